@@ -1,0 +1,263 @@
+//! The map file format (`.oeg`), version 1. Little-endian throughout:
+//!
+//! ```text
+//! offset  size  what
+//! 0       8     magic "OEGMAP\r\n" (the CR LF catches text-mode transfers)
+//! 8       4     u32 format version (1)
+//! 12      4     u32 length H of the header
+//! 16      H     header, UTF-8 JSON: see MapFileHeader (resolution, tile size, tile count, model options, ...)
+//! 16+H    ...   num_tiles times: i32 tile column, i32 tile row, then 64 x 64 cells row-major from the tile's
+//!               min-x, min-y cell, each cell three f32: log-odds, elevation mean (m), elevation variance (m^2)
+//! end-8   8     u64 FNV-1a-64 checksum of every byte before it
+//! ```
+//!
+//! A never-observed cell has NaN log-odds; a cell without an elevation estimate has an infinite variance (see
+//! [`crate::Cell`]). Tile `(ti, tj)` holds cells `(64 ti .. 64 ti + 63, 64 tj .. 64 tj + 63)`.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::{ByteReader, fnv1a64, read_file, write_atomically};
+use crate::cell::Cell;
+use crate::error::{Error, Result};
+use crate::map::{IntegrationStats, Map, MapConfig};
+use crate::storage::{TILE_CELLS, TILE_SIZE, TileIndex};
+
+/// The file's first eight bytes.
+pub const MAGIC: &[u8; 8] = b"OEGMAP\r\n";
+/// The format version this crate writes and reads.
+pub const FORMAT_VERSION: u32 = 1;
+const TILE_RECORD_BYTES: usize = 8 + TILE_CELLS * 12;
+
+/// The JSON header of a map file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapFileHeader {
+    /// The map's configuration (resolution, model options, memory limit).
+    pub config: MapConfig,
+    /// Tile edge in cells (64).
+    pub tile_size: u32,
+    /// Number of tile records that follow.
+    pub num_tiles: u64,
+    /// Scans integrated into the map.
+    pub num_scans: u64,
+    /// Integration totals.
+    pub totals: IntegrationStats,
+    /// The program that wrote the file.
+    pub written_by: String,
+}
+
+/// Serialises the map into the bytes of a map file.
+pub fn to_bytes(map: &Map) -> Vec<u8> {
+    let tiles: Vec<_> = map.tiles().collect();
+    let header = MapFileHeader {
+        config: *map.config(),
+        tile_size: TILE_SIZE as u32,
+        num_tiles: tiles.len() as u64,
+        num_scans: map.num_scans(),
+        totals: map.totals(),
+        written_by: format!("oeg {}", env!("CARGO_PKG_VERSION")),
+    };
+    // A plain struct of numbers and strings always serialises.
+    let json = serde_json::to_vec(&header).unwrap_or_default();
+    let mut out = Vec::with_capacity(16 + json.len() + tiles.len() * TILE_RECORD_BYTES + 8);
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&json);
+    for (tile, cells) in tiles {
+        out.extend_from_slice(&tile.ti.to_le_bytes());
+        out.extend_from_slice(&tile.tj.to_le_bytes());
+        for c in cells.iter() {
+            for v in [c.log_odds, c.mean_m, c.var_m2] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    let checksum = fnv1a64(&out);
+    out.extend_from_slice(&checksum.to_le_bytes());
+    out
+}
+
+/// Saves the map to `path` atomically.
+///
+/// # Errors
+/// [`Error::Io`] naming the file.
+pub fn save_map(map: &Map, path: &Path) -> Result<()> {
+    write_atomically(path, &to_bytes(map))
+}
+
+/// Reads only the header of a map file (and checks magic, version and checksum).
+///
+/// # Errors
+/// As [`load_map`].
+pub fn read_header(path: &Path) -> Result<MapFileHeader> {
+    let data = read_file(path)?;
+    parse(path, &data, false).map(|(h, _)| h)
+}
+
+/// Loads a map saved by [`save_map`].
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read; [`Error::Parse`] naming the byte offset for a wrong magic number,
+/// an unsupported version, a malformed header, a truncated file or a checksum mismatch;
+/// [`Error::MemoryLimit`] if the tiles exceed the map's memory limit.
+pub fn load_map(path: &Path) -> Result<Map> {
+    let data = read_file(path)?;
+    parse(path, &data, true).map(|(_, m)| m.unwrap_or_else(|| unreachable!("asked for the map")))
+}
+
+fn parse(path: &Path, data: &[u8], build: bool) -> Result<(MapFileHeader, Option<Map>)> {
+    let mut r = ByteReader::new(path, data);
+    let magic = r.take(8, "the magic number")?;
+    if magic != MAGIC {
+        return Err(r.error_at(0, "not an OEG map file (wrong magic number)"));
+    }
+    let version = r.u32("the format version")?;
+    if version != FORMAT_VERSION {
+        return Err(r.error_at(
+            8,
+            format!("format version {version} is not supported (this build reads {FORMAT_VERSION})"),
+        ));
+    }
+    if data.len() < 8 + 16 {
+        return Err(r.error("file is truncated: no room for the checksum"));
+    }
+    let (body, tail) = data.split_at(data.len() - 8);
+    let stored = u64::from_le_bytes(tail.try_into().unwrap_or([0; 8]));
+    let header_len = r.u32("the header length")? as usize;
+    let json = r.take(header_len, "the header")?;
+    let header: MapFileHeader =
+        serde_json::from_slice(json).map_err(|e| r.error_at(16, format!("malformed header: {e}")))?;
+    if header.tile_size as usize != TILE_SIZE {
+        return Err(r.error_at(
+            16,
+            format!(
+                "tile size {} is not supported (expected {TILE_SIZE})",
+                header.tile_size
+            ),
+        ));
+    }
+    let expected_len =
+        (16 + header_len) as u64 + header.num_tiles.saturating_mul(TILE_RECORD_BYTES as u64) + 8;
+    if expected_len != data.len() as u64 {
+        return Err(r.error(format!(
+            "the header declares {} tiles, so the file should be {expected_len} bytes, but it is {}: truncated or corrupt",
+            header.num_tiles,
+            data.len()
+        )));
+    }
+    if fnv1a64(body) != stored {
+        return Err(r.error_at(body.len(), "checksum mismatch: the file is corrupt"));
+    }
+    if !build {
+        return Ok((header, None));
+    }
+    let mut map =
+        Map::new(header.config).map_err(|e| r.error_at(16, format!("invalid map settings: {e}")))?;
+    for t in 0..header.num_tiles {
+        let what = format!("tile {t}");
+        let tile = TileIndex {
+            ti: r.i32(&what)?,
+            tj: r.i32(&what)?,
+        };
+        let mut cells = Box::new([Cell::UNOBSERVED; TILE_CELLS]);
+        for c in cells.iter_mut() {
+            *c = Cell {
+                log_odds: r.f32(&what)?,
+                mean_m: r.f32(&what)?,
+                var_m2: r.f32(&what)?,
+            };
+        }
+        map.insert_tile(tile, cells).map_err(|e| match e {
+            Error::MemoryLimit { .. } => Error::parse(path, format!("loading tile {t}: {e}")),
+            other => other,
+        })?;
+    }
+    map.restore_counters(header.num_scans, header.totals);
+    Ok((header, Some(map)))
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Point3;
+
+    use super::*;
+    use crate::geometry::CellIndex;
+    use crate::scan::Scan;
+    use crate::sensor::SensorModel;
+
+    fn small_map() -> Map {
+        let mut map = Map::new(MapConfig::new(0.1)).expect("valid");
+        let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+        for k in 0..50 {
+            let a = f64::from(k) * 0.1;
+            scan.push_hit(Point3::new(3.0 * a.cos(), 3.0 * a.sin(), 0.2));
+        }
+        map.integrate(&scan).expect("integrated");
+        map
+    }
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("oeg-mapfile-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir.join(name)
+    }
+
+    #[test]
+    fn saved_maps_load_back_identically() {
+        let map = small_map();
+        let path = temp("m.oeg");
+        save_map(&map, &path).expect("saved");
+        let back = load_map(&path).expect("loaded");
+        assert_eq!(back.config(), map.config());
+        assert_eq!(back.num_scans(), 1);
+        assert_eq!(back.totals(), map.totals());
+        assert_eq!(back.num_observed_cells(), map.num_observed_cells());
+        for (c, cell) in map.observed_cells() {
+            let b = back.cell(c);
+            assert_eq!(b.log_odds.to_bits(), cell.log_odds.to_bits());
+            assert_eq!(b.mean_m.to_bits(), cell.mean_m.to_bits());
+            assert_eq!(b.var_m2.to_bits(), cell.var_m2.to_bits());
+        }
+        assert!(!back.cell(CellIndex::new(1000, 1000)).is_observed());
+        // Same map, same bytes.
+        assert_eq!(to_bytes(&back), to_bytes(&map));
+        assert_eq!(
+            read_header(&path).expect("header").num_tiles,
+            map.tiles().count() as u64
+        );
+    }
+
+    #[test]
+    fn truncated_and_corrupt_files_are_errors() {
+        let bytes = to_bytes(&small_map());
+        let p = Path::new("m.oeg");
+        for cut in [0, 7, 12, 20, 100, bytes.len() / 2, bytes.len() - 1] {
+            let err = parse(p, &bytes[..cut], true).expect_err("truncated").to_string();
+            assert!(err.starts_with("m.oeg: at byte"), "cut {cut}: {err}");
+        }
+        let mut flipped = bytes.clone();
+        let k = flipped.len() - 100;
+        flipped[k] ^= 0x40;
+        let err = parse(p, &flipped, true).expect_err("corrupt").to_string();
+        assert!(err.contains("checksum mismatch"), "{err}");
+        let mut wrong = bytes.clone();
+        wrong[0] = b'X';
+        assert!(
+            parse(p, &wrong, true)
+                .expect_err("magic")
+                .to_string()
+                .contains("magic")
+        );
+        let mut future = bytes;
+        future[8] = 9;
+        assert!(
+            parse(p, &future, true)
+                .expect_err("version")
+                .to_string()
+                .contains("version 9")
+        );
+    }
+}

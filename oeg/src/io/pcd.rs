@@ -1,0 +1,815 @@
+//! PCL point clouds (`.pcd`), versions 0.6 and 0.7, with `DATA ascii`, `binary` or `binary_compressed`.
+//!
+//! The fields `x`, `y` and `z` (TYPE F, SIZE 4 or 8) are read; other fields are skipped. `VIEWPOINT` is the
+//! sensor's pose in the world (`tx ty tz qw qx qy qz`; identity when absent): the scan's origin is its
+//! translation and each point `p` becomes the world point `viewpoint * p`.
+//!
+//! * Invalid points (NaN, as PCL writes for pixels without depth) are dropped by default. For an organized
+//!   cloud (`HEIGHT > 1`, a depth image) they can instead become no-return rays ([`InvalidPoints::NoReturn`]):
+//!   the pixel's viewing direction comes from a pinhole model fitted by least squares to the valid pixels
+//!   (`x / z = a u + b`, `y / z = c v + d` in the camera frame), so a pixel that saw nothing clears space.
+//! * Infinite coordinates are an error.
+//! * Depth cameras write points in the optical frame (x right, y down, z forward); [`PcdFrame::Optical`] turns
+//!   them into the robot convention (x forward, y left, z up: `X = z, Y = -x, Z = -y`) before `VIEWPOINT` is
+//!   applied.
+
+use std::path::Path;
+
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+use super::{ByteReader, lzf, read_file, write_atomically};
+use crate::error::{Error, Result};
+use crate::scan::{Ray, Scan};
+use crate::sensor::SensorModel;
+
+/// How the body of a PCD file is stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PcdEncoding {
+    /// One point per text line.
+    Ascii,
+    /// Packed little-endian records, one per point.
+    Binary,
+    /// LZF-compressed, field by field.
+    BinaryCompressed,
+}
+
+/// The frame the cloud's points are written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PcdFrame {
+    /// Already x forward, y left, z up (or whatever the world uses).
+    #[default]
+    AsIs,
+    /// Camera optical frame: x right, y down, z forward.
+    Optical,
+}
+
+/// What to do with NaN points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InvalidPoints {
+    /// Leave them out.
+    #[default]
+    Drop,
+    /// Make them no-return rays along the pixel's direction (organized clouds only; unorganized clouds drop
+    /// them, since their pixels have no direction).
+    NoReturn,
+}
+
+/// How to turn a cloud into a scan.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PcdOptions {
+    /// The points' frame.
+    pub frame: PcdFrame,
+    /// NaN points.
+    pub invalid_points: InvalidPoints,
+    /// The sensor model attached to the scan.
+    pub sensor: SensorModel,
+}
+
+impl Default for PcdOptions {
+    fn default() -> Self {
+        Self {
+            frame: PcdFrame::AsIs,
+            invalid_points: InvalidPoints::Drop,
+            sensor: SensorModel::stereo(),
+        }
+    }
+}
+
+/// A point cloud as stored in a PCD file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PcdCloud {
+    /// Points per row (the image width of an organized cloud).
+    pub width: u32,
+    /// Rows (1 for an unorganized cloud).
+    pub height: u32,
+    /// `world_from_sensor`.
+    pub viewpoint: Isometry3<f64>,
+    /// The points, row-major; NaN marks an invalid point.
+    pub points: Vec<Point3<f32>>,
+}
+
+impl PcdCloud {
+    /// Number of points that are not NaN.
+    pub fn num_valid(&self) -> usize {
+        self.points.iter().filter(|p| !p.x.is_nan()).count()
+    }
+
+    /// The cloud as a scan from the viewpoint.
+    ///
+    /// # Errors
+    /// [`Error::InvalidScan`] if no-return rays were asked for and no pinhole model fits the valid pixels.
+    pub fn to_scan(&self, options: &PcdOptions) -> Result<Scan> {
+        let origin = Point3::from(self.viewpoint.translation.vector);
+        let mut scan = Scan::new(origin, options.sensor);
+        let rotation = self.viewpoint.rotation;
+        let to_world = |v: Vector3<f64>| -> Vector3<f32> {
+            let v = match options.frame {
+                PcdFrame::AsIs => v,
+                PcdFrame::Optical => Vector3::new(v.z, -v.x, -v.y),
+            };
+            (rotation * v).cast()
+        };
+        let pinhole = if options.invalid_points == InvalidPoints::NoReturn && self.height > 1 {
+            Some(self.fit_pinhole()?)
+        } else {
+            None
+        };
+        scan.rays.reserve(self.points.len());
+        for (k, p) in self.points.iter().enumerate() {
+            if p.x.is_nan() || p.y.is_nan() || p.z.is_nan() {
+                if let Some(pin) = &pinhole {
+                    let u = (k % self.width as usize) as f64;
+                    let v = (k / self.width as usize) as f64;
+                    let direction = Vector3::new(pin.0 * u + pin.1, pin.2 * v + pin.3, 1.0);
+                    scan.rays.push(Ray::no_return(to_world(direction)));
+                }
+                continue;
+            }
+            scan.rays.push(Ray::hit(to_world(p.coords.cast())));
+        }
+        Ok(scan)
+    }
+
+    /// Least-squares pinhole fit `x / z = a u + b`, `y / z = c v + d` over the valid pixels.
+    fn fit_pinhole(&self) -> Result<(f64, f64, f64, f64)> {
+        let mut fx = LineFit::default();
+        let mut fy = LineFit::default();
+        for (k, p) in self.points.iter().enumerate() {
+            if p.z.is_nan() || p.z <= 0.0 {
+                continue;
+            }
+            let (x, y, z) = (f64::from(p.x), f64::from(p.y), f64::from(p.z));
+            fx.add((k % self.width as usize) as f64, x / z);
+            fy.add((k / self.width as usize) as f64, y / z);
+        }
+        match (fx.solve(), fy.solve()) {
+            (Some((a, b)), Some((c, d))) => Ok((a, b, c, d)),
+            _ => Err(Error::InvalidScan(
+                "cannot infer the pixels' viewing directions: too few valid pixels in front of the camera \
+                 (use invalid points = drop)"
+                    .into(),
+            )),
+        }
+    }
+}
+
+#[derive(Default)]
+struct LineFit {
+    n: f64,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    sxy: f64,
+}
+
+impl LineFit {
+    fn add(&mut self, x: f64, y: f64) {
+        self.n += 1.0;
+        self.sx += x;
+        self.sy += y;
+        self.sxx += x * x;
+        self.sxy += x * y;
+    }
+
+    fn solve(&self) -> Option<(f64, f64)> {
+        let det = self.n * self.sxx - self.sx * self.sx;
+        if self.n < 2.0 || det.abs() < 1e-9 {
+            return None;
+        }
+        let a = (self.n * self.sxy - self.sx * self.sy) / det;
+        Some((a, (self.sy - a * self.sx) / self.n))
+    }
+}
+
+/// Reads a PCD file.
+///
+/// # Errors
+/// [`Error::Io`] if it cannot be read; [`Error::Parse`] naming the line (header, ascii body) or byte (binary
+/// body) for a malformed header, missing x/y/z fields, a count larger than the data, a corrupt compressed
+/// block or an infinite coordinate.
+pub fn read_pcd(path: &Path) -> Result<PcdCloud> {
+    let data = read_file(path)?;
+    parse_pcd(path, &data)
+}
+
+/// Reads a PCD file and converts it with [`PcdCloud::to_scan`].
+///
+/// # Errors
+/// As [`read_pcd`] and [`PcdCloud::to_scan`]; the latter's error is given the file's name.
+pub fn read_pcd_scan(path: &Path, options: &PcdOptions) -> Result<Scan> {
+    read_pcd(path)?
+        .to_scan(options)
+        .map_err(|e| Error::parse(path, e.to_string()))
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ScalarType {
+    F,
+    I,
+    U,
+}
+
+#[derive(Debug, Clone)]
+struct Field {
+    name: String,
+    size: usize,
+    kind: ScalarType,
+    count: usize,
+}
+
+struct Header {
+    fields: Vec<Field>,
+    width: u32,
+    height: u32,
+    num_points: usize,
+    viewpoint: Isometry3<f64>,
+    encoding: PcdEncoding,
+    /// Byte offset of the body.
+    body_start: usize,
+    /// Line number (1-based) of the DATA line.
+    data_line: usize,
+}
+
+/// The most bytes a PCD body may expand to (4 GiB): a bound on what a corrupt header can make us allocate.
+const MAX_BODY_BYTES: usize = 4 << 30;
+
+fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
+    let err = |line: usize, message: String| Error::parse(path, format!("line {line}: {message}"));
+    let mut names: Option<Vec<String>> = None;
+    let mut sizes: Option<Vec<usize>> = None;
+    let mut types: Option<Vec<ScalarType>> = None;
+    let mut counts: Option<Vec<usize>> = None;
+    let (mut width, mut height, mut points) = (None, None, None);
+    let mut viewpoint = Isometry3::identity();
+    let mut pos = 0;
+    let mut line_no = 0;
+    while pos < data.len() {
+        line_no += 1;
+        let end = data[pos..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(data.len(), |k| pos + k);
+        let raw = &data[pos..end];
+        pos = (end + 1).min(data.len());
+        let line = std::str::from_utf8(raw)
+            .map_err(|_| err(line_no, "the header is not text: is this a PCD file?".into()))?
+            .trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut words = line.split_whitespace();
+        let key = words.next().unwrap_or_default();
+        let values: Vec<&str> = words.collect();
+        let numbers = |what: &str| -> Result<Vec<usize>> {
+            values
+                .iter()
+                .map(|v| {
+                    v.parse::<usize>()
+                        .map_err(|_| err(line_no, format!("{what}: expected whole numbers, got `{v}`")))
+                })
+                .collect()
+        };
+        let single = |what: &str| -> Result<usize> {
+            match numbers(what)?.as_slice() {
+                [n] => Ok(*n),
+                _ => Err(err(
+                    line_no,
+                    format!("{what}: expected one whole number, got `{}`", values.join(" ")),
+                )),
+            }
+        };
+        match key {
+            "VERSION" => {}
+            "FIELDS" | "COLUMNS" => names = Some(values.iter().map(|s| s.to_string()).collect()),
+            "SIZE" => sizes = Some(numbers("SIZE")?),
+            "TYPE" => {
+                types = Some(
+                    values
+                        .iter()
+                        .map(|t| match *t {
+                            "F" => Ok(ScalarType::F),
+                            "I" => Ok(ScalarType::I),
+                            "U" => Ok(ScalarType::U),
+                            other => Err(err(line_no, format!("TYPE: expected F, I or U, got `{other}`"))),
+                        })
+                        .collect::<Result<_>>()?,
+                );
+            }
+            "COUNT" => counts = Some(numbers("COUNT")?),
+            "WIDTH" => width = Some(single("WIDTH")?),
+            "HEIGHT" => height = Some(single("HEIGHT")?),
+            "POINTS" => points = Some(single("POINTS")?),
+            "VIEWPOINT" => {
+                let v: Vec<f64> = values
+                    .iter()
+                    .map(|s| s.parse::<f64>().ok().filter(|v| v.is_finite()))
+                    .collect::<Option<_>>()
+                    .filter(|v: &Vec<f64>| v.len() == 7)
+                    .ok_or_else(|| {
+                        err(
+                            line_no,
+                            "VIEWPOINT: expected 7 finite numbers tx ty tz qw qx qy qz".into(),
+                        )
+                    })?;
+                let q = Quaternion::new(v[3], v[4], v[5], v[6]);
+                if q.norm() < 1e-9 {
+                    return Err(err(line_no, "VIEWPOINT: the rotation quaternion is zero".into()));
+                }
+                viewpoint = Isometry3::from_parts(
+                    Translation3::new(v[0], v[1], v[2]),
+                    UnitQuaternion::from_quaternion(q),
+                );
+            }
+            "DATA" => {
+                let encoding = match values.as_slice() {
+                    ["ascii"] => PcdEncoding::Ascii,
+                    ["binary"] => PcdEncoding::Binary,
+                    ["binary_compressed"] => PcdEncoding::BinaryCompressed,
+                    _ => {
+                        return Err(err(
+                            line_no,
+                            format!(
+                                "DATA: expected ascii, binary or binary_compressed, got `{}`",
+                                values.join(" ")
+                            ),
+                        ));
+                    }
+                };
+                let names = names.ok_or_else(|| err(line_no, "no FIELDS line before DATA".into()))?;
+                let sizes = sizes.ok_or_else(|| err(line_no, "no SIZE line before DATA".into()))?;
+                let types = types.ok_or_else(|| err(line_no, "no TYPE line before DATA".into()))?;
+                let counts = counts.unwrap_or_else(|| vec![1; names.len()]);
+                if sizes.len() != names.len() || types.len() != names.len() || counts.len() != names.len() {
+                    return Err(err(
+                        line_no,
+                        format!(
+                            "FIELDS, SIZE, TYPE and COUNT must list the same number of entries ({}, {}, {}, {})",
+                            names.len(),
+                            sizes.len(),
+                            types.len(),
+                            counts.len()
+                        ),
+                    ));
+                }
+                let fields: Vec<Field> = names
+                    .into_iter()
+                    .zip(sizes)
+                    .zip(types)
+                    .zip(counts)
+                    .map(|(((name, size), kind), count)| Field {
+                        name,
+                        size,
+                        kind,
+                        count,
+                    })
+                    .collect();
+                for f in &fields {
+                    if ![1, 2, 4, 8].contains(&f.size) || f.count == 0 {
+                        return Err(err(
+                            line_no,
+                            format!("field `{}` has SIZE {} and COUNT {}", f.name, f.size, f.count),
+                        ));
+                    }
+                }
+                let width = width.ok_or_else(|| err(line_no, "no WIDTH line before DATA".into()))?;
+                let height = height.unwrap_or(1);
+                let num_points = points.unwrap_or(width.saturating_mul(height));
+                if num_points != width.saturating_mul(height) {
+                    return Err(err(
+                        line_no,
+                        format!("POINTS is {num_points} but WIDTH x HEIGHT is {width} x {height}"),
+                    ));
+                }
+                let as_u32 = |v: usize, what: &str| {
+                    u32::try_from(v).map_err(|_| err(line_no, format!("{what} {v} is too large")))
+                };
+                return Ok(Header {
+                    fields,
+                    width: as_u32(width, "WIDTH")?,
+                    height: as_u32(height, "HEIGHT")?,
+                    num_points,
+                    viewpoint,
+                    encoding,
+                    body_start: pos,
+                    data_line: line_no,
+                });
+            }
+            other => return Err(err(line_no, format!("unknown header key `{other}`"))),
+        }
+    }
+    Err(Error::parse(
+        path,
+        "the header has no DATA line: truncated, or not a PCD file",
+    ))
+}
+
+fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
+    let header = parse_header(path, data)?;
+    let xyz: Vec<usize> = ["x", "y", "z"]
+        .iter()
+        .map(|name| {
+            header.fields.iter().position(|f| f.name == *name).ok_or_else(|| {
+                Error::parse(
+                    path,
+                    format!("line {}: the cloud has no `{name}` field", header.data_line),
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    for &k in &xyz {
+        let f = &header.fields[k];
+        if f.kind != ScalarType::F || !(f.size == 4 || f.size == 8) || f.count != 1 {
+            return Err(Error::parse(
+                path,
+                format!("field `{}` must be TYPE F, SIZE 4 or 8, COUNT 1", f.name),
+            ));
+        }
+    }
+    let record_bytes: usize = header.fields.iter().map(|f| f.size * f.count).sum();
+    let body_bytes = record_bytes
+        .checked_mul(header.num_points)
+        .filter(|&b| b <= MAX_BODY_BYTES)
+        .ok_or_else(|| {
+            Error::parse(
+                path,
+                format!(
+                    "{} points of {record_bytes} bytes exceed the {MAX_BODY_BYTES}-byte limit",
+                    header.num_points
+                ),
+            )
+        })?;
+    let body = &data[header.body_start..];
+    let raw = match header.encoding {
+        PcdEncoding::Ascii => return parse_ascii(path, &header, body, &xyz),
+        PcdEncoding::Binary => {
+            let mut r = ByteReader::new(path, data);
+            r.take(header.body_start, "the header")?;
+            r.take(
+                body_bytes,
+                &format!("{} points of {record_bytes} bytes", header.num_points),
+            )?;
+            body[..body_bytes].to_vec()
+        }
+        PcdEncoding::BinaryCompressed => {
+            let mut r = ByteReader::new(path, data);
+            r.take(header.body_start, "the header")?;
+            let compressed = r.u32("the compressed size")? as usize;
+            let uncompressed = r.u32("the uncompressed size")? as usize;
+            if uncompressed != body_bytes {
+                return Err(r.error(format!(
+                    "the uncompressed size is {uncompressed} bytes, but {} points of {record_bytes} bytes need {body_bytes}",
+                    header.num_points
+                )));
+            }
+            let start = r.pos();
+            let block = r.take(compressed, "the compressed block")?;
+            let field_major = lzf::decompress(block, uncompressed)
+                .map_err(|m| r.error_at(start, format!("corrupt compressed block: {m}")))?;
+            // Field-major (all x, then all y, ...) back to records.
+            let mut records = vec![0u8; body_bytes];
+            let mut offset_in_block = 0;
+            let mut offset_in_record = 0;
+            for f in &header.fields {
+                let w = f.size * f.count;
+                for k in 0..header.num_points {
+                    let src = offset_in_block + k * w;
+                    let dst = k * record_bytes + offset_in_record;
+                    records[dst..dst + w].copy_from_slice(&field_major[src..src + w]);
+                }
+                offset_in_block += w * header.num_points;
+                offset_in_record += w;
+            }
+            records
+        }
+    };
+    let offsets: Vec<usize> = header
+        .fields
+        .iter()
+        .scan(0, |acc, f| {
+            let o = *acc;
+            *acc += f.size * f.count;
+            Some(o)
+        })
+        .collect();
+    let read = |rec: &[u8], k: usize| -> f64 {
+        let f = &header.fields[k];
+        let o = offsets[k];
+        if f.size == 4 {
+            f64::from(f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]))
+        } else {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&rec[o..o + 8]);
+            f64::from_le_bytes(b)
+        }
+    };
+    let mut points = Vec::with_capacity(header.num_points);
+    for (k, rec) in raw.chunks_exact(record_bytes).enumerate() {
+        let p = [read(rec, xyz[0]), read(rec, xyz[1]), read(rec, xyz[2])];
+        points.push(checked_point(path, p, || format!("point {k}"))?);
+    }
+    finish(header, points)
+}
+
+fn checked_point(path: &Path, p: [f64; 3], which: impl Fn() -> String) -> Result<Point3<f32>> {
+    if p.iter().any(|v| v.is_infinite()) {
+        return Err(Error::parse(
+            path,
+            format!("{} has an infinite coordinate {p:?}", which()),
+        ));
+    }
+    if p.iter().any(|v| v.is_nan()) {
+        return Ok(Point3::new(f32::NAN, f32::NAN, f32::NAN));
+    }
+    Ok(Point3::new(p[0] as f32, p[1] as f32, p[2] as f32))
+}
+
+fn parse_ascii(path: &Path, header: &Header, body: &[u8], xyz: &[usize]) -> Result<PcdCloud> {
+    let text = std::str::from_utf8(body).map_err(|_| Error::parse(path, "the ascii body is not text"))?;
+    // Column of each field's first value.
+    let columns: Vec<usize> = header
+        .fields
+        .iter()
+        .scan(0, |acc, f| {
+            let c = *acc;
+            *acc += f.count;
+            Some(c)
+        })
+        .collect();
+    let num_columns: usize = header.fields.iter().map(|f| f.count).sum();
+    let mut points = Vec::with_capacity(header.num_points.min(body.len() / 2 + 1));
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    for k in 0..header.num_points {
+        let Some((n, line)) = lines.next() else {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "the file is truncated: POINTS declares {} points, found {k}",
+                    header.num_points
+                ),
+            ));
+        };
+        let line_no = header.data_line + 1 + n;
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.len() != num_columns {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "line {line_no}: expected {num_columns} values, found {}",
+                    words.len()
+                ),
+            ));
+        }
+        let mut p = [0.0; 3];
+        for (axis, &field) in xyz.iter().enumerate() {
+            let w = words[columns[field]];
+            p[axis] = w.parse::<f64>().map_err(|_| {
+                Error::parse(
+                    path,
+                    format!(
+                        "line {line_no}: `{w}` is not a number ({})",
+                        header.fields[field].name
+                    ),
+                )
+            })?;
+        }
+        points.push(checked_point(path, p, || format!("line {line_no}"))?);
+    }
+    finish_ref(header, points)
+}
+
+fn finish(header: Header, points: Vec<Point3<f32>>) -> Result<PcdCloud> {
+    finish_ref(&header, points)
+}
+
+fn finish_ref(header: &Header, points: Vec<Point3<f32>>) -> Result<PcdCloud> {
+    Ok(PcdCloud {
+        width: header.width,
+        height: header.height,
+        viewpoint: header.viewpoint,
+        points,
+    })
+}
+
+/// Writes a cloud with the fields `x y z` (F4) in `encoding`.
+///
+/// # Errors
+/// [`Error::Io`] naming the file; [`Error::InvalidSetting`] if `width * height` differs from the number of points.
+pub fn write_pcd(path: &Path, cloud: &PcdCloud, encoding: PcdEncoding) -> Result<()> {
+    if cloud.width as usize * cloud.height as usize != cloud.points.len() {
+        return Err(Error::setting(
+            "cloud",
+            "width x height must equal the number of points",
+        ));
+    }
+    let t = cloud.viewpoint.translation.vector;
+    let q = cloud.viewpoint.rotation.quaternion();
+    let data = match encoding {
+        PcdEncoding::Ascii => "ascii",
+        PcdEncoding::Binary => "binary",
+        PcdEncoding::BinaryCompressed => "binary_compressed",
+    };
+    let mut out = format!(
+        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n\
+         WIDTH {}\nHEIGHT {}\nVIEWPOINT {} {} {} {} {} {} {}\nPOINTS {}\nDATA {data}\n",
+        cloud.width,
+        cloud.height,
+        t.x,
+        t.y,
+        t.z,
+        q.w,
+        q.i,
+        q.j,
+        q.k,
+        cloud.points.len()
+    )
+    .into_bytes();
+    match encoding {
+        PcdEncoding::Ascii => {
+            for p in &cloud.points {
+                out.extend_from_slice(format!("{} {} {}\n", p.x, p.y, p.z).as_bytes());
+            }
+        }
+        PcdEncoding::Binary => {
+            for p in &cloud.points {
+                for v in [p.x, p.y, p.z] {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        PcdEncoding::BinaryCompressed => {
+            let mut field_major = Vec::with_capacity(cloud.points.len() * 12);
+            for axis in 0..3 {
+                for p in &cloud.points {
+                    field_major.extend_from_slice(&p[axis].to_le_bytes());
+                }
+            }
+            let packed = lzf::compress(&field_major);
+            out.extend_from_slice(&(packed.len() as u32).to_le_bytes());
+            out.extend_from_slice(&(field_major.len() as u32).to_le_bytes());
+            out.extend_from_slice(&packed);
+        }
+    }
+    write_atomically(path, &out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::RayKind;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("oeg-pcd-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir.join(name)
+    }
+
+    /// A 4 x 3 organized cloud from a pinhole camera looking at a wall 2 m away, with two invalid pixels.
+    fn depth_image() -> PcdCloud {
+        let (fx, cx, cy) = (2.0, 1.5, 1.0);
+        let mut points = Vec::new();
+        for v in 0..3 {
+            for u in 0..4 {
+                let z = 2.0f32;
+                points.push(Point3::new((u as f32 - cx) / fx * z, (v as f32 - cy) / fx * z, z));
+            }
+        }
+        points[5] = Point3::new(f32::NAN, f32::NAN, f32::NAN);
+        points[11] = Point3::new(f32::NAN, f32::NAN, f32::NAN);
+        PcdCloud {
+            width: 4,
+            height: 3,
+            viewpoint: Isometry3::from_parts(Translation3::new(1.0, 2.0, 0.5), UnitQuaternion::identity()),
+            points,
+        }
+    }
+
+    #[test]
+    fn every_encoding_round_trips() {
+        let cloud = depth_image();
+        for (encoding, name) in [
+            (PcdEncoding::Ascii, "a.pcd"),
+            (PcdEncoding::Binary, "b.pcd"),
+            (PcdEncoding::BinaryCompressed, "c.pcd"),
+        ] {
+            let path = temp(name);
+            write_pcd(&path, &cloud, encoding).expect("written");
+            let back = read_pcd(&path).expect("read");
+            assert_eq!((back.width, back.height), (4, 3));
+            assert_eq!(back.num_valid(), 10, "{encoding:?}");
+            assert!((back.viewpoint.translation.vector - cloud.viewpoint.translation.vector).norm() < 1e-9);
+            for (a, b) in back.points.iter().zip(&cloud.points) {
+                assert!(a.x.is_nan() == b.x.is_nan());
+                if !a.x.is_nan() {
+                    assert!((a - b).norm() < 1e-6, "{encoding:?}: {a} vs {b}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn invalid_pixels_are_dropped_or_become_no_returns_along_their_pixel() {
+        let cloud = depth_image();
+        let drop = cloud.to_scan(&PcdOptions::default()).expect("scan");
+        assert_eq!(drop.rays.len(), 10);
+        assert_eq!(drop.origin_in_world, Point3::new(1.0, 2.0, 0.5));
+        let opts = PcdOptions {
+            invalid_points: InvalidPoints::NoReturn,
+            frame: PcdFrame::Optical,
+            ..PcdOptions::default()
+        };
+        let scan = cloud.to_scan(&opts).expect("scan");
+        assert_eq!(scan.rays.len(), 12);
+        let misses: Vec<_> = scan.rays.iter().filter(|r| r.kind == RayKind::NoReturn).collect();
+        assert_eq!(misses.len(), 2);
+        // Pixel (1, 1): optical direction ((1 - 1.5) / 2, 0, 1) -> robot frame (1, 0.25, 0).
+        let d = misses[0].offset_in_world;
+        assert!((d - Vector3::new(1.0, 0.25, 0.0)).norm() < 1e-5, "{d}");
+        // A valid pixel in the optical frame: (x, y, z) -> (z, -x, -y).
+        let h = scan.rays[0].offset_in_world;
+        assert!((h - Vector3::new(2.0, 1.5, 1.0)).norm() < 1e-5, "{h}");
+    }
+
+    fn write_raw(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let path = temp(name);
+        std::fs::write(&path, bytes).expect("write");
+        path
+    }
+
+    #[test]
+    fn bad_files_give_errors_naming_the_place() {
+        let cases: [(&str, &[u8], &str); 8] = [
+            ("nodata.pcd", b"VERSION 0.7\nFIELDS x y z\n", "no DATA line"),
+            (
+                "nofield.pcd",
+                b"FIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nDATA ascii\n1 2\n",
+                "no `z` field",
+            ),
+            (
+                "badkey.pcd",
+                b"FIELDS x y z\nCOLOUR 3\n",
+                "line 2: unknown header key `COLOUR`",
+            ),
+            (
+                "badnum.pcd",
+                b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n1 two 3\n",
+                "line 6: `two`",
+            ),
+            (
+                "short.pcd",
+                b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nDATA ascii\n1 2 3\n",
+                "truncated",
+            ),
+            (
+                "inf.pcd",
+                b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n1 inf 3\n",
+                "infinite",
+            ),
+            (
+                "trunc.pcd",
+                b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nDATA binary\n\0\0\0\0",
+                "truncated",
+            ),
+            (
+                "count.pcd",
+                b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nPOINTS 3\nDATA binary\n",
+                "POINTS is 3",
+            ),
+        ];
+        for (name, bytes, expected) in cases {
+            let path = write_raw(name, bytes);
+            let err = read_pcd(&path).expect_err(name).to_string();
+            assert!(err.contains(name) && err.contains(expected), "{name}: {err}");
+        }
+    }
+
+    #[test]
+    fn corrupt_compressed_blocks_are_errors() {
+        let path = temp("corrupt.pcd");
+        write_pcd(&path, &depth_image(), PcdEncoding::BinaryCompressed).expect("written");
+        let mut bytes = std::fs::read(&path).expect("read");
+        let n = bytes.len();
+        // Cut the block short.
+        let err = parse_pcd(Path::new("cut.pcd"), &bytes[..n - 5])
+            .expect_err("truncated")
+            .to_string();
+        assert!(err.contains("cut.pcd") && err.contains("truncated"), "{err}");
+        // A back-reference before the start of the data.
+        let start = bytes
+            .windows(18)
+            .position(|w| w == b"binary_compressed\n")
+            .expect("DATA")
+            + 18
+            + 8;
+        bytes[start] = 0xe0;
+        bytes[start + 1] = 0xff;
+        bytes[start + 2] = 0xff;
+        let err = parse_pcd(Path::new("bad.pcd"), &bytes)
+            .expect_err("corrupt")
+            .to_string();
+        assert!(err.contains("corrupt compressed block"), "{err}");
+    }
+}

@@ -1,0 +1,208 @@
+//! Whole-layer access: dense rasters of one quantity over a region, for analysis and images.
+//!
+//! An analysis is then one line over two slices (`error = estimate - truth`). Rasters are row-major from the
+//! region's min-x, min-y cell (see [`crate::geometry`]).
+
+use serde::{Deserialize, Serialize};
+
+use crate::cell::Cell;
+use crate::error::{Error, Result};
+use crate::geometry::{CellIndex, CellRegion};
+use crate::map::Map;
+use crate::model::probability_from_log_odds;
+use crate::traversability::{RobotProfile, Traversability, TraversabilityRule, step_decision};
+
+/// A per-cell quantity of the map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LayerKind {
+    /// Occupancy probability (eq. 3), NaN where never observed.
+    OccupancyProbability,
+    /// Occupancy log-odds, NaN where never observed.
+    LogOdds,
+    /// Elevation mean, metres, NaN where there is no estimate.
+    ElevationM,
+    /// Elevation variance, m^2, NaN where there is no estimate.
+    VarianceM2,
+    /// Elevation standard deviation, metres, NaN where there is no estimate.
+    StdDevM,
+}
+
+impl LayerKind {
+    /// Every kind, in a fixed order.
+    pub const ALL: [LayerKind; 5] = [
+        Self::OccupancyProbability,
+        Self::LogOdds,
+        Self::ElevationM,
+        Self::VarianceM2,
+        Self::StdDevM,
+    ];
+
+    /// The snake_case name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::OccupancyProbability => "occupancy_probability",
+            Self::LogOdds => "log_odds",
+            Self::ElevationM => "elevation_m",
+            Self::VarianceM2 => "variance_m2",
+            Self::StdDevM => "std_dev_m",
+        }
+    }
+
+    /// The value of this quantity for one cell.
+    pub fn value(self, cell: &Cell) -> f32 {
+        if !cell.is_observed() {
+            return f32::NAN;
+        }
+        let elevation = cell.elevation();
+        match self {
+            Self::OccupancyProbability => probability_from_log_odds(cell.log_odds),
+            Self::LogOdds => cell.log_odds,
+            Self::ElevationM => elevation.map_or(f32::NAN, |e| e.mean_m),
+            Self::VarianceM2 => elevation.map_or(f32::NAN, |e| e.var_m2),
+            Self::StdDevM => elevation.map_or(f32::NAN, |e| e.var_m2.sqrt()),
+        }
+    }
+}
+
+/// A dense raster over a region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Raster<T> {
+    /// The cells covered.
+    pub region: CellRegion,
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// One value per cell, row-major from the region's min corner.
+    pub values: Vec<T>,
+}
+
+impl<T: Copy> Raster<T> {
+    /// The value at `cell`, or `None` outside the region.
+    pub fn get(&self, cell: CellIndex) -> Option<T> {
+        self.region.offset(cell).map(|k| self.values[k])
+    }
+}
+
+/// A raster of one [`LayerKind`], NaN where the quantity is undefined.
+pub type Layer = Raster<f32>;
+
+impl Map {
+    fn check_raster_size(&self, region: &CellRegion, bytes_per_cell: u64) -> Result<usize> {
+        let bytes = region.num_cells().saturating_mul(bytes_per_cell);
+        if bytes > self.config().memory_limit_bytes {
+            return Err(Error::MemoryLimit {
+                requested_bytes: bytes,
+                limit_bytes: self.config().memory_limit_bytes,
+            });
+        }
+        usize::try_from(region.num_cells())
+            .map_err(|_| Error::setting("region", "too many cells for this machine"))
+    }
+
+    /// A dense raster of `kind` over `region`.
+    ///
+    /// # Errors
+    /// [`Error::MemoryLimit`] if the raster would exceed the map's memory limit.
+    pub fn layer(&self, kind: LayerKind, region: CellRegion) -> Result<Layer> {
+        let n = self.check_raster_size(&region, 4)?;
+        let mut values = Vec::with_capacity(n);
+        values.extend(region.cells().map(|c| kind.value(&self.cell(c))));
+        Ok(Raster {
+            region,
+            resolution_m: self.geometry().resolution_m(),
+            values,
+        })
+    }
+
+    /// The traversability of one cell for `profile` under `rule`.
+    pub fn traversability(
+        &self,
+        cell: CellIndex,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> Traversability {
+        let c = self.cell(cell);
+        if !c.is_observed() {
+            return Traversability::Unknown;
+        }
+        if c.log_odds <= self.occupied_log_odds() {
+            return Traversability::Free;
+        }
+        let Some(e) = c.elevation() else {
+            // Occupied, height unknown: assume the worst.
+            return Traversability::Blocked;
+        };
+        let step_m = match rule {
+            TraversabilityRule::Terrain => {
+                let mut ground = e.mean_m;
+                for dj in -1..=1 {
+                    for di in -1..=1 {
+                        let n = CellIndex::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
+                        if let Some(ne) = self.cell(n).elevation() {
+                            ground = ground.min(ne.mean_m);
+                        }
+                    }
+                }
+                e.mean_m - ground
+            }
+            TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => e.mean_m,
+        };
+        step_decision(step_m, e.var_m2.sqrt(), rule, profile)
+    }
+
+    /// A dense raster of [`Map::traversability`] over `region`.
+    ///
+    /// # Errors
+    /// [`Error::MemoryLimit`] if the raster would exceed the map's memory limit.
+    pub fn traversability_layer(
+        &self,
+        region: CellRegion,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> Result<Raster<Traversability>> {
+        let n = self.check_raster_size(&region, 1)?;
+        let mut values = Vec::with_capacity(n);
+        values.extend(region.cells().map(|c| self.traversability(c, profile, rule)));
+        Ok(Raster {
+            region,
+            resolution_m: self.geometry().resolution_m(),
+            values,
+        })
+    }
+
+    /// Counts of each traversability class over the observed cells.
+    pub fn traversability_counts(
+        &self,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> TraversabilityCounts {
+        let mut counts = TraversabilityCounts::default();
+        for (c, _) in self.observed_cells() {
+            match self.traversability(c, profile, rule) {
+                Traversability::Unknown => {}
+                Traversability::Free => counts.num_free += 1,
+                Traversability::Traversable => counts.num_traversable += 1,
+                Traversability::Blocked => counts.num_blocked += 1,
+            }
+        }
+        counts
+    }
+}
+
+/// Number of observed cells in each traversability class.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TraversabilityCounts {
+    /// Observed, not occupied.
+    pub num_free: u64,
+    /// Occupied, low enough.
+    pub num_traversable: u64,
+    /// Occupied, too high.
+    pub num_blocked: u64,
+}
+
+impl TraversabilityCounts {
+    /// Occupied cells: traversable plus blocked.
+    pub fn num_occupied(&self) -> u64 {
+        self.num_traversable + self.num_blocked
+    }
+}

@@ -1,0 +1,24 @@
+#![doc = include_str!("../README.md")]
+
+pub mod cell;
+pub mod error;
+pub mod geometry;
+pub mod io;
+pub mod layers;
+pub mod map;
+pub mod model;
+pub mod scan;
+pub mod sensor;
+pub mod storage;
+pub mod traversability;
+pub mod traversal;
+
+pub use cell::Cell;
+pub use error::{Error, Result};
+pub use geometry::{CellIndex, CellRegion, GridGeometry};
+pub use layers::{Layer, LayerKind, Raster, TraversabilityCounts};
+pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Map, MapConfig};
+pub use model::{Elevation, FreeSpaceElevation, ModelOptions};
+pub use scan::{Ray, RayKind, Scan};
+pub use sensor::{RangeNoiseModel, SensorModel};
+pub use traversability::{RobotProfile, Traversability, TraversabilityRule};

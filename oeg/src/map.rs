@@ -1,0 +1,456 @@
+//! The Occupancy-Elevation Grid and its scan integration (the paper's Algorithm 1).
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::cell::Cell;
+use crate::error::{Error, Result};
+use crate::geometry::{CellIndex, CellRegion, GridGeometry};
+use crate::model::{
+    Elevation, FreeSpaceElevation, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions, clamp_probability,
+    elevation_observation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound, update_log_odds,
+};
+use crate::scan::{RayKind, Scan};
+use crate::sensor::MIN_RANGE_SIGMA_M;
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
+
+/// Default memory limit of a map, bytes (4 GiB): far above any sensible map, low enough that a corrupt point
+/// a million kilometres away gives an error instead of exhausting the machine.
+pub const DEFAULT_MEMORY_LIMIT_BYTES: u64 = 4 << 30;
+
+/// Everything needed to create a map.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapConfig {
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// The update rules' parameters.
+    #[serde(default)]
+    pub model: ModelOptions,
+    /// The most memory the map may hold, bytes ([`Map::memory_bytes`]).
+    #[serde(default = "default_memory_limit")]
+    pub memory_limit_bytes: u64,
+}
+
+fn default_memory_limit() -> u64 {
+    DEFAULT_MEMORY_LIMIT_BYTES
+}
+
+impl MapConfig {
+    /// A configuration with the default model at `resolution_m`.
+    pub fn new(resolution_m: f64) -> Self {
+        Self {
+            resolution_m,
+            model: ModelOptions::default(),
+            memory_limit_bytes: DEFAULT_MEMORY_LIMIT_BYTES,
+        }
+    }
+}
+
+/// What one call to [`Map::integrate`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct IntegrationStats {
+    /// Rays in the scan.
+    pub num_rays: u64,
+    /// Rays skipped entirely: zero length, or wholly above the height threshold.
+    pub num_rays_skipped: u64,
+    /// Cell visits by rays (a cell crossed by three rays counts three times).
+    pub num_cell_visits: u64,
+    /// Distinct cells updated (each once per scan).
+    pub num_cells_updated: u64,
+}
+
+impl std::ops::AddAssign for IntegrationStats {
+    fn add_assign(&mut self, o: Self) {
+        self.num_rays += o.num_rays;
+        self.num_rays_skipped += o.num_rays_skipped;
+        self.num_cell_visits += o.num_cell_visits;
+        self.num_cells_updated += o.num_cells_updated;
+    }
+}
+
+/// What one scan says about one cell, gathered over all its rays before the cell is updated once.
+#[derive(Debug, Clone, Copy)]
+struct ScanEvidence {
+    /// The largest inverse-sensor-model probability of any ray's sample in the cell; NaN: untouched.
+    p_max: f32,
+    /// The highest elevation measurement (eq. 12 with `p > l_occ`); -inf: none.
+    hit_z_m: f32,
+    /// Variance of that measurement.
+    hit_var_m2: f32,
+    /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it).
+    free_z_m: f32,
+    /// The smallest measurement variance among the free samples.
+    free_var_m2: f32,
+}
+
+impl ScanEvidence {
+    const NONE: Self = Self {
+        p_max: f32::NAN,
+        hit_z_m: f32::NEG_INFINITY,
+        hit_var_m2: f32::INFINITY,
+        free_z_m: f32::INFINITY,
+        free_var_m2: f32::INFINITY,
+    };
+}
+
+/// An Occupancy-Elevation Grid.
+///
+/// Each observed cell holds its occupancy log-odds, elevation mean and elevation variance (see [`Cell`]); the
+/// storage is sparse (see [`crate::storage`]). Feed it with [`Map::integrate`]; read it cell by cell
+/// ([`Map::cell`]) or a whole layer at a time ([`Map::layer`], [`Map::traversability_layer`]).
+///
+/// # Several rays in one scan
+///
+/// Within one scan, a cell crossed by several rays is updated once (OctoMap's rule, so that a dense scan does
+/// not count one surface as many independent observations): its occupancy takes the most occupied of the
+/// rays' samples (occupied wins), its elevation the highest elevation measurement among them ("the elevation
+/// is computed considering the higher point of the obstacle"), or, if no ray hit it, the free-space rule with
+/// the lowest beam height and smallest variance.
+#[derive(Debug, Clone)]
+pub struct Map {
+    config: MapConfig,
+    geometry: GridGeometry,
+    cells: TileGrid<Cell>,
+    scratch: TileGrid<ScanEvidence>,
+    /// `L` above which a cell is occupied (the occupancy threshold in log-odds).
+    occupied_log_odds: f32,
+    /// Eq. 6 of `p_min`, the log-odds of a plain free sample.
+    free_log_odds: f32,
+    totals: IntegrationStats,
+    num_scans: u64,
+}
+
+impl Map {
+    /// An empty map.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for a bad resolution or model option.
+    pub fn new(config: MapConfig) -> Result<Self> {
+        let geometry = GridGeometry::new(config.resolution_m)?;
+        config.model.validate()?;
+        Ok(Self {
+            geometry,
+            cells: TileGrid::new(Cell::UNOBSERVED),
+            scratch: TileGrid::new(ScanEvidence::NONE),
+            occupied_log_odds: log_odds(config.model.occupied_threshold),
+            free_log_odds: log_odds(config.model.p_min),
+            totals: IntegrationStats::default(),
+            num_scans: 0,
+            config,
+        })
+    }
+
+    /// The configuration the map was made with.
+    pub fn config(&self) -> &MapConfig {
+        &self.config
+    }
+
+    /// The grid geometry.
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// Number of scans integrated.
+    pub fn num_scans(&self) -> u64 {
+        self.num_scans
+    }
+
+    /// Totals over every scan integrated.
+    pub fn totals(&self) -> IntegrationStats {
+        self.totals
+    }
+
+    /// The cell's state; [`Cell::UNOBSERVED`] for a cell never observed.
+    pub fn cell(&self, cell: CellIndex) -> Cell {
+        self.cells.get(cell).copied().unwrap_or(Cell::UNOBSERVED)
+    }
+
+    /// The cell holding the world point `(x, y)`, if any.
+    pub fn cell_at(&self, x_m: f64, y_m: f64) -> Option<Cell> {
+        self.geometry.cell_of(x_m, y_m).map(|c| self.cell(c))
+    }
+
+    /// Whether the cell is occupied (`P > occupied_threshold`); `None` if never observed.
+    pub fn is_occupied(&self, cell: CellIndex) -> Option<bool> {
+        let c = self.cell(cell);
+        c.is_observed().then_some(c.log_odds > self.occupied_log_odds)
+    }
+
+    /// The occupancy threshold as log-odds: a cell is occupied when its `L` is above it.
+    pub fn occupied_log_odds(&self) -> f32 {
+        self.occupied_log_odds
+    }
+
+    /// Bytes the map holds: the cells' tiles, their index and the per-scan scratch kept for reuse.
+    pub fn memory_bytes(&self) -> u64 {
+        self.cells.memory_bytes() + self.scratch.memory_bytes() + size_of::<Self>() as u64
+    }
+
+    /// Bytes of the cells alone: 12 per cell of every allocated tile (observed or not).
+    pub fn cell_bytes(&self) -> u64 {
+        (self.cells.num_tiles() * TileGrid::<Cell>::tile_bytes()) as u64
+    }
+
+    /// Every observed cell with its state, tile by tile in a fixed order.
+    pub fn observed_cells(&self) -> impl Iterator<Item = (CellIndex, Cell)> + '_ {
+        self.cells.tiles().flat_map(|(tile, cells)| {
+            let first = tile.first_cell();
+            cells
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.is_observed())
+                .map(move |(k, c)| {
+                    let i = first.i + (k % TILE_SIZE) as i32;
+                    let j = first.j + (k >> TILE_SHIFT) as i32;
+                    (CellIndex::new(i, j), *c)
+                })
+        })
+    }
+
+    /// Number of observed cells.
+    pub fn num_observed_cells(&self) -> u64 {
+        self.cells
+            .tiles()
+            .map(|(_, cells)| cells.iter().filter(|c| c.is_observed()).count() as u64)
+            .sum()
+    }
+
+    /// The smallest region holding every observed cell, or `None` for an empty map.
+    pub fn observed_region(&self) -> Option<CellRegion> {
+        let mut it = self.observed_cells().map(|(c, _)| c);
+        let first = it.next()?;
+        let (lo, hi) = it.fold((first, first), |(lo, hi), c| {
+            (
+                CellIndex::new(lo.i.min(c.i), lo.j.min(c.j)),
+                CellIndex::new(hi.i.max(c.i), hi.j.max(c.j)),
+            )
+        });
+        CellRegion::from_corners(lo, hi)
+    }
+
+    pub(crate) fn tiles(&self) -> impl Iterator<Item = (TileIndex, &[Cell; TILE_CELLS])> + '_ {
+        self.cells.tiles()
+    }
+
+    pub(crate) fn insert_tile(&mut self, tile: TileIndex, cells: Box<[Cell; TILE_CELLS]>) -> Result<()> {
+        let limit = self.config.memory_limit_bytes;
+        self.cells
+            .insert_tile(tile, cells, limit)
+            .map_err(|e| Error::MemoryLimit {
+                requested_bytes: e.requested_bytes,
+                limit_bytes: limit,
+            })
+    }
+
+    pub(crate) fn restore_counters(&mut self, num_scans: u64, totals: IntegrationStats) {
+        self.num_scans = num_scans;
+        self.totals = totals;
+    }
+
+    /// Integrates one scan (the paper's Algorithm 1 for every ray, then one update per touched cell).
+    ///
+    /// # Errors
+    /// [`Error::InvalidScan`] if the scan holds non-finite numbers (nothing is changed), or
+    /// [`Error::MemoryLimit`] if storing the touched cells would exceed the limit (the map is left without
+    /// this scan's updates).
+    pub fn integrate(&mut self, scan: &Scan) -> Result<IntegrationStats> {
+        scan.validate()?;
+        let mut stats = IntegrationStats {
+            num_rays: scan.rays.len() as u64,
+            ..IntegrationStats::default()
+        };
+        let gathered = self
+            .gather(scan, &mut stats)
+            .and_then(|()| self.apply(&mut stats));
+        self.scratch.recycle_all();
+        gathered?;
+        self.num_scans += 1;
+        self.totals += stats;
+        Ok(stats)
+    }
+
+    /// Casts every ray of the scan into the scratch grid.
+    fn gather(&mut self, scan: &Scan, stats: &mut IntegrationStats) -> Result<()> {
+        let opts = self.config.model;
+        let o = scan.origin_in_world.coords;
+        let clear_range_m = f64::from(opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m));
+        let max_range_m = opts.max_range_m.map_or(f64::INFINITY, f64::from);
+        let scratch_limit = self
+            .config
+            .memory_limit_bytes
+            .saturating_sub(self.cells.memory_bytes());
+        for (index, ray) in scan.rays.iter().enumerate() {
+            let v: Vector3<f64> = ray.offset_in_world.cast();
+            let length = v.norm();
+            if length == 0.0 {
+                stats.num_rays_skipped += 1;
+                continue;
+            }
+            let dir = v / length;
+            // The hit range, or None for a ray that only clears; and the end of the traversal.
+            let (hit_range_m, l_end) = match ray.kind {
+                RayKind::Hit if length <= max_range_m => {
+                    let sigma = ray
+                        .range_sigma_m
+                        .unwrap_or_else(|| scan.sensor.sigma_m(length as f32));
+                    let sigma = f64::from(sigma.max(MIN_RANGE_SIGMA_M));
+                    (
+                        Some((length, sigma)),
+                        length + f64::from(GAUSSIAN_CUTOFF_SIGMAS) * sigma,
+                    )
+                }
+                RayKind::Hit => (None, max_range_m),
+                RayKind::NoReturn => (None, clear_range_m.min(max_range_m)),
+            };
+            let sigma_for_free = hit_range_m.map_or_else(
+                || {
+                    f64::from(
+                        ray.range_sigma_m
+                            .unwrap_or_else(|| scan.sensor.sigma_m(l_end as f32)),
+                    )
+                },
+                |(_, s)| s,
+            );
+            // Height thresholding: keep the part of the ray at or below max_height.
+            let (mut l_lo, mut l_hi): (f64, f64) = (0.0, l_end);
+            if let Some(h) = opts.max_height_m {
+                let h = f64::from(h);
+                if dir.z > 0.0 {
+                    l_hi = l_hi.min((h - o.z) / dir.z);
+                } else if dir.z < 0.0 {
+                    l_lo = l_lo.max((h - o.z) / dir.z);
+                } else if o.z > h {
+                    l_hi = -1.0;
+                }
+            }
+            if l_hi < l_lo {
+                stats.num_rays_skipped += 1;
+                continue;
+            }
+            let Some(walk) = crate::traversal::GroundTraversal::new(
+                &self.geometry,
+                (o.x, o.y),
+                (dir.x, dir.y),
+                l_lo,
+                l_hi,
+            ) else {
+                // The scan was validated, so only a ray leaving the index range gets here.
+                return Err(Error::InvalidScan(format!(
+                    "ray {index} reaches {l_hi} m from the sensor, beyond the grid's index range"
+                )));
+            };
+            let s2 = (sigma_for_free * sigma_for_free) as f32;
+            for crossing in walk {
+                stats.num_cell_visits += 1;
+                let (p, l_sample) = match hit_range_m {
+                    Some((l_p, sigma)) => {
+                        let l = l_p.clamp(crossing.l_enter, crossing.l_exit);
+                        let p = if l_p - l > f64::from(GAUSSIAN_CUTOFF_SIGMAS) * sigma {
+                            opts.p_min
+                        } else {
+                            clamp_probability(
+                                inverse_sensor_model(
+                                    l as f32,
+                                    l_p as f32,
+                                    sigma as f32,
+                                    opts.significance_k_m,
+                                    opts.p_min,
+                                ),
+                                opts.p_min,
+                                opts.p_max,
+                            )
+                        };
+                        (p, l)
+                    }
+                    None => (opts.p_min, crossing.l_exit),
+                };
+                let evidence = self
+                    .scratch
+                    .get_or_insert(crossing.cell, scratch_limit)
+                    .map_err(|e| Error::MemoryLimit {
+                        requested_bytes: e.requested_bytes,
+                        limit_bytes: scratch_limit,
+                    })?;
+                if !(evidence.p_max >= p) {
+                    evidence.p_max = p;
+                }
+                match elevation_observation(p, (o.z + dir.z * l_sample) as f32, opts.elevation_threshold) {
+                    Some(z) => {
+                        if z > evidence.hit_z_m {
+                            evidence.hit_z_m = z;
+                            evidence.hit_var_m2 = s2;
+                        }
+                    }
+                    None => {
+                        let beam_top = o.z + (dir.z * crossing.l_enter).max(dir.z * crossing.l_exit);
+                        evidence.free_z_m = evidence.free_z_m.min(beam_top as f32);
+                        evidence.free_var_m2 = evidence.free_var_m2.min(s2);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Updates every cell the scan touched, once.
+    fn apply(&mut self, stats: &mut IntegrationStats) -> Result<()> {
+        let opts = self.config.model;
+        let limit = self
+            .config
+            .memory_limit_bytes
+            .saturating_sub(self.scratch.memory_bytes());
+        for (tile, evidence) in self.scratch.tiles() {
+            let cells = self
+                .cells
+                .tile_or_insert(tile, limit)
+                .map_err(|e| Error::MemoryLimit {
+                    requested_bytes: e.requested_bytes + self.scratch.memory_bytes(),
+                    limit_bytes: self.config.memory_limit_bytes,
+                })?;
+            for (cell, ev) in cells.iter_mut().zip(evidence.iter()) {
+                if ev.p_max.is_nan() {
+                    continue;
+                }
+                stats.num_cells_updated += 1;
+                update_cell(cell, ev, &opts, self.occupied_log_odds, self.free_log_odds);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One cell's update from one scan's gathered evidence: eq. 5-7 for the occupancy, then eq. 12 with eq. 8-9 (or
+/// the free-space rule) for the elevation.
+fn update_cell(
+    cell: &mut Cell,
+    ev: &ScanEvidence,
+    opts: &ModelOptions,
+    occupied_log_odds: f32,
+    free_log_odds: f32,
+) {
+    let prior_log_odds = if cell.is_observed() { cell.log_odds } else { 0.0 };
+    let was_occupied = cell.is_observed() && prior_log_odds > occupied_log_odds;
+    let delta = if ev.p_max == opts.p_min {
+        free_log_odds
+    } else {
+        log_odds(ev.p_max)
+    };
+    cell.log_odds = update_log_odds(prior_log_odds, delta, opts.log_odds_min, opts.log_odds_max);
+    let prior = cell.elevation();
+    let q = opts.process_noise_var_m2;
+    let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
+        Some(kalman_fuse(prior, ev.hit_z_m, ev.hit_var_m2, q))
+    } else {
+        match opts.free_space_elevation {
+            FreeSpaceElevation::Zero => {
+                let now_free = cell.log_odds <= occupied_log_odds;
+                let prior = if was_occupied && now_free { None } else { prior };
+                Some(kalman_fuse(prior, 0.0, ev.free_var_m2, q))
+            }
+            FreeSpaceElevation::Skip => prior,
+            FreeSpaceElevation::RayBound => prior.map(|e: Elevation| ray_bound(e, ev.free_z_m)),
+        }
+    };
+    cell.set_elevation(posterior);
+}

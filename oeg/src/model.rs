@@ -1,0 +1,411 @@
+//! The OEG update rules (paper sections 3 and 4) as small pure functions, and the options that parameterise
+//! them.
+//!
+//! Each function names the equation it implements. [`crate::Map::integrate`] strings them together as the
+//! paper's Algorithm 1 does.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Default lower log-odds bound `L_min` (eq. 7): OctoMap's `clamping_thres_min` of 0.1192.
+pub const DEFAULT_LOG_ODDS_MIN: f32 = -2.0;
+/// Default upper log-odds bound `L_max` (eq. 7): OctoMap's `clamping_thres_max` of 0.971.
+pub const DEFAULT_LOG_ODDS_MAX: f32 = 3.5;
+/// Default occupancy threshold: a cell is occupied when `P(L)` exceeds it (OctoMap's default).
+pub const DEFAULT_OCCUPIED_THRESHOLD: f32 = 0.5;
+/// Default significance `k` of one measurement in eq. 10, in metres. Chosen so that a hit with a 3 cm range
+/// error peaks at `p` = 0.9 and one with a 30 cm error (stereo at 3 m) at about 0.54: far, noisy readings count
+/// less, as in the paper's Fig. 3.
+pub const DEFAULT_SIGNIFICANCE_K_M: f32 = 0.03;
+/// Default `p_min` of eq. 11, the occupancy probability of a sample the beam passed through (OctoMap's
+/// `prob_miss` of 0.4).
+pub const DEFAULT_P_MIN: f32 = 0.4;
+/// Default upper clamp of eq. 10's result, which exceeds 1 for small range errors. 0.9 lets two confident hits
+/// saturate `L_max`, close to OctoMap's `prob_hit` of 0.7 per hit.
+pub const DEFAULT_P_MAX: f32 = 0.9;
+/// Default `l_occ` of eq. 12: a sample is an elevation measurement when its `p` exceeds this.
+pub const DEFAULT_ELEVATION_THRESHOLD: f32 = 0.5;
+/// The inverse sensor model's Gaussian is evaluated within this many range errors of the hit; beyond it the
+/// exponential is below 1.2 % and the sample takes `p_occ(l)`. Cells beyond `l_p + 3 dl` are not touched.
+pub const GAUSSIAN_CUTOFF_SIGMAS: f32 = 3.0;
+
+/// What a sample the beam passed through (not near the hit) says about a cell's elevation: eq. 12's "otherwise"
+/// branch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FreeSpaceElevation {
+    /// The paper: a free sample is the measurement `h = 0` (flat ground), fused like any other. When a scan turns
+    /// an occupied cell free, the obstacle's elevation history is dropped first, so the cell restarts from the
+    /// ground (the paper's Fig. 6: the elevation follows the occupancy once a person has left).
+    #[default]
+    Zero,
+    /// A free sample leaves the elevation alone.
+    Skip,
+    /// A free sample at height `z` bounds the elevation from above: the beam passed there, so nothing stands
+    /// higher. `mu` is lowered to at most `z` (the beam's highest point inside the cell, the conservative choice);
+    /// the variance is kept.
+    RayBound,
+}
+
+/// The parameters of the map's update rules. `Default` gives the documented defaults above.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ModelOptions {
+    /// `L_min` of eq. 7.
+    pub log_odds_min: f32,
+    /// `L_max` of eq. 7.
+    pub log_odds_max: f32,
+    /// A cell is occupied when its probability (eq. 3) exceeds this.
+    pub occupied_threshold: f32,
+    /// `k` of eq. 10, metres.
+    pub significance_k_m: f32,
+    /// `p_min` of eq. 11.
+    pub p_min: f32,
+    /// Upper clamp of eq. 10's result.
+    pub p_max: f32,
+    /// `l_occ` of eq. 12.
+    pub elevation_threshold: f32,
+    /// Eq. 12's free branch.
+    pub free_space_elevation: FreeSpaceElevation,
+    /// Variance added to a cell's elevation variance before each fusion, m^2 per update. 0 (the paper) keeps
+    /// eq. 9's ever-shrinking variance; a positive value lets a stubborn cell follow a moving obstacle. It is per
+    /// update, not per second, because a cell stores no time stamp (three f32 per cell).
+    pub process_noise_var_m2: f32,
+    /// Height thresholding (paper section 6.2, Fig. 12): the parts of a beam higher than this, in world z
+    /// metres, are ignored entirely, so overhangs the robot passes under never enter the map. `None` (the
+    /// paper's base model) keeps everything; set it to the robot's height plus a margin.
+    pub max_height_m: Option<f32>,
+    /// Hits farther than this from the sensor are treated as no-return rays up to this range (OctoMap's
+    /// `maxrange`). `None`: no limit.
+    pub max_range_m: Option<f32>,
+    /// How far a no-return ray clears, metres. `None`: the sensor's maximum range.
+    pub no_return_clear_range_m: Option<f32>,
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        Self {
+            log_odds_min: DEFAULT_LOG_ODDS_MIN,
+            log_odds_max: DEFAULT_LOG_ODDS_MAX,
+            occupied_threshold: DEFAULT_OCCUPIED_THRESHOLD,
+            significance_k_m: DEFAULT_SIGNIFICANCE_K_M,
+            p_min: DEFAULT_P_MIN,
+            p_max: DEFAULT_P_MAX,
+            elevation_threshold: DEFAULT_ELEVATION_THRESHOLD,
+            free_space_elevation: FreeSpaceElevation::Zero,
+            process_noise_var_m2: 0.0,
+            max_height_m: None,
+            max_range_m: None,
+            no_return_clear_range_m: None,
+        }
+    }
+}
+
+impl ModelOptions {
+    /// Checks every option for sense.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] naming the first bad option and its valid range.
+    pub fn validate(&self) -> Result<()> {
+        fn check(ok: bool, name: &'static str, message: String) -> Result<()> {
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::setting(name, message))
+            }
+        }
+        let o = self;
+        check(
+            o.log_odds_min.is_finite() && o.log_odds_min < 0.0,
+            "log_odds_min",
+            format!("must be a finite negative log-odds, got {}", o.log_odds_min),
+        )?;
+        check(
+            o.log_odds_max.is_finite() && o.log_odds_max > 0.0,
+            "log_odds_max",
+            format!("must be a finite positive log-odds, got {}", o.log_odds_max),
+        )?;
+        check(
+            o.occupied_threshold > 0.0 && o.occupied_threshold < 1.0,
+            "occupied_threshold",
+            format!("must be a probability in (0, 1), got {}", o.occupied_threshold),
+        )?;
+        check(
+            o.significance_k_m.is_finite() && o.significance_k_m > 0.0,
+            "significance_k_m",
+            format!("must be a positive number of metres, got {}", o.significance_k_m),
+        )?;
+        check(
+            o.p_min > 0.0 && o.p_min < 0.5,
+            "p_min",
+            format!("must be in (0, 0.5), got {}", o.p_min),
+        )?;
+        check(
+            o.p_max > 0.5 && o.p_max < 1.0,
+            "p_max",
+            format!("must be in (0.5, 1), got {}", o.p_max),
+        )?;
+        check(
+            o.elevation_threshold > 0.0 && o.elevation_threshold < 1.0,
+            "elevation_threshold",
+            format!("must be a probability in (0, 1), got {}", o.elevation_threshold),
+        )?;
+        check(
+            o.process_noise_var_m2.is_finite() && o.process_noise_var_m2 >= 0.0,
+            "process_noise_var_m2",
+            format!("must be a variance >= 0, got {}", o.process_noise_var_m2),
+        )?;
+        if let Some(h) = o.max_height_m {
+            check(
+                h.is_finite(),
+                "max_height_m",
+                format!("must be a finite height in metres, got {h}"),
+            )?;
+        }
+        for (name, v) in [
+            ("max_range_m", o.max_range_m),
+            ("no_return_clear_range_m", o.no_return_clear_range_m),
+        ] {
+            if let Some(v) = v {
+                check(
+                    v.is_finite() && v > 0.0,
+                    name,
+                    format!("must be a positive range in metres, got {v}"),
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Eq. 3: the occupancy probability of log-odds `l`, `1 - 1 / (1 + e^l)`.
+pub fn probability_from_log_odds(l: f32) -> f32 {
+    1.0 - 1.0 / (1.0 + l.exp())
+}
+
+/// Eq. 6: the log-odds `log(p / (1 - p))` of one measurement's probability `p` (prior 0.5, so eq. 4's prior
+/// term vanishes).
+pub fn log_odds(p: f32) -> f32 {
+    (p / (1.0 - p)).ln()
+}
+
+/// Eq. 5 with Yguel's clamping, eq. 7: `max(min(l + delta, l_max), l_min)`.
+pub fn update_log_odds(l: f32, delta: f32, l_min: f32, l_max: f32) -> f32 {
+    (l + delta).clamp(l_min, l_max)
+}
+
+/// Eq. 11: the occupancy probability of a sample at range `l` without the Gaussian bump: `p_min` up to the
+/// measured range `l_p`, 0.5 (unknown) behind it.
+pub fn p_occ(l: f32, l_p: f32, p_min: f32) -> f32 {
+    if l <= l_p { p_min } else { 0.5 }
+}
+
+/// Eq. 10: the Gaussian inverse sensor model, the occupancy probability of a sample at range `l` on a beam that
+/// measured `l_p` with range error `dl`:
+/// `p_occ(l) + (k / (dl sqrt(2 pi)) + 0.5 - p_occ(l)) exp(-((l - l_p) / dl)^2 / 2)`.
+///
+/// The result can exceed 1 for small `dl`; [`clamp_probability`] bounds it before it becomes log-odds.
+pub fn inverse_sensor_model(l: f32, l_p: f32, dl: f32, k: f32, p_min: f32) -> f32 {
+    let base = p_occ(l, l_p, p_min);
+    let z = (l - l_p) / dl;
+    let peak = k / (dl * (2.0 * std::f32::consts::PI).sqrt());
+    base + (peak + 0.5 - base) * (-0.5 * z * z).exp()
+}
+
+/// Bounds an inverse-sensor-model probability into `[p_min, p_max]`, inside the open interval (0, 1), so its
+/// log-odds is finite.
+pub fn clamp_probability(p: f32, p_min: f32, p_max: f32) -> f32 {
+    p.clamp(p_min, p_max)
+}
+
+/// Eq. 12: the elevation measurement of a sample at height `z_m` with occupancy probability `p`: `z` when
+/// `p > l_occ`, otherwise the paper's `0` (returned as `None` here; what a free sample does is
+/// [`FreeSpaceElevation`]'s choice).
+pub fn elevation_observation(p: f32, z_m: f32, l_occ: f32) -> Option<f32> {
+    (p > l_occ).then_some(z_m)
+}
+
+/// An elevation estimate: the Gaussian `N(mean_m, var_m2)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Elevation {
+    /// Mean `mu`, metres (world z).
+    pub mean_m: f32,
+    /// Variance `sigma^2`, m^2.
+    pub var_m2: f32,
+}
+
+/// Eq. 8 and 9, the one-dimensional Kalman update of Pfaff et al.: fuses the measurement `h` with variance
+/// `s2` into the prior `(mu, sigma^2)`:
+/// `mu' = (s2 mu + sigma^2 h) / (sigma^2 + s2)`, `sigma'^2 = sigma^2 s2 / (sigma^2 + s2)`.
+///
+/// `process_noise_var_m2` is added to the prior variance first (0 in the paper). With no prior (`None`) the
+/// measurement becomes the estimate.
+pub fn kalman_fuse(prior: Option<Elevation>, h_m: f32, s2_m2: f32, process_noise_var_m2: f32) -> Elevation {
+    match prior {
+        None => Elevation {
+            mean_m: h_m,
+            var_m2: s2_m2,
+        },
+        Some(Elevation {
+            mean_m: mu,
+            var_m2: var,
+        }) => {
+            let var = var + process_noise_var_m2;
+            let sum = var + s2_m2;
+            if sum <= 0.0 {
+                // Two exact estimates: keep the prior rather than divide by zero.
+                return Elevation {
+                    mean_m: mu,
+                    var_m2: var,
+                };
+            }
+            Elevation {
+                mean_m: (s2_m2 * mu + var * h_m) / sum,
+                var_m2: var * s2_m2 / sum,
+            }
+        }
+    }
+}
+
+/// The ray-bound rule of [`FreeSpaceElevation::RayBound`]: a beam that passed through the cell at height
+/// `beam_z_m` caps the elevation mean there.
+pub fn ray_bound(prior: Elevation, beam_z_m: f32) -> Elevation {
+    Elevation {
+        mean_m: prior.mean_m.min(beam_z_m),
+        var_m2: prior.var_m2,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f32, b: f32, tol: f32) -> bool {
+        (a - b).abs() <= tol
+    }
+
+    #[test]
+    fn eq3_and_eq6_are_inverse() {
+        assert!(close(probability_from_log_odds(0.0), 0.5, 1e-7));
+        // OctoMap's clamping bounds: -2 -> 0.1192, 3.5 -> 0.9707.
+        assert!(close(probability_from_log_odds(-2.0), 0.119_203, 1e-5));
+        assert!(close(probability_from_log_odds(3.5), 0.970_688, 1e-5));
+        assert!(close(log_odds(0.7), 0.847_298, 1e-5));
+        assert!(close(log_odds(0.4), -0.405_465, 1e-5));
+        for p in [0.1_f32, 0.3, 0.5, 0.8, 0.95] {
+            assert!(close(probability_from_log_odds(log_odds(p)), p, 1e-5));
+        }
+    }
+
+    #[test]
+    fn eq7_clamps_to_the_bounds() {
+        assert_eq!(update_log_odds(3.0, 0.847, -2.0, 3.5), 3.5);
+        assert_eq!(update_log_odds(-1.8, -0.405, -2.0, 3.5), -2.0);
+        assert!(close(update_log_odds(0.0, 0.847, -2.0, 3.5), 0.847, 1e-6));
+    }
+
+    #[test]
+    fn eq10_matches_hand_computed_values() {
+        // At the hit: p_occ = p_min = 0.4, bump = k / (dl sqrt(2 pi)) = 0.03 / (0.03 * 2.506628) = 0.398942.
+        let p = inverse_sensor_model(5.0, 5.0, 0.03, 0.03, 0.4);
+        assert!(close(p, 0.4 + (0.398_942 + 0.5 - 0.4), 1e-5), "{p}");
+        // One dl before the hit: 0.4 + 0.498942 * exp(-0.5) = 0.702627.
+        let p = inverse_sensor_model(4.97, 5.0, 0.03, 0.03, 0.4);
+        assert!(close(p, 0.702_627, 1e-4), "{p}");
+        // One dl behind the hit, p_occ is 0.5: 0.5 + 0.398942 * exp(-0.5) = 0.741971.
+        let p = inverse_sensor_model(5.03, 5.0, 0.03, 0.03, 0.4);
+        assert!(close(p, 0.741_971, 1e-4), "{p}");
+        // Far before the hit the Gaussian vanishes and p = p_min.
+        assert!(close(inverse_sensor_model(1.0, 5.0, 0.03, 0.03, 0.4), 0.4, 1e-6));
+        // The paper's Fig. 3: a larger range error lowers the peak.
+        assert!(
+            inverse_sensor_model(15.0, 15.0, 0.3, 0.03, 0.4)
+                < inverse_sensor_model(10.0, 10.0, 0.2, 0.03, 0.4)
+        );
+    }
+
+    #[test]
+    fn eq11_switches_at_the_measured_range() {
+        assert_eq!(p_occ(2.0, 2.0, 0.4), 0.4);
+        assert_eq!(p_occ(2.01, 2.0, 0.4), 0.5);
+    }
+
+    #[test]
+    fn eq12_gives_the_height_only_near_the_hit() {
+        assert_eq!(elevation_observation(0.8, 0.31, 0.5), Some(0.31));
+        assert_eq!(elevation_observation(0.4, 0.31, 0.5), None);
+    }
+
+    #[test]
+    fn eq8_eq9_match_hand_computed_values() {
+        // Prior N(1, 0.04), measurement 2 with 0.01: mu = (0.01 * 1 + 0.04 * 2) / 0.05 = 1.8, var = 0.008.
+        let e = kalman_fuse(
+            Some(Elevation {
+                mean_m: 1.0,
+                var_m2: 0.04,
+            }),
+            2.0,
+            0.01,
+            0.0,
+        );
+        assert!(
+            close(e.mean_m, 1.8, 1e-6) && close(e.var_m2, 0.008, 1e-7),
+            "{e:?}"
+        );
+        // Process noise inflates the prior first: var 0.03 + 0.01 = 0.04 -> same result.
+        let e2 = kalman_fuse(
+            Some(Elevation {
+                mean_m: 1.0,
+                var_m2: 0.03,
+            }),
+            2.0,
+            0.01,
+            0.01,
+        );
+        assert!(
+            close(e2.mean_m, 1.8, 1e-6) && close(e2.var_m2, 0.008, 1e-7),
+            "{e2:?}"
+        );
+        // No prior: the measurement is the estimate.
+        let e3 = kalman_fuse(None, 0.2, 0.5, 0.0);
+        assert_eq!(
+            e3,
+            Elevation {
+                mean_m: 0.2,
+                var_m2: 0.5
+            }
+        );
+    }
+
+    #[test]
+    fn ray_bound_only_lowers() {
+        let e = Elevation {
+            mean_m: 1.2,
+            var_m2: 0.01,
+        };
+        assert_eq!(ray_bound(e, 0.3).mean_m, 0.3);
+        assert_eq!(ray_bound(e, 2.0).mean_m, 1.2);
+        assert_eq!(ray_bound(e, 0.3).var_m2, 0.01);
+    }
+
+    #[test]
+    fn options_are_validated() {
+        assert!(ModelOptions::default().validate().is_ok());
+        let bad = ModelOptions {
+            p_min: 0.6,
+            ..ModelOptions::default()
+        };
+        assert!(bad.validate().expect_err("p_min").to_string().contains("p_min"));
+        let bad = ModelOptions {
+            process_noise_var_m2: f32::NAN,
+            ..ModelOptions::default()
+        };
+        assert!(bad.validate().is_err());
+        let bad = ModelOptions {
+            max_range_m: Some(-1.0),
+            ..ModelOptions::default()
+        };
+        assert!(bad.validate().is_err());
+    }
+}

@@ -1,0 +1,352 @@
+//! The map's behaviour through its public API: Algorithm 1 end to end on small hand-made scans.
+
+use nalgebra::{Point3, Vector3};
+use oeg::{
+    CellIndex, FreeSpaceElevation, Map, MapConfig, ModelOptions, Ray, RobotProfile, Scan, SensorModel,
+    Traversability, TraversabilityRule,
+};
+use proptest::prelude::*;
+
+fn map_with(resolution_m: f64, model: ModelOptions) -> Map {
+    Map::new(MapConfig {
+        model,
+        ..MapConfig::new(resolution_m)
+    })
+    .expect("valid config")
+}
+
+fn cell(map: &Map, x: f64, y: f64) -> CellIndex {
+    map.geometry().cell_of(x, y).expect("finite")
+}
+
+/// A fan of laser rays from `origin` hitting the points `(x, y, z)` of `targets`.
+fn scan_of(origin: Point3<f64>, targets: &[(f64, f64, f64)]) -> Scan {
+    let mut scan = Scan::new(origin, SensorModel::laser());
+    for &(x, y, z) in targets {
+        scan.push_hit(Point3::new(x, y, z));
+    }
+    scan
+}
+
+#[test]
+fn a_hit_marks_its_cell_occupied_at_its_height_and_clears_the_way() {
+    let mut map = map_with(0.1, ModelOptions::default());
+    let scan = scan_of(Point3::new(0.05, 0.05, 0.5), &[(2.05, 0.05, 0.2)]);
+    let stats = map.integrate(&scan).expect("integrated");
+    assert_eq!(stats.num_rays, 1);
+    // 0.05 .. 2.05 along x: cells 0..=20, plus the cells up to 3 sigma behind the hit (same cell here).
+    assert_eq!(stats.num_cells_updated, 21);
+    let hit = map.cell(cell(&map, 2.05, 0.05));
+    let e = hit.elevation().expect("elevation");
+    assert!((e.mean_m - 0.2).abs() < 0.01, "{e:?}");
+    // sigma_t = the laser's 12 mm range error.
+    assert!((e.var_m2 - 0.012f32 * 0.012).abs() < 1e-6, "{e:?}");
+    assert_eq!(map.is_occupied(cell(&map, 2.05, 0.05)), Some(true));
+    for x in [0.05, 0.5, 1.0, 1.85] {
+        let c = cell(&map, x, 0.05);
+        assert_eq!(map.is_occupied(c), Some(false), "x = {x}");
+        // Zero mode: free samples are the measurement h = 0.
+        assert_eq!(map.cell(c).elevation().map(|e| e.mean_m), Some(0.0));
+    }
+    assert!(!map.cell(cell(&map, 2.5, 0.05)).is_observed());
+    assert!(!map.cell(cell(&map, 1.0, 0.5)).is_observed());
+}
+
+#[test]
+fn several_rays_of_one_scan_update_a_cell_once_and_occupied_wins() {
+    let opts = ModelOptions::default();
+    let mut once = map_with(0.2, opts);
+    once.integrate(&scan_of(Point3::new(0.1, 0.1, 0.5), &[(2.1, 0.1, 0.1)]))
+        .expect("integrated");
+    let mut many = map_with(0.2, opts);
+    // Three hits in the same cell, and a ray that passes over that cell to hit farther away.
+    let targets = [
+        (2.1, 0.1, 0.1),
+        (2.12, 0.12, 0.15),
+        (2.08, 0.15, 0.12),
+        (4.1, 0.1, 0.0),
+    ];
+    many.integrate(&scan_of(Point3::new(0.1, 0.1, 0.5), &targets))
+        .expect("integrated");
+    let c = cell(&once, 2.1, 0.1);
+    assert_eq!(
+        once.cell(c).log_odds,
+        many.cell(c).log_odds,
+        "one update per scan"
+    );
+    assert_eq!(
+        many.is_occupied(c),
+        Some(true),
+        "occupied wins over the ray that passed"
+    );
+    // The highest point the scan saw in the cell is its elevation measurement.
+    let e = many.cell(c).elevation().expect("elevation");
+    assert!((e.mean_m - 0.15).abs() < 1e-3, "{e:?}");
+}
+
+#[test]
+fn no_return_rays_only_clear() {
+    let mut map = map_with(
+        0.1,
+        ModelOptions {
+            no_return_clear_range_m: Some(3.0),
+            ..ModelOptions::default()
+        },
+    );
+    let mut scan = Scan::new(Point3::new(0.05, 0.05, 0.3), SensorModel::laser());
+    scan.rays.push(Ray::no_return(Vector3::new(1.0, 0.0, 0.0)));
+    map.integrate(&scan).expect("integrated");
+    let observed: Vec<_> = map.observed_cells().collect();
+    assert_eq!(observed.len(), 31, "0.05 m to 3.05 m");
+    assert!(observed.iter().all(|(c, _)| map.is_occupied(*c) == Some(false)));
+    assert!(!map.cell(cell(&map, 3.2, 0.05)).is_observed());
+}
+
+#[test]
+fn hits_beyond_the_maximum_range_only_clear_up_to_it() {
+    let mut map = map_with(
+        0.1,
+        ModelOptions {
+            max_range_m: Some(1.0),
+            ..ModelOptions::default()
+        },
+    );
+    map.integrate(&scan_of(Point3::new(0.05, 0.05, 0.3), &[(5.05, 0.05, 0.3)]))
+        .expect("integrated");
+    assert_eq!(map.num_observed_cells(), 11);
+    assert!(
+        map.observed_cells()
+            .all(|(c, _)| map.is_occupied(c) == Some(false))
+    );
+}
+
+#[test]
+fn height_thresholding_keeps_overhangs_out_of_the_map() {
+    // A sensor at 0.3 m sees a branch at 0.8 m, 2 m ahead, and the ground 4 m ahead.
+    let targets = [(2.05, 0.05, 0.8), (4.05, 0.05, 0.0)];
+    let origin = Point3::new(0.05, 0.05, 0.3);
+    let mut plain = map_with(0.1, ModelOptions::default());
+    let mut thresholded = map_with(
+        0.1,
+        ModelOptions {
+            max_height_m: Some(0.5),
+            ..ModelOptions::default()
+        },
+    );
+    for _ in 0..3 {
+        plain.integrate(&scan_of(origin, &targets)).expect("integrated");
+        thresholded
+            .integrate(&scan_of(origin, &targets))
+            .expect("integrated");
+    }
+    let under_branch = cell(&plain, 2.05, 0.05);
+    let profile = RobotProfile::default();
+    let rule = TraversabilityRule::Absolute;
+    // Without thresholding the branch blocks the path (the paper's Fig. 12 (b)) ...
+    assert_eq!(
+        plain.traversability(under_branch, &profile, rule),
+        Traversability::Blocked
+    );
+    // ... with it the path is open (Fig. 12 (c)): the cell under the branch is only seen free by the ground ray.
+    assert_eq!(
+        thresholded.traversability(under_branch, &profile, rule),
+        Traversability::Free
+    );
+    // The part of the branch ray above 0.5 m was ignored: nothing beyond 1.05 m along it but the ground ray.
+    assert_eq!(
+        thresholded.traversability(cell(&plain, 4.05, 0.05), &profile, rule),
+        Traversability::Traversable
+    );
+}
+
+/// The paper's Fig. 5 and 6: a person stands 2 m ahead for several scans, then leaves; the laser, 0.4 m up,
+/// then sees the floor 4 m ahead through the place the person stood.
+fn person_walks_through(mode: FreeSpaceElevation) -> Map {
+    let mut map = map_with(
+        0.1,
+        ModelOptions {
+            free_space_elevation: mode,
+            ..ModelOptions::default()
+        },
+    );
+    let origin = Point3::new(0.05, 0.05, 0.4);
+    let person: Vec<_> = (0..10).map(|k| (2.05, 0.05, 0.1 + 0.04 * f64::from(k))).collect();
+    for _ in 0..6 {
+        map.integrate(&scan_of(origin, &person)).expect("integrated");
+    }
+    let c = cell(&map, 2.05, 0.05);
+    assert_eq!(
+        map.is_occupied(c),
+        Some(true),
+        "{mode:?}: the person is an obstacle"
+    );
+    let e = map.cell(c).elevation().expect("elevation");
+    assert!(e.mean_m > 0.4, "{mode:?}: the person's height is mapped: {e:?}");
+    for _ in 0..12 {
+        map.integrate(&scan_of(origin, &[(4.05, 0.05, 0.0)]))
+            .expect("integrated");
+    }
+    map
+}
+
+#[test]
+fn issue_dynamic_obstacle_is_cleared_in_zero_and_ray_bound_modes() {
+    for mode in [FreeSpaceElevation::Zero, FreeSpaceElevation::RayBound] {
+        let map = person_walks_through(mode);
+        let c = cell(&map, 2.05, 0.05);
+        assert_eq!(map.is_occupied(c), Some(false), "{mode:?}: the person is gone");
+        let e = map.cell(c).elevation().expect("elevation");
+        // The ray to the floor passes the cell at about 0.2 m: zero mode is back on the ground; ray_bound is
+        // capped by the beam.
+        let limit = if mode == FreeSpaceElevation::Zero {
+            0.01
+        } else {
+            0.25
+        };
+        assert!(
+            e.mean_m < limit,
+            "{mode:?}: elevation back near the ground: {e:?}"
+        );
+        assert_eq!(
+            map.traversability(c, &RobotProfile::default(), TraversabilityRule::Absolute),
+            Traversability::Free
+        );
+    }
+}
+
+#[test]
+fn skip_mode_keeps_the_height_but_frees_the_cell() {
+    let map = person_walks_through(FreeSpaceElevation::Skip);
+    let c = cell(&map, 2.05, 0.05);
+    assert_eq!(map.is_occupied(c), Some(false));
+    assert!(map.cell(c).elevation().expect("elevation").mean_m > 0.4);
+}
+
+#[test]
+fn bad_resolutions_and_scans_are_errors_not_panics() {
+    for r in [0.0, -0.05, f64::NAN] {
+        let err = Map::new(MapConfig::new(r)).expect_err("bad resolution");
+        assert!(err.to_string().contains("resolution_m"), "{err}");
+    }
+    let mut map = map_with(0.1, ModelOptions::default());
+    let mut scan = scan_of(Point3::new(0.0, 0.0, 0.3), &[(1.0, 0.0, 0.0)]);
+    scan.rays.push(Ray::hit(Vector3::new(f32::INFINITY, 0.0, 0.0)));
+    let err = map.integrate(&scan).expect_err("infinite ray");
+    assert!(err.to_string().contains("ray 1"), "{err}");
+    assert_eq!(map.num_observed_cells(), 0, "a rejected scan changes nothing");
+}
+
+#[test]
+fn a_map_over_its_memory_limit_is_an_error() {
+    let config = MapConfig {
+        memory_limit_bytes: 1 << 20,
+        ..MapConfig::new(0.05)
+    };
+    let mut map = Map::new(config).expect("valid");
+    // A 20 m ray at 0.05 m touches ~7 tiles of 48 KiB plus scratch: fine. A 500 m ray is not.
+    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(20.0, 0.0, 0.0)]))
+        .expect("fits");
+    let err = map
+        .integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(500.0, 300.0, 0.0)]))
+        .expect_err("too big");
+    assert!(matches!(err, oeg::Error::MemoryLimit { .. }), "{err}");
+    assert!(map.memory_bytes() <= 1 << 20);
+}
+
+#[test]
+fn memory_follows_what_was_seen_not_the_extent() {
+    // A robot crossing a 300 m x 170 m area at 0.05 m: a dense grid would need 6000 x 3400 x 12 = 245 MB.
+    let mut map = map_with(0.05, ModelOptions::default());
+    for k in 0..60 {
+        let x = -150.0 + 5.0 * f64::from(k);
+        let y = -85.0 + 2.8 * f64::from(k);
+        map.integrate(&scan_of(
+            Point3::new(x, y, 0.5),
+            &[(x + 3.0, y, 0.0), (x, y + 3.0, 0.0)],
+        ))
+        .expect("ok");
+    }
+    let dense_bytes = 6000u64 * 3400 * 12;
+    assert!(
+        map.memory_bytes() * 20 < dense_bytes,
+        "{} bytes",
+        map.memory_bytes()
+    );
+    // The count is honest: at least 12 bytes per cell of every allocated tile.
+    assert!(map.memory_bytes() >= map.cell_bytes() && map.cell_bytes() >= map.num_observed_cells() * 12);
+}
+
+#[test]
+fn the_terrain_rule_measures_steps_against_the_neighbours() {
+    // A plane at 0.5 m height (a plateau) seen from above: absolute says blocked, terrain says traversable.
+    let mut map = map_with(0.1, ModelOptions::default());
+    let mut scan = Scan::new(Point3::new(0.0, 0.0, 1.5), SensorModel::laser());
+    for i in -10..=10 {
+        for j in -10..=10 {
+            scan.push_hit(Point3::new(
+                0.05 + 0.1 * f64::from(i),
+                0.05 + 0.1 * f64::from(j),
+                0.5,
+            ));
+        }
+    }
+    for _ in 0..2 {
+        map.integrate(&scan).expect("integrated");
+    }
+    let c = cell(&map, 0.05, 0.05);
+    let p = RobotProfile::default();
+    assert_eq!(
+        map.traversability(c, &p, TraversabilityRule::Absolute),
+        Traversability::Blocked
+    );
+    assert_eq!(
+        map.traversability(c, &p, TraversabilityRule::Terrain),
+        Traversability::Traversable
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Whatever scans come in, every observed cell's log-odds stays within the clamping bounds.
+    #[test]
+    fn log_odds_stay_within_bounds(
+        points in prop::collection::vec((-4.0f64..4.0, -4.0f64..4.0, -0.5f64..1.5), 1..60),
+        origin in (-1.0f64..1.0, -1.0f64..1.0, 0.0f64..1.0),
+        repeats in 1usize..5,
+        stereo in any::<bool>(),
+    ) {
+        let opts = ModelOptions::default();
+        let mut map = map_with(0.1, opts);
+        let mut scan = scan_of(Point3::new(origin.0, origin.1, origin.2), &points);
+        if stereo {
+            scan.sensor = SensorModel::stereo();
+        }
+        for _ in 0..repeats {
+            map.integrate(&scan).expect("integrated");
+        }
+        for (_, c) in map.observed_cells() {
+            prop_assert!(c.log_odds >= opts.log_odds_min && c.log_odds <= opts.log_odds_max, "{:?}", c);
+            prop_assert!(c.var_m2 > 0.0, "{:?}", c);
+        }
+    }
+
+    /// Without process noise a Kalman fusion never increases the variance (eq. 9).
+    #[test]
+    fn fusion_never_increases_variance(mu in -5.0f32..5.0, var in 1e-6f32..10.0, h in -5.0f32..5.0, s2 in 1e-6f32..10.0) {
+        let prior = oeg::Elevation { mean_m: mu, var_m2: var };
+        let post = oeg::model::kalman_fuse(Some(prior), h, s2, 0.0);
+        prop_assert!(post.var_m2 <= var && post.var_m2 <= s2 * (1.0 + 1e-6));
+        prop_assert!(post.mean_m >= mu.min(h) - 1e-4 && post.mean_m <= mu.max(h) + 1e-4);
+    }
+
+    /// Eq. 7 keeps any sequence of updates inside the bounds.
+    #[test]
+    fn clamped_updates_stay_in_bounds(deltas in prop::collection::vec(-5.0f32..5.0, 0..50)) {
+        let mut l = 0.0;
+        for d in deltas {
+            l = oeg::model::update_log_odds(l, d, -2.0, 3.5);
+            prop_assert!((-2.0..=3.5).contains(&l));
+        }
+    }
+}
