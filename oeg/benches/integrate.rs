@@ -1,1 +1,94 @@
-fn main() {}
+//! Map-building speed: `cargo bench -p oeg --bench integrate`.
+//!
+//! * `real/3dtk_frames/<res>`: the 233,028 real rays of `../shared/data/3dtk_frames.graph` (or
+//!   `$OEG_SHARED_DATA`) into a fresh map, single thread; skipped with a printed reason when absent. Compare
+//!   with OctoMap's `graph2tree -i 3dtk_frames.graph -res <res>` run in the same session (README).
+//! * `synthetic/fan/<res>`: a 100,000-ray scan of a room with a floor and walls, always available.
+
+use std::hint::black_box;
+use std::path::PathBuf;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use nalgebra::Point3;
+use oeg::io::graph;
+use oeg::{Map, MapConfig, Scan, SensorModel};
+
+const RESOLUTIONS_M: [f64; 3] = [0.05, 0.1, 0.2];
+
+fn shared_graph() -> Option<PathBuf> {
+    let dir = std::env::var_os("OEG_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
+    let path = dir.join("3dtk_frames.graph");
+    path.is_file().then_some(path)
+}
+
+fn build(scans: &[Scan], resolution_m: f64) -> Map {
+    let mut map = Map::new(MapConfig::new(resolution_m)).expect("valid config");
+    for scan in scans {
+        map.integrate(scan).expect("integrated");
+    }
+    map
+}
+
+fn real(c: &mut Criterion) {
+    let Some(path) = shared_graph() else {
+        println!("skipped real/3dtk_frames: 3dtk_frames.graph is absent (set OEG_SHARED_DATA)");
+        return;
+    };
+    let scans = graph::read_graph_scans(&path, SensorModel::laser()).expect("readable");
+    let num_rays: usize = scans.iter().map(|s| s.rays.len()).sum();
+    let mut group = c.benchmark_group("real/3dtk_frames");
+    group.throughput(Throughput::Elements(num_rays as u64));
+    group.sample_size(20);
+    for r in RESOLUTIONS_M {
+        group.bench_with_input(BenchmarkId::from_parameter(r), &r, |b, &r| {
+            b.iter(|| black_box(build(&scans, r)))
+        });
+    }
+    group.finish();
+}
+
+/// A sensor 1 m up in a 12 m x 12 m room: 100,000 rays to the floor and the walls.
+fn room_scan() -> Scan {
+    let mut scan = Scan::new(Point3::new(0.3, -0.2, 1.0), SensorModel::laser());
+    let n = 100_000;
+    for k in 0..n {
+        let azimuth = f64::from(k) * 2.0 * std::f64::consts::PI / f64::from(n) * 37.0;
+        let elevation = -0.6 + 0.7 * f64::from(k) / f64::from(n);
+        let d = nalgebra::Vector3::new(
+            azimuth.cos() * elevation.cos(),
+            azimuth.sin() * elevation.sin().abs().max(0.3),
+            elevation.sin(),
+        );
+        let d = d.normalize();
+        // Distance to the floor (z = 0) or the walls at |x|, |y| = 6.
+        let mut t = f64::INFINITY;
+        if d.z < 0.0 {
+            t = t.min(-1.0 / d.z);
+        }
+        for (o, v) in [(0.3, d.x), (-0.2, d.y)] {
+            if v != 0.0 {
+                t = t.min(((6.0f64.copysign(v)) - o) / v);
+            }
+        }
+        scan.push_hit(scan.origin_in_world + d * t);
+    }
+    scan
+}
+
+fn synthetic(c: &mut Criterion) {
+    let scans = [room_scan()];
+    let mut group = c.benchmark_group("synthetic/fan");
+    group.throughput(Throughput::Elements(scans[0].rays.len() as u64));
+    group.sample_size(20);
+    for r in RESOLUTIONS_M {
+        group.bench_with_input(BenchmarkId::from_parameter(r), &r, |b, &r| {
+            b.iter(|| black_box(build(&scans, r)))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, real, synthetic);
+criterion_main!(benches);

@@ -12,7 +12,8 @@ use crate::model::{
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex, offset_in_tile};
+use crate::traversal::GroundTraversal;
 
 /// Default memory limit of a map, bytes (4 GiB): far above any sensible map, low enough that a corrupt point
 /// a million kilometres away gives an error instead of exhausting the machine.
@@ -72,7 +73,8 @@ impl std::ops::AddAssign for IntegrationStats {
 /// What one scan says about one cell, gathered over all its rays before the cell is updated once.
 #[derive(Debug, Clone, Copy)]
 struct ScanEvidence {
-    /// The largest inverse-sensor-model probability of any ray's sample in the cell; NaN: untouched.
+    /// The largest inverse-sensor-model probability of any ray's sample in the cell; 0: untouched (a sample's
+    /// probability is at least `p_min` > 0).
     p_max: f32,
     /// The highest elevation measurement (eq. 12 with `p > l_occ`); -inf: none.
     hit_z_m: f32,
@@ -86,12 +88,91 @@ struct ScanEvidence {
 
 impl ScanEvidence {
     const NONE: Self = Self {
-        p_max: f32::NAN,
+        p_max: 0.0,
         hit_z_m: f32::NEG_INFINITY,
         hit_var_m2: f32::INFINITY,
         free_z_m: f32::INFINITY,
         free_var_m2: f32::INFINITY,
     };
+
+    fn is_untouched(&self) -> bool {
+        self.p_max == 0.0
+    }
+
+    // The selects below compile to single min / max instructions: no value here is NaN, so the NaN handling
+    // of f32::min and f32::max is not needed in this, the hottest loop.
+    #[inline(always)]
+    fn raise_p(&mut self, p: f32) {
+        self.p_max = if p > self.p_max { p } else { self.p_max };
+    }
+
+    /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12).
+    #[inline(always)]
+    fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32) {
+        self.raise_p(p);
+        if z_m > self.hit_z_m {
+            self.hit_z_m = z_m;
+            self.hit_var_m2 = var_m2;
+        }
+    }
+
+    /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
+    #[inline(always)]
+    fn add_free(&mut self, p: f32, beam_top_m: f32, var_m2: f32) {
+        self.raise_p(p);
+        self.free_z_m = if beam_top_m < self.free_z_m {
+            beam_top_m
+        } else {
+            self.free_z_m
+        };
+        self.free_var_m2 = if var_m2 < self.free_var_m2 {
+            var_m2
+        } else {
+            self.free_var_m2
+        };
+    }
+}
+
+/// Access to the scratch grid along a walk, re-indexing only when the walk enters another tile.
+struct ScratchCursor<'a> {
+    grid: &'a mut TileGrid<ScanEvidence>,
+    limit_bytes: u64,
+    tile: Option<TileIndex>,
+    slot: usize,
+}
+
+impl<'a> ScratchCursor<'a> {
+    fn new(grid: &'a mut TileGrid<ScanEvidence>, limit_bytes: u64) -> Self {
+        Self {
+            grid,
+            limit_bytes,
+            tile: None,
+            slot: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn at(&mut self, cell: CellIndex) -> Result<&mut ScanEvidence> {
+        let tile = TileIndex::of(cell);
+        if self.tile != Some(tile) {
+            self.enter(tile)?;
+        }
+        Ok(self.grid.in_slot_mut(self.slot, offset_in_tile(cell)))
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn enter(&mut self, tile: TileIndex) -> Result<()> {
+        self.slot = self
+            .grid
+            .slot_or_insert(tile, self.limit_bytes)
+            .map_err(|e| Error::MemoryLimit {
+                requested_bytes: e.requested_bytes,
+                limit_bytes: self.limit_bytes,
+            })?;
+        self.tile = Some(tile);
+        Ok(())
+    }
 }
 
 /// An Occupancy-Elevation Grid.
@@ -328,65 +409,49 @@ impl Map {
                 stats.num_rays_skipped += 1;
                 continue;
             }
-            let Some(walk) = crate::traversal::GroundTraversal::new(
-                &self.geometry,
-                (o.x, o.y),
-                (dir.x, dir.y),
-                l_lo,
-                l_hi,
-            ) else {
-                // The scan was validated, so only a ray leaving the index range gets here.
-                return Err(Error::InvalidScan(format!(
-                    "ray {index} reaches {l_hi} m from the sensor, beyond the grid's index range"
-                )));
-            };
             let s2 = (sigma_for_free * sigma_for_free) as f32;
+            // Samples that end before `free_until` are plain free samples (p = p_min, no exponential); only the
+            // few cells within 3 sigma of the hit evaluate eq. 10.
+            let free_until = hit_range_m.map_or(f64::INFINITY, |(l_p, s)| {
+                l_p - f64::from(GAUSSIAN_CUTOFF_SIGMAS) * s
+            });
+            let walk = GroundTraversal::new(&self.geometry, (o.x, o.y), (dir.x, dir.y), l_lo, l_hi)
+                .ok_or_else(|| {
+                    Error::InvalidScan(format!(
+                        "ray {index} reaches {l_hi} m from the sensor, beyond the grid's index range"
+                    ))
+                })?;
+            stats.num_cell_visits += walk.len() as u64;
+            let mut cursor = ScratchCursor::new(&mut self.scratch, scratch_limit);
+            let top_at_exit = dir.z > 0.0;
             for crossing in walk {
-                stats.num_cell_visits += 1;
-                let (p, l_sample) = match hit_range_m {
-                    Some((l_p, sigma)) => {
-                        let l = l_p.clamp(crossing.l_enter, crossing.l_exit);
-                        let p = if l_p - l > f64::from(GAUSSIAN_CUTOFF_SIGMAS) * sigma {
-                            opts.p_min
-                        } else {
-                            clamp_probability(
-                                inverse_sensor_model(
-                                    l as f32,
-                                    l_p as f32,
-                                    sigma as f32,
-                                    opts.significance_k_m,
-                                    opts.p_min,
-                                ),
-                                opts.p_min,
-                                opts.p_max,
-                            )
-                        };
-                        (p, l)
-                    }
-                    None => (opts.p_min, crossing.l_exit),
+                let evidence = cursor.at(crossing.cell)?;
+                // The beam's highest point inside the cell.
+                let l_top = if top_at_exit {
+                    crossing.l_exit
+                } else {
+                    crossing.l_enter
                 };
-                let evidence = self
-                    .scratch
-                    .get_or_insert(crossing.cell, scratch_limit)
-                    .map_err(|e| Error::MemoryLimit {
-                        requested_bytes: e.requested_bytes,
-                        limit_bytes: scratch_limit,
-                    })?;
-                if !(evidence.p_max >= p) {
-                    evidence.p_max = p;
+                let beam_top = (o.z + dir.z * l_top) as f32;
+                if crossing.l_exit < free_until {
+                    evidence.add_free(opts.p_min, beam_top, s2);
+                    continue;
                 }
-                match elevation_observation(p, (o.z + dir.z * l_sample) as f32, opts.elevation_threshold) {
-                    Some(z) => {
-                        if z > evidence.hit_z_m {
-                            evidence.hit_z_m = z;
-                            evidence.hit_var_m2 = s2;
-                        }
-                    }
-                    None => {
-                        let beam_top = o.z + (dir.z * crossing.l_enter).max(dir.z * crossing.l_exit);
-                        evidence.free_z_m = evidence.free_z_m.min(beam_top as f32);
-                        evidence.free_var_m2 = evidence.free_var_m2.min(s2);
-                    }
+                let Some((l_p, sigma)) = hit_range_m else {
+                    unreachable!("free_until is infinite without a hit")
+                };
+                let l = l_p.clamp(crossing.l_enter, crossing.l_exit);
+                let p = inverse_sensor_model(
+                    l as f32,
+                    l_p as f32,
+                    sigma as f32,
+                    opts.significance_k_m,
+                    opts.p_min,
+                );
+                let p = clamp_probability(p, opts.p_min, opts.p_max);
+                match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold) {
+                    Some(z) => evidence.add_hit(p, z, s2),
+                    None => evidence.add_free(p, beam_top, s2),
                 }
             }
         }
@@ -409,7 +474,7 @@ impl Map {
                     limit_bytes: self.config.memory_limit_bytes,
                 })?;
             for (cell, ev) in cells.iter_mut().zip(evidence.iter()) {
-                if ev.p_max.is_nan() {
+                if ev.is_untouched() {
                     continue;
                 }
                 stats.num_cells_updated += 1;

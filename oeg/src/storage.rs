@@ -130,6 +130,26 @@ impl<T: Copy> TileGrid<T> {
         }
     }
 
+    /// The index slot of `tile`, allocating the tile (filled with `fill`) if needed, for repeated access with
+    /// [`TileGrid::in_slot_mut`] while a walk stays inside one tile. Fails past `limit_bytes`.
+    #[inline]
+    pub fn slot_or_insert(&mut self, tile: TileIndex, limit_bytes: u64) -> Result<usize, CapacityExceeded> {
+        match self.slot(tile) {
+            Some(slot) if self.slots[slot].is_some() => Ok(slot),
+            _ => self.allocate(tile, limit_bytes, None),
+        }
+    }
+
+    /// The cell at `offset` (see [`offset_in_tile`]) of the tile in `slot`, from [`TileGrid::slot_or_insert`]
+    /// with no allocation or re-indexing in between.
+    #[inline]
+    pub fn in_slot_mut(&mut self, slot: usize, offset: usize) -> &mut T {
+        match self.slots[slot].as_mut() {
+            Some(t) => &mut t[offset & (TILE_CELLS - 1)],
+            None => unreachable!("slots come from slot_or_insert"),
+        }
+    }
+
     /// The whole tile at `tile`, allocating it (filled with `fill`) if needed. Fails past `limit_bytes`.
     pub fn tile_or_insert(
         &mut self,

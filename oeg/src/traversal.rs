@@ -43,6 +43,7 @@ impl GroundTraversal {
     /// `origin_xy_m` and `direction_xy` are the ray's x and y components; `l` is in units of the direction's
     /// length (metres for a unit direction). Returns `None` if either end is not finite or lies outside the
     /// `i32` index range, or if `l_end < l_start`.
+    #[inline]
     pub fn new(
         geometry: &GridGeometry,
         origin_xy_m: (f64, f64),
@@ -50,7 +51,11 @@ impl GroundTraversal {
         l_start: f64,
         l_end: f64,
     ) -> Option<Self> {
-        if !(l_end >= l_start) {
+        // Written to reject NaN bounds too.
+        if l_end
+            .partial_cmp(&l_start)
+            .is_none_or(|o| o == std::cmp::Ordering::Less)
+        {
             return None;
         }
         let (ox, oy) = origin_xy_m;
@@ -101,6 +106,8 @@ impl GroundTraversal {
     }
 }
 
+impl ExactSizeIterator for GroundTraversal {}
+
 impl Iterator for GroundTraversal {
     type Item = CellCrossing;
 
@@ -120,22 +127,26 @@ impl Iterator for GroundTraversal {
             });
         }
         // Step along the axis whose boundary comes first; once an axis has reached the end cell's index, only
-        // the other may move, which keeps the walk on the end cell despite rounding.
-        let step_x = if self.cell.i == self.end.i {
-            false
-        } else if self.cell.j == self.end.j {
-            true
+        // the other may move, which keeps the walk on the end cell despite rounding. Written without branches:
+        // which axis steps is data-dependent and would be mispredicted about every other cell.
+        let step_x =
+            (self.t_max_x <= self.t_max_y || self.cell.j == self.end.j) & (self.cell.i != self.end.i);
+        let t_next = if step_x { self.t_max_x } else { self.t_max_y };
+        let l_exit = t_next.clamp(l_enter, self.l_end);
+        let (dx, dy) = if step_x {
+            (self.step_i, 0)
         } else {
-            self.t_max_x <= self.t_max_y
+            (0, self.step_j)
         };
-        let l_exit = if step_x { self.t_max_x } else { self.t_max_y }.clamp(l_enter, self.l_end);
-        if step_x {
-            self.cell.i += self.step_i;
-            self.t_max_x += self.t_delta_x;
+        self.cell.i += dx;
+        self.cell.j += dy;
+        let (ax, ay) = if step_x {
+            (self.t_delta_x, 0.0)
         } else {
-            self.cell.j += self.step_j;
-            self.t_max_y += self.t_delta_y;
-        }
+            (0.0, self.t_delta_y)
+        };
+        self.t_max_x += ax;
+        self.t_max_y += ay;
         self.remaining_steps -= 1;
         self.l = l_exit;
         Some(CellCrossing {

@@ -84,7 +84,7 @@ fn parse_graph(path: &Path, data: &[u8]) -> Result<Vec<GraphNode>> {
     }
     let mut nodes = Vec::with_capacity(num_nodes);
     for node in 0..num_nodes {
-        let num_points = r.u32(&format!("the point count of node {node}"))? as usize;
+        let num_points = r.u32(format_args!("the point count of node {node}"))? as usize;
         if num_points.saturating_mul(POINT_BYTES) > r.remaining() {
             return Err(r.error(format!(
                 "node {node} declares {num_points} points ({} bytes) but only {} bytes remain: truncated",
@@ -94,12 +94,11 @@ fn parse_graph(path: &Path, data: &[u8]) -> Result<Vec<GraphNode>> {
         }
         let mut points = Vec::with_capacity(num_points);
         for k in 0..num_points {
-            let what = format!("point {k} of node {node}");
-            let v = read_vector3(&mut r, &what)?;
+            let v = read_vector3(&mut r, &PointName { node, point: k })?;
             points.push(Point3::from(v));
         }
-        let pose = read_pose(&mut r, &format!("the pose of node {node}"))?;
-        let id = r.u32(&format!("the id of node {node}"))?;
+        let pose = read_pose(&mut r, &format_args!("the pose of node {node}"))?;
+        let id = r.u32(format_args!("the id of node {node}"))?;
         nodes.push(GraphNode {
             id,
             world_from_sensor: pose,
@@ -110,16 +109,30 @@ fn parse_graph(path: &Path, data: &[u8]) -> Result<Vec<GraphNode>> {
     if r.remaining() > 0 {
         let num_edges = r.u32("the edge count")? as usize;
         for e in 0..num_edges {
-            let what = format!("edge {e}");
-            r.take(8, &what)?;
+            let what = format_args!("edge {e}");
+            r.take(8, what)?;
             read_pose(&mut r, &what)?;
-            r.f64(&what)?;
+            r.f64(what)?;
         }
     }
     Ok(nodes)
 }
 
-fn expect_tag(r: &mut ByteReader<'_>, expected: i32, what: &str) -> Result<()> {
+/// Names a point in errors, formatted only when an error is reported.
+struct PointName {
+    node: usize,
+    point: usize,
+}
+
+impl std::fmt::Display for PointName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "point {} of node {}", self.point, self.node)
+    }
+}
+
+type What<'a> = &'a dyn std::fmt::Display;
+
+fn expect_tag(r: &mut ByteReader<'_>, expected: i32, what: What<'_>) -> Result<()> {
     let at = r.pos();
     let tag = r.i32(what)?;
     if tag != expected {
@@ -131,7 +144,7 @@ fn expect_tag(r: &mut ByteReader<'_>, expected: i32, what: &str) -> Result<()> {
     Ok(())
 }
 
-fn finite(r: &ByteReader<'_>, v: f64, what: &str) -> Result<f64> {
+fn finite(r: &ByteReader<'_>, v: f64, what: What<'_>) -> Result<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
@@ -139,7 +152,7 @@ fn finite(r: &ByteReader<'_>, v: f64, what: &str) -> Result<f64> {
     }
 }
 
-fn read_vector3(r: &mut ByteReader<'_>, what: &str) -> Result<Vector3<f64>> {
+fn read_vector3(r: &mut ByteReader<'_>, what: What<'_>) -> Result<Vector3<f64>> {
     expect_tag(r, 3, what)?;
     let x = r.f64(what)?;
     let y = r.f64(what)?;
@@ -151,7 +164,7 @@ fn read_vector3(r: &mut ByteReader<'_>, what: &str) -> Result<Vector3<f64>> {
     ))
 }
 
-fn read_pose(r: &mut ByteReader<'_>, what: &str) -> Result<Isometry3<f64>> {
+fn read_pose(r: &mut ByteReader<'_>, what: What<'_>) -> Result<Isometry3<f64>> {
     let t = read_vector3(r, what)?;
     expect_tag(r, 4, what)?;
     let mut q = [0.0; 4];

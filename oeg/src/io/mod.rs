@@ -76,7 +76,7 @@ impl<'a> ByteReader<'a> {
         Error::parse(self.path, format!("at byte {at}: {message}"))
     }
 
-    pub(crate) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8]> {
+    pub(crate) fn take(&mut self, n: usize, what: impl std::fmt::Display) -> Result<&'a [u8]> {
         if self.remaining() < n {
             return Err(self.error(format!(
                 "file is truncated: expected {n} more bytes for {what}, found {}",
@@ -88,26 +88,26 @@ impl<'a> ByteReader<'a> {
         Ok(s)
     }
 
-    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N]> {
+    fn array<const N: usize>(&mut self, what: impl std::fmt::Display) -> Result<[u8; N]> {
         let s = self.take(N, what)?;
         let mut a = [0u8; N];
         a.copy_from_slice(s);
         Ok(a)
     }
 
-    pub(crate) fn u32(&mut self, what: &str) -> Result<u32> {
+    pub(crate) fn u32(&mut self, what: impl std::fmt::Display) -> Result<u32> {
         self.array(what).map(u32::from_le_bytes)
     }
 
-    pub(crate) fn i32(&mut self, what: &str) -> Result<i32> {
+    pub(crate) fn i32(&mut self, what: impl std::fmt::Display) -> Result<i32> {
         self.array(what).map(i32::from_le_bytes)
     }
 
-    pub(crate) fn f64(&mut self, what: &str) -> Result<f64> {
+    pub(crate) fn f64(&mut self, what: impl std::fmt::Display) -> Result<f64> {
         self.array(what).map(f64::from_le_bytes)
     }
 
-    pub(crate) fn f32(&mut self, what: &str) -> Result<f32> {
+    pub(crate) fn f32(&mut self, what: impl std::fmt::Display) -> Result<f32> {
         self.array(what).map(f32::from_le_bytes)
     }
 }

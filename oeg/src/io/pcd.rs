@@ -450,7 +450,7 @@ fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
             r.take(header.body_start, "the header")?;
             r.take(
                 body_bytes,
-                &format!("{} points of {record_bytes} bytes", header.num_points),
+                format_args!("{} points of {record_bytes} bytes", header.num_points),
             )?;
             body[..body_bytes].to_vec()
         }
