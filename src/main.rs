@@ -1,1 +1,240 @@
-fn main() {}
+//! `oeg`: the Occupancy-Elevation Grid testbed's command-line program. Thin: it parses arguments and calls
+//! the `eval` crate.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand, ValueEnum};
+use eval::mapping::{MapJob, MapReport};
+use eval::progress::Progress;
+use oeg::io::pcd::{InvalidPoints, PcdFrame, PcdOptions};
+use oeg::{
+    FreeSpaceElevation, MapConfig, ModelOptions, RangeNoiseModel, RobotProfile, SensorModel,
+    TraversabilityRule,
+};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "oeg",
+    version,
+    about = "Occupancy-Elevation Grid mapping and evaluation"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Build a map from OctoMap scan graphs (.graph) and point clouds (.pcd); write map.oeg, layer images,
+    /// summary.json and timing.json.
+    Map(MapArgs),
+    /// Print a saved map's header and statistics.
+    Inspect {
+        /// A map file written by `oeg map` (map.oeg).
+        map: PathBuf,
+    },
+    /// Map the built-in demonstration scans (what `oeg` with no arguments does).
+    Demo {
+        /// Output folder.
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+    },
+}
+
+#[derive(clap::Args, Debug)]
+struct MapArgs {
+    /// Input files: .graph (OctoMap scan graph) or .pcd (ascii, binary or binary_compressed).
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Cell size in metres.
+    #[arg(long)]
+    resolution: f64,
+    /// Output folder (created if needed).
+    #[arg(long)]
+    out: PathBuf,
+    /// Range-error model of the scan-graph rays.
+    #[arg(long, value_enum, default_value_t = SensorKind::Laser)]
+    graph_sensor: SensorKind,
+    /// Range-error model of the PCD rays.
+    #[arg(long, value_enum, default_value_t = SensorKind::Stereo)]
+    pcd_sensor: SensorKind,
+    /// Frame of the PCD points: as_is, or optical (x right, y down, z forward, as depth cameras write them).
+    #[arg(long, value_enum, default_value_t = FrameArg::AsIs)]
+    pcd_frame: FrameArg,
+    /// What NaN points of an organized PCD become: dropped, or no-return rays along their pixel.
+    #[arg(long, value_enum, default_value_t = InvalidArg::Drop)]
+    pcd_invalid: InvalidArg,
+    /// Eq. 12's free-space rule: zero (the paper), skip, or ray_bound.
+    #[arg(long, value_enum, default_value_t = FreeSpaceArg::Zero)]
+    free_space: FreeSpaceArg,
+    /// Height threshold in metres (world z): beam parts above it are ignored. Default: none.
+    #[arg(long)]
+    max_height: Option<f32>,
+    /// Hits farther than this (metres) only clear up to it. Default: no limit.
+    #[arg(long)]
+    max_range: Option<f32>,
+    /// The robot's largest climbable step in metres, for the traversability image.
+    #[arg(long, default_value_t = oeg::traversability::DEFAULT_MAX_STEP_M)]
+    max_step: f32,
+    /// Memory limit of the map in MiB.
+    #[arg(long, default_value_t = oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20)]
+    memory_limit_mib: u64,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum SensorKind {
+    /// Laser scanner, 12 mm range error (SICK class).
+    Laser,
+    /// Stereo camera, 0.032 l^2 range error (the paper's Fig. 4).
+    Stereo,
+}
+
+impl SensorKind {
+    fn model(self) -> SensorModel {
+        match self {
+            Self::Laser => SensorModel::laser(),
+            Self::Stereo => SensorModel {
+                noise: RangeNoiseModel::stereo(),
+                ..SensorModel::stereo()
+            },
+        }
+    }
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum FrameArg {
+    AsIs,
+    Optical,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum InvalidArg {
+    Drop,
+    NoReturn,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum FreeSpaceArg {
+    Zero,
+    Skip,
+    RayBound,
+}
+
+impl MapArgs {
+    fn job(&self) -> MapJob {
+        let model = ModelOptions {
+            free_space_elevation: match self.free_space {
+                FreeSpaceArg::Zero => FreeSpaceElevation::Zero,
+                FreeSpaceArg::Skip => FreeSpaceElevation::Skip,
+                FreeSpaceArg::RayBound => FreeSpaceElevation::RayBound,
+            },
+            max_height_m: self.max_height,
+            max_range_m: self.max_range,
+            ..ModelOptions::default()
+        };
+        MapJob {
+            inputs: self.inputs.clone(),
+            out_dir: self.out.clone(),
+            config: MapConfig {
+                resolution_m: self.resolution,
+                model,
+                memory_limit_bytes: self.memory_limit_mib.saturating_mul(1 << 20),
+            },
+            graph_sensor: self.graph_sensor.model(),
+            pcd: PcdOptions {
+                frame: match self.pcd_frame {
+                    FrameArg::AsIs => PcdFrame::AsIs,
+                    FrameArg::Optical => PcdFrame::Optical,
+                },
+                invalid_points: match self.pcd_invalid {
+                    InvalidArg::Drop => InvalidPoints::Drop,
+                    InvalidArg::NoReturn => InvalidPoints::NoReturn,
+                },
+                sensor: self.pcd_sensor.model(),
+            },
+            profile: RobotProfile {
+                max_step_m: self.max_step,
+                ..RobotProfile::default()
+            },
+            rule: TraversabilityRule::Absolute,
+        }
+    }
+}
+
+fn print_report(report: &MapReport) {
+    let s = &report.summary;
+    println!(
+        "mapped {} scans, {} rays at {} m: {} cells observed ({} free, {} traversable, {} blocked), {} bytes; \
+         integration {:.3} s ({:.2} M rays/s)",
+        s.num_scans,
+        s.num_rays,
+        s.resolution_m,
+        s.num_cells_observed,
+        s.num_cells_free,
+        s.num_cells_traversable,
+        s.num_cells_blocked,
+        s.map_bytes,
+        report.timing.integrate_wall_time_s,
+        report.timing.integrate_rays_per_s / 1e6
+    );
+    for f in &report.files {
+        println!("wrote {}", f.display());
+    }
+}
+
+fn run_map(args: &MapArgs) -> anyhow::Result<()> {
+    let job = args.job();
+    let progress = Progress::new(0, "scans");
+    let report = eval::mapping::run(&job, &progress)?;
+    print_report(&report);
+    Ok(())
+}
+
+fn run_demo(out: PathBuf) -> anyhow::Result<()> {
+    eval::output::create_dir(&out)?;
+    let input = out.join("demo.graph");
+    eval::demo::write_demo_graph(&input).with_context(|| "writing the demonstration scans")?;
+    println!(
+        "wrote {} (synthetic scans of a scene with a 3 cm and a 5 cm curb and a board at 0.35 m)",
+        input.display()
+    );
+    let args = MapArgs {
+        inputs: vec![input],
+        resolution: 0.05,
+        out,
+        graph_sensor: SensorKind::Laser,
+        pcd_sensor: SensorKind::Stereo,
+        pcd_frame: FrameArg::AsIs,
+        pcd_invalid: InvalidArg::Drop,
+        free_space: FreeSpaceArg::Zero,
+        max_height: Some(0.5),
+        max_range: None,
+        max_step: oeg::traversability::DEFAULT_MAX_STEP_M,
+        memory_limit_mib: oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20,
+    };
+    run_map(&args)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Map(args)) => run_map(&args),
+        Some(Command::Inspect { map }) => eval::inspect::inspect(&map)
+            .map(|text| print!("{text}"))
+            .map_err(Into::into),
+        Some(Command::Demo { out }) => run_demo(out),
+        None => run_demo(PathBuf::from("out/demo")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,1 +1,13 @@
-//! placeholder
+//! Runs OEG experiments end to end: maps from recorded data (`oeg map`), inspection of saved maps
+//! (`oeg inspect`), reports and images. It ties the map crate (`oeg`) to the outside world; the command-line
+//! program is a thin layer over it.
+
+pub mod demo;
+pub mod error;
+pub mod inspect;
+pub mod mapping;
+pub mod output;
+pub mod progress;
+pub mod render;
+
+pub use error::{EvalError, Result};

@@ -1,0 +1,31 @@
+//! The evaluation crate's error type.
+
+use std::path::PathBuf;
+
+/// What can go wrong while running an evaluation job.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum EvalError {
+    /// From the map crate (reading data, building or saving the map). Its message names the file.
+    #[error(transparent)]
+    Map(#[from] oeg::Error),
+    /// An input the job cannot use.
+    #[error("{}: {message}", path.display())]
+    Input {
+        /// The input.
+        path: PathBuf,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A file or folder could not be created or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+}
+
+/// Short for `Result<T, EvalError>`.
+pub type Result<T, E = EvalError> = std::result::Result<T, E>;

@@ -1,0 +1,324 @@
+//! `oeg map`: build a map from recorded range data (OctoMap scan graphs, PCD files) and write the map, its
+//! layer images, `summary.json` and `timing.json`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use oeg::io::{graph, mapfile, pcd};
+use oeg::{LayerKind, Map, MapConfig, RobotProfile, Scan, SensorModel, TraversabilityRule};
+use serde::Serialize;
+
+use crate::error::{EvalError, Result};
+use crate::output::{create_dir, write_bytes, write_json};
+use crate::progress::Progress;
+use crate::render::{Colormap, scalar_figure, traversability_figure};
+
+/// The kinds of input `oeg map` reads, by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputFormat {
+    /// `.graph`: OctoMap scan graph, one scan per node.
+    Graph,
+    /// `.pcd`: one point cloud, one scan.
+    Pcd,
+}
+
+impl InputFormat {
+    /// The format of `path`, from its extension.
+    ///
+    /// # Errors
+    /// [`EvalError::Input`] for any other extension.
+    pub fn of(path: &Path) -> Result<Self> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("graph") => Ok(Self::Graph),
+            Some("pcd") => Ok(Self::Pcd),
+            _ => Err(EvalError::Input {
+                path: path.to_path_buf(),
+                message:
+                    "unknown input format: expected an OctoMap scan graph (.graph) or a point cloud (.pcd)"
+                        .into(),
+            }),
+        }
+    }
+}
+
+/// Everything `oeg map` needs.
+#[derive(Debug, Clone)]
+pub struct MapJob {
+    /// The input files.
+    pub inputs: Vec<PathBuf>,
+    /// Where the outputs go (created if needed).
+    pub out_dir: PathBuf,
+    /// The map's resolution and model.
+    pub config: MapConfig,
+    /// The sensor model of scan-graph scans.
+    pub graph_sensor: SensorModel,
+    /// How PCD files become scans (includes their sensor model).
+    pub pcd: pcd::PcdOptions,
+    /// The robot for the traversability layer.
+    pub profile: RobotProfile,
+    /// The traversability rule.
+    pub rule: TraversabilityRule,
+}
+
+/// `summary.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
+/// inputs and settings.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MapSummary {
+    /// Number of input files.
+    pub num_inputs: u64,
+    /// Scans integrated.
+    pub num_scans: u64,
+    /// Rays integrated (hits and no-returns).
+    pub num_rays: u64,
+    /// Cell visits by rays.
+    pub num_cell_visits: u64,
+    /// Cell size.
+    pub resolution_m: f64,
+    /// Eq. 12's free-space rule.
+    pub free_space_elevation: oeg::FreeSpaceElevation,
+    /// Height threshold, if any.
+    pub max_height_m: Option<f32>,
+    /// Cells observed at least once.
+    pub num_cells_observed: u64,
+    /// Observed cells with `P > occupied_threshold`.
+    pub num_cells_occupied: u64,
+    /// Observed, not occupied.
+    pub num_cells_free: u64,
+    /// Occupied and low enough for the robot.
+    pub num_cells_traversable: u64,
+    /// Occupied and too high (or of unknown height).
+    pub num_cells_blocked: u64,
+    /// The robot's step limit used for the classes.
+    pub max_step_m: f32,
+    /// Bytes the map holds ([`Map::memory_bytes`]).
+    pub map_bytes: u64,
+    /// Bytes of the saved map file.
+    pub map_file_bytes: u64,
+    /// Observed extent: min x.
+    pub extent_min_x_m: Option<f64>,
+    /// Observed extent: min y.
+    pub extent_min_y_m: Option<f64>,
+    /// Observed extent: max x.
+    pub extent_max_x_m: Option<f64>,
+    /// Observed extent: max y.
+    pub extent_max_y_m: Option<f64>,
+}
+
+/// `timing.json`: wall times, kept apart from the summary because they vary from run to run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MapTiming {
+    /// Reading and decoding the inputs.
+    pub read_wall_time_s: f64,
+    /// Integrating every scan (the map-building time).
+    pub integrate_wall_time_s: f64,
+    /// Rays integrated per second of integration.
+    pub integrate_rays_per_s: f64,
+    /// Cell visits per second of integration.
+    pub integrate_cell_visits_per_s: f64,
+    /// Threads used for integration.
+    pub integrate_threads: u32,
+}
+
+/// What a map job produced.
+#[derive(Debug, Clone)]
+pub struct MapReport {
+    /// The summary written to `summary.json`.
+    pub summary: MapSummary,
+    /// The timing written to `timing.json`.
+    pub timing: MapTiming,
+    /// Every file written, in order.
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads every input into scans, before anything is written, so a bad input leaves no partial output.
+///
+/// # Errors
+/// The first unreadable or malformed input, named.
+pub fn read_inputs(job: &MapJob) -> Result<Vec<Scan>> {
+    let mut scans = Vec::new();
+    for path in &job.inputs {
+        match InputFormat::of(path)? {
+            InputFormat::Graph => scans.extend(graph::read_graph_scans(path, job.graph_sensor)?),
+            InputFormat::Pcd => scans.push(pcd::read_pcd_scan(path, &job.pcd)?),
+        }
+    }
+    Ok(scans)
+}
+
+/// Runs the job: reads, integrates, writes `map.oeg`, the layer images, `summary.json` and `timing.json`.
+///
+/// # Errors
+/// Bad inputs or settings (before any output is written), or a failed write.
+pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
+    if job.inputs.is_empty() {
+        return Err(EvalError::Input {
+            path: PathBuf::from("(command line)"),
+            message: "no input files".into(),
+        });
+    }
+    job.profile.validate()?;
+    let mut map = Map::new(job.config)?;
+    let read_start = Instant::now();
+    let scans = read_inputs(job)?;
+    let read_wall_time_s = read_start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    for (k, scan) in scans.iter().enumerate() {
+        map.integrate(scan).map_err(|e| EvalError::Input {
+            path: PathBuf::from(format!("scan {k}")),
+            message: e.to_string(),
+        })?;
+        progress.inc(1);
+    }
+    let integrate_wall_time_s = start.elapsed().as_secs_f64();
+    progress.finish();
+
+    create_dir(&job.out_dir)?;
+    let mut files = Vec::new();
+    let map_path = job.out_dir.join("map.oeg");
+    let map_bytes = mapfile::to_bytes(&map);
+    write_bytes(&map_path, &map_bytes)?;
+    files.push(map_path);
+    files.extend(write_layer_images(&map, &job.out_dir, &job.profile, job.rule)?);
+
+    let totals = map.totals();
+    let counts = map.traversability_counts(&job.profile, job.rule);
+    let extent = map.observed_region().map(|r| {
+        let (x0, y0) = map.geometry().cell_min_corner(r.min);
+        let (x1, y1) = map.geometry().cell_min_corner(r.max());
+        let res = map.geometry().resolution_m();
+        (x0, y0, x1 + res, y1 + res)
+    });
+    let summary = MapSummary {
+        num_inputs: job.inputs.len() as u64,
+        num_scans: map.num_scans(),
+        num_rays: totals.num_rays,
+        num_cell_visits: totals.num_cell_visits,
+        resolution_m: map.geometry().resolution_m(),
+        free_space_elevation: job.config.model.free_space_elevation,
+        max_height_m: job.config.model.max_height_m,
+        num_cells_observed: map.num_observed_cells(),
+        num_cells_occupied: counts.num_occupied(),
+        num_cells_free: counts.num_free,
+        num_cells_traversable: counts.num_traversable,
+        num_cells_blocked: counts.num_blocked,
+        max_step_m: job.profile.max_step_m,
+        map_bytes: map.memory_bytes(),
+        map_file_bytes: map_bytes.len() as u64,
+        extent_min_x_m: extent.map(|e| e.0),
+        extent_min_y_m: extent.map(|e| e.1),
+        extent_max_x_m: extent.map(|e| e.2),
+        extent_max_y_m: extent.map(|e| e.3),
+    };
+    let per_s = |n: u64| {
+        if integrate_wall_time_s > 0.0 {
+            n as f64 / integrate_wall_time_s
+        } else {
+            0.0
+        }
+    };
+    let timing = MapTiming {
+        read_wall_time_s,
+        integrate_wall_time_s,
+        integrate_rays_per_s: per_s(totals.num_rays),
+        integrate_cell_visits_per_s: per_s(totals.num_cell_visits),
+        integrate_threads: 1,
+    };
+    let summary_path = job.out_dir.join("summary.json");
+    write_json(&summary_path, &summary)?;
+    files.push(summary_path);
+    let timing_path = job.out_dir.join("timing.json");
+    write_json(&timing_path, &timing)?;
+    files.push(timing_path);
+    Ok(MapReport {
+        summary,
+        timing,
+        files,
+    })
+}
+
+/// Writes `occupancy.png`, `elevation.png`, `variance.png` and `traversability.png` over the observed region.
+/// An empty map has no region and gets no images.
+///
+/// # Errors
+/// A failed write, or a region over the map's memory limit.
+pub fn write_layer_images(
+    map: &Map,
+    out_dir: &Path,
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+) -> Result<Vec<PathBuf>> {
+    let Some(region) = map.observed_region() else {
+        return Ok(Vec::new());
+    };
+    let res = map.geometry().resolution_m();
+    let mut files = Vec::new();
+    let layers = [
+        (
+            "occupancy.png",
+            LayerKind::OccupancyProbability,
+            "Occupancy probability",
+            "P(occupied)",
+            Colormap::GreysReversed,
+            Some((0.0, 1.0)),
+        ),
+        (
+            "elevation.png",
+            LayerKind::ElevationM,
+            "Elevation mean",
+            "elevation [m]",
+            Colormap::Viridis,
+            None,
+        ),
+        (
+            "variance.png",
+            LayerKind::VarianceM2,
+            "Elevation variance",
+            "variance [m^2]",
+            Colormap::Inferno,
+            None,
+        ),
+    ];
+    for (name, kind, title, label, colormap, range) in layers {
+        let layer = map.layer(kind, region)?;
+        let title = format!("{title} ({res} m cells)");
+        let path = out_dir.join(name);
+        write_bytes(
+            &path,
+            &scalar_figure(&layer, &title, label, colormap, range).to_png(),
+        )?;
+        files.push(path);
+    }
+    let classes = map.traversability_layer(region, profile, rule)?;
+    let title = format!("Traversability (max step {} m)", profile.max_step_m);
+    let path = out_dir.join("traversability.png");
+    write_bytes(&path, &traversability_figure(&classes, &title).to_png())?;
+    files.push(path);
+    Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_come_from_the_extension() {
+        assert_eq!(
+            InputFormat::of(Path::new("a/b.graph")).expect("graph"),
+            InputFormat::Graph
+        );
+        assert_eq!(
+            InputFormat::of(Path::new("B.PCD")).expect("pcd"),
+            InputFormat::Pcd
+        );
+        let err = InputFormat::of(Path::new("scan.bt"))
+            .expect_err("unknown")
+            .to_string();
+        assert!(err.contains("scan.bt") && err.contains(".graph"), "{err}");
+    }
+}

@@ -1,0 +1,193 @@
+//! An RGB pixel buffer with the few drawing operations the figures need, and PNG encoding.
+
+/// An RGB colour.
+pub type Rgb = [u8; 3];
+
+/// Black.
+pub const BLACK: Rgb = [0, 0, 0];
+/// White.
+pub const WHITE: Rgb = [255, 255, 255];
+
+/// Text glyphs are 8 x 8 pixels at scale 1 (the public-domain font8x8 basic Latin set).
+pub const GLYPH_PX: usize = 8;
+
+/// A width x height RGB image, row 0 at the top.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Canvas {
+    width: usize,
+    height: usize,
+    pixels: Vec<u8>,
+}
+
+impl Canvas {
+    /// A canvas filled with `background`.
+    pub fn new(width: usize, height: usize, background: Rgb) -> Self {
+        let mut pixels = Vec::with_capacity(width * height * 3);
+        for _ in 0..width * height {
+            pixels.extend_from_slice(&background);
+        }
+        Self {
+            width,
+            height,
+            pixels,
+        }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// The colour at `(x, y)`, or `None` outside.
+    pub fn pixel(&self, x: usize, y: usize) -> Option<Rgb> {
+        (x < self.width && y < self.height).then(|| {
+            let k = (y * self.width + x) * 3;
+            [self.pixels[k], self.pixels[k + 1], self.pixels[k + 2]]
+        })
+    }
+
+    /// Sets one pixel; outside the canvas it does nothing.
+    pub fn set(&mut self, x: i64, y: i64, color: Rgb) {
+        if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+            let k = (y as usize * self.width + x as usize) * 3;
+            self.pixels[k..k + 3].copy_from_slice(&color);
+        }
+    }
+
+    /// Fills the rectangle `[x, x + w) x [y, y + h)`, clipped to the canvas.
+    pub fn fill_rect(&mut self, x: i64, y: i64, w: i64, h: i64, color: Rgb) {
+        for yy in y.max(0)..(y + h).min(self.height as i64) {
+            for xx in x.max(0)..(x + w).min(self.width as i64) {
+                self.set(xx, yy, color);
+            }
+        }
+    }
+
+    /// A one-pixel rectangle outline.
+    pub fn stroke_rect(&mut self, x: i64, y: i64, w: i64, h: i64, color: Rgb) {
+        self.line(x, y, x + w - 1, y, color);
+        self.line(x, y + h - 1, x + w - 1, y + h - 1, color);
+        self.line(x, y, x, y + h - 1, color);
+        self.line(x + w - 1, y, x + w - 1, y + h - 1, color);
+    }
+
+    /// A one-pixel line (Bresenham), clipped to the canvas.
+    pub fn line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb) {
+        let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
+        let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
+        let (mut x, mut y, mut err) = (x0, y0, dx + dy);
+        // Bound the loop: a line never needs more steps than its longer side.
+        for _ in 0..=(dx.max(-dy) + 1) {
+            self.set(x, y, color);
+            if x == x1 && y == y1 {
+                break;
+            }
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                x += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                y += sy;
+            }
+        }
+    }
+
+    /// Text with its top-left corner at `(x, y)`, each glyph pixel drawn `scale` x `scale`. Characters outside
+    /// ASCII are drawn as `?`.
+    pub fn text(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
+        let s = scale.max(1) as i64;
+        for (n, ch) in text.chars().enumerate() {
+            let code = if ch.is_ascii() { ch as usize } else { '?' as usize };
+            let glyph = font8x8::legacy::BASIC_LEGACY[code];
+            let gx = x + n as i64 * GLYPH_PX as i64 * s;
+            for (row, bits) in glyph.iter().enumerate() {
+                for col in 0..8 {
+                    if bits & (1 << col) != 0 {
+                        self.fill_rect(gx + col * s, y + row as i64 * s, s, s, color);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Width in pixels of `text` at `scale`.
+    pub fn text_width(text: &str, scale: usize) -> usize {
+        text.chars().count() * GLYPH_PX * scale.max(1)
+    }
+
+    /// Text rotated 90 degrees counter-clockwise (reading upwards), its glyphs' top-left at `(x, y)` being the
+    /// bottom-left of the string. For vertical axis labels.
+    pub fn text_vertical(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
+        let s = scale.max(1) as i64;
+        for (n, ch) in text.chars().enumerate() {
+            let code = if ch.is_ascii() { ch as usize } else { '?' as usize };
+            let glyph = font8x8::legacy::BASIC_LEGACY[code];
+            let gy = y - n as i64 * GLYPH_PX as i64 * s;
+            for (row, bits) in glyph.iter().enumerate() {
+                for col in 0..8 {
+                    if bits & (1 << col) != 0 {
+                        self.fill_rect(x + row as i64 * s, gy - col * s, s, s, color);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The image as PNG bytes (8-bit RGB). Deterministic: the same pixels give the same bytes.
+    pub fn to_png(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        {
+            let mut encoder = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            // Writing into a Vec cannot fail for a well-formed header and a buffer of the right size.
+            let written = encoder
+                .write_header()
+                .and_then(|mut w| w.write_image_data(&self.pixels));
+            debug_assert!(written.is_ok(), "{written:?}");
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn drawing_stays_on_the_canvas() {
+        let mut c = Canvas::new(10, 5, WHITE);
+        c.fill_rect(-3, -3, 100, 100, BLACK);
+        assert_eq!(c.pixel(9, 4), Some(BLACK));
+        c.line(-50, 2, 50, 2, WHITE);
+        assert_eq!(c.pixel(0, 2), Some(WHITE));
+        assert_eq!(c.pixel(10, 0), None);
+    }
+
+    #[test]
+    fn text_draws_glyph_pixels() {
+        let mut c = Canvas::new(40, 10, WHITE);
+        c.text(0, 0, "1", 1, BLACK);
+        let dark = (0..8)
+            .flat_map(|y| (0..8).map(move |x| (x, y)))
+            .filter(|&(x, y)| c.pixel(x, y) == Some(BLACK));
+        assert!(dark.count() > 5);
+        assert_eq!(Canvas::text_width("abc", 2), 48);
+    }
+
+    #[test]
+    fn png_bytes_are_a_png() {
+        let png = Canvas::new(3, 2, BLACK).to_png();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+        let decoder = png::Decoder::new(std::io::Cursor::new(png));
+        let reader = decoder.read_info().expect("valid png");
+        assert_eq!((reader.info().width, reader.info().height), (3, 2));
+    }
+}

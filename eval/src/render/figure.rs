@@ -1,0 +1,300 @@
+//! Map figures: a raster drawn north-up with axes in metres, a title, and a colour bar or a legend.
+
+use oeg::{CellIndex, CellRegion};
+
+use super::canvas::{BLACK, Canvas, GLYPH_PX, Rgb, WHITE};
+use super::colormap::Colormap;
+
+/// Colour of cells with no value (never observed, no estimate).
+pub const NO_DATA: Rgb = [205, 205, 205];
+
+/// Longest side of the plot area, pixels: maps larger than this are sampled, smaller ones enlarged.
+const TARGET_PLOT_PX: f64 = 900.0;
+/// Largest enlargement, pixels per cell.
+const MAX_PX_PER_CELL: f64 = 24.0;
+const LEFT: usize = 72;
+const RIGHT: usize = 190;
+const TOP: usize = 40;
+const BOTTOM: usize = 52;
+
+/// What explains the colours.
+#[derive(Debug, Clone)]
+pub enum Legend {
+    /// A continuous colour bar from `min` to `max`, labelled (with units).
+    ColorBar {
+        /// The colour map.
+        colormap: Colormap,
+        /// Value at the bottom.
+        min: f32,
+        /// Value at the top.
+        max: f32,
+        /// Label, with units.
+        label: String,
+    },
+    /// Discrete classes.
+    Classes(Vec<(String, Rgb)>),
+}
+
+/// A figure being drawn; overlays are added in world coordinates.
+#[derive(Debug, Clone)]
+pub struct Figure {
+    canvas: Canvas,
+    region: CellRegion,
+    resolution_m: f64,
+    px_per_cell: f64,
+    plot_w: usize,
+    plot_h: usize,
+}
+
+impl Figure {
+    /// Draws the raster over `region` (each cell coloured by `cell_color`), its axes, title and legend.
+    pub fn new(
+        region: CellRegion,
+        resolution_m: f64,
+        title: &str,
+        cell_color: impl Fn(CellIndex) -> Rgb,
+        legend: &Legend,
+    ) -> Self {
+        let longest = f64::from(region.num_x.max(region.num_y));
+        let px_per_cell = (TARGET_PLOT_PX / longest).min(MAX_PX_PER_CELL);
+        let plot_w = ((f64::from(region.num_x) * px_per_cell).round() as usize).max(1);
+        let plot_h = ((f64::from(region.num_y) * px_per_cell).round() as usize).max(1);
+        let width = LEFT + plot_w + RIGHT;
+        let height = TOP + plot_h.max(200) + BOTTOM;
+        let mut fig = Self {
+            canvas: Canvas::new(width, height, WHITE),
+            region,
+            resolution_m,
+            px_per_cell,
+            plot_w,
+            plot_h,
+        };
+        for py in 0..plot_h {
+            let from_bottom = plot_h - 1 - py;
+            let v = ((from_bottom as f64 + 0.5) / px_per_cell) as u32;
+            for px in 0..plot_w {
+                let u = ((px as f64 + 0.5) / px_per_cell) as u32;
+                let color = cell_color(region.cell_at(u.min(region.num_x - 1), v.min(region.num_y - 1)));
+                fig.canvas.set((LEFT + px) as i64, (TOP + py) as i64, color);
+            }
+        }
+        fig.draw_axes();
+        let title_x = (LEFT as i64 + plot_w as i64 / 2 - Canvas::text_width(title, 2) as i64 / 2).max(4);
+        fig.canvas.text(title_x, 10, title, 2, BLACK);
+        fig.draw_legend(legend);
+        fig
+    }
+
+    fn draw_axes(&mut self) {
+        let (x0, y0) = (LEFT as i64, TOP as i64);
+        let (w, h) = (self.plot_w as i64, self.plot_h as i64);
+        self.canvas.stroke_rect(x0 - 1, y0 - 1, w + 2, h + 2, BLACK);
+        let (min_x, min_y) = (
+            f64::from(self.region.min.i) * self.resolution_m,
+            f64::from(self.region.min.j) * self.resolution_m,
+        );
+        let span_x = f64::from(self.region.num_x) * self.resolution_m;
+        let span_y = f64::from(self.region.num_y) * self.resolution_m;
+        for (value, label) in ticks(min_x, min_x + span_x) {
+            let px = x0 + ((value - min_x) / span_x * w as f64).round() as i64;
+            self.canvas.line(px, y0 + h, px, y0 + h + 4, BLACK);
+            let tw = Canvas::text_width(&label, 1) as i64;
+            self.canvas.text(px - tw / 2, y0 + h + 8, &label, 1, BLACK);
+        }
+        for (value, label) in ticks(min_y, min_y + span_y) {
+            let py = y0 + h - ((value - min_y) / span_y * h as f64).round() as i64;
+            self.canvas.line(x0 - 5, py, x0 - 1, py, BLACK);
+            let tw = Canvas::text_width(&label, 1) as i64;
+            self.canvas.text(x0 - 8 - tw, py - 4, &label, 1, BLACK);
+        }
+        let xl = "x [m]";
+        self.canvas.text(
+            x0 + w / 2 - Canvas::text_width(xl, 1) as i64 / 2,
+            y0 + h + 28,
+            xl,
+            1,
+            BLACK,
+        );
+        let yl = "y [m]";
+        self.canvas
+            .text_vertical(8, y0 + h / 2 + Canvas::text_width(yl, 1) as i64 / 2, yl, 1, BLACK);
+    }
+
+    fn draw_legend(&mut self, legend: &Legend) {
+        let x = (LEFT + self.plot_w + 24) as i64;
+        let y = TOP as i64;
+        match legend {
+            Legend::ColorBar {
+                colormap,
+                min,
+                max,
+                label,
+            } => {
+                let bar_h = (self.plot_h as i64).clamp(120, 400);
+                for k in 0..bar_h {
+                    let t = 1.0 - k as f32 / (bar_h - 1).max(1) as f32;
+                    self.canvas.fill_rect(x, y + k, 18, 1, colormap.color(t));
+                }
+                self.canvas.stroke_rect(x - 1, y - 1, 20, bar_h + 2, BLACK);
+                for n in 0..=4 {
+                    let t = n as f32 / 4.0;
+                    let value = min + (max - min) * t;
+                    let py = y + ((1.0 - t) * (bar_h - 1) as f32).round() as i64;
+                    self.canvas.line(x + 19, py, x + 23, py, BLACK);
+                    self.canvas
+                        .text(x + 27, py - 4, &format_value(value, max - min), 1, BLACK);
+                }
+                self.canvas.text(x - 4, y + bar_h + 10, label, 1, BLACK);
+                self.canvas.fill_rect(x, y + bar_h + 26, 12, 12, NO_DATA);
+                self.canvas.stroke_rect(x, y + bar_h + 26, 12, 12, BLACK);
+                self.canvas.text(x + 18, y + bar_h + 28, "no data", 1, BLACK);
+            }
+            Legend::Classes(classes) => {
+                for (n, (name, color)) in classes.iter().enumerate() {
+                    let py = y + n as i64 * 20;
+                    self.canvas.fill_rect(x, py, 14, 14, *color);
+                    self.canvas.stroke_rect(x, py, 14, 14, BLACK);
+                    self.canvas.text(x + 20, py + 3, name, 1, BLACK);
+                }
+            }
+        }
+    }
+
+    /// The pixel of the world point `(x, y)`.
+    pub fn world_to_px(&self, x_m: f64, y_m: f64) -> (i64, i64) {
+        let u = (x_m / self.resolution_m - f64::from(self.region.min.i)) * self.px_per_cell;
+        let v = (y_m / self.resolution_m - f64::from(self.region.min.j)) * self.px_per_cell;
+        (
+            LEFT as i64 + u.round() as i64,
+            TOP as i64 + self.plot_h as i64 - v.round() as i64,
+        )
+    }
+
+    /// A polyline through world points, clipped to the canvas.
+    pub fn polyline(&mut self, points_m: &[(f64, f64)], color: Rgb) {
+        for w in points_m.windows(2) {
+            let (a, b) = (self.world_to_px(w[0].0, w[0].1), self.world_to_px(w[1].0, w[1].1));
+            self.canvas.line(a.0, a.1, b.0, b.1, color);
+        }
+    }
+
+    /// A small filled square marker at a world point.
+    pub fn marker(&mut self, x_m: f64, y_m: f64, color: Rgb) {
+        let (px, py) = self.world_to_px(x_m, y_m);
+        self.canvas.fill_rect(px - 3, py - 3, 7, 7, color);
+        self.canvas.stroke_rect(px - 4, py - 4, 9, 9, BLACK);
+    }
+
+    /// The finished image.
+    pub fn canvas(&self) -> &Canvas {
+        &self.canvas
+    }
+
+    /// The finished image as PNG bytes.
+    pub fn to_png(&self) -> Vec<u8> {
+        self.canvas.to_png()
+    }
+}
+
+/// "Nice" tick positions (steps of 1, 2 or 5 times a power of ten, about six of them) within `[lo, hi]`, with
+/// their labels.
+pub fn ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0) {
+        return vec![(lo, format!("{lo}"))];
+    }
+    let raw = span / 6.0;
+    let power = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * power)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * power);
+    let decimals = if step >= 1.0 {
+        0
+    } else {
+        (-step.log10().floor()) as usize
+    };
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last)
+        .map(|k| {
+            let v = k as f64 * step;
+            // Avoid "-0".
+            let v = if v == 0.0 { 0.0 } else { v };
+            (v, format!("{v:.decimals$}"))
+        })
+        .collect()
+}
+
+/// A colour-bar label with as many decimals as the range needs.
+fn format_value(v: f32, range: f32) -> String {
+    let decimals = if range >= 10.0 {
+        1
+    } else if range >= 0.1 {
+        2
+    } else if range >= 0.001 {
+        4
+    } else {
+        6
+    };
+    format!("{v:.decimals$}")
+}
+
+/// The value range to colour: the finite values' minimum and maximum, widened when they are equal. `None`
+/// when there are no finite values.
+pub fn finite_range(values: &[f32]) -> Option<(f32, f32)> {
+    let mut it = values.iter().copied().filter(|v| v.is_finite());
+    let first = it.next()?;
+    let (lo, hi) = it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    Some(if hi - lo < 1e-6 {
+        (lo - 0.5, hi + 0.5)
+    } else {
+        (lo, hi)
+    })
+}
+
+/// Glyph height, re-exported for overlays that label things.
+pub const TEXT_PX: usize = GLYPH_PX;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_nice_and_inside() {
+        let t = ticks(-1.3, 4.2);
+        let values: Vec<f64> = t.iter().map(|(v, _)| *v).collect();
+        assert_eq!(values, vec![-1.0, 0.0, 1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(t[1].1, "0");
+        let t = ticks(0.0, 0.5);
+        assert_eq!(t[1].1, "0.1");
+        assert!(ticks(2.0, 2.0).len() == 1);
+    }
+
+    #[test]
+    fn finite_range_ignores_nan_and_widens_flat_data() {
+        assert_eq!(finite_range(&[f32::NAN, 1.0, 3.0]), Some((1.0, 3.0)));
+        assert_eq!(finite_range(&[2.0, 2.0]), Some((1.5, 2.5)));
+        assert_eq!(finite_range(&[f32::NAN]), None);
+    }
+
+    #[test]
+    fn north_is_up_and_east_is_right() {
+        // A 2 x 2 region: paint only the max-x, max-y cell black; it must land top-right.
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(1, 1)).expect("valid");
+        let top_right = region.max();
+        let legend = Legend::Classes(vec![]);
+        let fig = Figure::new(
+            region,
+            1.0,
+            "t",
+            |c| if c == top_right { BLACK } else { WHITE },
+            &legend,
+        );
+        let (px, py) = fig.world_to_px(1.5, 1.5);
+        assert_eq!(fig.canvas().pixel(px as usize, py as usize), Some(BLACK));
+        let (px, py) = fig.world_to_px(0.5, 0.5);
+        assert_eq!(fig.canvas().pixel(px as usize, py as usize), Some(WHITE));
+    }
+}

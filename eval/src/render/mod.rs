@@ -1,0 +1,14 @@
+//! Figures of map layers: PNG images with axes in metres, a title and a colour bar or legend.
+//!
+//! Drawn with a small built-in rasteriser (lines, rectangles, the public-domain 8 x 8 font) so that images
+//! are byte-identical across machines and the build stays light.
+
+pub mod canvas;
+pub mod colormap;
+pub mod figure;
+mod layers;
+
+pub use canvas::{Canvas, Rgb};
+pub use colormap::Colormap;
+pub use figure::{Figure, Legend, NO_DATA, finite_range};
+pub use layers::{TRAVERSABILITY_CLASSES, scalar_figure, traversability_color, traversability_figure};

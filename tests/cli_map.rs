@@ -1,0 +1,297 @@
+//! `oeg map`, `oeg inspect` and `oeg` (the demo) through the built binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use nalgebra::Point3;
+use oeg::io::graph::write_graph;
+use oeg::{Scan, SensorModel};
+
+fn oeg(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_oeg"))
+        .args(args)
+        .output()
+        .expect("the oeg binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("oeg-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Three scans of a floor with a 10 cm box, written as a scan graph.
+fn write_scans(path: &Path) {
+    let mut scans = Vec::new();
+    for k in 0..3 {
+        let origin = Point3::new(0.2 * f64::from(k), 0.0, 0.5);
+        let mut scan = Scan::new(origin, SensorModel::laser());
+        for a in -20..=20 {
+            for r in 1..=8 {
+                let (x, y) = (0.5 * f64::from(r), 0.1 * f64::from(a));
+                let z = if (2.0..2.5).contains(&x) && y.abs() < 0.5 {
+                    0.1
+                } else {
+                    0.0
+                };
+                scan.push_hit(Point3::new(x, y, z));
+            }
+        }
+        scans.push(scan);
+    }
+    write_graph(path, &scans).expect("written");
+}
+
+#[test]
+fn map_writes_every_output_and_inspect_reads_the_map() {
+    let dir = temp_dir("ok");
+    let input = dir.join("scans.graph");
+    write_scans(&input);
+    let out = dir.join("out");
+    let o = oeg(&[
+        "map",
+        input.to_str().expect("utf8"),
+        "--resolution",
+        "0.1",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in [
+        "map.oeg",
+        "occupancy.png",
+        "elevation.png",
+        "variance.png",
+        "traversability.png",
+        "summary.json",
+        "timing.json",
+    ] {
+        assert!(out.join(name).is_file(), "{name} missing");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("read")).expect("json");
+    assert_eq!(summary["num_scans"], 3);
+    assert_eq!(summary["num_rays"], 3 * 41 * 8);
+    let observed = summary["num_cells_observed"].as_u64().expect("count");
+    let parts = ["num_cells_free", "num_cells_traversable", "num_cells_blocked"]
+        .iter()
+        .map(|k| summary[*k].as_u64().expect("count"))
+        .sum::<u64>();
+    assert_eq!(observed, parts);
+    assert!(
+        summary["num_cells_blocked"].as_u64().expect("count") > 0,
+        "the 10 cm box blocks"
+    );
+    assert!(summary["map_bytes"].as_u64().expect("bytes") > 0);
+    let timing: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("timing.json")).expect("read")).expect("json");
+    assert!(timing["integrate_rays_per_s"].as_f64().expect("rate") > 0.0);
+    // The PNG has the plot's size plus margins.
+    let png = std::fs::read(out.join("elevation.png")).expect("read");
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+
+    let o = oeg(&["inspect", out.join("map.oeg").to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("resolution:           0.1 m"), "{text}");
+    assert!(text.contains("scans integrated:     3"), "{text}");
+    assert!(
+        text.contains(&format!("observed cells:       {observed}")),
+        "{text}"
+    );
+}
+
+#[test]
+fn the_same_inputs_give_the_same_summary_map_and_images() {
+    let dir = temp_dir("determinism");
+    let input = dir.join("scans.graph");
+    write_scans(&input);
+    let run = |name: &str| {
+        let out = dir.join(name);
+        let o = oeg(&[
+            "map",
+            input.to_str().expect("utf8"),
+            "--resolution",
+            "0.05",
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let (a, b) = (run("a"), run("b"));
+    for name in ["summary.json", "map.oeg", "elevation.png", "traversability.png"] {
+        assert_eq!(
+            std::fs::read(a.join(name)).expect("a"),
+            std::fs::read(b.join(name)).expect("b"),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn bad_inputs_fail_with_the_file_named_and_write_nothing() {
+    let dir = temp_dir("bad");
+    let input = dir.join("scans.graph");
+    write_scans(&input);
+    let bytes = std::fs::read(&input).expect("read");
+    let truncated = dir.join("truncated.graph");
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).expect("write");
+    let corrupt_pcd = dir.join("corrupt.pcd");
+    std::fs::write(
+        &corrupt_pcd,
+        b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 3\nDATA binary\n\x01\x02",
+    )
+    .expect("write");
+    let unknown = dir.join("scan.xyz");
+    std::fs::write(&unknown, b"1 2 3\n").expect("write");
+    let input_s = input.to_str().expect("utf8");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                truncated.display().to_string(),
+                "--resolution".into(),
+                "0.1".into(),
+            ],
+            "truncated.graph",
+        ),
+        (
+            vec![
+                corrupt_pcd.display().to_string(),
+                "--resolution".into(),
+                "0.1".into(),
+            ],
+            "corrupt.pcd",
+        ),
+        (
+            vec![unknown.display().to_string(), "--resolution".into(), "0.1".into()],
+            "unknown input format",
+        ),
+        (
+            vec![
+                dir.join("missing.graph").display().to_string(),
+                "--resolution".into(),
+                "0.1".into(),
+            ],
+            "missing.graph",
+        ),
+        (
+            vec![input_s.into(), "--resolution".into(), "0".into()],
+            "resolution_m",
+        ),
+        (vec![input_s.into(), "--resolution=-0.1".into()], "resolution_m"),
+        (
+            vec![
+                input_s.into(),
+                "--resolution".into(),
+                "0.01".into(),
+                "--memory-limit-mib".into(),
+                "1".into(),
+            ],
+            "memory limit",
+        ),
+    ];
+    for (k, (args, expected)) in cases.into_iter().enumerate() {
+        let out = dir.join(format!("out{k}"));
+        let mut all = vec!["map".to_string()];
+        all.extend(args);
+        all.extend(["--out".to_string(), out.display().to_string()]);
+        let refs: Vec<&str> = all.iter().map(String::as_str).collect();
+        let o = oeg(&refs);
+        assert!(!o.status.success(), "case {k} should fail");
+        let err = stderr(&o);
+        assert!(
+            err.contains(expected),
+            "case {k}: expected `{expected}` in: {err}"
+        );
+        assert!(!err.contains("panicked"), "case {k}: {err}");
+        assert!(!out.exists(), "case {k}: no output folder for a failed job");
+    }
+}
+
+#[test]
+fn inspect_rejects_a_corrupt_map() {
+    let dir = temp_dir("inspect");
+    let input = dir.join("scans.graph");
+    write_scans(&input);
+    let out = dir.join("out");
+    assert!(
+        oeg(&[
+            "map",
+            input.to_str().expect("utf8"),
+            "--resolution",
+            "0.2",
+            "--out",
+            out.to_str().expect("utf8")
+        ])
+        .status
+        .success()
+    );
+    let map = out.join("map.oeg");
+    let mut bytes = std::fs::read(&map).expect("read");
+    let k = bytes.len() / 2;
+    bytes[k] ^= 0xff;
+    let bad = dir.join("bad.oeg");
+    std::fs::write(&bad, &bytes).expect("write");
+    let o = oeg(&["inspect", bad.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("bad.oeg") && stderr(&o).contains("checksum"),
+        "{}",
+        stderr(&o)
+    );
+    std::fs::write(&bad, &bytes[..100]).expect("write");
+    let o = oeg(&["inspect", bad.to_str().expect("utf8")]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("bad.oeg"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn the_demo_runs_with_no_arguments_style_output() {
+    let dir = temp_dir("demo");
+    let out = dir.join("demo");
+    let o = oeg(&["demo", "--out", out.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("read")).expect("json");
+    assert_eq!(summary["num_scans"], 12);
+    assert!(summary["num_cells_blocked"].as_u64().expect("count") > 0);
+    assert!(out.join("traversability.png").is_file());
+}
+
+#[test]
+fn the_shared_real_scans_map_when_present() {
+    let dir = std::env::var_os("OEG_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let input = dir.join("3dtk_frames.graph");
+    if !input.is_file() {
+        println!(
+            "skipped: {} is absent (the shared data set lives beside the project)",
+            input.display()
+        );
+        return;
+    }
+    let out = temp_dir("real").join("out");
+    let o = oeg(&[
+        "map",
+        input.to_str().expect("utf8"),
+        "--resolution",
+        "0.1",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("read")).expect("json");
+    assert_eq!(summary["num_rays"], 233_028);
+    assert_eq!(summary["num_scans"], 3);
+}
