@@ -1,0 +1,374 @@
+//! The robot, from its URDF (read with urdf-rs): links, their fixed poses in the base frame, their collision
+//! shapes, and the derived facts the testbed needs (height, wheel contact points).
+//!
+//! Joints are taken at position zero: wheels spin about their own axis, which changes no collision shape, and
+//! every other joint of the robot is fixed.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+use crate::error::{Result, SimError};
+
+/// A collision shape of a link, in the link's frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// A box with these half extents.
+    Cuboid {
+        /// Half extents, metres.
+        half_extents_m: Vector3<f64>,
+    },
+    /// A cylinder along the shape frame's z axis.
+    Cylinder {
+        /// Radius, metres.
+        radius_m: f64,
+        /// Length, metres.
+        length_m: f64,
+    },
+    /// A sphere.
+    Sphere {
+        /// Radius, metres.
+        radius_m: f64,
+    },
+    /// A capsule along z (`length_m` between the centres of its caps).
+    Capsule {
+        /// Radius, metres.
+        radius_m: f64,
+        /// Length of the cylindrical part, metres.
+        length_m: f64,
+    },
+}
+
+impl Shape {
+    /// The highest z of the shape placed at `pose`.
+    fn top_z(&self, pose: &Isometry3<f64>) -> f64 {
+        let corners: Vec<Point3<f64>> = match self {
+            Self::Cuboid { half_extents_m: h } => (0..8)
+                .map(|k| {
+                    Point3::new(
+                        if k & 1 == 0 { -h.x } else { h.x },
+                        if k & 2 == 0 { -h.y } else { h.y },
+                        if k & 4 == 0 { -h.z } else { h.z },
+                    )
+                })
+                .collect(),
+            Self::Sphere { radius_m } => return pose.translation.z + radius_m,
+            Self::Cylinder { radius_m, length_m } | Self::Capsule { radius_m, length_m } => {
+                // The two end-cap centres, then the cap rim's highest point around the axis.
+                let axis = pose.rotation * Vector3::z();
+                let half = length_m / 2.0;
+                let rim = radius_m * (1.0 - axis.z * axis.z).max(0.0).sqrt();
+                let extra = if matches!(self, Self::Capsule { .. }) {
+                    *radius_m
+                } else {
+                    rim
+                };
+                let ends = [
+                    pose * Point3::new(0.0, 0.0, half),
+                    pose * Point3::new(0.0, 0.0, -half),
+                ];
+                return ends.iter().map(|p| p.z).fold(f64::MIN, f64::max) + extra;
+            }
+        };
+        corners.iter().map(|c| (pose * c).z).fold(f64::MIN, f64::max)
+    }
+}
+
+/// One link: its pose in the base frame and its collision shapes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Link {
+    /// The link's name.
+    pub name: String,
+    /// `base_from_link`.
+    pub base_from_link: Isometry3<f64>,
+    /// Collision shapes with `link_from_shape`.
+    pub shapes: Vec<(Isometry3<f64>, Shape)>,
+}
+
+/// The robot as the simulation uses it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotModel {
+    /// The URDF file.
+    pub path: PathBuf,
+    /// The robot's name in the URDF.
+    pub name: String,
+    /// The base link's name.
+    pub base_link: String,
+    links: BTreeMap<String, Link>,
+}
+
+/// URDF rpy (fixed axes x, then y, then z) as a rotation.
+pub fn rotation_from_rpy(rpy: [f64; 3]) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2])
+}
+
+fn pose_of(p: &urdf_rs::Pose) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(p.xyz[0], p.xyz[1], p.xyz[2]),
+        rotation_from_rpy(p.rpy.0),
+    )
+}
+
+impl RobotModel {
+    /// Loads `path` and resolves every link's pose relative to `base_link`.
+    ///
+    /// # Errors
+    /// [`SimError::Io`] for a missing file, [`SimError::Urdf`] for malformed XML, a missing base link, a link
+    /// not connected to the base, a mesh collision (not supported: use primitives), or a non-positive size.
+    pub fn load(path: &Path, base_link: &str) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let urdf = urdf_rs::read_from_string(&text).map_err(|e| SimError::Urdf {
+            path: path.to_path_buf(),
+            message: format!("not a valid URDF: {e}"),
+        })?;
+        Self::from_urdf(path, &urdf, base_link)
+    }
+
+    fn from_urdf(path: &Path, urdf: &urdf_rs::Robot, base_link: &str) -> Result<Self> {
+        let err = |message: String| SimError::Urdf {
+            path: path.to_path_buf(),
+            message,
+        };
+        let by_name: BTreeMap<&str, &urdf_rs::Link> =
+            urdf.links.iter().map(|l| (l.name.as_str(), l)).collect();
+        if !by_name.contains_key(base_link) {
+            let names: Vec<&str> = by_name.keys().copied().collect();
+            return Err(err(format!(
+                "has no link named `{base_link}` (the base link); its links are: {}",
+                names.join(", ")
+            )));
+        }
+        // Walk the joint tree from the base.
+        let mut poses: BTreeMap<String, Isometry3<f64>> = BTreeMap::new();
+        poses.insert(base_link.to_string(), Isometry3::identity());
+        let mut frontier = vec![base_link.to_string()];
+        while let Some(parent) = frontier.pop() {
+            let base_from_parent = poses[&parent];
+            for j in urdf.joints.iter().filter(|j| j.parent.link == parent) {
+                if !by_name.contains_key(j.child.link.as_str()) {
+                    return Err(err(format!(
+                        "joint `{}` names a child link `{}` that does not exist",
+                        j.name, j.child.link
+                    )));
+                }
+                if poses
+                    .insert(j.child.link.clone(), base_from_parent * pose_of(&j.origin))
+                    .is_some()
+                {
+                    return Err(err(format!(
+                        "link `{}` has more than one parent joint",
+                        j.child.link
+                    )));
+                }
+                frontier.push(j.child.link.clone());
+            }
+        }
+        let mut links = BTreeMap::new();
+        for l in &urdf.links {
+            let Some(base_from_link) = poses.get(&l.name) else {
+                return Err(err(format!(
+                    "link `{}` is not connected to the base link `{base_link}` by joints",
+                    l.name
+                )));
+            };
+            let mut shapes = Vec::new();
+            for c in &l.collision {
+                let shape = match &c.geometry {
+                    urdf_rs::Geometry::Box { size } => Shape::Cuboid {
+                        half_extents_m: Vector3::new(size[0], size[1], size[2]) / 2.0,
+                    },
+                    urdf_rs::Geometry::Cylinder { radius, length } => Shape::Cylinder {
+                        radius_m: *radius,
+                        length_m: *length,
+                    },
+                    urdf_rs::Geometry::Sphere { radius } => Shape::Sphere { radius_m: *radius },
+                    urdf_rs::Geometry::Capsule { radius, length } => Shape::Capsule {
+                        radius_m: *radius,
+                        length_m: *length,
+                    },
+                    urdf_rs::Geometry::Mesh { filename, .. } => {
+                        return Err(err(format!(
+                            "link `{}` has a mesh collision ({filename}); only box, cylinder, sphere and capsule are supported",
+                            l.name
+                        )));
+                    }
+                };
+                let sizes_ok = match &shape {
+                    Shape::Cuboid { half_extents_m } => {
+                        half_extents_m.iter().all(|v| *v > 0.0 && v.is_finite())
+                    }
+                    Shape::Cylinder { radius_m, length_m } | Shape::Capsule { radius_m, length_m } => {
+                        *radius_m > 0.0 && *length_m >= 0.0 && radius_m.is_finite() && length_m.is_finite()
+                    }
+                    Shape::Sphere { radius_m } => *radius_m > 0.0 && radius_m.is_finite(),
+                };
+                if !sizes_ok {
+                    return Err(err(format!(
+                        "link `{}` has a collision shape with a non-positive size",
+                        l.name
+                    )));
+                }
+                shapes.push((pose_of(&c.origin), shape));
+            }
+            links.insert(
+                l.name.clone(),
+                Link {
+                    name: l.name.clone(),
+                    base_from_link: *base_from_link,
+                    shapes,
+                },
+            );
+        }
+        Ok(Self {
+            path: path.to_path_buf(),
+            name: urdf.name.clone(),
+            base_link: base_link.to_string(),
+            links,
+        })
+    }
+
+    /// The link called `name`.
+    pub fn link(&self, name: &str) -> Option<&Link> {
+        self.links.get(name)
+    }
+
+    /// Every link's name, sorted.
+    pub fn link_names(&self) -> Vec<&str> {
+        self.links.keys().map(String::as_str).collect()
+    }
+
+    /// Every link, sorted by name.
+    pub fn links(&self) -> impl Iterator<Item = &Link> {
+        self.links.values()
+    }
+
+    /// `base_from_link` of a link.
+    pub fn base_from_link(&self, name: &str) -> Option<Isometry3<f64>> {
+        self.link(name).map(|l| l.base_from_link)
+    }
+
+    /// The robot's height: the highest point of its collision geometry above the base frame's origin (the
+    /// ground, for a base link on the ground).
+    pub fn height_m(&self) -> f64 {
+        self.links()
+            .flat_map(|l| {
+                l.shapes
+                    .iter()
+                    .map(move |(pose, s)| s.top_z(&(l.base_from_link * pose)))
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The wheels' ground contact points in the base frame: the lowest point of every cylinder whose axis is
+    /// horizontal (sorted front-left, front-right, rear-left, rear-right by x then y).
+    pub fn wheel_contacts(&self) -> Vec<Point3<f64>> {
+        let mut contacts: Vec<Point3<f64>> = self
+            .links()
+            .flat_map(|l| l.shapes.iter().map(move |(pose, s)| (l.base_from_link * pose, s)))
+            .filter_map(|(pose, s)| match s {
+                Shape::Cylinder { radius_m, .. } => {
+                    let axis = pose.rotation * Vector3::z();
+                    (axis.z.abs() < 1e-6).then(|| {
+                        Point3::new(
+                            pose.translation.x,
+                            pose.translation.y,
+                            pose.translation.z - radius_m,
+                        )
+                    })
+                }
+                _ => None,
+            })
+            .collect();
+        contacts.sort_by(|a, b| b.x.total_cmp(&a.x).then(b.y.total_cmp(&a.y)));
+        contacts
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pioneer() -> RobotModel {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/robots/pioneer3at.urdf");
+        RobotModel::load(&path, "base_link").expect("the shipped URDF loads")
+    }
+
+    #[test]
+    fn the_pioneer_is_0_46_m_tall_with_its_mounts_where_the_file_says() {
+        let robot = pioneer();
+        assert!((robot.height_m() - 0.46).abs() < 1e-9, "{}", robot.height_m());
+        let left = robot.base_from_link("laser_left_mount").expect("mount");
+        assert!(
+            (left.translation.vector - Vector3::new(0.08, 0.1, 0.42)).norm() < 1e-9,
+            "{left}"
+        );
+        let front = robot.base_from_link("laser_front_mount").expect("mount");
+        assert!(
+            (front.translation.vector - Vector3::new(0.2, 0.0, 0.30)).norm() < 1e-9,
+            "{front}"
+        );
+        let stereo = robot.base_from_link("stereo_mount").expect("mount");
+        assert!((stereo.translation.z - 0.452).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_wheels_touch_the_ground_at_the_published_positions() {
+        let c = pioneer().wheel_contacts();
+        assert_eq!(c.len(), 4);
+        assert!((c[0] - Point3::new(0.135, 0.197, 0.0)).norm() < 1e-9, "{}", c[0]);
+        assert!(
+            (c[3] - Point3::new(-0.134, -0.197, 0.0)).norm() < 1e-9,
+            "{}",
+            c[3]
+        );
+    }
+
+    #[test]
+    fn broken_descriptions_are_clear_errors() {
+        let dir = std::env::temp_dir().join(format!("sim-urdf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let missing = RobotModel::load(&dir.join("nope.urdf"), "base_link").expect_err("missing");
+        assert!(
+            matches!(missing, SimError::Io { .. }) && missing.to_string().contains("nope.urdf"),
+            "{missing}"
+        );
+
+        let broken = dir.join("broken.urdf");
+        std::fs::write(&broken, "<robot name=\"r\"><link name=\"base_link\">").expect("write");
+        let e = RobotModel::load(&broken, "base_link").expect_err("broken xml");
+        assert!(
+            e.to_string().contains("broken.urdf") && e.to_string().contains("not a valid URDF"),
+            "{e}"
+        );
+
+        let no_base = dir.join("nobase.urdf");
+        std::fs::write(&no_base, "<robot name=\"r\"><link name=\"body\"/></robot>").expect("write");
+        let e = RobotModel::load(&no_base, "base_link").expect_err("no base");
+        assert!(
+            e.to_string().contains("no link named `base_link`") && e.to_string().contains("body"),
+            "{e}"
+        );
+
+        let mesh = dir.join("mesh.urdf");
+        std::fs::write(
+            &mesh,
+            "<robot name=\"r\"><link name=\"base_link\"><collision><geometry><mesh filename=\"a.stl\"/></geometry></collision></link></robot>",
+        )
+        .expect("write");
+        let e = RobotModel::load(&mesh, "base_link").expect_err("mesh");
+        assert!(e.to_string().contains("mesh collision"), "{e}");
+
+        let loose = dir.join("loose.urdf");
+        std::fs::write(
+            &loose,
+            "<robot name=\"r\"><link name=\"base_link\"/><link name=\"floating\"/></robot>",
+        )
+        .expect("write");
+        let e = RobotModel::load(&loose, "base_link").expect_err("not connected");
+        assert!(e.to_string().contains("`floating` is not connected"), "{e}");
+    }
+}

@@ -1,0 +1,7 @@
+//! Scenario files: schema, loading and validation.
+
+mod load;
+mod schema;
+
+pub use load::{KeySeg, LoadedScenario, MAX_DURATION_S, MAX_MAP_CELLS, load, load_str};
+pub use schema::*;

@@ -1,0 +1,401 @@
+//! The scenario file's schema: what `serde` reads from TOML. `docs/scenario-format.md` documents every key.
+//!
+//! Frames follow REP-103: x forward, y left, z up, metres. Angles in files are degrees (keys end in `_deg`).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use oeg::{ModelOptions, TraversabilityRule};
+use serde::Deserialize;
+
+/// A whole scenario: a place, a robot, its sensors and drive, and what the run must achieve.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name, used for the output folder.
+    pub name: String,
+    /// What the scenario shows.
+    #[serde(default)]
+    pub description: String,
+    /// The one source of randomness; split into named sub-streams.
+    pub seed: u64,
+    /// Simulated duration, seconds.
+    pub duration_s: f64,
+    /// Simulation tick, seconds (the clock step of the drive, actors and sensors).
+    #[serde(default = "default_tick_s")]
+    pub tick_s: f64,
+    /// The map's region and model.
+    pub map: MapSettings,
+    /// The robot, its drive and odometry.
+    pub robot: RobotSettings,
+    /// The ground.
+    #[serde(default)]
+    pub terrain: Terrain,
+    /// Static obstacles.
+    #[serde(default)]
+    pub obstacles: Vec<Obstacle>,
+    /// Moving actors (people).
+    #[serde(default)]
+    pub actors: Vec<Actor>,
+    /// Sensors on the robot.
+    #[serde(default)]
+    pub sensors: Vec<SensorMount>,
+    /// Thresholds on the run's metrics, by metric name.
+    #[serde(default)]
+    pub expectations: BTreeMap<String, Expectation>,
+}
+
+/// Default simulation tick: 0.1 s (10 Hz).
+pub const DEFAULT_TICK_S: f64 = 0.1;
+
+fn default_tick_s() -> f64 {
+    DEFAULT_TICK_S
+}
+
+/// The region mapped and evaluated, and the map model.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapSettings {
+    /// Min-x, min-y corner of the region, metres.
+    pub min_xy_m: [f64; 2],
+    /// Max-x, max-y corner, metres.
+    pub max_xy_m: [f64; 2],
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// The OEG model options (`oeg::ModelOptions`; every field optional, defaults documented there).
+    #[serde(default)]
+    pub model: ModelOptions,
+    /// How the map's step decision is taken.
+    #[serde(default)]
+    pub traversability: TraversabilityRule,
+}
+
+/// The robot.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSettings {
+    /// The URDF file, relative to the scenario file.
+    pub urdf: PathBuf,
+    /// The URDF link that is the robot's base (its pose is the robot's pose).
+    #[serde(default = "default_base_link")]
+    pub base_link: String,
+    /// Largest step the robot climbs, metres (decisions).
+    #[serde(default = "default_max_step")]
+    pub max_step_m: f64,
+    /// Robot height, metres (decisions: it passes under higher structures).
+    #[serde(default = "default_height")]
+    pub height_m: f64,
+    /// The path it drives.
+    pub drive: Drive,
+    /// Odometry drift of the estimated pose.
+    #[serde(default)]
+    pub odometry: Odometry,
+}
+
+fn default_base_link() -> String {
+    "base_link".into()
+}
+
+fn default_max_step() -> f64 {
+    f64::from(oeg::traversability::DEFAULT_MAX_STEP_M)
+}
+
+fn default_height() -> f64 {
+    f64::from(oeg::traversability::DEFAULT_ROBOT_HEIGHT_M)
+}
+
+/// The drive: straight segments between waypoints at a constant speed; the robot turns on the spot at each
+/// waypoint and stops at the last.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Drive {
+    /// Waypoints `[x, y]`, metres; the first is the start.
+    pub waypoints_xy_m: Vec<[f64; 2]>,
+    /// Speed along the path, m/s.
+    pub speed_m_s: f64,
+    /// Heading at the start, degrees from +x; default: towards the second waypoint.
+    #[serde(default)]
+    pub start_yaw_deg: Option<f64>,
+}
+
+/// Odometry drift: the estimated pose is the true pose plus a random walk whose standard deviation grows with
+/// the square root of the distance driven. Zero by default (perfect localisation).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Odometry {
+    /// Position drift, metres per square root of metre driven (per axis).
+    pub xy_sigma_m_per_sqrt_m: f64,
+    /// Heading drift, degrees per square root of metre driven.
+    pub yaw_sigma_deg_per_sqrt_m: f64,
+}
+
+/// The ground.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Terrain {
+    /// A horizontal plane.
+    Flat {
+        /// Height of the plane, metres.
+        #[serde(default)]
+        height_m: f64,
+    },
+    /// A plane `z = height_m + slope_x * x + slope_y * y`.
+    Slope {
+        /// Height at the origin, metres.
+        #[serde(default)]
+        height_m: f64,
+        /// Rise per metre along x.
+        #[serde(default)]
+        slope_x: f64,
+        /// Rise per metre along y.
+        #[serde(default)]
+        slope_y: f64,
+    },
+    /// Irregular ground: a sum of seeded sine waves (seed sub-stream `terrain`).
+    Noise {
+        /// Peak-to-mean amplitude, metres.
+        amplitude_m: f64,
+        /// Typical wavelength of the bumps, metres.
+        wavelength_m: f64,
+        /// Heightfield cell size, metres.
+        #[serde(default = "default_terrain_cell")]
+        cell_m: f64,
+    },
+    /// A greyscale PNG: black is 0, white is `height_scale_m`; row 0 of the image is the max-y edge (north up),
+    /// column 0 the min-x edge; the image's min-x, min-y corner is at `origin_xy_m`.
+    Image {
+        /// The PNG, relative to the scenario file (8- or 16-bit greyscale).
+        path: PathBuf,
+        /// Height of a white pixel, metres.
+        height_scale_m: f64,
+        /// Pixel size, metres.
+        cell_m: f64,
+        /// Where the image's min-x, min-y corner lies; default: the map's min corner.
+        #[serde(default)]
+        origin_xy_m: Option<[f64; 2]>,
+    },
+}
+
+impl Default for Terrain {
+    fn default() -> Self {
+        Self::Flat { height_m: 0.0 }
+    }
+}
+
+fn default_terrain_cell() -> f64 {
+    0.1
+}
+
+fn default_bush_parts() -> u32 {
+    12
+}
+
+/// A static obstacle. Heights are above the terrain at the obstacle's centre.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Obstacle {
+    /// A box (wall, curb, step, table top): `size_m` = length (local x), width (local y), height.
+    Box {
+        /// Optional label, shown in reports.
+        #[serde(default)]
+        name: Option<String>,
+        /// Centre of the footprint, metres.
+        center_xy_m: [f64; 2],
+        /// Length, width, height, metres.
+        size_m: [f64; 3],
+        /// Rotation about z, degrees.
+        #[serde(default)]
+        yaw_deg: f64,
+        /// Height of the box's bottom above the ground, metres (0: standing on it).
+        #[serde(default)]
+        base_m: f64,
+    },
+    /// A vertical cylinder (pole, trunk).
+    Cylinder {
+        /// Optional label.
+        #[serde(default)]
+        name: Option<String>,
+        /// Centre, metres.
+        center_xy_m: [f64; 2],
+        /// Radius, metres.
+        radius_m: f64,
+        /// Height, metres.
+        height_m: f64,
+        /// Height of the bottom above the ground, metres.
+        #[serde(default)]
+        base_m: f64,
+    },
+    /// A wedge rising from 0 at its local -x end to `height_m` at its +x end.
+    Ramp {
+        /// Optional label.
+        #[serde(default)]
+        name: Option<String>,
+        /// Centre of the footprint, metres.
+        center_xy_m: [f64; 2],
+        /// Length along local x, metres.
+        length_m: f64,
+        /// Width along local y, metres.
+        width_m: f64,
+        /// Height at the high end, metres.
+        height_m: f64,
+        /// Rotation about z, degrees.
+        #[serde(default)]
+        yaw_deg: f64,
+    },
+    /// An irregular cluster of small boxes (a bush), placed from the seed sub-stream `bush/<index>`.
+    Bush {
+        /// Optional label.
+        #[serde(default)]
+        name: Option<String>,
+        /// Centre, metres.
+        center_xy_m: [f64; 2],
+        /// Radius of the cluster, metres.
+        radius_m: f64,
+        /// Height of the cluster, metres.
+        height_m: f64,
+        /// Number of parts.
+        #[serde(default = "default_bush_parts")]
+        num_parts: u32,
+    },
+    /// A board or branch at a height, with nothing under it: `size_m` = length, width, thickness;
+    /// `clearance_m` is the free gap between the ground and its underside.
+    Overhang {
+        /// Optional label.
+        #[serde(default)]
+        name: Option<String>,
+        /// Centre of the footprint, metres.
+        center_xy_m: [f64; 2],
+        /// Length, width, thickness, metres.
+        size_m: [f64; 3],
+        /// Gap under it, metres.
+        clearance_m: f64,
+        /// Rotation about z, degrees.
+        #[serde(default)]
+        yaw_deg: f64,
+    },
+}
+
+impl Obstacle {
+    /// The obstacle's kind as written in files.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Box { .. } => "box",
+            Self::Cylinder { .. } => "cylinder",
+            Self::Ramp { .. } => "ramp",
+            Self::Bush { .. } => "bush",
+            Self::Overhang { .. } => "overhang",
+        }
+    }
+
+    /// The obstacle's label, or `<kind> <index>`.
+    pub fn label(&self, index: usize) -> String {
+        let name = match self {
+            Self::Box { name, .. }
+            | Self::Cylinder { name, .. }
+            | Self::Ramp { name, .. }
+            | Self::Bush { name, .. }
+            | Self::Overhang { name, .. } => name.clone(),
+        };
+        name.unwrap_or_else(|| format!("{} {index}", self.kind()))
+    }
+
+    /// The footprint's centre.
+    pub fn center_xy_m(&self) -> [f64; 2] {
+        match self {
+            Self::Box { center_xy_m, .. }
+            | Self::Cylinder { center_xy_m, .. }
+            | Self::Ramp { center_xy_m, .. }
+            | Self::Bush { center_xy_m, .. }
+            | Self::Overhang { center_xy_m, .. } => *center_xy_m,
+        }
+    }
+}
+
+/// A moving actor.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Actor {
+    /// A person: an upright capsule walking between timed waypoints; absent before the first waypoint's time
+    /// and after the last one's (entering and leaving the scene).
+    Person {
+        /// Label.
+        #[serde(default)]
+        name: Option<String>,
+        /// `[t_s, x_m, y_m]`, times strictly increasing.
+        waypoints: Vec<[f64; 3]>,
+        /// Capsule radius, metres.
+        #[serde(default = "default_person_radius")]
+        radius_m: f64,
+        /// Height, metres.
+        #[serde(default = "default_person_height")]
+        height_m: f64,
+    },
+}
+
+fn default_person_radius() -> f64 {
+    0.25
+}
+
+fn default_person_height() -> f64 {
+    1.7
+}
+
+/// The kinds of simulated sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SensorKind {
+    /// A 2D laser scanner (possibly tilted: push-broom).
+    Laser2d,
+    /// A multi-beam 3D lidar.
+    Lidar3d,
+    /// A stereo camera.
+    Stereo,
+}
+
+/// A sensor and where it sits on the robot.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorMount {
+    /// Unique name.
+    pub name: String,
+    /// What it is.
+    pub kind: SensorKind,
+    /// The URDF link it is fixed to.
+    pub mount_link: String,
+    /// Offset from the link, metres (link frame).
+    #[serde(default)]
+    pub xyz_m: [f64; 3],
+    /// Roll, pitch, yaw from the link, degrees (applied as in URDF: fixed-axis x, then y, then z).
+    #[serde(default)]
+    pub rpy_deg: [f64; 3],
+}
+
+/// A threshold on one metric: the run fails when the value is below `min` or above `max`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Expectation {
+    /// Smallest acceptable value.
+    #[serde(default)]
+    pub min: Option<f64>,
+    /// Largest acceptable value.
+    #[serde(default)]
+    pub max: Option<f64>,
+}
+
+/// Where a scenario came from: resolves the paths it mentions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioSource {
+    /// The scenario file.
+    pub path: PathBuf,
+    /// Its text, for error positions.
+    pub text: String,
+}
+
+impl ScenarioSource {
+    /// A path from the scenario, relative to the scenario file's folder.
+    pub fn resolve(&self, relative: &std::path::Path) -> PathBuf {
+        self.path
+            .parent()
+            .map_or_else(|| relative.to_path_buf(), |dir| dir.join(relative))
+    }
+}
