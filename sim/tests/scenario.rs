@@ -1,0 +1,112 @@
+//! Scenario files: one test per error class, and every shipped scenario validates.
+
+mod common;
+
+use sim::SimError;
+
+fn error_of(name: &str, text: &str) -> (String, Option<sim::TextPosition>) {
+    match common::load_text(name, text) {
+        Ok(_) => panic!("{name}: expected an error"),
+        Err(SimError::Scenario { position, message, .. }) => (message, position),
+        Err(other) => panic!("{name}: expected a scenario error, got {other}"),
+    }
+}
+
+#[test]
+fn a_valid_scenario_loads() {
+    let loaded = common::load_text("valid", &common::scenario_text("")).expect("valid");
+    assert_eq!(loaded.scenario.name, "test");
+    assert_eq!(loaded.scenario.tick_s, 0.1);
+    assert!((loaded.robot.height_m() - 0.46).abs() < 1e-9);
+}
+
+#[test]
+fn a_syntax_error_names_line_and_column() {
+    let text = common::scenario_text("[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [1.0, 2.0\n");
+    let (message, position) = error_of("syntax", &text);
+    let p = position.expect("position");
+    assert_eq!(p.line, 19, "{message}");
+    assert!(p.column > 1, "{p}");
+    let shown = common::load_text("syntax", &text).expect_err("error").to_string();
+    assert!(shown.contains("syntax.toml:19:"), "{shown}");
+}
+
+#[test]
+fn an_unknown_key_is_an_error_at_its_place() {
+    let text = common::scenario_text("").replace("speed_m_s = 1.0", "speed_m_s = 1.0\nspeed_kmh = 3.6");
+    let (message, position) = error_of("unknown", &text);
+    assert!(message.contains("unknown field `speed_kmh`"), "{message}");
+    assert_eq!(position.expect("position").line, 16);
+}
+
+#[test]
+fn bad_values_are_errors_at_their_place() {
+    let cases = [
+        ("resolution", common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = -0.05"), "map.resolution_m", 8),
+        ("huge", common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = 0.001"), "over the limit", 8),
+        ("waypoint", common::scenario_text("").replace("[4.0, 0.0]]", "[40.0, 0.0]]"), "outside the map region", 14),
+        ("noise", common::scenario_text("[robot.odometry]\nxy_sigma_m_per_sqrt_m = -0.1\n"), "xy_sigma_m_per_sqrt_m", 18),
+        ("duration", common::scenario_text("").replace("duration_s = 4.0", "duration_s = 0.0"), "duration_s", 3),
+        (
+            "mount",
+            common::scenario_text("[[sensors]]\nname = \"l\"\nkind = \"laser2d\"\nmount_link = \"roof\"\n"),
+            "`roof`, which",
+            20,
+        ),
+        (
+            "box",
+            common::scenario_text("[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [1.0, 1.0]\nsize_m = [1.0, 0.0, 1.0]\n"),
+            "obstacles[0].size_m",
+            20,
+        ),
+        (
+            "times",
+            common::scenario_text("[[actors]]\nkind = \"person\"\nwaypoints = [[2.0, 1.0, 1.0], [1.0, 2.0, 2.0]]\n"),
+            "times must increase",
+            19,
+        ),
+        ("expect", common::scenario_text("[expectations]\ncoverage = { min = 0.9, max = 0.5 }\n"), "min 0.9 exceeds max 0.5", 18),
+    ];
+    for (name, text, expected, line) in cases {
+        let (message, position) = error_of(name, &text);
+        assert!(message.contains(expected), "{name}: {message}");
+        assert_eq!(position.map(|p| p.line), Some(line), "{name}: {message}");
+    }
+}
+
+#[test]
+fn a_wrong_type_is_an_error() {
+    let text = common::scenario_text("").replace("seed = 7", "seed = \"seven\"");
+    let (message, position) = error_of("type", &text);
+    assert!(message.contains("invalid type"), "{message}");
+    assert_eq!(position.expect("position").line, 2);
+}
+
+#[test]
+fn missing_files_are_errors_naming_them() {
+    let err = sim::scenario::load(std::path::Path::new("/nonexistent/scenario.toml")).expect_err("missing");
+    assert!(matches!(err, SimError::Io { .. }) && err.to_string().contains("/nonexistent/scenario.toml"), "{err}");
+    let text = common::scenario_text("").replace(&common::urdf_path().display().to_string(), "robots/none.urdf");
+    let (message, position) = error_of("nourdf", &text);
+    assert!(message.contains("robot.urdf") && message.contains("none.urdf"), "{message}");
+    assert_eq!(position.expect("position").line, 11);
+    let text = common::scenario_text("[terrain]\nkind = \"image\"\npath = \"missing.png\"\nheight_scale_m = 1.0\ncell_m = 0.1\n");
+    let (message, _) = error_of("noimage", &text);
+    assert!(message.contains("missing.png"), "{message}");
+}
+
+#[test]
+fn every_shipped_scenario_validates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    let mut names: Vec<_> = std::fs::read_dir(&dir)
+        .expect("scenarios folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    names.sort();
+    assert!(!names.is_empty());
+    for path in names {
+        let loaded = sim::scenario::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        sim::World::new(&loaded).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
+}
