@@ -35,6 +35,20 @@ enum Command {
         /// A map file written by `oeg map` (map.oeg).
         map: PathBuf,
     },
+    /// Check scenario files: print one line per file, exit non-zero if any is invalid.
+    Validate {
+        /// Scenario files (.toml).
+        #[arg(required = true)]
+        scenarios: Vec<PathBuf>,
+    },
+    /// Draw a scenario's true elevation and decisions, its drive and sensor mounts, before running it.
+    Preview {
+        /// A scenario file (.toml).
+        scenario: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "out/preview")]
+        out: PathBuf,
+    },
     /// Map the built-in demonstration scans (what `oeg` with no arguments does).
     Demo {
         /// Output folder.
@@ -220,6 +234,30 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
     run_map(&args)
 }
 
+fn run_validate(paths: &[PathBuf]) -> anyhow::Result<()> {
+    let mut num_bad = 0;
+    for path in paths {
+        match eval::preview::validate(path) {
+            Ok(loaded) => println!("{}", eval::preview::describe(&loaded)),
+            Err(e) => {
+                num_bad += 1;
+                eprintln!("error: {e}");
+            }
+        }
+    }
+    if num_bad > 0 {
+        anyhow::bail!("{num_bad} of {} scenario files are invalid", paths.len());
+    }
+    Ok(())
+}
+
+fn run_preview(path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
+    for f in eval::preview::preview(path, out)? {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -228,6 +266,8 @@ fn main() -> ExitCode {
             .map(|text| print!("{text}"))
             .map_err(Into::into),
         Some(Command::Demo { out }) => run_demo(out),
+        Some(Command::Validate { scenarios }) => run_validate(&scenarios),
+        Some(Command::Preview { scenario, out }) => run_preview(&scenario, &out),
         None => run_demo(PathBuf::from("out/demo")),
     };
     match result {

@@ -9,6 +9,9 @@ pub enum EvalError {
     /// From the map crate (reading data, building or saving the map). Its message names the file.
     #[error(transparent)]
     Map(#[from] oeg::Error),
+    /// From the simulation crate (scenario files, the robot, the world). Its message names the file and place.
+    #[error(transparent)]
+    Sim(#[from] sim::SimError),
     /// An input the job cannot use.
     #[error("{}: {message}", path.display())]
     Input {

@@ -1,5 +1,5 @@
 //! Runs OEG experiments end to end: maps from recorded data (`oeg map`), inspection of saved maps
-//! (`oeg inspect`), reports and images. It ties the map crate (`oeg`) to the outside world; the command-line
+//! (`oeg inspect`), scenario checks and previews (`oeg validate`, `oeg preview`), reports and images. It ties the map crate (`oeg`) to the outside world; the command-line
 //! program is a thin layer over it.
 
 pub mod demo;
@@ -7,6 +7,7 @@ pub mod error;
 pub mod inspect;
 pub mod mapping;
 pub mod output;
+pub mod preview;
 pub mod progress;
 pub mod render;
 

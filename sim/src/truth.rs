@@ -6,8 +6,9 @@
 //! 2. the top surface: a ray down from `g + robot height`, everything but the robot; a start inside a solid
 //!    counts as a surface at the start height. Structures above the robot's height are therefore not seen,
 //!    and a board lower than the robot is;
-//! 3. a structure overhead: a ray up from 1 mm above the ground; a hit at a gap `d > 0` is a structure whose
-//!    underside is `d` above the ground (a start inside a solid, `d = 0`, is a step obstacle, not a structure).
+//! 3. a structure overhead: a ray up from 1 mm above the ground; a hit at a gap `d` higher than a step is a
+//!    structure whose underside is `d` above the ground (a start inside a solid, or a gap a wheel could not
+//!    even enter, is a step obstacle, not a structure).
 //!
 //! The cell's elevation is the highest top surface, its step the largest `top - g`: blocked when it exceeds the
 //! robot's `max_step_m` (the step measured against the ground beside it, so a slope alone never blocks). A

@@ -22,6 +22,10 @@ use crate::scenario::{Actor, LoadedScenario, Obstacle, Scenario};
 use crate::seed;
 use crate::terrain::{self, HeightGrid};
 
+/// How far obstacles standing on the ground reach below it, metres: on uneven terrain their footprint stays
+/// sealed against the ground instead of floating over its dips.
+pub const OBSTACLE_FOOTING_M: f64 = 0.5;
+
 const KIND_TERRAIN: u32 = 0;
 const KIND_OBSTACLE: u32 = 1;
 const KIND_ACTOR: u32 = 2;
@@ -285,13 +289,17 @@ impl World {
                 ..
             } => {
                 let (l, w, h) = ((length_m / 2.0) as f32, (width_m / 2.0) as f32, *height_m as f32);
+                let f = OBSTACLE_FOOTING_M as f32;
+                // The wedge, sealed below the ground by the footing.
                 let points = [
                     Vector::new(-l, -w, 0.0),
-                    Vector::new(l, -w, 0.0),
                     Vector::new(-l, w, 0.0),
-                    Vector::new(l, w, 0.0),
                     Vector::new(l, -w, h),
                     Vector::new(l, w, h),
+                    Vector::new(-l, -w, -f),
+                    Vector::new(-l, w, -f),
+                    Vector::new(l, -w, -f),
+                    Vector::new(l, w, -f),
                 ];
                 let hull = ColliderBuilder::convex_hull(&points)
                     .ok_or_else(|| format!("ramp {index} has a degenerate shape"))?;
@@ -472,7 +480,7 @@ impl World {
         start: RayStart,
     ) -> Option<RayHit> {
         let norm = direction.norm();
-        if !(norm > 0.0) || !origin.iter().all(|v| v.is_finite()) {
+        if !norm.is_finite() || norm <= 0.0 || !origin.iter().all(|v| v.is_finite()) {
             return None;
         }
         let dir = direction / norm;

@@ -7,7 +7,9 @@ use sim::SimError;
 fn error_of(name: &str, text: &str) -> (String, Option<sim::TextPosition>) {
     match common::load_text(name, text) {
         Ok(_) => panic!("{name}: expected an error"),
-        Err(SimError::Scenario { position, message, .. }) => (message, position),
+        Err(SimError::Scenario {
+            position, message, ..
+        }) => (message, position),
         Err(other) => panic!("{name}: expected a scenario error, got {other}"),
     }
 }
@@ -42,11 +44,36 @@ fn an_unknown_key_is_an_error_at_its_place() {
 #[test]
 fn bad_values_are_errors_at_their_place() {
     let cases = [
-        ("resolution", common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = -0.05"), "map.resolution_m", 8),
-        ("huge", common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = 0.001"), "over the limit", 8),
-        ("waypoint", common::scenario_text("").replace("[4.0, 0.0]]", "[40.0, 0.0]]"), "outside the map region", 14),
-        ("noise", common::scenario_text("[robot.odometry]\nxy_sigma_m_per_sqrt_m = -0.1\n"), "xy_sigma_m_per_sqrt_m", 18),
-        ("duration", common::scenario_text("").replace("duration_s = 4.0", "duration_s = 0.0"), "duration_s", 3),
+        (
+            "resolution",
+            common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = -0.05"),
+            "map.resolution_m",
+            8,
+        ),
+        (
+            "huge",
+            common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = 0.001"),
+            "over the limit",
+            8,
+        ),
+        (
+            "waypoint",
+            common::scenario_text("").replace("[4.0, 0.0]]", "[40.0, 0.0]]"),
+            "outside the map region",
+            14,
+        ),
+        (
+            "noise",
+            common::scenario_text("[robot.odometry]\nxy_sigma_m_per_sqrt_m = -0.1\n"),
+            "xy_sigma_m_per_sqrt_m",
+            18,
+        ),
+        (
+            "duration",
+            common::scenario_text("").replace("duration_s = 4.0", "duration_s = 0.0"),
+            "duration_s",
+            3,
+        ),
         (
             "mount",
             common::scenario_text("[[sensors]]\nname = \"l\"\nkind = \"laser2d\"\nmount_link = \"roof\"\n"),
@@ -55,17 +82,26 @@ fn bad_values_are_errors_at_their_place() {
         ),
         (
             "box",
-            common::scenario_text("[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [1.0, 1.0]\nsize_m = [1.0, 0.0, 1.0]\n"),
+            common::scenario_text(
+                "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [1.0, 1.0]\nsize_m = [1.0, 0.0, 1.0]\n",
+            ),
             "obstacles[0].size_m",
             20,
         ),
         (
             "times",
-            common::scenario_text("[[actors]]\nkind = \"person\"\nwaypoints = [[2.0, 1.0, 1.0], [1.0, 2.0, 2.0]]\n"),
+            common::scenario_text(
+                "[[actors]]\nkind = \"person\"\nwaypoints = [[2.0, 1.0, 1.0], [1.0, 2.0, 2.0]]\n",
+            ),
             "times must increase",
             19,
         ),
-        ("expect", common::scenario_text("[expectations]\ncoverage = { min = 0.9, max = 0.5 }\n"), "min 0.9 exceeds max 0.5", 18),
+        (
+            "expect",
+            common::scenario_text("[expectations]\ncoverage = { min = 0.9, max = 0.5 }\n"),
+            "min 0.9 exceeds max 0.5",
+            18,
+        ),
     ];
     for (name, text, expected, line) in cases {
         let (message, position) = error_of(name, &text);
@@ -85,12 +121,21 @@ fn a_wrong_type_is_an_error() {
 #[test]
 fn missing_files_are_errors_naming_them() {
     let err = sim::scenario::load(std::path::Path::new("/nonexistent/scenario.toml")).expect_err("missing");
-    assert!(matches!(err, SimError::Io { .. }) && err.to_string().contains("/nonexistent/scenario.toml"), "{err}");
-    let text = common::scenario_text("").replace(&common::urdf_path().display().to_string(), "robots/none.urdf");
+    assert!(
+        matches!(err, SimError::Io { .. }) && err.to_string().contains("/nonexistent/scenario.toml"),
+        "{err}"
+    );
+    let text =
+        common::scenario_text("").replace(&common::urdf_path().display().to_string(), "robots/none.urdf");
     let (message, position) = error_of("nourdf", &text);
-    assert!(message.contains("robot.urdf") && message.contains("none.urdf"), "{message}");
+    assert!(
+        message.contains("robot.urdf") && message.contains("none.urdf"),
+        "{message}"
+    );
     assert_eq!(position.expect("position").line, 11);
-    let text = common::scenario_text("[terrain]\nkind = \"image\"\npath = \"missing.png\"\nheight_scale_m = 1.0\ncell_m = 0.1\n");
+    let text = common::scenario_text(
+        "[terrain]\nkind = \"image\"\npath = \"missing.png\"\nheight_scale_m = 1.0\ncell_m = 0.1\n",
+    );
     let (message, _) = error_of("noimage", &text);
     assert!(message.contains("missing.png"), "{message}");
 }

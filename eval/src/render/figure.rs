@@ -13,7 +13,7 @@ const TARGET_PLOT_PX: f64 = 900.0;
 /// Largest enlargement, pixels per cell.
 const MAX_PX_PER_CELL: f64 = 24.0;
 const LEFT: usize = 72;
-const RIGHT: usize = 190;
+const RIGHT: usize = 240;
 const TOP: usize = 40;
 const BOTTOM: usize = 52;
 
@@ -79,8 +79,17 @@ impl Figure {
             }
         }
         fig.draw_axes();
-        let title_x = (LEFT as i64 + plot_w as i64 / 2 - Canvas::text_width(title, 2) as i64 / 2).max(4);
-        fig.canvas.text(title_x, 10, title, 2, BLACK);
+        // The title in double size when it fits, else in single size.
+        let scale = if Canvas::text_width(title, 2) + 8 <= width {
+            2
+        } else {
+            1
+        };
+        let title_x = (LEFT as i64 + plot_w as i64 / 2 - Canvas::text_width(title, scale) as i64 / 2).clamp(
+            4,
+            (width as i64 - Canvas::text_width(title, scale) as i64 - 4).max(4),
+        );
+        fig.canvas.text(title_x, 10, title, scale, BLACK);
         fig.draw_legend(legend);
         fig
     }

@@ -96,12 +96,17 @@ fn default_base_link() -> String {
     "base_link".into()
 }
 
+/// Default largest step, metres: the paper's Pioneer 3-AT climbs 3.5 cm.
+pub const DEFAULT_MAX_STEP_M: f64 = 0.035;
+/// Default robot height, metres: the paper's 0.46 m.
+pub const DEFAULT_ROBOT_HEIGHT_M: f64 = 0.46;
+
 fn default_max_step() -> f64 {
-    f64::from(oeg::traversability::DEFAULT_MAX_STEP_M)
+    DEFAULT_MAX_STEP_M
 }
 
 fn default_height() -> f64 {
-    f64::from(oeg::traversability::DEFAULT_ROBOT_HEIGHT_M)
+    DEFAULT_ROBOT_HEIGHT_M
 }
 
 /// The drive: straight segments between waypoints at a constant speed; the robot turns on the spot at each

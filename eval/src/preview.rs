@@ -1,0 +1,168 @@
+//! `oeg validate` and `oeg preview`: check scenario files, and draw a scenario's truth before running it.
+
+use std::path::{Path, PathBuf};
+
+use oeg::GridGeometry;
+use sim::scenario::{self, LoadedScenario};
+use sim::truth::{TruthProfile, TruthRaster};
+use sim::world::{Actors, World};
+
+use crate::error::Result;
+use crate::output::{create_dir, write_bytes};
+use crate::render::{Colormap, Figure, Legend, NO_DATA, Rgb, finite_range};
+
+/// Sample points per cell side for the preview's truth (the evaluation uses more).
+pub const PREVIEW_SAMPLES_PER_SIDE: u32 = 2;
+
+/// One line describing a valid scenario.
+pub fn describe(loaded: &LoadedScenario) -> String {
+    let s = &loaded.scenario;
+    let size = [
+        s.map.max_xy_m[0] - s.map.min_xy_m[0],
+        s.map.max_xy_m[1] - s.map.min_xy_m[1],
+    ];
+    format!(
+        "{}: ok: `{}`, {:.0} s, map {:.1} x {:.1} m at {} m, {} obstacles, {} actors, {} sensors, robot `{}` {:.2} m tall",
+        loaded.source.path.display(),
+        s.name,
+        s.duration_s,
+        size[0],
+        size[1],
+        s.map.resolution_m,
+        s.obstacles.len(),
+        s.actors.len(),
+        s.sensors.len(),
+        loaded.robot.name,
+        loaded.robot.height_m()
+    )
+}
+
+/// Loads a scenario and builds its world, as `oeg validate` does.
+///
+/// # Errors
+/// The scenario's error (file, line, column, what was expected).
+pub fn validate(path: &Path) -> Result<LoadedScenario> {
+    let loaded = scenario::load(path)?;
+    World::new(&loaded)?;
+    Ok(loaded)
+}
+
+/// The colours of the truth's decision classes.
+pub const TRUTH_CLASSES: [(&str, Rgb); 5] = [
+    ("off the terrain", NO_DATA),
+    ("drivable", [255, 255, 255]),
+    ("step blocked", [200, 40, 40]),
+    ("under structure: passable", [90, 140, 230]),
+    ("under structure: too low", [120, 30, 120]),
+];
+
+/// Writes `preview_elevation.png` and `preview_decisions.png` for a scenario: the truth at time 0 with the
+/// people left out, the drive and the sensor mounts. Returns the files written.
+///
+/// # Errors
+/// A bad scenario, or a failed write.
+pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
+    let loaded = validate(path)?;
+    let s = &loaded.scenario;
+    let world = World::new(&loaded)?;
+    let geometry = GridGeometry::new(s.map.resolution_m)?;
+    let region = geometry.region_covering(
+        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
+        (
+            s.map.max_xy_m[0] - s.map.resolution_m * 1e-6,
+            s.map.max_xy_m[1] - s.map.resolution_m * 1e-6,
+        ),
+    )?;
+    let profile = TruthProfile {
+        max_step_m: s.robot.max_step_m,
+        height_m: s.robot.height_m,
+    };
+    let truth = TruthRaster::compute(
+        &world,
+        &geometry,
+        region,
+        profile,
+        Actors::Excluded,
+        PREVIEW_SAMPLES_PER_SIDE,
+    );
+
+    let drive: Vec<(f64, f64)> = s
+        .robot
+        .drive
+        .waypoints_xy_m
+        .iter()
+        .map(|w| (w[0], w[1]))
+        .collect();
+    let mounts: Vec<(f64, f64)> = s
+        .sensors
+        .iter()
+        .filter_map(|m| world.world_from_link(&m.mount_link))
+        .map(|p| (p.translation.x, p.translation.y))
+        .collect();
+    let overlay = |fig: &mut Figure| {
+        fig.polyline(&drive, [230, 30, 30]);
+        if let Some(&(x, y)) = drive.first() {
+            fig.marker(x, y, [230, 30, 30]);
+        }
+        for &(x, y) in &mounts {
+            fig.marker(x, y, [255, 200, 0]);
+        }
+    };
+
+    let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
+    let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
+    let legend = Legend::ColorBar {
+        colormap: Colormap::Viridis,
+        min: lo,
+        max: hi,
+        label: "elevation [m]".into(),
+    };
+    let title = format!("{}: true elevation (drive red, sensors yellow)", s.name);
+    let mut fig = Figure::new(
+        region,
+        geometry.resolution_m(),
+        &title,
+        |c| match truth.get(c) {
+            Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
+            _ => NO_DATA,
+        },
+        &legend,
+    );
+    overlay(&mut fig);
+    create_dir(out_dir)?;
+    let elevation_path = out_dir.join("preview_elevation.png");
+    write_bytes(&elevation_path, &fig.to_png())?;
+
+    let legend = Legend::Classes(
+        TRUTH_CLASSES
+            .iter()
+            .map(|(n, c)| ((*n).to_string(), *c))
+            .collect(),
+    );
+    let title = format!(
+        "{}: true decisions (step {} m, height {} m)",
+        s.name, profile.max_step_m, profile.height_m
+    );
+    let mut fig = Figure::new(
+        region,
+        geometry.resolution_m(),
+        &title,
+        |c| {
+            let Some(t) = truth.get(c) else { return NO_DATA };
+            if t.elevation_m.is_nan() {
+                return TRUTH_CLASSES[0].1;
+            }
+            match t.clearance_passable(&profile) {
+                Some(true) => TRUTH_CLASSES[3].1,
+                Some(false) => TRUTH_CLASSES[4].1,
+                None if t.step_blocked => TRUTH_CLASSES[2].1,
+                None => TRUTH_CLASSES[1].1,
+            }
+        },
+        &legend,
+    );
+    overlay(&mut fig);
+    let decisions_path = out_dir.join("preview_decisions.png");
+    write_bytes(&decisions_path, &fig.to_png())?;
+    Ok(vec![elevation_path, decisions_path])
+}
