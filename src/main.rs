@@ -49,6 +49,21 @@ enum Command {
         #[arg(long, default_value = "out/preview")]
         out: PathBuf,
     },
+    /// Run a scenario's drive and sensors and record every scan (a sensor log, or an OctoMap scan graph).
+    Record {
+        /// A scenario file (.toml).
+        scenario: PathBuf,
+        /// The file to write (.oeglog, or .graph with --format graph).
+        #[arg(long)]
+        out: PathBuf,
+        /// log: the testbed's sensor log (both poses, no-returns, range errors); graph: OctoMap's scan graph
+        /// (estimated pose, hits only) for other mappers.
+        #[arg(long, value_enum, default_value_t = FormatArg::Log)]
+        format: FormatArg,
+        /// Replace the scenario's seed.
+        #[arg(long)]
+        seed: Option<u64>,
+    },
     /// Map the built-in demonstration scans (what `oeg` with no arguments does).
     Demo {
         /// Output folder.
@@ -80,6 +95,9 @@ struct MapArgs {
     /// What NaN points of an organized PCD become: dropped, or no-return rays along their pixel.
     #[arg(long, value_enum, default_value_t = InvalidArg::Drop)]
     pcd_invalid: InvalidArg,
+    /// Pose of sensor-log scans: estimated (with odometry drift, as a robot maps) or true.
+    #[arg(long, value_enum, default_value_t = PoseArg::Estimated)]
+    log_pose: PoseArg,
     /// Eq. 12's free-space rule: zero (the paper), skip, or ray_bound.
     #[arg(long, value_enum, default_value_t = FreeSpaceArg::Zero)]
     free_space: FreeSpaceArg,
@@ -115,6 +133,20 @@ impl SensorKind {
             },
         }
     }
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum FormatArg {
+    Log,
+    Graph,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum PoseArg {
+    Estimated,
+    True,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -171,6 +203,10 @@ impl MapArgs {
                 },
                 sensor: self.pcd_sensor.model(),
             },
+            log_pose: match self.log_pose {
+                PoseArg::Estimated => sim::sensors::PoseSource::Estimated,
+                PoseArg::True => sim::sensors::PoseSource::True,
+            },
             profile: RobotProfile {
                 max_step_m: self.max_step,
                 ..RobotProfile::default()
@@ -225,6 +261,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
         pcd_sensor: SensorKind::Stereo,
         pcd_frame: FrameArg::AsIs,
         pcd_invalid: InvalidArg::Drop,
+        log_pose: PoseArg::Estimated,
         free_space: FreeSpaceArg::Zero,
         max_height: Some(0.5),
         max_range: None,
@@ -251,6 +288,25 @@ fn run_validate(paths: &[PathBuf]) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn run_record(path: &std::path::Path, out: &std::path::Path, format: FormatArg, seed: Option<u64>) -> anyhow::Result<()> {
+    let format = match format {
+        FormatArg::Log => eval::record::RecordFormat::Log,
+        FormatArg::Graph => eval::record::RecordFormat::Graph,
+    };
+    let progress = Progress::new(0, "scans");
+    let r = eval::record::record(path, out, format, seed, &progress)?;
+    println!(
+        "recorded {} scans, {} rays in {:.2} s ({:.2} M simulated rays/s){}; wrote {}",
+        r.num_scans,
+        r.num_rays,
+        r.wall_time_s,
+        r.rays_per_s / 1e6,
+        if r.num_rays_left_out > 0 { format!(", {} no-return rays left out of the graph", r.num_rays_left_out) } else { String::new() },
+        r.path.display()
+    );
+    Ok(())
+}
+
 fn run_preview(path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
     for f in eval::preview::preview(path, out)? {
         println!("wrote {}", f.display());
@@ -267,6 +323,7 @@ fn main() -> ExitCode {
             .map_err(Into::into),
         Some(Command::Demo { out }) => run_demo(out),
         Some(Command::Validate { scenarios }) => run_validate(&scenarios),
+        Some(Command::Record { scenario, out, format, seed }) => run_record(&scenario, &out, format, seed),
         Some(Command::Preview { scenario, out }) => run_preview(&scenario, &out),
         None => run_demo(PathBuf::from("out/demo")),
     };

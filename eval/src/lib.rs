@@ -9,6 +9,7 @@ pub mod mapping;
 pub mod output;
 pub mod preview;
 pub mod progress;
+pub mod record;
 pub mod render;
 
 pub use error::{EvalError, Result};

@@ -20,6 +20,8 @@ pub enum InputFormat {
     Graph,
     /// `.pcd`: one point cloud, one scan.
     Pcd,
+    /// `.oeglog`: a recorded sensor log (`oeg record`), one scan per record.
+    Log,
 }
 
 impl InputFormat {
@@ -36,11 +38,12 @@ impl InputFormat {
         {
             Some("graph") => Ok(Self::Graph),
             Some("pcd") => Ok(Self::Pcd),
+            Some("oeglog") => Ok(Self::Log),
             _ => Err(EvalError::Input {
                 path: path.to_path_buf(),
-                message:
-                    "unknown input format: expected an OctoMap scan graph (.graph) or a point cloud (.pcd)"
-                        .into(),
+                message: "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd) \
+                          or a sensor log (.oeglog)"
+                    .into(),
             }),
         }
     }
@@ -59,6 +62,8 @@ pub struct MapJob {
     pub graph_sensor: SensorModel,
     /// How PCD files become scans (includes their sensor model).
     pub pcd: pcd::PcdOptions,
+    /// Which pose sensor-log scans are placed with.
+    pub log_pose: sim::sensors::PoseSource,
     /// The robot for the traversability layer.
     pub profile: RobotProfile,
     /// The traversability rule.
@@ -145,6 +150,10 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<Scan>> {
         match InputFormat::of(path)? {
             InputFormat::Graph => scans.extend(graph::read_graph_scans(path, job.graph_sensor)?),
             InputFormat::Pcd => scans.push(pcd::read_pcd_scan(path, &job.pcd)?),
+            InputFormat::Log => {
+                let log = sim::log::read_log(path)?;
+                scans.extend(log.scans.iter().map(|s| s.to_scan(job.log_pose, log.header.sensors[s.sensor_index].map_model)));
+            }
         }
     }
     Ok(scans)

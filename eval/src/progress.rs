@@ -26,6 +26,11 @@ impl Progress {
         }
     }
 
+    /// Set the number of steps.
+    pub fn set_length(&self, len: u64) {
+        self.bar.set_length(len);
+    }
+
     /// Advance by `n` steps.
     pub fn inc(&self, n: u64) {
         self.bar.inc(n);

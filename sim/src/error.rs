@@ -55,6 +55,14 @@ pub enum SimError {
         /// What is wrong.
         message: String,
     },
+    /// A recorded sensor log is malformed.
+    #[error("{}: {message}", path.display())]
+    Log {
+        /// The log file.
+        path: PathBuf,
+        /// Where (byte offset) and what is wrong.
+        message: String,
+    },
     /// A file could not be read.
     #[error("{}: {source}", path.display())]
     Io {

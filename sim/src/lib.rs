@@ -8,9 +8,12 @@
 mod convert;
 pub mod drive;
 pub mod error;
+pub mod log;
 pub mod robot;
 pub mod scenario;
 pub mod seed;
+pub mod sensors;
+pub mod simulate;
 pub mod terrain;
 pub mod truth;
 pub mod world;
@@ -18,4 +21,5 @@ pub mod world;
 pub use error::{Result, SimError, TextPosition};
 pub use robot::RobotModel;
 pub use scenario::{LoadedScenario, Scenario, load};
+pub use simulate::Simulation;
 pub use world::{Actors, HitKind, RayHit, RayStart, World};

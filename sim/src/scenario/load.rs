@@ -330,6 +330,11 @@ impl Checker<'_> {
             self.check(finite, &[K("sensors"), I(k), K("xyz_m")], || {
                 "expected finite offsets".into()
             })?;
+            if let Err(e) = sensor.resolve() {
+                let mut path = vec![K("sensors"), I(k)];
+                path.extend(e.key.iter().map(|key| K(key)));
+                return Err(self.error(&path, e.message));
+            }
         }
         for (name, e) in &s.expectations {
             let path = [K("expectations"), K(name.as_str())];

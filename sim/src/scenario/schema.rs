@@ -345,35 +345,7 @@ fn default_person_height() -> f64 {
     1.7
 }
 
-/// The kinds of simulated sensor.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SensorKind {
-    /// A 2D laser scanner (possibly tilted: push-broom).
-    Laser2d,
-    /// A multi-beam 3D lidar.
-    Lidar3d,
-    /// A stereo camera.
-    Stereo,
-}
-
-/// A sensor and where it sits on the robot.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SensorMount {
-    /// Unique name.
-    pub name: String,
-    /// What it is.
-    pub kind: SensorKind,
-    /// The URDF link it is fixed to.
-    pub mount_link: String,
-    /// Offset from the link, metres (link frame).
-    #[serde(default)]
-    pub xyz_m: [f64; 3],
-    /// Roll, pitch, yaw from the link, degrees (applied as in URDF: fixed-axis x, then y, then z).
-    #[serde(default)]
-    pub rpy_deg: [f64; 3],
-}
+pub use crate::sensors::config::{NoiseSettings, SensorKind, SensorMount};
 
 /// A threshold on one metric: the run fails when the value is below `min` or above `max`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]

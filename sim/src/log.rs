@@ -1,0 +1,289 @@
+//! Recorded sensor logs (`.oeglog`), version 1: every scan of a run, so the same data can be replayed through
+//! different map settings. Little-endian throughout:
+//!
+//! ```text
+//! 8    magic "OEGLOG\r\n"
+//! 4    u32 format version (1)
+//! 4    u32 header length H
+//! H    header, UTF-8 JSON (LogHeader: scenario, seed, duration, sensors with their map models)
+//! then records, each starting with a u8 tag:
+//!   1 = scan:  u32 sensor index, u64 scan index, f64 stamp_s,
+//!              7 f64 true world_from_sensor (tx ty tz qw qx qy qz), 7 f64 estimated world_from_sensor,
+//!              u32 ray count, then per ray: u8 kind (0 hit, 1 no return), 3 f32 vector in the sensor frame
+//!              (hit: end point, metres; no return: unit direction), f32 range error (metres)
+//!   0 = end:   u64 scan count, u64 FNV-1a-64 checksum of every byte before the checksum
+//! ```
+
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use oeg::RayKind;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, SimError};
+use crate::sensors::{SensorRay, SensorScan};
+
+/// The file's first eight bytes.
+pub const MAGIC: &[u8; 8] = b"OEGLOG\r\n";
+/// The format version written and read.
+pub const FORMAT_VERSION: u32 = 1;
+const RAY_BYTES: usize = 1 + 4 * 4;
+const SCAN_FIXED_BYTES: usize = 4 + 8 + 8 + 14 * 8 + 4;
+
+/// One sensor as the log describes it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LogSensor {
+    /// Name.
+    pub name: String,
+    /// Kind (`laser2d`, `lidar3d`, `stereo`, `depth_camera`).
+    pub kind: String,
+    /// Preset used.
+    pub preset: String,
+    /// Scans per second.
+    pub rate_hz: f64,
+    /// What the map assumes for rays without their own error, and how far no-returns clear.
+    pub map_model: oeg::SensorModel,
+}
+
+/// The log's JSON header.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LogHeader {
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Simulated duration, seconds.
+    pub duration_s: f64,
+    /// Sensors, by index.
+    pub sensors: Vec<LogSensor>,
+}
+
+/// A whole log read back.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorLog {
+    /// Header.
+    pub header: LogHeader,
+    /// Scans in recorded order.
+    pub scans: Vec<SensorScan>,
+}
+
+struct Fnv(u64);
+
+impl Fnv {
+    fn update(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+/// Writes a log scan by scan, to a temporary file renamed into place by [`LogWriter::finish`] (an abandoned
+/// writer leaves no partial log behind... only its temporary file, removed on drop).
+pub struct LogWriter {
+    path: PathBuf,
+    tmp: PathBuf,
+    out: Option<BufWriter<std::fs::File>>,
+    hash: Fnv,
+    num_scans: u64,
+}
+
+impl std::fmt::Debug for LogWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LogWriter").field("path", &self.path).field("num_scans", &self.num_scans).finish()
+    }
+}
+
+impl LogWriter {
+    /// Starts a log at `path`.
+    ///
+    /// # Errors
+    /// [`SimError::Io`] naming the file.
+    pub fn create(path: &Path, header: &LogHeader) -> Result<Self> {
+        let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+        name.push(format!(".{}.tmp", std::process::id()));
+        let tmp = path.with_file_name(name);
+        let file = std::fs::File::create(&tmp).map_err(|source| SimError::Io { path: path.to_path_buf(), source })?;
+        let mut w = Self { path: path.to_path_buf(), tmp, out: Some(BufWriter::new(file)), hash: Fnv(0xcbf2_9ce4_8422_2325), num_scans: 0 };
+        let json = serde_json_bytes(header);
+        w.put(MAGIC)?;
+        w.put(&FORMAT_VERSION.to_le_bytes())?;
+        w.put(&(json.len() as u32).to_le_bytes())?;
+        w.put(&json)?;
+        Ok(w)
+    }
+
+    fn put(&mut self, bytes: &[u8]) -> Result<()> {
+        self.hash.update(bytes);
+        let path = &self.path;
+        match self.out.as_mut() {
+            Some(out) => out.write_all(bytes).map_err(|source| SimError::Io { path: path.clone(), source }),
+            None => Ok(()),
+        }
+    }
+
+    /// Appends one scan.
+    ///
+    /// # Errors
+    /// [`SimError::Io`] naming the file.
+    pub fn push(&mut self, scan: &SensorScan) -> Result<()> {
+        let mut buf = Vec::with_capacity(1 + SCAN_FIXED_BYTES + scan.rays.len() * RAY_BYTES);
+        buf.push(1u8);
+        buf.extend_from_slice(&(scan.sensor_index as u32).to_le_bytes());
+        buf.extend_from_slice(&scan.scan_index.to_le_bytes());
+        buf.extend_from_slice(&scan.stamp_s.to_le_bytes());
+        for pose in [&scan.world_from_sensor, &scan.estimated_world_from_sensor] {
+            let t = pose.translation.vector;
+            let q = pose.rotation.quaternion();
+            for v in [t.x, t.y, t.z, q.w, q.i, q.j, q.k] {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        buf.extend_from_slice(&(scan.rays.len() as u32).to_le_bytes());
+        for r in &scan.rays {
+            buf.push(u8::from(r.kind == RayKind::NoReturn));
+            for v in [r.vector_in_sensor.x, r.vector_in_sensor.y, r.vector_in_sensor.z, r.range_sigma_m] {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        self.put(&buf)?;
+        self.num_scans += 1;
+        Ok(())
+    }
+
+    /// Writes the end record and moves the log into place.
+    ///
+    /// # Errors
+    /// [`SimError::Io`] naming the file.
+    pub fn finish(mut self) -> Result<u64> {
+        self.put(&[0u8])?;
+        self.put(&self.num_scans.to_le_bytes())?;
+        let checksum = self.hash.0.to_le_bytes();
+        let io = |source| SimError::Io { path: self.path.clone(), source };
+        let mut out = self.out.take().ok_or_else(|| io(std::io::Error::other("log already finished")))?;
+        out.write_all(&checksum).map_err(io)?;
+        let file = out.into_inner().map_err(|e| io(e.into_error()))?;
+        file.sync_all().map_err(io)?;
+        std::fs::rename(&self.tmp, &self.path).map_err(io)?;
+        Ok(self.num_scans)
+    }
+}
+
+impl Drop for LogWriter {
+    fn drop(&mut self) {
+        if self.out.take().is_some() {
+            // Abandoned before finish(): remove the partial file. Nothing to report to.
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+fn serde_json_bytes(header: &LogHeader) -> Vec<u8> {
+    // A struct of strings and numbers always serialises.
+    serde_json::to_vec(header).unwrap_or_default()
+}
+
+/// Reads a log.
+///
+/// # Errors
+/// [`SimError::Io`] if it cannot be read; [`SimError::Log`] (naming the file and byte) for a wrong magic
+/// number or version, a malformed header, a truncated record, a bad ray kind, a non-finite number, a scan
+/// count that disagrees with the records, or a checksum mismatch.
+pub fn read_log(path: &Path) -> Result<SensorLog> {
+    let data = std::fs::read(path).map_err(|source| SimError::Io { path: path.to_path_buf(), source })?;
+    parse(path, &data)
+}
+
+fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
+    let mut pos = 0usize;
+    let fail = |at: usize, message: String| SimError::Log { path: path.to_path_buf(), message: format!("at byte {at}: {message}") };
+    let take = |pos: &mut usize, n: usize, what: &str| -> Result<&[u8]> {
+        if data.len() - *pos < n {
+            return Err(fail(*pos, format!("the log is truncated: expected {n} bytes for {what}, found {}", data.len() - *pos)));
+        }
+        let s = &data[*pos..*pos + n];
+        *pos += n;
+        Ok(s)
+    };
+    let u32_at = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    let u64_at = |b: &[u8]| u64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
+    let f64_at = |b: &[u8]| f64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
+    let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+
+    if take(&mut pos, 8, "the magic number")? != MAGIC {
+        return Err(fail(0, "not an OEG sensor log (wrong magic number)".into()));
+    }
+    let version = u32_at(take(&mut pos, 4, "the version")?);
+    if version != FORMAT_VERSION {
+        return Err(fail(8, format!("format version {version} is not supported (this build reads {FORMAT_VERSION})")));
+    }
+    let header_len = u32_at(take(&mut pos, 4, "the header length")?) as usize;
+    let header: LogHeader = serde_json::from_slice(take(&mut pos, header_len, "the header")?)
+        .map_err(|e| fail(16, format!("malformed header: {e}")))?;
+    let mut scans = Vec::new();
+    loop {
+        let at = pos;
+        match take(&mut pos, 1, "a record tag")?[0] {
+            0 => {
+                let count = u64_at(take(&mut pos, 8, "the scan count")?);
+                if count != scans.len() as u64 {
+                    return Err(fail(at, format!("the end record counts {count} scans, the log holds {}", scans.len())));
+                }
+                let body_end = pos;
+                let stored = u64_at(take(&mut pos, 8, "the checksum")?);
+                let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+                h.update(&data[..body_end]);
+                if h.0 != stored {
+                    return Err(fail(body_end, "checksum mismatch: the log is corrupt".into()));
+                }
+                if pos != data.len() {
+                    return Err(fail(pos, "unexpected bytes after the end record".into()));
+                }
+                return Ok(SensorLog { header, scans });
+            }
+            1 => {
+                let fixed = take(&mut pos, SCAN_FIXED_BYTES, "a scan record")?;
+                let sensor_index = u32_at(&fixed[0..4]) as usize;
+                if sensor_index >= header.sensors.len() {
+                    return Err(fail(at, format!("scan of sensor {sensor_index}, but the header lists {}", header.sensors.len())));
+                }
+                let scan_index = u64_at(&fixed[4..12]);
+                let stamp_s = f64_at(&fixed[12..20]);
+                let mut poses = [Isometry3::identity(); 2];
+                for (k, pose) in poses.iter_mut().enumerate() {
+                    let v: Vec<f64> = (0..7).map(|n| f64_at(&fixed[20 + (k * 7 + n) * 8..])).collect();
+                    let q = Quaternion::new(v[3], v[4], v[5], v[6]);
+                    if !v.iter().all(|x| x.is_finite()) || q.norm() < 1e-9 {
+                        return Err(fail(at, "a scan pose is not finite or has a zero rotation".into()));
+                    }
+                    *pose = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), UnitQuaternion::from_quaternion(q));
+                }
+                let num_rays = u32_at(&fixed[SCAN_FIXED_BYTES - 4..]) as usize;
+                if num_rays.saturating_mul(RAY_BYTES) > data.len() - pos {
+                    return Err(fail(at, format!("a scan declares {num_rays} rays, more than the log holds: truncated")));
+                }
+                let bytes = take(&mut pos, num_rays * RAY_BYTES, "the rays")?;
+                let mut rays = Vec::with_capacity(num_rays);
+                for (n, r) in bytes.chunks_exact(RAY_BYTES).enumerate() {
+                    let kind = match r[0] {
+                        0 => RayKind::Hit,
+                        1 => RayKind::NoReturn,
+                        other => return Err(fail(at, format!("ray {n} has kind {other}, expected 0 (hit) or 1 (no return)"))),
+                    };
+                    let v = Vector3::new(f32_at(&r[1..]), f32_at(&r[5..]), f32_at(&r[9..]));
+                    let sigma = f32_at(&r[13..]);
+                    if !v.iter().all(|x| x.is_finite()) || !(sigma.is_finite() && sigma >= 0.0) {
+                        return Err(fail(at, format!("ray {n} holds a non-finite number")));
+                    }
+                    rays.push(SensorRay { kind, vector_in_sensor: v, range_sigma_m: sigma });
+                }
+                let [world_from_sensor, estimated_world_from_sensor] = poses;
+                scans.push(SensorScan { sensor_index, scan_index, stamp_s, world_from_sensor, estimated_world_from_sensor, rays });
+            }
+            other => return Err(fail(at, format!("unknown record tag {other}"))),
+        }
+    }
+}

@@ -1,0 +1,292 @@
+//! Simulated sensors: beam patterns, ray casts into the world, noise. Every beam of a scan is cast in parallel
+//! (rayon) with its own random stream derived from (sensor, scan, beam), so results do not depend on the
+//! number of threads.
+//!
+//! What each beam goes through, in order (each step off when its parameter is 0):
+//! 1. angular jitter: the beam travels along a perturbed direction but is reported along its nominal one;
+//! 2. camera holes and dropouts: no return;
+//! 3. the ray cast (robot excluded, people included): nothing within range, or a hit closer than the minimum
+//!    range, is a no-return reading, never a hit at maximum range;
+//! 4. mixed pixels: at a depth edge (a neighbouring ray, one beam spacing away, differs by more than 0.1 m),
+//!    the range is drawn uniformly between the two surfaces;
+//! 5. spurious returns: a false hit at a uniformly random range between the minimum range and the true one;
+//! 6. range noise: bias (drawn once per sensor) plus Gaussian noise of the kind's model; cameras' depth noise
+//!    is along the optical axis (converted to range).
+//!
+//! Each hit carries the range error its model gives at the measured range (bias excluded: it is systematic),
+//! so the map's elevation variance matches the noise actually applied.
+
+pub mod config;
+
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
+use oeg::{Ray, RayKind, Scan};
+use rand::{RngExt, SeedableRng};
+use rand_distr::{Distribution, Normal, StandardNormal};
+use rayon::prelude::*;
+
+pub use config::{BeamPattern, Noise, RangeNoise, SensorKind, SensorSpec};
+
+use crate::robot::rotation_from_rpy;
+use crate::seed::{self, Stream};
+use crate::world::{Actors, RayStart, World};
+
+/// Range difference beyond which two neighbouring beams see a depth edge, metres.
+pub const DEPTH_EDGE_M: f64 = 0.1;
+
+/// One reading of a scan, in the sensor frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorRay {
+    /// Hit or no return.
+    pub kind: RayKind,
+    /// Hit: the measured end point in the sensor frame, metres; no return: the unit direction.
+    pub vector_in_sensor: Vector3<f32>,
+    /// The range error of the sensor model at the measured range, metres (0 for no returns).
+    pub range_sigma_m: f32,
+}
+
+/// Which pose a scan is placed with in the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PoseSource {
+    /// The estimated pose (odometry drift included): what a robot's mapper gets.
+    Estimated,
+    /// The true pose.
+    True,
+}
+
+/// One scan of one sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorScan {
+    /// Index of the sensor in the scenario.
+    pub sensor_index: usize,
+    /// Scans of this sensor before this one.
+    pub scan_index: u64,
+    /// Simulated time, seconds.
+    pub stamp_s: f64,
+    /// True `world_from_sensor`.
+    pub world_from_sensor: Isometry3<f64>,
+    /// Estimated `world_from_sensor`.
+    pub estimated_world_from_sensor: Isometry3<f64>,
+    /// The readings.
+    pub rays: Vec<SensorRay>,
+}
+
+impl SensorScan {
+    /// The scan as the map's input, placed with `pose`; rays keep their range errors.
+    pub fn to_scan(&self, pose: PoseSource, sensor: oeg::SensorModel) -> Scan {
+        let world_from_sensor = match pose {
+            PoseSource::Estimated => self.estimated_world_from_sensor,
+            PoseSource::True => self.world_from_sensor,
+        };
+        let rotation = world_from_sensor.rotation.cast::<f32>();
+        let mut scan = Scan::new(Point3::from(world_from_sensor.translation.vector), sensor);
+        scan.stamp_s = self.stamp_s;
+        scan.rays.extend(self.rays.iter().map(|r| Ray {
+            kind: r.kind,
+            offset_in_world: rotation * r.vector_in_sensor,
+            range_sigma_m: (r.kind == RayKind::Hit).then_some(r.range_sigma_m),
+        }));
+        scan
+    }
+
+    /// Number of hits.
+    pub fn num_hits(&self) -> usize {
+        self.rays.iter().filter(|r| r.kind == RayKind::Hit).count()
+    }
+}
+
+/// A sensor in the simulation.
+#[derive(Debug, Clone)]
+pub struct SimSensor {
+    /// Its resolved settings.
+    pub spec: SensorSpec,
+    /// `link_from_sensor`.
+    pub link_from_sensor: Isometry3<f64>,
+    /// Beam directions in the sensor frame (unit).
+    directions: Vec<Vector3<f64>>,
+    /// Two unit vectors perpendicular to each direction, for jitter and mixed-pixel neighbours.
+    perpendiculars: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Angle to the neighbouring beam, radians.
+    spacing_rad: f64,
+    bias_m: f64,
+    stream_seed: u64,
+    num_scans: u64,
+}
+
+impl SimSensor {
+    /// A sensor from its spec; `seed` is the scenario's.
+    pub fn new(spec: SensorSpec, seed: u64) -> Self {
+        let directions = beam_directions(&spec.beams);
+        let perpendiculars = directions
+            .iter()
+            .map(|d| {
+                let helper = if d.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
+                let e1 = d.cross(&helper).normalize();
+                (e1, d.cross(&e1))
+            })
+            .collect();
+        let spacing_rad = match &spec.beams {
+            BeamPattern::Fan { step_rad, .. } | BeamPattern::Sweep { step_rad, .. } => *step_rad,
+            BeamPattern::Pinhole { focal_px, stride, .. } => f64::from(*stride) / focal_px,
+        };
+        let mut stream = seed::stream(seed, &format!("sensor/{}", spec.name));
+        let bias_m = if spec.noise.bias_sigma_m > 0.0 {
+            Normal::new(0.0, spec.noise.bias_sigma_m).map_or(0.0, |n| n.sample(&mut stream))
+        } else {
+            0.0
+        };
+        let stream_seed: u64 = stream.random();
+        let link_from_sensor = Isometry3::from_parts(
+            Translation3::new(spec.xyz_m[0], spec.xyz_m[1], spec.xyz_m[2]),
+            rotation_from_rpy(spec.rpy_rad),
+        );
+        Self { spec, link_from_sensor, directions, perpendiculars, spacing_rad, bias_m, stream_seed, num_scans: 0 }
+    }
+
+    /// Beam directions in the sensor frame.
+    pub fn directions(&self) -> &[Vector3<f64>] {
+        &self.directions
+    }
+
+    /// The range bias drawn for this sensor, metres.
+    pub fn bias_m(&self) -> f64 {
+        self.bias_m
+    }
+
+    /// What the map should assume about this sensor when a ray carries no error of its own.
+    pub fn map_model(&self) -> oeg::SensorModel {
+        let noise = match self.spec.noise.range {
+            RangeNoise::Linear { sigma_m, per_m } => oeg::RangeNoiseModel::Laser { sigma_m: sigma_m as f32, sigma_per_m: per_m as f32 },
+            RangeNoise::Disparity { coefficient_per_m } => oeg::RangeNoiseModel::Stereo { coefficient_per_m: coefficient_per_m as f32 },
+            // The axial model is close to 0.0019 z^2 beyond a metre.
+            RangeNoise::Axial { scale } => oeg::RangeNoiseModel::Stereo { coefficient_per_m: (0.0019 * scale) as f32 },
+        };
+        oeg::SensorModel { noise, max_range_m: self.spec.max_range_m as f32 }
+    }
+
+    /// Takes one scan of the world at its current time into `rays` (reused between scans).
+    pub fn capture(&mut self, world: &World, sensor_index: usize, rays: &mut Vec<SensorRay>) -> Option<SensorScan> {
+        let world_from_link = world.world_from_link(&self.spec.mount_link)?;
+        let estimated = world.estimated_world_from_link(&self.spec.mount_link)?;
+        let world_from_sensor = world_from_link * self.link_from_sensor;
+        let scan_index = self.num_scans;
+        self.num_scans += 1;
+        let this = &*self;
+        let origin = Point3::from(world_from_sensor.translation.vector);
+        let rotation = world_from_sensor.rotation;
+        (0..this.directions.len())
+            .into_par_iter()
+            .map(|k| this.beam(world, &origin, &rotation, scan_index, k))
+            .collect_into_vec(rays);
+        Some(SensorScan {
+            sensor_index,
+            scan_index,
+            stamp_s: world.time_s(),
+            world_from_sensor,
+            estimated_world_from_sensor: estimated * self.link_from_sensor,
+            rays: rays.clone(),
+        })
+    }
+
+    fn beam(
+        &self,
+        world: &World,
+        origin: &Point3<f64>,
+        rotation: &nalgebra::UnitQuaternion<f64>,
+        scan_index: u64,
+        k: usize,
+    ) -> SensorRay {
+        let noise = &self.spec.noise;
+        let nominal = self.directions[k];
+        let no_return =
+            SensorRay { kind: RayKind::NoReturn, vector_in_sensor: nominal.cast(), range_sigma_m: 0.0 };
+        // A stream per beam: the same numbers whatever thread casts it.
+        let mut rng = Stream::seed_from_u64(
+            self.stream_seed ^ scan_index.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (k as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f),
+        );
+        let (e1, e2) = self.perpendiculars[k];
+        let mut travelled = nominal;
+        if noise.angular_jitter_rad > 0.0 {
+            let (a, b): (f64, f64) = (rng.sample(StandardNormal), rng.sample(StandardNormal));
+            travelled = (nominal + (e1 * a + e2 * b) * noise.angular_jitter_rad).normalize();
+        }
+        if noise.hole_probability > 0.0 && rng.random::<f64>() < noise.hole_probability {
+            return no_return;
+        }
+        if noise.dropout_probability > 0.0 && rng.random::<f64>() < noise.dropout_probability {
+            return no_return;
+        }
+        let cast = |d: &Vector3<f64>| {
+            world.cast_ray(origin, &(rotation * d), self.spec.max_range_m, Actors::Included, RayStart::InsideExits)
+        };
+        let Some(hit) = cast(&travelled) else { return no_return };
+        let mut range = hit.distance_m;
+        if range < self.spec.min_range_m {
+            return no_return;
+        }
+        if noise.mixed_pixel_probability > 0.0 && rng.random::<f64>() < noise.mixed_pixel_probability {
+            let neighbour = (travelled + e1 * self.spacing_rad).normalize();
+            let other = cast(&neighbour).map_or(self.spec.max_range_m, |h| h.distance_m);
+            if (other - range).abs() > DEPTH_EDGE_M {
+                range = rng.random_range(range.min(other)..range.max(other));
+            }
+        }
+        if noise.spurious_probability > 0.0 && rng.random::<f64>() < noise.spurious_probability {
+            range = rng.random_range(self.spec.min_range_m..range.max(self.spec.min_range_m + 1e-6));
+        }
+        let forward = nominal.x.max(1e-6);
+        let sigma = noise.range_sigma_m(range, forward);
+        let mut measured = range + self.bias_m;
+        if sigma > 0.0 {
+            let z: f64 = rng.sample(StandardNormal);
+            measured += sigma * z;
+        }
+        if measured <= self.spec.min_range_m || measured > self.spec.max_range_m {
+            return no_return;
+        }
+        let sigma_at_measured = noise.range_sigma_m(measured, forward);
+        SensorRay { kind: RayKind::Hit, vector_in_sensor: (nominal * measured).cast(), range_sigma_m: sigma_at_measured as f32 }
+    }
+}
+
+/// The unit beam directions of a pattern, in the sensor frame (x forward, y left, z up).
+pub fn beam_directions(pattern: &BeamPattern) -> Vec<Vector3<f64>> {
+    match pattern {
+        BeamPattern::Fan { fov_rad, step_rad } => {
+            let n = (fov_rad / step_rad + 1e-9).floor() as usize + 1;
+            (0..n)
+                .map(|k| {
+                    let a = -fov_rad / 2.0 + k as f64 * step_rad;
+                    Vector3::new(a.cos(), a.sin(), 0.0)
+                })
+                .collect()
+        }
+        BeamPattern::Sweep { elevations_rad, fov_rad, step_rad } => {
+            // A full circle does not repeat its first azimuth.
+            let full = (fov_rad - std::f64::consts::TAU).abs() < 1e-9;
+            let n = (fov_rad / step_rad + 1e-9).floor() as usize + usize::from(!full);
+            let start = if full { 0.0 } else { -fov_rad / 2.0 };
+            let mut out = Vec::with_capacity(n * elevations_rad.len());
+            for k in 0..n {
+                let a = start + k as f64 * step_rad;
+                for e in elevations_rad {
+                    out.push(Vector3::new(e.cos() * a.cos(), e.cos() * a.sin(), e.sin()));
+                }
+            }
+            out
+        }
+        BeamPattern::Pinhole { width_px, height_px, focal_px, stride } => {
+            // Through pixel centres: pixel (u, v) spans [u, u + 1), its centre u + 0.5; the principal point is
+            // the image centre. Optical (right, down, forward) -> sensor (forward, left, up).
+            let (w, h) = (f64::from(*width_px), f64::from(*height_px));
+            let mut out = Vec::new();
+            for v in (0..*height_px).step_by(*stride as usize) {
+                for u in (0..*width_px).step_by(*stride as usize) {
+                    let x = (f64::from(u) + 0.5 - w / 2.0) / focal_px;
+                    let y = (f64::from(v) + 0.5 - h / 2.0) / focal_px;
+                    out.push(Vector3::new(1.0, -x, -y).normalize());
+                }
+            }
+            out
+        }
+    }
+}

@@ -1,0 +1,194 @@
+//! Simulated sensors: geometry, noise statistics, determinism.
+
+mod common;
+
+use nalgebra::Vector3;
+use oeg::RayKind;
+use sim::Simulation;
+use sim::sensors::{BeamPattern, SensorScan, beam_directions};
+
+/// A scenario with one sensor entry (`sensor` is the body of a `[[sensors]]` table) facing a wall 5 m ahead
+/// (the robot at the origin looking along +x).
+fn scan_with(name: &str, sensor: &str, extra: &str) -> (SensorScan, Simulation) {
+    let text = common::scenario_text(&format!(
+        "[[obstacles]]\nkind = \"box\"\nname = \"wall\"\ncenter_xy_m = [5.1, 0.0]\nsize_m = [0.2, 7.0, 3.0]\n\n[[sensors]]\n{sensor}\n{extra}"
+    ))
+    .replace("[[0.0, 0.0], [4.0, 0.0]]", "[[0.0, 0.0], [0.5, 0.0]]");
+    let loaded = common::load_text(name, &text).expect("valid");
+    let mut sim = Simulation::new(&loaded).expect("simulation");
+    let scan = sim.next_scan().expect("a scan at t = 0");
+    (scan, sim)
+}
+
+const LASER: &str = "name = \"laser\"\nkind = \"laser2d\"\nmount_link = \"laser_front_mount\"\nfov_deg = 90.0\nstep_deg = 1.0\n";
+
+#[test]
+fn laser_beams_fan_at_the_configured_angles() {
+    let dirs = beam_directions(&BeamPattern::Fan { fov_rad: 90f64.to_radians(), step_rad: 1f64.to_radians() });
+    assert_eq!(dirs.len(), 91);
+    let angle = |d: &Vector3<f64>| d.y.atan2(d.x).to_degrees();
+    assert!((angle(&dirs[0]) + 45.0).abs() < 1e-9);
+    assert!((angle(&dirs[45])).abs() < 1e-9);
+    assert!((angle(&dirs[90]) - 45.0).abs() < 1e-9);
+    assert!(dirs.iter().all(|d| d.z == 0.0 && (d.norm() - 1.0).abs() < 1e-12));
+}
+
+#[test]
+fn lidar_channels_sit_at_their_elevations() {
+    let elevations: Vec<f64> = [-15.0f64, 1.0, 15.0].iter().map(|a| a.to_radians()).collect();
+    let dirs = beam_directions(&BeamPattern::Sweep { elevations_rad: elevations, fov_rad: std::f64::consts::TAU, step_rad: 90f64.to_radians() });
+    assert_eq!(dirs.len(), 12, "4 azimuths x 3 channels, the full circle not repeated");
+    assert!((dirs[2].z.asin().to_degrees() - 15.0).abs() < 1e-9);
+    assert!((dirs[3].y - (-15f64).to_radians().cos()).abs() < 1e-9, "second azimuth is +90 degrees: {}", dirs[3]);
+}
+
+#[test]
+fn stereo_rays_pass_through_pixel_centres() {
+    let (w, h, f) = (4u32, 2u32, 2.0);
+    let dirs = beam_directions(&BeamPattern::Pinhole { width_px: w, height_px: h, focal_px: f, stride: 1 });
+    assert_eq!(dirs.len(), 8);
+    // Pixel (u, v) = (0, 0): centre (0.5, 0.5), optical (x, y) = ((0.5 - 2) / 2, (0.5 - 1) / 2) = (-0.75, -0.25):
+    // left of and above the axis, so +y (left) and +z (up) in the sensor frame.
+    let d = dirs[0] / dirs[0].x;
+    assert!((d.y - 0.75).abs() < 1e-12 && (d.z - 0.25).abs() < 1e-12, "{d}");
+    // Pixel (3, 1): optical (0.75, 0.25).
+    let d = dirs[7] / dirs[7].x;
+    assert!((d.y + 0.75).abs() < 1e-12 && (d.z + 0.25).abs() < 1e-12, "{d}");
+}
+
+#[test]
+fn a_noiseless_laser_facing_a_wall_returns_its_distance() {
+    let (scan, sim) = scan_with("wall", &format!("{LASER}\n[sensors.noise]\nrange_sigma_m = 0.0\n"), "");
+    let origin = scan.world_from_sensor.translation.vector;
+    assert!((origin.x - 0.2).abs() < 1e-9 && (origin.z - 0.3).abs() < 1e-6, "{origin}");
+    let middle = scan.rays[45];
+    assert_eq!(middle.kind, RayKind::Hit);
+    assert!((f64::from(middle.vector_in_sensor.x) - 4.8).abs() < 1e-4, "{:?}", middle);
+    // A beam at angle a reaches the wall plane at 4.8 / cos(a).
+    let beam = scan.rays[15];
+    let a = (-30f64).to_radians();
+    assert!((f64::from(beam.vector_in_sensor.norm()) - 4.8 / a.cos()).abs() < 1e-3, "{beam:?}");
+    assert_eq!(sim.sensors()[0].directions().len(), 91);
+}
+
+/// Range errors of the beams within 30 degrees of the axis (those that see the wall), over 30 scans.
+fn range_errors(noise: &str, seed_name: &str) -> (Vec<f64>, Vec<f32>, usize) {
+    let (_, mut sim) = scan_with(seed_name, &format!("{LASER}\nrate_hz = 10.0\n[sensors.noise]\n{noise}"), "");
+    let (mut errors, mut sigmas, mut no_returns) = (Vec::new(), Vec::new(), 0);
+    for _ in 0..30 {
+        let Some(scan) = sim.next_scan() else { break };
+        // The wall's face is at x = 5.0; the robot drives towards it.
+        let to_wall = 5.0 - scan.world_from_sensor.translation.x;
+        for (k, r) in scan.rays.iter().enumerate().take(76).skip(15) {
+            let a = (-45.0 + k as f64).to_radians();
+            let truth = to_wall / a.cos();
+            match r.kind {
+                RayKind::Hit => {
+                    errors.push(f64::from(r.vector_in_sensor.norm()) - truth);
+                    sigmas.push(r.range_sigma_m);
+                }
+                RayKind::NoReturn => no_returns += 1,
+            }
+        }
+    }
+    (errors, sigmas, no_returns)
+}
+
+fn mean_std(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    (mean, (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt())
+}
+
+#[test]
+fn gaussian_range_noise_has_the_configured_spread_and_the_rays_say_so() {
+    let (errors, sigmas, _) = range_errors("range_sigma_m = 0.02\n", "gauss");
+    assert!(errors.len() > 1500, "{}", errors.len());
+    let (mean, std) = mean_std(&errors);
+    assert!(mean.abs() < 0.002, "mean {mean}");
+    assert!((std - 0.02).abs() < 0.001, "std {std}");
+    assert!(sigmas.iter().all(|s| (s - 0.02).abs() < 1e-6), "each ray carries the model's error");
+}
+
+#[test]
+fn a_bias_is_drawn_once_per_sensor() {
+    let (errors, _, _) = range_errors("range_sigma_m = 0.0\nbias_sigma_m = 0.05\n", "bias");
+    let first = errors[0];
+    assert!(first.abs() > 1e-4, "a bias was drawn: {first}");
+    assert!(errors.iter().all(|e| (e - first).abs() < 1e-3), "the same bias on every beam");
+}
+
+#[test]
+fn dropouts_are_no_returns_at_the_configured_rate() {
+    let (errors, _, no_returns) = range_errors("range_sigma_m = 0.0\ndropout_probability = 0.2\n", "dropout");
+    let rate = no_returns as f64 / (no_returns + errors.len()) as f64;
+    assert!((rate - 0.2).abs() < 0.02, "dropout rate {rate}");
+    assert!(errors.iter().all(|e| e.abs() < 1e-3), "a dropout is never a hit at some range");
+}
+
+#[test]
+fn spurious_returns_land_before_the_true_surface_at_the_configured_rate() {
+    let (errors, _, _) = range_errors("range_sigma_m = 0.0\nspurious_probability = 0.1\n", "spurious");
+    let spurious = errors.iter().filter(|e| **e < -1e-3).count();
+    let rate = spurious as f64 / errors.len() as f64;
+    assert!((rate - 0.1).abs() < 0.015, "spurious rate {rate}");
+    assert!(errors.iter().all(|e| *e < 1e-3), "never behind the wall");
+}
+
+#[test]
+fn stereo_depth_error_grows_with_the_square_of_depth() {
+    // A wall in front of a noisy stereo camera looking straight ahead; only pixels at most 5 degrees below the
+    // axis, which see the wall, not the floor.
+    let stats = |x: f64, name: &str| {
+        let sensor = "name = \"cam\"\nkind = \"stereo\"\nmount_link = \"stereo_mount\"\npreset = \"paper_stereo\"\nrate_hz = 10.0\n[sensors.noise]\nhole_probability = 0.0\n";
+        let text = common::scenario_text(&format!(
+            "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [{x}, 0.0]\nsize_m = [0.2, 7.0, 3.0]\n\n[[sensors]]\n{sensor}"
+        ))
+        // The robot stands still.
+        .replace("[[0.0, 0.0], [4.0, 0.0]]", "[[0.0, 0.0]]");
+        let loaded = common::load_text(name, &text).expect("valid");
+        let mut sim = Simulation::new(&loaded).expect("simulation");
+        let directions = sim.sensors()[0].directions().to_vec();
+        let (mut errors, mut depth) = (Vec::new(), 0.0);
+        for _ in 0..5 {
+            let scan = sim.next_scan().expect("scan");
+            depth = x - 0.1 - scan.world_from_sensor.translation.x;
+            for (r, d) in scan.rays.iter().zip(&directions) {
+                if r.kind == RayKind::Hit && d.z / d.x > -(5f64.to_radians().tan()) {
+                    // Depth is the sensor-frame x (the optical axis).
+                    errors.push(f64::from(r.vector_in_sensor.x) - depth);
+                }
+            }
+        }
+        (mean_std(&errors).1, errors.len(), depth)
+    };
+    let (s2, n2, z2) = stats(2.321, "stereo2");
+    let (s4, n4, z4) = stats(4.321, "stereo4");
+    assert!(n2 > 1000 && n4 > 1000, "{n2} {n4}");
+    // The paper's 0.032 z^2.
+    assert!((s2 / (0.032 * z2 * z2) - 1.0).abs() < 0.06, "{s2} at {z2} m");
+    assert!((s4 / (0.032 * z4 * z4) - 1.0).abs() < 0.06, "{s4} at {z4} m");
+}
+
+#[test]
+fn the_same_seed_gives_the_same_scans_on_one_and_two_threads() {
+    let noise = "range_sigma_m = 0.02\ndropout_probability = 0.1\nspurious_probability = 0.05\nangular_jitter_deg = 0.2\nmixed_pixel_probability = 0.3\n";
+    let run = |threads: usize, name: &str, seed: u64| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let extra = format!("{LASER}\nrate_hz = 10.0\n[sensors.noise]\n{noise}");
+            let text = common::scenario_text(&format!(
+                "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [5.1, 0.0]\nsize_m = [0.2, 7.0, 3.0]\n\n[[sensors]]\n{extra}"
+            ))
+            .replace("seed = 7", &format!("seed = {seed}"));
+            let loaded = common::load_text(name, &text).expect("valid");
+            let mut sim = Simulation::new(&loaded).expect("simulation");
+            (0..20).filter_map(|_| sim.next_scan()).collect::<Vec<_>>()
+        })
+    };
+    let one = run(1, "det1", 7);
+    let two = run(2, "det2", 7);
+    assert_eq!(one, two);
+    let other = run(2, "det3", 8);
+    assert_ne!(one, other, "a different seed changes the noise");
+}
