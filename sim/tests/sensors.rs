@@ -192,3 +192,84 @@ fn the_same_seed_gives_the_same_scans_on_one_and_two_threads() {
     let other = run(2, "det3", 8);
     assert_ne!(one, other, "a different seed changes the noise");
 }
+
+#[test]
+fn logs_read_back_exactly_and_reject_damage() {
+    let (_, mut sim) = scan_with("log", &format!("{LASER}\n[sensors.noise]\ndropout_probability = 0.1\n"), "");
+    let scans: Vec<_> = (0..5).filter_map(|_| sim.next_scan()).collect();
+    let header = sim::log::LogHeader {
+        scenario: "log".into(),
+        seed: 7,
+        duration_s: 4.0,
+        sensors: vec![sim::log::LogSensor {
+            name: "laser".into(),
+            kind: "laser2d".into(),
+            preset: "sick_lms291".into(),
+            rate_hz: 75.0,
+            map_model: sim.sensors()[0].map_model(),
+        }],
+    };
+    let dir = common::temp_dir("logfile");
+    let path = dir.join("run.oeglog");
+    let mut w = sim::log::LogWriter::create(&path, &header).expect("create");
+    for s in &scans {
+        w.push(s).expect("push");
+    }
+    assert_eq!(w.finish().expect("finish"), 5);
+    let back = sim::log::read_log(&path).expect("read");
+    assert_eq!(back.header, header);
+    assert_eq!(back.scans, scans);
+    let bytes = std::fs::read(&path).expect("bytes");
+    for cut in [0, 10, 40, bytes.len() / 2, bytes.len() - 1] {
+        std::fs::write(dir.join("cut.oeglog"), &bytes[..cut]).expect("write");
+        let err = sim::log::read_log(&dir.join("cut.oeglog")).expect_err("truncated").to_string();
+        assert!(err.contains("cut.oeglog: at byte"), "{cut}: {err}");
+    }
+    let mut flipped = bytes.clone();
+    let k = bytes.len() - 30;
+    flipped[k] ^= 0x10;
+    std::fs::write(dir.join("flip.oeglog"), &flipped).expect("write");
+    let err = sim::log::read_log(&dir.join("flip.oeglog")).expect_err("corrupt").to_string();
+    assert!(err.contains("checksum") || err.contains("non-finite") || err.contains("kind"), "{err}");
+    // An abandoned writer leaves no file.
+    let abandoned = dir.join("abandoned.oeglog");
+    drop(sim::log::LogWriter::create(&abandoned, &header).expect("create"));
+    assert!(!abandoned.exists());
+    assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 3, "no temporary files left");
+}
+
+#[test]
+fn mixed_pixels_fall_between_the_surfaces_at_a_depth_edge() {
+    // A wall ending at y = 1: beams near its edge mix the wall (4.8 m) with the floor behind.
+    let sensor = "name = \"laser\"\nkind = \"laser2d\"\nmount_link = \"laser_front_mount\"\nfov_deg = 90.0\nstep_deg = 0.5\nrpy_deg = [0.0, 2.0, 0.0]\n[sensors.noise]\nrange_sigma_m = 0.0\nmixed_pixel_probability = 1.0\n";
+    let text = common::scenario_text(&format!(
+        "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [5.1, -1.5]\nsize_m = [0.2, 5.0, 3.0]\n\n[[sensors]]\n{sensor}"
+    ))
+    .replace("[[0.0, 0.0], [4.0, 0.0]]", "[[0.0, 0.0]]");
+    let loaded = common::load_text("mixed", &text).expect("valid");
+    let mut sim = Simulation::new(&loaded).expect("simulation");
+    let scan = sim.next_scan().expect("scan");
+    // Per beam at azimuth a (pitched 2 degrees down): the wall at 4.8 / (cos a cos 2deg) while its edge at
+    // y = 1 is not passed, else the floor at 0.3 / (cos a sin 2deg).
+    let pitch = 2f64.to_radians();
+    let mut mixed = Vec::new();
+    for (k, r) in scan.rays.iter().enumerate() {
+        let a = (-45.0 + 0.5 * k as f64).to_radians();
+        let wall = 4.8 / (a.cos() * pitch.cos());
+        let floor = 0.3 / (a.cos() * pitch.sin());
+        let range = f64::from(r.vector_in_sensor.norm());
+        // On the grazing floor neighbouring beams differ by about 0.1 m and mix harmlessly; count what lies
+        // clearly off both surfaces.
+        if r.kind == RayKind::Hit && (range - wall).abs() > 0.15 && (range - floor).abs() > 0.15 {
+            assert!(range > wall.min(floor) && range < wall.max(floor), "beam {k}: {range} outside both surfaces");
+            mixed.push(a.to_degrees());
+        }
+    }
+    // The wall's two ends, at y = 1 and y = -4.
+    let edges = [(1.0f64 / 4.8).atan().to_degrees(), (-4.0f64 / 4.8).atan().to_degrees()];
+    assert!(!mixed.is_empty(), "no mixed pixel at the edges");
+    assert!(
+        mixed.iter().all(|a| edges.iter().any(|e| (a - e).abs() < 1.5)),
+        "mixed pixels only at the edges {edges:?}: {mixed:?}"
+    );
+}
