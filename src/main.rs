@@ -107,6 +107,9 @@ struct MapArgs {
     /// Hits farther than this (metres) only clear up to it. Default: no limit.
     #[arg(long)]
     max_range: Option<f32>,
+    /// How far a no-return ray clears, metres. Default: the sensor's maximum range.
+    #[arg(long)]
+    no_return_clear_range: Option<f32>,
     /// The robot's largest climbable step in metres, for the traversability image.
     #[arg(long, default_value_t = oeg::traversability::DEFAULT_MAX_STEP_M)]
     max_step: f32,
@@ -181,6 +184,7 @@ impl MapArgs {
             },
             max_height_m: self.max_height,
             max_range_m: self.max_range,
+            no_return_clear_range_m: self.no_return_clear_range,
             ..ModelOptions::default()
         };
         MapJob {
@@ -265,6 +269,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
         free_space: FreeSpaceArg::Zero,
         max_height: Some(0.5),
         max_range: None,
+        no_return_clear_range: None,
         max_step: oeg::traversability::DEFAULT_MAX_STEP_M,
         memory_limit_mib: oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20,
     };
@@ -288,7 +293,12 @@ fn run_validate(paths: &[PathBuf]) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn run_record(path: &std::path::Path, out: &std::path::Path, format: FormatArg, seed: Option<u64>) -> anyhow::Result<()> {
+fn run_record(
+    path: &std::path::Path,
+    out: &std::path::Path,
+    format: FormatArg,
+    seed: Option<u64>,
+) -> anyhow::Result<()> {
     let format = match format {
         FormatArg::Log => eval::record::RecordFormat::Log,
         FormatArg::Graph => eval::record::RecordFormat::Graph,
@@ -301,7 +311,11 @@ fn run_record(path: &std::path::Path, out: &std::path::Path, format: FormatArg, 
         r.num_rays,
         r.wall_time_s,
         r.rays_per_s / 1e6,
-        if r.num_rays_left_out > 0 { format!(", {} no-return rays left out of the graph", r.num_rays_left_out) } else { String::new() },
+        if r.num_rays_left_out > 0 {
+            format!(", {} no-return rays left out of the graph", r.num_rays_left_out)
+        } else {
+            String::new()
+        },
         r.path.display()
     );
     Ok(())
@@ -323,7 +337,12 @@ fn main() -> ExitCode {
             .map_err(Into::into),
         Some(Command::Demo { out }) => run_demo(out),
         Some(Command::Validate { scenarios }) => run_validate(&scenarios),
-        Some(Command::Record { scenario, out, format, seed }) => run_record(&scenario, &out, format, seed),
+        Some(Command::Record {
+            scenario,
+            out,
+            format,
+            seed,
+        }) => run_record(&scenario, &out, format, seed),
         Some(Command::Preview { scenario, out }) => run_preview(&scenario, &out),
         None => run_demo(PathBuf::from("out/demo")),
     };

@@ -41,9 +41,10 @@ impl InputFormat {
             Some("oeglog") => Ok(Self::Log),
             _ => Err(EvalError::Input {
                 path: path.to_path_buf(),
-                message: "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd) \
+                message:
+                    "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd) \
                           or a sensor log (.oeglog)"
-                    .into(),
+                        .into(),
             }),
         }
     }
@@ -152,7 +153,11 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<Scan>> {
             InputFormat::Pcd => scans.push(pcd::read_pcd_scan(path, &job.pcd)?),
             InputFormat::Log => {
                 let log = sim::log::read_log(path)?;
-                scans.extend(log.scans.iter().map(|s| s.to_scan(job.log_pose, log.header.sensors[s.sensor_index].map_model)));
+                scans.extend(
+                    log.scans
+                        .iter()
+                        .map(|s| s.to_scan(job.log_pose, log.header.sensors[s.sensor_index].map_model)),
+                );
             }
         }
     }

@@ -60,13 +60,22 @@ pub fn log_header(loaded: &scenario::LoadedScenario, sim: &Simulation) -> LogHea
 ///
 /// # Errors
 /// A bad scenario, or a failed write (no partial file is left).
-pub fn record(path: &Path, out: &Path, format: RecordFormat, seed: Option<u64>, progress: &Progress) -> Result<RecordReport> {
+pub fn record(
+    path: &Path,
+    out: &Path,
+    format: RecordFormat,
+    seed: Option<u64>,
+    progress: &Progress,
+) -> Result<RecordReport> {
     let mut loaded = scenario::load(path)?;
     if let Some(seed) = seed {
         loaded.scenario.seed = seed;
     }
     if loaded.scenario.sensors.is_empty() {
-        return Err(EvalError::Input { path: path.to_path_buf(), message: "the scenario has no sensors to record".into() });
+        return Err(EvalError::Input {
+            path: path.to_path_buf(),
+            message: "the scenario has no sensors to record".into(),
+        });
     }
     let mut sim = Simulation::new(&loaded)?;
     let header = log_header(&loaded, &sim);
@@ -100,6 +109,10 @@ pub fn record(path: &Path, out: &Path, format: RecordFormat, seed: Option<u64>, 
         num_rays,
         num_rays_left_out,
         wall_time_s,
-        rays_per_s: if wall_time_s > 0.0 { num_rays as f64 / wall_time_s } else { 0.0 },
+        rays_per_s: if wall_time_s > 0.0 {
+            num_rays as f64 / wall_time_s
+        } else {
+            0.0
+        },
     })
 }

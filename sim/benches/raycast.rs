@@ -24,10 +24,15 @@ fn scenario_text() -> String {
         let r = 3.0 + f64::from(k % 12) * 1.3;
         let (x, y) = (r * angle.cos(), r * angle.sin());
         let body = match k % 4 {
-            0 => format!("kind = \"box\"\ncenter_xy_m = [{x}, {y}]\nsize_m = [0.8, 0.4, 0.6]\nyaw_deg = {}\n", k * 17),
+            0 => format!(
+                "kind = \"box\"\ncenter_xy_m = [{x}, {y}]\nsize_m = [0.8, 0.4, 0.6]\nyaw_deg = {}\n",
+                k * 17
+            ),
             1 => format!("kind = \"cylinder\"\ncenter_xy_m = [{x}, {y}]\nradius_m = 0.1\nheight_m = 2.0\n"),
             2 => format!("kind = \"bush\"\ncenter_xy_m = [{x}, {y}]\nradius_m = 0.6\nheight_m = 0.9\n"),
-            _ => format!("kind = \"overhang\"\ncenter_xy_m = [{x}, {y}]\nsize_m = [0.5, 1.5, 0.05]\nclearance_m = 0.4\n"),
+            _ => format!(
+                "kind = \"overhang\"\ncenter_xy_m = [{x}, {y}]\nsize_m = [0.5, 1.5, 0.05]\nclearance_m = 0.4\n"
+            ),
         };
         let _ = write!(s, "[[obstacles]]\n{body}\n");
     }
@@ -46,17 +51,24 @@ fn simulated_rays(c: &mut Criterion) {
     std::fs::write(&path, scenario_text()).expect("write");
     let loaded = sim::scenario::load(&path).expect("valid bench scenario");
     let mut sim = sim::Simulation::new(&loaded).expect("simulation");
-    let rays_per_iteration = sim.sensors().iter().map(|s| s.directions().len() as u64).sum::<u64>();
+    let rays_per_iteration = sim
+        .sensors()
+        .iter()
+        .map(|s| s.directions().len() as u64)
+        .sum::<u64>();
     let mut group = c.benchmark_group("simulated_rays");
     group.throughput(Throughput::Elements(rays_per_iteration));
     group.sample_size(20);
-    group.bench_function(format!("lidar_and_stereo/threads={}", rayon::current_num_threads()), |b| {
-        b.iter(|| {
-            for _ in 0..sim.sensors().len() {
-                black_box(sim.next_scan());
-            }
-        });
-    });
+    group.bench_function(
+        format!("lidar_and_stereo/threads={}", rayon::current_num_threads()),
+        |b| {
+            b.iter(|| {
+                for _ in 0..sim.sensors().len() {
+                    black_box(sim.next_scan());
+                }
+            });
+        },
+    );
     group.finish();
     let _ = std::fs::remove_dir_all(&dir);
 }

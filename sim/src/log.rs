@@ -93,7 +93,10 @@ pub struct LogWriter {
 
 impl std::fmt::Debug for LogWriter {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("LogWriter").field("path", &self.path).field("num_scans", &self.num_scans).finish()
+        f.debug_struct("LogWriter")
+            .field("path", &self.path)
+            .field("num_scans", &self.num_scans)
+            .finish()
     }
 }
 
@@ -106,8 +109,17 @@ impl LogWriter {
         let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
         name.push(format!(".{}.tmp", std::process::id()));
         let tmp = path.with_file_name(name);
-        let file = std::fs::File::create(&tmp).map_err(|source| SimError::Io { path: path.to_path_buf(), source })?;
-        let mut w = Self { path: path.to_path_buf(), tmp, out: Some(BufWriter::new(file)), hash: Fnv(0xcbf2_9ce4_8422_2325), num_scans: 0 };
+        let file = std::fs::File::create(&tmp).map_err(|source| SimError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut w = Self {
+            path: path.to_path_buf(),
+            tmp,
+            out: Some(BufWriter::new(file)),
+            hash: Fnv(0xcbf2_9ce4_8422_2325),
+            num_scans: 0,
+        };
         let json = serde_json_bytes(header);
         w.put(MAGIC)?;
         w.put(&FORMAT_VERSION.to_le_bytes())?;
@@ -120,7 +132,10 @@ impl LogWriter {
         self.hash.update(bytes);
         let path = &self.path;
         match self.out.as_mut() {
-            Some(out) => out.write_all(bytes).map_err(|source| SimError::Io { path: path.clone(), source }),
+            Some(out) => out.write_all(bytes).map_err(|source| SimError::Io {
+                path: path.clone(),
+                source,
+            }),
             None => Ok(()),
         }
     }
@@ -145,7 +160,12 @@ impl LogWriter {
         buf.extend_from_slice(&(scan.rays.len() as u32).to_le_bytes());
         for r in &scan.rays {
             buf.push(u8::from(r.kind == RayKind::NoReturn));
-            for v in [r.vector_in_sensor.x, r.vector_in_sensor.y, r.vector_in_sensor.z, r.range_sigma_m] {
+            for v in [
+                r.vector_in_sensor.x,
+                r.vector_in_sensor.y,
+                r.vector_in_sensor.z,
+                r.range_sigma_m,
+            ] {
                 buf.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -162,8 +182,14 @@ impl LogWriter {
         self.put(&[0u8])?;
         self.put(&self.num_scans.to_le_bytes())?;
         let checksum = self.hash.0.to_le_bytes();
-        let io = |source| SimError::Io { path: self.path.clone(), source };
-        let mut out = self.out.take().ok_or_else(|| io(std::io::Error::other("log already finished")))?;
+        let io = |source| SimError::Io {
+            path: self.path.clone(),
+            source,
+        };
+        let mut out = self
+            .out
+            .take()
+            .ok_or_else(|| io(std::io::Error::other("log already finished")))?;
         out.write_all(&checksum).map_err(io)?;
         let file = out.into_inner().map_err(|e| io(e.into_error()))?;
         file.sync_all().map_err(io)?;
@@ -193,16 +219,28 @@ fn serde_json_bytes(header: &LogHeader) -> Vec<u8> {
 /// number or version, a malformed header, a truncated record, a bad ray kind, a non-finite number, a scan
 /// count that disagrees with the records, or a checksum mismatch.
 pub fn read_log(path: &Path) -> Result<SensorLog> {
-    let data = std::fs::read(path).map_err(|source| SimError::Io { path: path.to_path_buf(), source })?;
+    let data = std::fs::read(path).map_err(|source| SimError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse(path, &data)
 }
 
 fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
     let mut pos = 0usize;
-    let fail = |at: usize, message: String| SimError::Log { path: path.to_path_buf(), message: format!("at byte {at}: {message}") };
+    let fail = |at: usize, message: String| SimError::Log {
+        path: path.to_path_buf(),
+        message: format!("at byte {at}: {message}"),
+    };
     let take = |pos: &mut usize, n: usize, what: &str| -> Result<&[u8]> {
         if data.len() - *pos < n {
-            return Err(fail(*pos, format!("the log is truncated: expected {n} bytes for {what}, found {}", data.len() - *pos)));
+            return Err(fail(
+                *pos,
+                format!(
+                    "the log is truncated: expected {n} bytes for {what}, found {}",
+                    data.len() - *pos
+                ),
+            ));
         }
         let s = &data[*pos..*pos + n];
         *pos += n;
@@ -218,7 +256,10 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
     }
     let version = u32_at(take(&mut pos, 4, "the version")?);
     if version != FORMAT_VERSION {
-        return Err(fail(8, format!("format version {version} is not supported (this build reads {FORMAT_VERSION})")));
+        return Err(fail(
+            8,
+            format!("format version {version} is not supported (this build reads {FORMAT_VERSION})"),
+        ));
     }
     let header_len = u32_at(take(&mut pos, 4, "the header length")?) as usize;
     let header: LogHeader = serde_json::from_slice(take(&mut pos, header_len, "the header")?)
@@ -230,7 +271,13 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
             0 => {
                 let count = u64_at(take(&mut pos, 8, "the scan count")?);
                 if count != scans.len() as u64 {
-                    return Err(fail(at, format!("the end record counts {count} scans, the log holds {}", scans.len())));
+                    return Err(fail(
+                        at,
+                        format!(
+                            "the end record counts {count} scans, the log holds {}",
+                            scans.len()
+                        ),
+                    ));
                 }
                 let body_end = pos;
                 let stored = u64_at(take(&mut pos, 8, "the checksum")?);
@@ -248,7 +295,13 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
                 let fixed = take(&mut pos, SCAN_FIXED_BYTES, "a scan record")?;
                 let sensor_index = u32_at(&fixed[0..4]) as usize;
                 if sensor_index >= header.sensors.len() {
-                    return Err(fail(at, format!("scan of sensor {sensor_index}, but the header lists {}", header.sensors.len())));
+                    return Err(fail(
+                        at,
+                        format!(
+                            "scan of sensor {sensor_index}, but the header lists {}",
+                            header.sensors.len()
+                        ),
+                    ));
                 }
                 let scan_index = u64_at(&fixed[4..12]);
                 let stamp_s = f64_at(&fixed[12..20]);
@@ -257,13 +310,22 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
                     let v: Vec<f64> = (0..7).map(|n| f64_at(&fixed[20 + (k * 7 + n) * 8..])).collect();
                     let q = Quaternion::new(v[3], v[4], v[5], v[6]);
                     if !v.iter().all(|x| x.is_finite()) || q.norm() < 1e-9 {
-                        return Err(fail(at, "a scan pose is not finite or has a zero rotation".into()));
+                        return Err(fail(
+                            at,
+                            "a scan pose is not finite or has a zero rotation".into(),
+                        ));
                     }
-                    *pose = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), UnitQuaternion::from_quaternion(q));
+                    *pose = Isometry3::from_parts(
+                        Translation3::new(v[0], v[1], v[2]),
+                        UnitQuaternion::from_quaternion(q),
+                    );
                 }
                 let num_rays = u32_at(&fixed[SCAN_FIXED_BYTES - 4..]) as usize;
                 if num_rays.saturating_mul(RAY_BYTES) > data.len() - pos {
-                    return Err(fail(at, format!("a scan declares {num_rays} rays, more than the log holds: truncated")));
+                    return Err(fail(
+                        at,
+                        format!("a scan declares {num_rays} rays, more than the log holds: truncated"),
+                    ));
                 }
                 let bytes = take(&mut pos, num_rays * RAY_BYTES, "the rays")?;
                 let mut rays = Vec::with_capacity(num_rays);
@@ -271,17 +333,33 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
                     let kind = match r[0] {
                         0 => RayKind::Hit,
                         1 => RayKind::NoReturn,
-                        other => return Err(fail(at, format!("ray {n} has kind {other}, expected 0 (hit) or 1 (no return)"))),
+                        other => {
+                            return Err(fail(
+                                at,
+                                format!("ray {n} has kind {other}, expected 0 (hit) or 1 (no return)"),
+                            ));
+                        }
                     };
                     let v = Vector3::new(f32_at(&r[1..]), f32_at(&r[5..]), f32_at(&r[9..]));
                     let sigma = f32_at(&r[13..]);
-                    if !v.iter().all(|x| x.is_finite()) || !(sigma.is_finite() && sigma >= 0.0) {
+                    if !(v.iter().all(|x| x.is_finite()) && sigma.is_finite() && sigma >= 0.0) {
                         return Err(fail(at, format!("ray {n} holds a non-finite number")));
                     }
-                    rays.push(SensorRay { kind, vector_in_sensor: v, range_sigma_m: sigma });
+                    rays.push(SensorRay {
+                        kind,
+                        vector_in_sensor: v,
+                        range_sigma_m: sigma,
+                    });
                 }
                 let [world_from_sensor, estimated_world_from_sensor] = poses;
-                scans.push(SensorScan { sensor_index, scan_index, stamp_s, world_from_sensor, estimated_world_from_sensor, rays });
+                scans.push(SensorScan {
+                    sensor_index,
+                    scan_index,
+                    stamp_s,
+                    world_from_sensor,
+                    estimated_world_from_sensor,
+                    rays,
+                });
             }
             other => return Err(fail(at, format!("unknown record tag {other}"))),
         }

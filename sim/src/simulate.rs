@@ -71,7 +71,10 @@ impl Simulation {
 
     /// Total scans the run will produce.
     pub fn num_scans_total(&self) -> u64 {
-        self.sensors.iter().map(|s| (self.duration_s * s.spec.rate_hz + 1e-9).floor() as u64 + 1).sum()
+        self.sensors
+            .iter()
+            .map(|s| (self.duration_s * s.spec.rate_hz + 1e-9).floor() as u64 + 1)
+            .sum()
     }
 
     /// The next scan in time order (ties: the sensor listed first), or `None` at the end of the run.

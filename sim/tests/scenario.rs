@@ -158,14 +158,38 @@ fn every_shipped_scenario_validates() {
 
 #[test]
 fn bad_sensor_settings_are_errors_at_their_place() {
-    let sensor = |body: &str| common::scenario_text(&format!("[[sensors]]\nname = \"s\"\nkind = \"laser2d\"\nmount_link = \"laser_front_mount\"\n{body}"));
+    let sensor = |body: &str| {
+        common::scenario_text(&format!(
+            "[[sensors]]\nname = \"s\"\nkind = \"laser2d\"\nmount_link = \"laser_front_mount\"\n{body}"
+        ))
+    };
     let cases = [
         ("fov", sensor("fov_deg = -90.0\n"), "sensors[0].fov_deg", 21),
         ("step", sensor("step_deg = 0.0\n"), "sensors[0].step_deg", 21),
-        ("nan", sensor("[sensors.noise]\nrange_sigma_m = nan\n"), "sensors[0].noise.range_sigma_m", 22),
-        ("foreign", sensor("baseline_m = 0.1\n"), "does not apply to a laser2d", 21),
-        ("preset", sensor("preset = \"kinect\"\n"), "presets for laser2d: sick_lms291, sick_lms291_90", 21),
-        ("prob", sensor("[sensors.noise]\ndropout_probability = 2.0\n"), "expected a probability", 22),
+        (
+            "nan",
+            sensor("[sensors.noise]\nrange_sigma_m = nan\n"),
+            "sensors[0].noise.range_sigma_m",
+            22,
+        ),
+        (
+            "foreign",
+            sensor("baseline_m = 0.1\n"),
+            "does not apply to a laser2d",
+            21,
+        ),
+        (
+            "preset",
+            sensor("preset = \"kinect\"\n"),
+            "presets for laser2d: sick_lms291, sick_lms291_90",
+            21,
+        ),
+        (
+            "prob",
+            sensor("[sensors.noise]\ndropout_probability = 2.0\n"),
+            "expected a probability",
+            22,
+        ),
     ];
     for (name, text, expected, line) in cases {
         let (message, position) = error_of(name, &text);

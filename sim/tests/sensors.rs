@@ -24,7 +24,10 @@ const LASER: &str = "name = \"laser\"\nkind = \"laser2d\"\nmount_link = \"laser_
 
 #[test]
 fn laser_beams_fan_at_the_configured_angles() {
-    let dirs = beam_directions(&BeamPattern::Fan { fov_rad: 90f64.to_radians(), step_rad: 1f64.to_radians() });
+    let dirs = beam_directions(&BeamPattern::Fan {
+        fov_rad: 90f64.to_radians(),
+        step_rad: 1f64.to_radians(),
+    });
     assert_eq!(dirs.len(), 91);
     let angle = |d: &Vector3<f64>| d.y.atan2(d.x).to_degrees();
     assert!((angle(&dirs[0]) + 45.0).abs() < 1e-9);
@@ -36,16 +39,33 @@ fn laser_beams_fan_at_the_configured_angles() {
 #[test]
 fn lidar_channels_sit_at_their_elevations() {
     let elevations: Vec<f64> = [-15.0f64, 1.0, 15.0].iter().map(|a| a.to_radians()).collect();
-    let dirs = beam_directions(&BeamPattern::Sweep { elevations_rad: elevations, fov_rad: std::f64::consts::TAU, step_rad: 90f64.to_radians() });
-    assert_eq!(dirs.len(), 12, "4 azimuths x 3 channels, the full circle not repeated");
+    let dirs = beam_directions(&BeamPattern::Sweep {
+        elevations_rad: elevations,
+        fov_rad: std::f64::consts::TAU,
+        step_rad: 90f64.to_radians(),
+    });
+    assert_eq!(
+        dirs.len(),
+        12,
+        "4 azimuths x 3 channels, the full circle not repeated"
+    );
     assert!((dirs[2].z.asin().to_degrees() - 15.0).abs() < 1e-9);
-    assert!((dirs[3].y - (-15f64).to_radians().cos()).abs() < 1e-9, "second azimuth is +90 degrees: {}", dirs[3]);
+    assert!(
+        (dirs[3].y - (-15f64).to_radians().cos()).abs() < 1e-9,
+        "second azimuth is +90 degrees: {}",
+        dirs[3]
+    );
 }
 
 #[test]
 fn stereo_rays_pass_through_pixel_centres() {
     let (w, h, f) = (4u32, 2u32, 2.0);
-    let dirs = beam_directions(&BeamPattern::Pinhole { width_px: w, height_px: h, focal_px: f, stride: 1 });
+    let dirs = beam_directions(&BeamPattern::Pinhole {
+        width_px: w,
+        height_px: h,
+        focal_px: f,
+        stride: 1,
+    });
     assert_eq!(dirs.len(), 8);
     // Pixel (u, v) = (0, 0): centre (0.5, 0.5), optical (x, y) = ((0.5 - 2) / 2, (0.5 - 1) / 2) = (-0.75, -0.25):
     // left of and above the axis, so +y (left) and +z (up) in the sensor frame.
@@ -58,22 +78,40 @@ fn stereo_rays_pass_through_pixel_centres() {
 
 #[test]
 fn a_noiseless_laser_facing_a_wall_returns_its_distance() {
-    let (scan, sim) = scan_with("wall", &format!("{LASER}\n[sensors.noise]\nrange_sigma_m = 0.0\n"), "");
+    let (scan, sim) = scan_with(
+        "wall",
+        &format!("{LASER}\n[sensors.noise]\nrange_sigma_m = 0.0\n"),
+        "",
+    );
     let origin = scan.world_from_sensor.translation.vector;
-    assert!((origin.x - 0.2).abs() < 1e-9 && (origin.z - 0.3).abs() < 1e-6, "{origin}");
+    assert!(
+        (origin.x - 0.2).abs() < 1e-9 && (origin.z - 0.3).abs() < 1e-6,
+        "{origin}"
+    );
     let middle = scan.rays[45];
     assert_eq!(middle.kind, RayKind::Hit);
-    assert!((f64::from(middle.vector_in_sensor.x) - 4.8).abs() < 1e-4, "{:?}", middle);
+    assert!(
+        (f64::from(middle.vector_in_sensor.x) - 4.8).abs() < 1e-4,
+        "{:?}",
+        middle
+    );
     // A beam at angle a reaches the wall plane at 4.8 / cos(a).
     let beam = scan.rays[15];
     let a = (-30f64).to_radians();
-    assert!((f64::from(beam.vector_in_sensor.norm()) - 4.8 / a.cos()).abs() < 1e-3, "{beam:?}");
+    assert!(
+        (f64::from(beam.vector_in_sensor.norm()) - 4.8 / a.cos()).abs() < 1e-3,
+        "{beam:?}"
+    );
     assert_eq!(sim.sensors()[0].directions().len(), 91);
 }
 
 /// Range errors of the beams within 30 degrees of the axis (those that see the wall), over 30 scans.
 fn range_errors(noise: &str, seed_name: &str) -> (Vec<f64>, Vec<f32>, usize) {
-    let (_, mut sim) = scan_with(seed_name, &format!("{LASER}\nrate_hz = 10.0\n[sensors.noise]\n{noise}"), "");
+    let (_, mut sim) = scan_with(
+        seed_name,
+        &format!("{LASER}\nrate_hz = 10.0\n[sensors.noise]\n{noise}"),
+        "",
+    );
     let (mut errors, mut sigmas, mut no_returns) = (Vec::new(), Vec::new(), 0);
     for _ in 0..30 {
         let Some(scan) = sim.next_scan() else { break };
@@ -97,7 +135,10 @@ fn range_errors(noise: &str, seed_name: &str) -> (Vec<f64>, Vec<f32>, usize) {
 fn mean_std(v: &[f64]) -> (f64, f64) {
     let n = v.len() as f64;
     let mean = v.iter().sum::<f64>() / n;
-    (mean, (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt())
+    (
+        mean,
+        (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt(),
+    )
 }
 
 #[test]
@@ -107,7 +148,10 @@ fn gaussian_range_noise_has_the_configured_spread_and_the_rays_say_so() {
     let (mean, std) = mean_std(&errors);
     assert!(mean.abs() < 0.002, "mean {mean}");
     assert!((std - 0.02).abs() < 0.001, "std {std}");
-    assert!(sigmas.iter().all(|s| (s - 0.02).abs() < 1e-6), "each ray carries the model's error");
+    assert!(
+        sigmas.iter().all(|s| (s - 0.02).abs() < 1e-6),
+        "each ray carries the model's error"
+    );
 }
 
 #[test]
@@ -115,7 +159,10 @@ fn a_bias_is_drawn_once_per_sensor() {
     let (errors, _, _) = range_errors("range_sigma_m = 0.0\nbias_sigma_m = 0.05\n", "bias");
     let first = errors[0];
     assert!(first.abs() > 1e-4, "a bias was drawn: {first}");
-    assert!(errors.iter().all(|e| (e - first).abs() < 1e-3), "the same bias on every beam");
+    assert!(
+        errors.iter().all(|e| (e - first).abs() < 1e-3),
+        "the same bias on every beam"
+    );
 }
 
 #[test]
@@ -123,7 +170,10 @@ fn dropouts_are_no_returns_at_the_configured_rate() {
     let (errors, _, no_returns) = range_errors("range_sigma_m = 0.0\ndropout_probability = 0.2\n", "dropout");
     let rate = no_returns as f64 / (no_returns + errors.len()) as f64;
     assert!((rate - 0.2).abs() < 0.02, "dropout rate {rate}");
-    assert!(errors.iter().all(|e| e.abs() < 1e-3), "a dropout is never a hit at some range");
+    assert!(
+        errors.iter().all(|e| e.abs() < 1e-3),
+        "a dropout is never a hit at some range"
+    );
 }
 
 #[test]
@@ -174,7 +224,10 @@ fn stereo_depth_error_grows_with_the_square_of_depth() {
 fn the_same_seed_gives_the_same_scans_on_one_and_two_threads() {
     let noise = "range_sigma_m = 0.02\ndropout_probability = 0.1\nspurious_probability = 0.05\nangular_jitter_deg = 0.2\nmixed_pixel_probability = 0.3\n";
     let run = |threads: usize, name: &str, seed: u64| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
         pool.install(|| {
             let extra = format!("{LASER}\nrate_hz = 10.0\n[sensors.noise]\n{noise}");
             let text = common::scenario_text(&format!(
@@ -195,7 +248,11 @@ fn the_same_seed_gives_the_same_scans_on_one_and_two_threads() {
 
 #[test]
 fn logs_read_back_exactly_and_reject_damage() {
-    let (_, mut sim) = scan_with("log", &format!("{LASER}\n[sensors.noise]\ndropout_probability = 0.1\n"), "");
+    let (_, mut sim) = scan_with(
+        "log",
+        &format!("{LASER}\n[sensors.noise]\ndropout_probability = 0.1\n"),
+        "",
+    );
     let scans: Vec<_> = (0..5).filter_map(|_| sim.next_scan()).collect();
     let header = sim::log::LogHeader {
         scenario: "log".into(),
@@ -222,20 +279,31 @@ fn logs_read_back_exactly_and_reject_damage() {
     let bytes = std::fs::read(&path).expect("bytes");
     for cut in [0, 10, 40, bytes.len() / 2, bytes.len() - 1] {
         std::fs::write(dir.join("cut.oeglog"), &bytes[..cut]).expect("write");
-        let err = sim::log::read_log(&dir.join("cut.oeglog")).expect_err("truncated").to_string();
+        let err = sim::log::read_log(&dir.join("cut.oeglog"))
+            .expect_err("truncated")
+            .to_string();
         assert!(err.contains("cut.oeglog: at byte"), "{cut}: {err}");
     }
     let mut flipped = bytes.clone();
     let k = bytes.len() - 30;
     flipped[k] ^= 0x10;
     std::fs::write(dir.join("flip.oeglog"), &flipped).expect("write");
-    let err = sim::log::read_log(&dir.join("flip.oeglog")).expect_err("corrupt").to_string();
-    assert!(err.contains("checksum") || err.contains("non-finite") || err.contains("kind"), "{err}");
+    let err = sim::log::read_log(&dir.join("flip.oeglog"))
+        .expect_err("corrupt")
+        .to_string();
+    assert!(
+        err.contains("checksum") || err.contains("non-finite") || err.contains("kind"),
+        "{err}"
+    );
     // An abandoned writer leaves no file.
     let abandoned = dir.join("abandoned.oeglog");
     drop(sim::log::LogWriter::create(&abandoned, &header).expect("create"));
     assert!(!abandoned.exists());
-    assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 3, "no temporary files left");
+    assert_eq!(
+        std::fs::read_dir(&dir).expect("dir").count(),
+        3,
+        "no temporary files left"
+    );
 }
 
 #[test]
@@ -261,12 +329,18 @@ fn mixed_pixels_fall_between_the_surfaces_at_a_depth_edge() {
         // On the grazing floor neighbouring beams differ by about 0.1 m and mix harmlessly; count what lies
         // clearly off both surfaces.
         if r.kind == RayKind::Hit && (range - wall).abs() > 0.15 && (range - floor).abs() > 0.15 {
-            assert!(range > wall.min(floor) && range < wall.max(floor), "beam {k}: {range} outside both surfaces");
+            assert!(
+                range > wall.min(floor) && range < wall.max(floor),
+                "beam {k}: {range} outside both surfaces"
+            );
             mixed.push(a.to_degrees());
         }
     }
     // The wall's two ends, at y = 1 and y = -4.
-    let edges = [(1.0f64 / 4.8).atan().to_degrees(), (-4.0f64 / 4.8).atan().to_degrees()];
+    let edges = [
+        (1.0f64 / 4.8).atan().to_degrees(),
+        (-4.0f64 / 4.8).atan().to_degrees(),
+    ];
     assert!(!mixed.is_empty(), "no mixed pixel at the edges");
     assert!(
         mixed.iter().all(|a| edges.iter().any(|e| (a - e).abs() < 1.5)),

@@ -238,7 +238,9 @@ struct Preset {
     hole_probability: f64,
 }
 
-const VLP16_ANGLES: [f64; 16] = [-15.0, -13.0, -11.0, -9.0, -7.0, -5.0, -3.0, -1.0, 1.0, 3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0];
+const VLP16_ANGLES: [f64; 16] = [
+    -15.0, -13.0, -11.0, -9.0, -7.0, -5.0, -3.0, -1.0, 1.0, 3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0,
+];
 
 const BASE: Preset = Preset {
     name: "",
@@ -263,9 +265,22 @@ const BASE: Preset = Preset {
 /// over +-15 degrees, 0.2 degree azimuth step at 10 Hz, 100 m, +-3 cm), the paper's simple stereo rig (Fig. 4:
 /// depth error 0.032 m at 1 m), Kinect v1 (640 x 480, 57 degrees, 0.5 to 4.5 m).
 const PRESETS: &[Preset] = &[
-    Preset { name: "sick_lms291", kind: SensorKind::Laser2d, rate_hz: 75.0, range_sigma_m: 0.012, ..BASE },
+    Preset {
+        name: "sick_lms291",
+        kind: SensorKind::Laser2d,
+        rate_hz: 75.0,
+        range_sigma_m: 0.012,
+        ..BASE
+    },
     // The paper's data set (section 6.2): LMS 291-S14 scanners sweeping 90 degrees.
-    Preset { name: "sick_lms291_90", kind: SensorKind::Laser2d, rate_hz: 75.0, fov_deg: 90.0, range_sigma_m: 0.012, ..BASE },
+    Preset {
+        name: "sick_lms291_90",
+        kind: SensorKind::Laser2d,
+        rate_hz: 75.0,
+        fov_deg: 90.0,
+        range_sigma_m: 0.012,
+        ..BASE
+    },
     Preset {
         name: "vlp16",
         kind: SensorKind::Lidar3d,
@@ -325,7 +340,11 @@ const PRESETS: &[Preset] = &[
 
 /// The names of the presets of `kind`, default first.
 pub fn preset_names(kind: SensorKind) -> Vec<&'static str> {
-    PRESETS.iter().filter(|p| p.kind == kind).map(|p| p.name).collect()
+    PRESETS
+        .iter()
+        .filter(|p| p.kind == kind)
+        .map(|p| p.name)
+        .collect()
 }
 
 /// A problem with a sensor entry: the key (relative to the entry) and what is wrong.
@@ -338,7 +357,10 @@ pub struct SpecError {
 }
 
 fn err(key: &[&'static str], message: String) -> SpecError {
-    SpecError { key: key.to_vec(), message }
+    SpecError {
+        key: key.to_vec(),
+        message,
+    }
 }
 
 impl SensorMount {
@@ -353,22 +375,57 @@ impl SensorMount {
             Some(name) => PRESETS.iter().find(|p| p.name == name),
         }
         .ok_or_else(|| {
-            err(&["preset"], format!("unknown preset; presets for {}: {}", kind.name(), preset_names(kind).join(", ")))
+            err(
+                &["preset"],
+                format!(
+                    "unknown preset; presets for {}: {}",
+                    kind.name(),
+                    preset_names(kind).join(", ")
+                ),
+            )
         })?;
         if preset.kind != kind {
-            return Err(err(&["preset"], format!("preset `{}` is a {}, not a {}", preset.name, preset.kind.name(), kind.name())));
+            return Err(err(
+                &["preset"],
+                format!(
+                    "preset `{}` is a {}, not a {}",
+                    preset.name,
+                    preset.kind.name(),
+                    kind.name()
+                ),
+            ));
         }
         // Keys that do not apply to the kind.
         let is_camera = matches!(kind, SensorKind::Stereo | SensorKind::DepthCamera);
         let foreign: [(&'static str, bool, bool); 8] = [
-            ("fov_deg", self.fov_deg.is_some(), matches!(kind, SensorKind::Laser2d | SensorKind::Lidar3d)),
+            (
+                "fov_deg",
+                self.fov_deg.is_some(),
+                matches!(kind, SensorKind::Laser2d | SensorKind::Lidar3d),
+            ),
             ("step_deg", self.step_deg.is_some(), kind == SensorKind::Laser2d),
-            ("vertical_angles_deg", self.vertical_angles_deg.is_some(), kind == SensorKind::Lidar3d),
-            ("azimuth_step_deg", self.azimuth_step_deg.is_some(), kind == SensorKind::Lidar3d),
+            (
+                "vertical_angles_deg",
+                self.vertical_angles_deg.is_some(),
+                kind == SensorKind::Lidar3d,
+            ),
+            (
+                "azimuth_step_deg",
+                self.azimuth_step_deg.is_some(),
+                kind == SensorKind::Lidar3d,
+            ),
             ("image_size_px", self.image_size_px.is_some(), is_camera),
-            ("hfov_deg", self.hfov_deg.is_some() || self.focal_px.is_some(), is_camera),
+            (
+                "hfov_deg",
+                self.hfov_deg.is_some() || self.focal_px.is_some(),
+                is_camera,
+            ),
             ("pixel_stride", self.pixel_stride.is_some(), is_camera),
-            ("baseline_m", self.baseline_m.is_some(), kind == SensorKind::Stereo),
+            (
+                "baseline_m",
+                self.baseline_m.is_some(),
+                kind == SensorKind::Stereo,
+            ),
         ];
         for (key, given, applies) in foreign {
             if given && !applies {
@@ -377,51 +434,113 @@ impl SensorMount {
         }
         let n = &self.noise;
         let noise_foreign: [(&'static str, bool, bool); 5] = [
-            ("range_sigma_m", n.range_sigma_m.is_some(), matches!(kind, SensorKind::Laser2d | SensorKind::Lidar3d)),
-            ("range_sigma_per_m", n.range_sigma_per_m.is_some(), matches!(kind, SensorKind::Laser2d | SensorKind::Lidar3d)),
-            ("disparity_sigma_px", n.disparity_sigma_px.is_some(), kind == SensorKind::Stereo),
-            ("axial_noise_scale", n.axial_noise_scale.is_some(), kind == SensorKind::DepthCamera),
+            (
+                "range_sigma_m",
+                n.range_sigma_m.is_some(),
+                matches!(kind, SensorKind::Laser2d | SensorKind::Lidar3d),
+            ),
+            (
+                "range_sigma_per_m",
+                n.range_sigma_per_m.is_some(),
+                matches!(kind, SensorKind::Laser2d | SensorKind::Lidar3d),
+            ),
+            (
+                "disparity_sigma_px",
+                n.disparity_sigma_px.is_some(),
+                kind == SensorKind::Stereo,
+            ),
+            (
+                "axial_noise_scale",
+                n.axial_noise_scale.is_some(),
+                kind == SensorKind::DepthCamera,
+            ),
             ("hole_probability", n.hole_probability.is_some(), is_camera),
         ];
         for (key, given, applies) in noise_foreign {
             if given && !applies {
-                return Err(err(&["noise", key], format!("does not apply to a {} sensor", kind.name())));
+                return Err(err(
+                    &["noise", key],
+                    format!("does not apply to a {} sensor", kind.name()),
+                ));
             }
         }
 
         let positive = |v: f64, key: &'static str, what: &str| {
-            if v.is_finite() && v > 0.0 { Ok(v) } else { Err(err(&[key], format!("expected a positive {what}, got {v}"))) }
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(err(&[key], format!("expected a positive {what}, got {v}")))
+            }
         };
         let rate_hz = positive(self.rate_hz.unwrap_or(preset.rate_hz), "rate_hz", "rate in Hz")?;
-        let max_range_m = positive(self.max_range_m.unwrap_or(preset.max_range_m), "max_range_m", "range in metres")?;
+        let max_range_m = positive(
+            self.max_range_m.unwrap_or(preset.max_range_m),
+            "max_range_m",
+            "range in metres",
+        )?;
         let min_range_m = self.min_range_m.unwrap_or(preset.min_range_m);
         if !(min_range_m.is_finite() && min_range_m >= 0.0 && min_range_m < max_range_m) {
-            return Err(err(&["min_range_m"], format!("expected a range >= 0 and below max_range_m {max_range_m}, got {min_range_m}")));
+            return Err(err(
+                &["min_range_m"],
+                format!("expected a range >= 0 and below max_range_m {max_range_m}, got {min_range_m}"),
+            ));
         }
         let beams = match kind {
             SensorKind::Laser2d => {
                 let fov = self.fov_deg.unwrap_or(preset.fov_deg);
                 if !(fov.is_finite() && fov > 0.0 && fov <= 360.0) {
-                    return Err(err(&["fov_deg"], format!("expected a field of view in (0, 360] degrees, got {fov}")));
+                    return Err(err(
+                        &["fov_deg"],
+                        format!("expected a field of view in (0, 360] degrees, got {fov}"),
+                    ));
                 }
-                let step = positive(self.step_deg.unwrap_or(preset.step_deg), "step_deg", "angle in degrees")?;
+                let step = positive(
+                    self.step_deg.unwrap_or(preset.step_deg),
+                    "step_deg",
+                    "angle in degrees",
+                )?;
                 if fov / step > 100_000.0 {
-                    return Err(err(&["step_deg"], format!("{fov} / {step} gives more than 100000 beams")));
+                    return Err(err(
+                        &["step_deg"],
+                        format!("{fov} / {step} gives more than 100000 beams"),
+                    ));
                 }
-                BeamPattern::Fan { fov_rad: fov.to_radians(), step_rad: step.to_radians() }
+                BeamPattern::Fan {
+                    fov_rad: fov.to_radians(),
+                    step_rad: step.to_radians(),
+                }
             }
             SensorKind::Lidar3d => {
                 let fov = self.fov_deg.unwrap_or(preset.fov_deg);
                 if !(fov.is_finite() && fov > 0.0 && fov <= 360.0) {
-                    return Err(err(&["fov_deg"], format!("expected an azimuth coverage in (0, 360] degrees, got {fov}")));
+                    return Err(err(
+                        &["fov_deg"],
+                        format!("expected an azimuth coverage in (0, 360] degrees, got {fov}"),
+                    ));
                 }
-                let step = positive(self.azimuth_step_deg.unwrap_or(preset.step_deg), "azimuth_step_deg", "angle in degrees")?;
-                let angles = self.vertical_angles_deg.clone().unwrap_or_else(|| preset.vertical_angles_deg.to_vec());
-                if angles.is_empty() || angles.len() > 1024 || angles.iter().any(|a| !(a.is_finite() && a.abs() <= 90.0)) {
-                    return Err(err(&["vertical_angles_deg"], "expected 1 to 1024 elevations within [-90, 90] degrees".into()));
+                let step = positive(
+                    self.azimuth_step_deg.unwrap_or(preset.step_deg),
+                    "azimuth_step_deg",
+                    "angle in degrees",
+                )?;
+                let angles = self
+                    .vertical_angles_deg
+                    .clone()
+                    .unwrap_or_else(|| preset.vertical_angles_deg.to_vec());
+                if angles.is_empty()
+                    || angles.len() > 1024
+                    || angles.iter().any(|a| !(a.is_finite() && a.abs() <= 90.0))
+                {
+                    return Err(err(
+                        &["vertical_angles_deg"],
+                        "expected 1 to 1024 elevations within [-90, 90] degrees".into(),
+                    ));
                 }
                 if fov / step * angles.len() as f64 > 10_000_000.0 {
-                    return Err(err(&["azimuth_step_deg"], "more than 10 million beams per scan".into()));
+                    return Err(err(
+                        &["azimuth_step_deg"],
+                        "more than 10 million beams per scan".into(),
+                    ));
                 }
                 BeamPattern::Sweep {
                     elevations_rad: angles.iter().map(|a| a.to_radians()).collect(),
@@ -432,31 +551,56 @@ impl SensorMount {
             SensorKind::Stereo | SensorKind::DepthCamera => {
                 let [w, h] = self.image_size_px.unwrap_or(preset.image_size_px);
                 if !(1..=20_000).contains(&w) || !(1..=20_000).contains(&h) {
-                    return Err(err(&["image_size_px"], format!("expected 1 to 20000 pixels per side, got [{w}, {h}]")));
+                    return Err(err(
+                        &["image_size_px"],
+                        format!("expected 1 to 20000 pixels per side, got [{w}, {h}]"),
+                    ));
                 }
                 let focal_px = match (self.focal_px, self.hfov_deg) {
                     (Some(f), _) => positive(f, "focal_px", "focal length in pixels")?,
                     (None, hfov) => {
                         let hfov = hfov.unwrap_or(preset.hfov_deg);
                         if !(hfov.is_finite() && hfov > 0.0 && hfov < 180.0) {
-                            return Err(err(&["hfov_deg"], format!("expected a field of view in (0, 180) degrees, got {hfov}")));
+                            return Err(err(
+                                &["hfov_deg"],
+                                format!("expected a field of view in (0, 180) degrees, got {hfov}"),
+                            ));
                         }
                         f64::from(w) / 2.0 / (hfov.to_radians() / 2.0).tan()
                     }
                 };
                 let stride = self.pixel_stride.unwrap_or(preset.pixel_stride);
                 if stride == 0 || stride > w.max(h) {
-                    return Err(err(&["pixel_stride"], format!("expected 1 to {} pixels, got {stride}", w.max(h))));
+                    return Err(err(
+                        &["pixel_stride"],
+                        format!("expected 1 to {} pixels, got {stride}", w.max(h)),
+                    ));
                 }
-                BeamPattern::Pinhole { width_px: w, height_px: h, focal_px, stride }
+                BeamPattern::Pinhole {
+                    width_px: w,
+                    height_px: h,
+                    focal_px,
+                    stride,
+                }
             }
         };
         let probability = |v: Option<f64>, key: &'static str| {
             let v = v.unwrap_or(0.0);
-            if v.is_finite() && (0.0..=1.0).contains(&v) { Ok(v) } else { Err(err(&["noise", key], format!("expected a probability in [0, 1], got {v}"))) }
+            if v.is_finite() && (0.0..=1.0).contains(&v) {
+                Ok(v)
+            } else {
+                Err(err(
+                    &["noise", key],
+                    format!("expected a probability in [0, 1], got {v}"),
+                ))
+            }
         };
         let non_negative = |v: f64, key: &'static str| {
-            if v.is_finite() && v >= 0.0 { Ok(v) } else { Err(err(&["noise", key], format!("expected a value >= 0, got {v}"))) }
+            if v.is_finite() && v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(err(&["noise", key], format!("expected a value >= 0, got {v}")))
+            }
         };
         let range = match kind {
             SensorKind::Laser2d | SensorKind::Lidar3d => RangeNoise::Linear {
@@ -464,12 +608,25 @@ impl SensorMount {
                 per_m: non_negative(n.range_sigma_per_m.unwrap_or(0.0), "range_sigma_per_m")?,
             },
             SensorKind::Stereo => {
-                let sigma_d = non_negative(n.disparity_sigma_px.unwrap_or(preset.disparity_sigma_px), "disparity_sigma_px")?;
-                let baseline = positive(self.baseline_m.unwrap_or(preset.baseline_m), "baseline_m", "baseline in metres")?;
-                let BeamPattern::Pinhole { focal_px, .. } = beams else { unreachable!("cameras have pinhole beams") };
-                RangeNoise::Disparity { coefficient_per_m: sigma_d / (focal_px * baseline) }
+                let sigma_d = non_negative(
+                    n.disparity_sigma_px.unwrap_or(preset.disparity_sigma_px),
+                    "disparity_sigma_px",
+                )?;
+                let baseline = positive(
+                    self.baseline_m.unwrap_or(preset.baseline_m),
+                    "baseline_m",
+                    "baseline in metres",
+                )?;
+                let BeamPattern::Pinhole { focal_px, .. } = beams else {
+                    unreachable!("cameras have pinhole beams")
+                };
+                RangeNoise::Disparity {
+                    coefficient_per_m: sigma_d / (focal_px * baseline),
+                }
             }
-            SensorKind::DepthCamera => RangeNoise::Axial { scale: non_negative(n.axial_noise_scale.unwrap_or(1.0), "axial_noise_scale")? },
+            SensorKind::DepthCamera => RangeNoise::Axial {
+                scale: non_negative(n.axial_noise_scale.unwrap_or(1.0), "axial_noise_scale")?,
+            },
         };
         let noise = Noise {
             range,
@@ -477,8 +634,12 @@ impl SensorMount {
             dropout_probability: probability(n.dropout_probability, "dropout_probability")?,
             spurious_probability: probability(n.spurious_probability, "spurious_probability")?,
             mixed_pixel_probability: probability(n.mixed_pixel_probability, "mixed_pixel_probability")?,
-            angular_jitter_rad: non_negative(n.angular_jitter_deg.unwrap_or(0.0), "angular_jitter_deg")?.to_radians(),
-            hole_probability: probability(n.hole_probability.or(Some(preset.hole_probability)), "hole_probability")?,
+            angular_jitter_rad: non_negative(n.angular_jitter_deg.unwrap_or(0.0), "angular_jitter_deg")?
+                .to_radians(),
+            hole_probability: probability(
+                n.hole_probability.or(Some(preset.hole_probability)),
+                "hole_probability",
+            )?,
         };
         Ok(SensorSpec {
             name: self.name.clone(),
@@ -547,14 +708,28 @@ mod tests {
         let spec = mount(SensorKind::Laser2d).resolve().expect("valid");
         assert_eq!(spec.preset, "sick_lms291");
         assert_eq!(spec.rate_hz, 75.0);
-        assert!(matches!(spec.beams, BeamPattern::Fan { fov_rad, .. } if (fov_rad - std::f64::consts::PI).abs() < 1e-12));
-        let spec = SensorMount { preset: Some("vlp16".into()), ..mount(SensorKind::Lidar3d) }.resolve().expect("valid");
-        assert!(matches!(&spec.beams, BeamPattern::Sweep { elevations_rad, .. } if elevations_rad.len() == 16));
+        assert!(
+            matches!(spec.beams, BeamPattern::Fan { fov_rad, .. } if (fov_rad - std::f64::consts::PI).abs() < 1e-12)
+        );
+        let spec = SensorMount {
+            preset: Some("vlp16".into()),
+            ..mount(SensorKind::Lidar3d)
+        }
+        .resolve()
+        .expect("valid");
+        assert!(
+            matches!(&spec.beams, BeamPattern::Sweep { elevations_rad, .. } if elevations_rad.len() == 16)
+        );
     }
 
     #[test]
     fn the_paper_stereo_preset_gives_the_papers_depth_error() {
-        let spec = SensorMount { preset: Some("paper_stereo".into()), ..mount(SensorKind::Stereo) }.resolve().expect("valid");
+        let spec = SensorMount {
+            preset: Some("paper_stereo".into()),
+            ..mount(SensorKind::Stereo)
+        }
+        .resolve()
+        .expect("valid");
         // On the optical axis: 0.032 z^2.
         for z in [1.0, 2.0, 3.0] {
             let s = spec.noise.range_sigma_m(z, 1.0);
@@ -564,21 +739,62 @@ mod tests {
 
     #[test]
     fn bad_settings_are_errors_with_their_key() {
-        let bad = SensorMount { fov_deg: Some(-10.0), ..mount(SensorKind::Laser2d) }.resolve().expect_err("fov");
+        let bad = SensorMount {
+            fov_deg: Some(-10.0),
+            ..mount(SensorKind::Laser2d)
+        }
+        .resolve()
+        .expect_err("fov");
         assert_eq!(bad.key, vec!["fov_deg"]);
-        let bad = SensorMount { step_deg: Some(0.0), ..mount(SensorKind::Laser2d) }.resolve().expect_err("step");
+        let bad = SensorMount {
+            step_deg: Some(0.0),
+            ..mount(SensorKind::Laser2d)
+        }
+        .resolve()
+        .expect_err("step");
         assert_eq!(bad.key, vec!["step_deg"]);
-        let noise = NoiseSettings { range_sigma_m: Some(f64::NAN), ..NoiseSettings::default() };
-        let bad = SensorMount { noise, ..mount(SensorKind::Laser2d) }.resolve().expect_err("nan");
+        let noise = NoiseSettings {
+            range_sigma_m: Some(f64::NAN),
+            ..NoiseSettings::default()
+        };
+        let bad = SensorMount {
+            noise,
+            ..mount(SensorKind::Laser2d)
+        }
+        .resolve()
+        .expect_err("nan");
         assert_eq!(bad.key, vec!["noise", "range_sigma_m"]);
-        let noise = NoiseSettings { dropout_probability: Some(1.5), ..NoiseSettings::default() };
-        let bad = SensorMount { noise, ..mount(SensorKind::Laser2d) }.resolve().expect_err("probability");
+        let noise = NoiseSettings {
+            dropout_probability: Some(1.5),
+            ..NoiseSettings::default()
+        };
+        let bad = SensorMount {
+            noise,
+            ..mount(SensorKind::Laser2d)
+        }
+        .resolve()
+        .expect_err("probability");
         assert_eq!(bad.key, vec!["noise", "dropout_probability"]);
-        let bad = SensorMount { baseline_m: Some(0.1), ..mount(SensorKind::Laser2d) }.resolve().expect_err("foreign");
+        let bad = SensorMount {
+            baseline_m: Some(0.1),
+            ..mount(SensorKind::Laser2d)
+        }
+        .resolve()
+        .expect_err("foreign");
         assert!(bad.message.contains("does not apply to a laser2d"), "{bad:?}");
-        let bad = SensorMount { preset: Some("vlp16".into()), ..mount(SensorKind::Stereo) }.resolve().expect_err("kind");
+        let bad = SensorMount {
+            preset: Some("vlp16".into()),
+            ..mount(SensorKind::Stereo)
+        }
+        .resolve()
+        .expect_err("kind");
         assert!(bad.message.contains("is a lidar3d"), "{bad:?}");
-        let bad = SensorMount { preset: Some("nope".into()), ..mount(SensorKind::Stereo) }.resolve().expect_err("unknown");
+        let bad = SensorMount {
+            preset: Some("nope".into()),
+            ..mount(SensorKind::Stereo)
+        }
+        .resolve()
+        .expect_err("unknown");
         assert!(bad.message.contains("paper_stereo"), "{bad:?}");
     }
 }

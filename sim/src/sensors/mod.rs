@@ -119,7 +119,11 @@ impl SimSensor {
         let perpendiculars = directions
             .iter()
             .map(|d| {
-                let helper = if d.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
+                let helper = if d.z.abs() < 0.9 {
+                    Vector3::z()
+                } else {
+                    Vector3::x()
+                };
                 let e1 = d.cross(&helper).normalize();
                 (e1, d.cross(&e1))
             })
@@ -139,7 +143,16 @@ impl SimSensor {
             Translation3::new(spec.xyz_m[0], spec.xyz_m[1], spec.xyz_m[2]),
             rotation_from_rpy(spec.rpy_rad),
         );
-        Self { spec, link_from_sensor, directions, perpendiculars, spacing_rad, bias_m, stream_seed, num_scans: 0 }
+        Self {
+            spec,
+            link_from_sensor,
+            directions,
+            perpendiculars,
+            spacing_rad,
+            bias_m,
+            stream_seed,
+            num_scans: 0,
+        }
     }
 
     /// Beam directions in the sensor frame.
@@ -155,16 +168,31 @@ impl SimSensor {
     /// What the map should assume about this sensor when a ray carries no error of its own.
     pub fn map_model(&self) -> oeg::SensorModel {
         let noise = match self.spec.noise.range {
-            RangeNoise::Linear { sigma_m, per_m } => oeg::RangeNoiseModel::Laser { sigma_m: sigma_m as f32, sigma_per_m: per_m as f32 },
-            RangeNoise::Disparity { coefficient_per_m } => oeg::RangeNoiseModel::Stereo { coefficient_per_m: coefficient_per_m as f32 },
+            RangeNoise::Linear { sigma_m, per_m } => oeg::RangeNoiseModel::Laser {
+                sigma_m: sigma_m as f32,
+                sigma_per_m: per_m as f32,
+            },
+            RangeNoise::Disparity { coefficient_per_m } => oeg::RangeNoiseModel::Stereo {
+                coefficient_per_m: coefficient_per_m as f32,
+            },
             // The axial model is close to 0.0019 z^2 beyond a metre.
-            RangeNoise::Axial { scale } => oeg::RangeNoiseModel::Stereo { coefficient_per_m: (0.0019 * scale) as f32 },
+            RangeNoise::Axial { scale } => oeg::RangeNoiseModel::Stereo {
+                coefficient_per_m: (0.0019 * scale) as f32,
+            },
         };
-        oeg::SensorModel { noise, max_range_m: self.spec.max_range_m as f32 }
+        oeg::SensorModel {
+            noise,
+            max_range_m: self.spec.max_range_m as f32,
+        }
     }
 
     /// Takes one scan of the world at its current time into `rays` (reused between scans).
-    pub fn capture(&mut self, world: &World, sensor_index: usize, rays: &mut Vec<SensorRay>) -> Option<SensorScan> {
+    pub fn capture(
+        &mut self,
+        world: &World,
+        sensor_index: usize,
+        rays: &mut Vec<SensorRay>,
+    ) -> Option<SensorScan> {
         let world_from_link = world.world_from_link(&self.spec.mount_link)?;
         let estimated = world.estimated_world_from_link(&self.spec.mount_link)?;
         let world_from_sensor = world_from_link * self.link_from_sensor;
@@ -197,11 +225,16 @@ impl SimSensor {
     ) -> SensorRay {
         let noise = &self.spec.noise;
         let nominal = self.directions[k];
-        let no_return =
-            SensorRay { kind: RayKind::NoReturn, vector_in_sensor: nominal.cast(), range_sigma_m: 0.0 };
+        let no_return = SensorRay {
+            kind: RayKind::NoReturn,
+            vector_in_sensor: nominal.cast(),
+            range_sigma_m: 0.0,
+        };
         // A stream per beam: the same numbers whatever thread casts it.
         let mut rng = Stream::seed_from_u64(
-            self.stream_seed ^ scan_index.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (k as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f),
+            self.stream_seed
+                ^ scan_index.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                ^ (k as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f),
         );
         let (e1, e2) = self.perpendiculars[k];
         let mut travelled = nominal;
@@ -216,9 +249,17 @@ impl SimSensor {
             return no_return;
         }
         let cast = |d: &Vector3<f64>| {
-            world.cast_ray(origin, &(rotation * d), self.spec.max_range_m, Actors::Included, RayStart::InsideExits)
+            world.cast_ray(
+                origin,
+                &(rotation * d),
+                self.spec.max_range_m,
+                Actors::Included,
+                RayStart::InsideExits,
+            )
         };
-        let Some(hit) = cast(&travelled) else { return no_return };
+        let Some(hit) = cast(&travelled) else {
+            return no_return;
+        };
         let mut range = hit.distance_m;
         if range < self.spec.min_range_m {
             return no_return;
@@ -244,7 +285,11 @@ impl SimSensor {
             return no_return;
         }
         let sigma_at_measured = noise.range_sigma_m(measured, forward);
-        SensorRay { kind: RayKind::Hit, vector_in_sensor: (nominal * measured).cast(), range_sigma_m: sigma_at_measured as f32 }
+        SensorRay {
+            kind: RayKind::Hit,
+            vector_in_sensor: (nominal * measured).cast(),
+            range_sigma_m: sigma_at_measured as f32,
+        }
     }
 }
 
@@ -260,7 +305,11 @@ pub fn beam_directions(pattern: &BeamPattern) -> Vec<Vector3<f64>> {
                 })
                 .collect()
         }
-        BeamPattern::Sweep { elevations_rad, fov_rad, step_rad } => {
+        BeamPattern::Sweep {
+            elevations_rad,
+            fov_rad,
+            step_rad,
+        } => {
             // A full circle does not repeat its first azimuth.
             let full = (fov_rad - std::f64::consts::TAU).abs() < 1e-9;
             let n = (fov_rad / step_rad + 1e-9).floor() as usize + usize::from(!full);
@@ -274,7 +323,12 @@ pub fn beam_directions(pattern: &BeamPattern) -> Vec<Vector3<f64>> {
             }
             out
         }
-        BeamPattern::Pinhole { width_px, height_px, focal_px, stride } => {
+        BeamPattern::Pinhole {
+            width_px,
+            height_px,
+            focal_px,
+            stride,
+        } => {
             // Through pixel centres: pixel (u, v) spans [u, u + 1), its centre u + 0.5; the principal point is
             // the image centre. Optical (right, down, forward) -> sensor (forward, left, up).
             let (w, h) = (f64::from(*width_px), f64::from(*height_px));
