@@ -101,6 +101,9 @@ struct MapArgs {
     /// Eq. 12's free-space rule: zero (the paper), skip, or ray_bound.
     #[arg(long, value_enum, default_value_t = FreeSpaceArg::Zero)]
     free_space: FreeSpaceArg,
+    /// Whether free samples above a cell's elevation lower its occupancy: always (the paper) or below_elevation.
+    #[arg(long, value_enum, default_value_t = FreeOccArg::Always)]
+    free_space_occupancy: FreeOccArg,
     /// Height threshold in metres (world z): beam parts above it are ignored. Default: none.
     #[arg(long)]
     max_height: Option<f32>,
@@ -136,6 +139,13 @@ impl SensorKind {
             },
         }
     }
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum FreeOccArg {
+    Always,
+    BelowElevation,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -181,6 +191,10 @@ impl MapArgs {
                 FreeSpaceArg::Zero => FreeSpaceElevation::Zero,
                 FreeSpaceArg::Skip => FreeSpaceElevation::Skip,
                 FreeSpaceArg::RayBound => FreeSpaceElevation::RayBound,
+            },
+            free_space_occupancy: match self.free_space_occupancy {
+                FreeOccArg::Always => oeg::FreeSpaceOccupancy::Always,
+                FreeOccArg::BelowElevation => oeg::FreeSpaceOccupancy::BelowElevation,
             },
             max_height_m: self.max_height,
             max_range_m: self.max_range,
@@ -267,6 +281,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
         pcd_invalid: InvalidArg::Drop,
         log_pose: PoseArg::Estimated,
         free_space: FreeSpaceArg::Zero,
+        free_space_occupancy: FreeOccArg::Always,
         max_height: Some(0.5),
         max_range: None,
         no_return_clear_range: None,

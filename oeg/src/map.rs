@@ -7,8 +7,9 @@ use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
 use crate::model::{
-    Elevation, FreeSpaceElevation, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions, clamp_probability,
-    elevation_observation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound, update_log_odds,
+    Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
+    clamp_probability, elevation_observation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound,
+    update_log_odds,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -494,6 +495,11 @@ fn update_cell(
     occupied_log_odds: f32,
     free_log_odds: f32,
 ) {
+    if ev.hit_z_m == f32::NEG_INFINITY
+        && !crate::model::free_sample_informs(opts.free_space_occupancy, cell.elevation(), ev.free_z_m)
+    {
+        return;
+    }
     let prior_log_odds = if cell.is_observed() { cell.log_odds } else { 0.0 };
     let was_occupied = cell.is_observed() && prior_log_odds > occupied_log_odds;
     let delta = if ev.p_max == opts.p_min {
@@ -510,8 +516,14 @@ fn update_cell(
         match opts.free_space_elevation {
             FreeSpaceElevation::Zero => {
                 let now_free = cell.log_odds <= occupied_log_odds;
-                let prior = if was_occupied && now_free { None } else { prior };
-                Some(kalman_fuse(prior, 0.0, ev.free_var_m2, q))
+                if !now_free && opts.free_space_occupancy == FreeSpaceOccupancy::BelowElevation {
+                    // The obstacle keeps its height until the occupancy says it is gone; pulling it down to 0
+                    // first would put it below the beams that are clearing it.
+                    prior
+                } else {
+                    let prior = if was_occupied && now_free { None } else { prior };
+                    Some(kalman_fuse(prior, 0.0, ev.free_var_m2, q))
+                }
             }
             FreeSpaceElevation::Skip => prior,
             FreeSpaceElevation::RayBound => prior.map(|e: Elevation| ray_bound(e, ev.free_z_m)),

@@ -48,6 +48,32 @@ pub enum FreeSpaceElevation {
     RayBound,
 }
 
+/// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FreeSpaceOccupancy {
+    /// The paper: every free sample is evidence that the cell is free, at whatever height the beam passed.
+    /// In a 2.5D cell this lets a beam passing high over a low obstacle (a push-broom laser's beams over a
+    /// curb it saw a moment ago) erase it.
+    #[default]
+    Always,
+    /// A free sample counts only where the beam passed no higher than the cell's elevation estimate (its
+    /// highest point in the cell at most `mu`): a beam above an obstacle says nothing about it. Cells without
+    /// an estimate are updated as in the paper. Moving obstacles (people) are still cleared: beams pass below
+    /// their top. With [`FreeSpaceElevation::Zero`], an occupied cell keeps its elevation while free samples
+    /// lower its occupancy, and restarts from the ground once it turns free.
+    BelowElevation,
+}
+
+/// Whether a free sample passing at `beam_top_m` (its highest point in the cell) may update a cell whose
+/// elevation estimate is `prior` under `rule`.
+pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, beam_top_m: f32) -> bool {
+    match (rule, prior) {
+        (FreeSpaceOccupancy::Always, _) | (FreeSpaceOccupancy::BelowElevation, None) => true,
+        (FreeSpaceOccupancy::BelowElevation, Some(e)) => beam_top_m <= e.mean_m,
+    }
+}
+
 /// The parameters of the map's update rules. `Default` gives the documented defaults above.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -68,6 +94,8 @@ pub struct ModelOptions {
     pub elevation_threshold: f32,
     /// Eq. 12's free branch.
     pub free_space_elevation: FreeSpaceElevation,
+    /// Whether free samples above a cell's elevation lower its occupancy.
+    pub free_space_occupancy: FreeSpaceOccupancy,
     /// Variance added to a cell's elevation variance before each fusion, m^2 per update. 0 (the paper) keeps
     /// eq. 9's ever-shrinking variance; a positive value lets a stubborn cell follow a moving obstacle. It is per
     /// update, not per second, because a cell stores no time stamp (three f32 per cell).
@@ -94,6 +122,7 @@ impl Default for ModelOptions {
             p_max: DEFAULT_P_MAX,
             elevation_threshold: DEFAULT_ELEVATION_THRESHOLD,
             free_space_elevation: FreeSpaceElevation::Zero,
+            free_space_occupancy: FreeSpaceOccupancy::Always,
             process_noise_var_m2: 0.0,
             max_height_m: None,
             max_range_m: None,
@@ -387,6 +416,26 @@ mod tests {
         assert_eq!(ray_bound(e, 0.3).mean_m, 0.3);
         assert_eq!(ray_bound(e, 2.0).mean_m, 1.2);
         assert_eq!(ray_bound(e, 0.3).var_m2, 0.01);
+    }
+
+    #[test]
+    fn free_samples_above_an_obstacle_say_nothing_about_it() {
+        let curb = Some(Elevation {
+            mean_m: 0.05,
+            var_m2: 1e-4,
+        });
+        assert!(free_sample_informs(FreeSpaceOccupancy::Always, curb, 0.4));
+        assert!(!free_sample_informs(
+            FreeSpaceOccupancy::BelowElevation,
+            curb,
+            0.4
+        ));
+        assert!(free_sample_informs(
+            FreeSpaceOccupancy::BelowElevation,
+            curb,
+            0.03
+        ));
+        assert!(free_sample_informs(FreeSpaceOccupancy::BelowElevation, None, 0.4));
     }
 
     #[test]

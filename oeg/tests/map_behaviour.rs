@@ -350,3 +350,63 @@ proptest! {
         }
     }
 }
+
+/// A push-broom laser sees a 5 cm curb, then its beams pass over it on their way to the ground beyond.
+fn curb_then_overpass(rule: oeg::FreeSpaceOccupancy) -> Map {
+    let mut map = map_with(
+        0.05,
+        ModelOptions {
+            free_space_occupancy: rule,
+            ..ModelOptions::default()
+        },
+    );
+    for _ in 0..5 {
+        map.integrate(&scan_of(Point3::new(0.0, 0.025, 0.4), &[(2.025, 0.025, 0.05)]))
+            .expect("integrated");
+    }
+    for k in 0..30 {
+        let x = 2.5 + 0.02 * f64::from(k);
+        map.integrate(&scan_of(Point3::new(0.0, 0.025, 0.4), &[(x, 0.025, 0.0)]))
+            .expect("integrated");
+    }
+    map
+}
+
+#[test]
+fn issue_beams_passing_over_a_curb_erase_it_under_the_papers_rule_only() {
+    let p = RobotProfile::default();
+    let paper = curb_then_overpass(oeg::FreeSpaceOccupancy::Always);
+    let c = cell(&paper, 2.025, 0.025);
+    assert_eq!(
+        paper.traversability(c, &p, TraversabilityRule::Absolute),
+        Traversability::Free,
+        "erased"
+    );
+    let bounded = curb_then_overpass(oeg::FreeSpaceOccupancy::BelowElevation);
+    assert_eq!(
+        bounded.traversability(c, &p, TraversabilityRule::Absolute),
+        Traversability::Blocked,
+        "kept"
+    );
+}
+
+#[test]
+fn below_elevation_still_clears_people() {
+    let mut map = map_with(
+        0.1,
+        ModelOptions {
+            free_space_occupancy: oeg::FreeSpaceOccupancy::BelowElevation,
+            ..ModelOptions::default()
+        },
+    );
+    let origin = Point3::new(0.05, 0.05, 0.4);
+    let person: Vec<_> = (0..10).map(|k| (2.05, 0.05, 0.1 + 0.04 * f64::from(k))).collect();
+    for _ in 0..6 {
+        map.integrate(&scan_of(origin, &person)).expect("integrated");
+    }
+    for _ in 0..12 {
+        map.integrate(&scan_of(origin, &[(4.05, 0.05, 0.0)]))
+            .expect("integrated");
+    }
+    assert_eq!(map.is_occupied(cell(&map, 2.05, 0.05)), Some(false));
+}
