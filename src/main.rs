@@ -1,8 +1,16 @@
 //! `oeg`: the Occupancy-Elevation Grid testbed's command-line program. Thin: it parses arguments and calls
 //! the `eval` crate.
 
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+
+/// `println!` that ignores a closed standard output (`oeg run ... | head -1`) instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
 
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -35,6 +43,9 @@ enum Command {
         /// A map file written by `oeg map` (map.oeg).
         map: PathBuf,
     },
+    /// Run a scenario end to end: simulate, map, compare with the truth, write the report; exit non-zero when
+    /// the scenario's expectations are not met.
+    Run(RunArgs),
     /// Check scenario files: print one line per file, exit non-zero if any is invalid.
     Validate {
         /// Scenario files (.toml).
@@ -70,6 +81,22 @@ enum Command {
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
     },
+}
+
+#[derive(clap::Args, Debug)]
+struct RunArgs {
+    /// A scenario file (.toml).
+    scenario: PathBuf,
+    /// Output folder [default: out/<scenario name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Replace the scenario's seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Override a scenario value by its dotted key, e.g. --set map.resolution_m=0.1 or
+    /// --set sensors.0.noise.dropout_probability=0.05 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -236,7 +263,7 @@ impl MapArgs {
 
 fn print_report(report: &MapReport) {
     let s = &report.summary;
-    println!(
+    say!(
         "mapped {} scans, {} rays at {} m: {} cells observed ({} free, {} traversable, {} blocked), {} bytes; \
          integration {:.3} s ({:.2} M rays/s)",
         s.num_scans,
@@ -251,7 +278,7 @@ fn print_report(report: &MapReport) {
         report.timing.integrate_rays_per_s / 1e6
     );
     for f in &report.files {
-        println!("wrote {}", f.display());
+        say!("wrote {}", f.display());
     }
 }
 
@@ -267,7 +294,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
     eval::output::create_dir(&out)?;
     let input = out.join("demo.graph");
     eval::demo::write_demo_graph(&input).with_context(|| "writing the demonstration scans")?;
-    println!(
+    say!(
         "wrote {} (synthetic scans of a scene with a 3 cm and a 5 cm curb and a board at 0.35 m)",
         input.display()
     );
@@ -291,14 +318,63 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
     run_map(&args)
 }
 
+/// What `oeg` with no arguments runs (relative to the repository root).
+const DEFAULT_SCENARIO: &str = "scenarios/default.toml";
+
+fn run_scenario(args: &RunArgs) -> anyhow::Result<()> {
+    if !args.scenario.exists() && args.scenario == std::path::Path::new(DEFAULT_SCENARIO) {
+        anyhow::bail!(
+            "{DEFAULT_SCENARIO} not found: run `oeg` from the repository root, or give a scenario: oeg run FILE"
+        );
+    }
+    let options = eval::run::RunOptions {
+        scenario: args.scenario.clone(),
+        out_dir: args.out.clone(),
+        seed: args.seed,
+        overrides: args.overrides.clone(),
+    };
+    let progress = Progress::new(0, "scans");
+    let report = eval::run::run(&options, &progress)?;
+    let m = &report.metrics;
+    say!(
+        "{}: {} scans, {} rays; coverage {:.1} %, elevation RMSE {:.3} m; step cells: {} unsafe, {} over-cautious; \
+         clearance cells: {} unsafe, {} over-cautious",
+        m.scenario,
+        m.num_scans,
+        m.num_rays,
+        100.0 * m.coverage,
+        m.elevation_rmse_m,
+        m.unsafe_step_cells,
+        m.overcautious_step_cells,
+        m.unsafe_clearance_cells,
+        m.overcautious_clearance_cells
+    );
+    say!(
+        "simulation {:.2} s ({:.2} M rays/s), map {:.2} s ({:.2} M rays/s), truth {:.2} s; report in {}",
+        report.timing.simulation_wall_time_s,
+        report.timing.simulation_rays_per_s / 1e6,
+        report.timing.map_wall_time_s,
+        report.timing.map_rays_per_s / 1e6,
+        report.timing.truth_wall_time_s,
+        report.out_dir.display()
+    );
+    if !report.failed.is_empty() {
+        for f in &report.failed {
+            esay!("expectation failed: {f}");
+        }
+        anyhow::bail!("{} of the scenario's expectations failed", report.failed.len());
+    }
+    Ok(())
+}
+
 fn run_validate(paths: &[PathBuf]) -> anyhow::Result<()> {
     let mut num_bad = 0;
     for path in paths {
         match eval::preview::validate(path) {
-            Ok(loaded) => println!("{}", eval::preview::describe(&loaded)),
+            Ok(loaded) => say!("{}", eval::preview::describe(&loaded)),
             Err(e) => {
                 num_bad += 1;
-                eprintln!("error: {e}");
+                esay!("error: {e}");
             }
         }
     }
@@ -320,7 +396,7 @@ fn run_record(
     };
     let progress = Progress::new(0, "scans");
     let r = eval::record::record(path, out, format, seed, &progress)?;
-    println!(
+    say!(
         "recorded {} scans, {} rays in {:.2} s ({:.2} M simulated rays/s){}; wrote {}",
         r.num_scans,
         r.num_rays,
@@ -338,7 +414,7 @@ fn run_record(
 
 fn run_preview(path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
     for f in eval::preview::preview(path, out)? {
-        println!("wrote {}", f.display());
+        say!("wrote {}", f.display());
     }
     Ok(())
 }
@@ -347,8 +423,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Map(args)) => run_map(&args),
+        Some(Command::Run(args)) => run_scenario(&args),
         Some(Command::Inspect { map }) => eval::inspect::inspect(&map)
-            .map(|text| print!("{text}"))
+            .map(|text| {
+                let _ = write!(std::io::stdout(), "{text}");
+            })
             .map_err(Into::into),
         Some(Command::Demo { out }) => run_demo(out),
         Some(Command::Validate { scenarios }) => run_validate(&scenarios),
@@ -359,12 +438,17 @@ fn main() -> ExitCode {
             seed,
         }) => run_record(&scenario, &out, format, seed),
         Some(Command::Preview { scenario, out }) => run_preview(&scenario, &out),
-        None => run_demo(PathBuf::from("out/demo")),
+        None => run_scenario(&RunArgs {
+            scenario: PathBuf::from(DEFAULT_SCENARIO),
+            out: None,
+            seed: None,
+            overrides: Vec::new(),
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            esay!("error: {e:#}");
             ExitCode::FAILURE
         }
     }

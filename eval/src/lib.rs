@@ -6,10 +6,14 @@ pub mod demo;
 pub mod error;
 pub mod inspect;
 pub mod mapping;
+pub mod metrics;
 pub mod output;
+pub mod overrides;
 pub mod preview;
 pub mod progress;
 pub mod record;
 pub mod render;
+pub mod report_images;
+pub mod run;
 
 pub use error::{EvalError, Result};

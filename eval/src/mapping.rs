@@ -198,7 +198,13 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let map_bytes = mapfile::to_bytes(&map);
     write_bytes(&map_path, &map_bytes)?;
     files.push(map_path);
-    files.extend(write_layer_images(&map, &job.out_dir, &job.profile, job.rule)?);
+    files.extend(write_layer_images(
+        &map,
+        &job.out_dir,
+        &job.profile,
+        job.rule,
+        None,
+    )?);
 
     let totals = map.totals();
     let counts = map.traversability_counts(&job.profile, job.rule);
@@ -256,8 +262,8 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     })
 }
 
-/// Writes `occupancy.png`, `elevation.png`, `variance.png` and `traversability.png` over the observed region.
-/// An empty map has no region and gets no images.
+/// Writes `occupancy.png`, `elevation.png`, `variance.png` and `traversability.png` over `region` (default: the
+/// observed region). An empty map with no region given gets no images.
 ///
 /// # Errors
 /// A failed write, or a region over the map's memory limit.
@@ -266,8 +272,9 @@ pub fn write_layer_images(
     out_dir: &Path,
     profile: &RobotProfile,
     rule: TraversabilityRule,
+    region: Option<oeg::CellRegion>,
 ) -> Result<Vec<PathBuf>> {
-    let Some(region) = map.observed_region() else {
+    let Some(region) = region.or_else(|| map.observed_region()) else {
         return Ok(Vec::new());
     };
     let res = map.geometry().resolution_m();

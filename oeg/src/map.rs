@@ -8,8 +8,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
 use crate::model::{
     Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    clamp_probability, elevation_observation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound,
-    update_log_odds,
+    clamp_probability, elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds,
+    ray_bound, update_log_odds,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -81,7 +81,8 @@ struct ScanEvidence {
     hit_z_m: f32,
     /// Variance of that measurement.
     hit_var_m2: f32,
-    /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it).
+    /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it),
+    /// from samples more than 3 sigma before their hit (confidently free).
     free_z_m: f32,
     /// The smallest measurement variance among the free samples.
     free_var_m2: f32,
@@ -435,7 +436,13 @@ impl Map {
                 };
                 let beam_top = (o.z + dir.z * l_top) as f32;
                 if crossing.l_exit < free_until {
-                    evidence.add_free(opts.p_min, beam_top, s2);
+                    if hit_range_m.is_some() {
+                        evidence.add_free(opts.p_min, beam_top, s2);
+                    } else {
+                        // A ray that returned nothing clears, but bounds no height: it may have left through
+                        // the ground or past anything (a dropout), so its heights prove nothing.
+                        evidence.raise_p(opts.p_min);
+                    }
                     continue;
                 }
                 let Some((l_p, sigma)) = hit_range_m else {
@@ -452,7 +459,10 @@ impl Map {
                 let p = clamp_probability(p, opts.p_min, opts.p_max);
                 match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold) {
                     Some(z) => evidence.add_hit(p, z, s2),
-                    None => evidence.add_free(p, beam_top, s2),
+                    // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
+                    // the occupancy, but its height bounds nothing (a noisy long reading would otherwise
+                    // "prove" free space under the ground).
+                    None => evidence.raise_p(p),
                 }
             }
         }
@@ -511,12 +521,22 @@ fn update_cell(
     let prior = cell.elevation();
     let q = opts.process_noise_var_m2;
     let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
-        Some(kalman_fuse(prior, ev.hit_z_m, ev.hit_var_m2, q))
+        Some(fuse_elevation(
+            opts.elevation_fusion,
+            prior,
+            ev.hit_z_m,
+            ev.hit_var_m2,
+            q,
+        ))
     } else {
         match opts.free_space_elevation {
             FreeSpaceElevation::Zero => {
                 let now_free = cell.log_odds <= occupied_log_odds;
-                if !now_free && opts.free_space_occupancy == FreeSpaceOccupancy::BelowElevation {
+                if !ev.free_var_m2.is_finite() {
+                    // Only no-return evidence: no elevation measurement, but a cell turned free forgets its
+                    // obstacle.
+                    if was_occupied && now_free { None } else { prior }
+                } else if !now_free && opts.free_space_occupancy == FreeSpaceOccupancy::BelowElevation {
                     // The obstacle keeps its height until the occupancy says it is gone; pulling it down to 0
                     // first would put it below the beams that are clearing it.
                     prior

@@ -48,6 +48,54 @@ pub enum FreeSpaceElevation {
     RayBound,
 }
 
+/// How an elevation measurement of a hit is fused with the cell's estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ElevationFusion {
+    /// The paper: every measurement is fused by eq. 8 and 9.
+    #[default]
+    Kalman,
+    /// As elevation_mapping (Fankhauser et al.): a measurement more than `mahalanobis_threshold` standard
+    /// deviations above the estimate is a higher surface and replaces it; one as far below is a lower surface
+    /// (the ground under a board, the foot of a curb's face) and is ignored; others are fused by eq. 8 and 9.
+    /// "The elevation is computed considering the higher point of the obstacle", across scans as within one.
+    HighestSurface {
+        /// Threshold in standard deviations of the difference (`sqrt(sigma^2 + s^2)`).
+        mahalanobis_threshold: f32,
+    },
+}
+
+/// Fuses the elevation measurement `h` (variance `s2`) into `prior` under `rule` (see [`ElevationFusion`]).
+pub fn fuse_elevation(
+    rule: ElevationFusion,
+    prior: Option<Elevation>,
+    h_m: f32,
+    s2_m2: f32,
+    process_noise_var_m2: f32,
+) -> Elevation {
+    match (rule, prior) {
+        (
+            ElevationFusion::HighestSurface {
+                mahalanobis_threshold,
+            },
+            Some(e),
+        ) => {
+            let spread = (e.var_m2 + process_noise_var_m2 + s2_m2).sqrt();
+            if h_m - e.mean_m > mahalanobis_threshold * spread {
+                Elevation {
+                    mean_m: h_m,
+                    var_m2: s2_m2,
+                }
+            } else if e.mean_m - h_m > mahalanobis_threshold * spread {
+                e
+            } else {
+                kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2)
+            }
+        }
+        _ => kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2),
+    }
+}
+
 /// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -96,6 +144,8 @@ pub struct ModelOptions {
     pub free_space_elevation: FreeSpaceElevation,
     /// Whether free samples above a cell's elevation lower its occupancy.
     pub free_space_occupancy: FreeSpaceOccupancy,
+    /// How hit elevations are fused.
+    pub elevation_fusion: ElevationFusion,
     /// Variance added to a cell's elevation variance before each fusion, m^2 per update. 0 (the paper) keeps
     /// eq. 9's ever-shrinking variance; a positive value lets a stubborn cell follow a moving obstacle. It is per
     /// update, not per second, because a cell stores no time stamp (three f32 per cell).
@@ -123,6 +173,7 @@ impl Default for ModelOptions {
             elevation_threshold: DEFAULT_ELEVATION_THRESHOLD,
             free_space_elevation: FreeSpaceElevation::Zero,
             free_space_occupancy: FreeSpaceOccupancy::Always,
+            elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,
             max_height_m: None,
             max_range_m: None,
@@ -180,6 +231,18 @@ impl ModelOptions {
             "elevation_threshold",
             format!("must be a probability in (0, 1), got {}", o.elevation_threshold),
         )?;
+        if let ElevationFusion::HighestSurface {
+            mahalanobis_threshold,
+        } = o.elevation_fusion
+        {
+            check(
+                mahalanobis_threshold.is_finite() && mahalanobis_threshold > 0.0,
+                "elevation_fusion",
+                format!(
+                    "mahalanobis_threshold must be a positive number of standard deviations, got {mahalanobis_threshold}"
+                ),
+            )?;
+        }
         check(
             o.process_noise_var_m2.is_finite() && o.process_noise_var_m2 >= 0.0,
             "process_noise_var_m2",
@@ -416,6 +479,48 @@ mod tests {
         assert_eq!(ray_bound(e, 0.3).mean_m, 0.3);
         assert_eq!(ray_bound(e, 2.0).mean_m, 1.2);
         assert_eq!(ray_bound(e, 0.3).var_m2, 0.01);
+    }
+
+    #[test]
+    fn the_highest_surface_wins_across_scans() {
+        let rule = ElevationFusion::HighestSurface {
+            mahalanobis_threshold: 3.0,
+        };
+        let curb = Some(Elevation {
+            mean_m: 0.03,
+            var_m2: 1e-6,
+        });
+        // Much higher: replaces.
+        assert_eq!(
+            fuse_elevation(rule, curb, 0.05, 1e-4, 0.0),
+            Elevation {
+                mean_m: 0.05,
+                var_m2: 1e-4
+            }
+        );
+        // Much lower: ignored.
+        assert_eq!(
+            fuse_elevation(
+                rule,
+                Some(Elevation {
+                    mean_m: 0.05,
+                    var_m2: 1e-6
+                }),
+                0.0,
+                1e-4,
+                0.0
+            )
+            .mean_m,
+            0.05
+        );
+        // Close: fused as eq. 8-9.
+        let near = fuse_elevation(rule, curb, 0.031, 1e-4, 0.0);
+        assert_eq!(near, kalman_fuse(curb, 0.031, 1e-4, 0.0));
+        // The paper's rule always fuses.
+        assert_eq!(
+            fuse_elevation(ElevationFusion::Kalman, curb, 0.05, 1e-4, 0.0),
+            kalman_fuse(curb, 0.05, 1e-4, 0.0)
+        );
     }
 
     #[test]

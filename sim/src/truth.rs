@@ -17,6 +17,7 @@
 
 use nalgebra::{Point3, Vector3};
 use oeg::{CellIndex, CellRegion, GridGeometry};
+use rayon::prelude::*;
 
 use crate::world::{Actors, RayStart, World};
 
@@ -84,9 +85,16 @@ impl TruthRaster {
         samples_per_side: u32,
     ) -> Self {
         let n = samples_per_side.max(1);
-        let cells = region
-            .cells()
-            .map(|c| cell_truth(world, geometry, c, &profile, actors, n))
+        // Cells are independent: computed in parallel, collected in raster order (the same on any thread count).
+        let cells = (0..region.num_cells() as usize)
+            .into_par_iter()
+            .map(|k| {
+                let (u, v) = (
+                    (k % region.num_x as usize) as u32,
+                    (k / region.num_x as usize) as u32,
+                );
+                cell_truth(world, geometry, region.cell_at(u, v), &profile, actors, n)
+            })
             .collect();
         Self {
             region,

@@ -13,6 +13,9 @@
 //! 6. range noise: bias (drawn once per sensor) plus Gaussian noise of the kind's model; cameras' depth noise
 //!    is along the optical axis (converted to range).
 //!
+//! Cameras report only their valid pixels (holes, dropouts and pixels without a surface in range are left
+//! out, like NaN pixels of a depth image); lasers report their no-return beams.
+//!
 //! Each hit carries the range error its model gives at the measured range (bias excluded: it is systematic),
 //! so the map's elevation variance matches the noise actually applied.
 
@@ -205,6 +208,11 @@ impl SimSensor {
             .into_par_iter()
             .map(|k| this.beam(world, &origin, &rotation, scan_index, k))
             .collect_into_vec(rays);
+        if matches!(self.spec.kind, SensorKind::Stereo | SensorKind::DepthCamera) {
+            // A camera pixel without depth is an invalid measurement, not a ray that saw nothing up to its
+            // range (a laser's no return): it is left out, as depth images mark it NaN.
+            rays.retain(|r| r.kind == RayKind::Hit);
+        }
         Some(SensorScan {
             sensor_index,
             scan_index,

@@ -1,0 +1,300 @@
+//! Metrics of a map against the truth (`docs/metrics.md` defines every key), and the check of a scenario's
+//! expectations. Pure functions of the map and the truth raster.
+
+use std::collections::BTreeMap;
+
+use oeg::{Map, RobotProfile, Traversability, TraversabilityRule};
+use serde::Serialize;
+use sim::truth::TruthRaster;
+
+/// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
+/// scenario and seed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Metrics {
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Cells in the scenario's map region.
+    pub num_cells: u64,
+    /// Region cells the map observed.
+    pub num_observed_cells: u64,
+    /// `num_observed_cells / num_cells`.
+    pub coverage: f64,
+    /// Observed region cells with an elevation estimate and a true elevation: the elevation metrics' cells.
+    pub num_elevation_cells: u64,
+    /// Root mean square of `mu - true elevation`, metres.
+    pub elevation_rmse_m: f64,
+    /// Mean absolute error, metres.
+    pub elevation_mae_m: f64,
+    /// Mean error (positive: the map is too high), metres.
+    pub elevation_bias_m: f64,
+    /// 95th percentile of the absolute error, metres.
+    pub elevation_p95_abs_err_m: f64,
+    /// Fraction of cells whose true elevation lies within 2 sigma of `mu` (0.95 for a calibrated map).
+    pub elevation_within_2sigma: f64,
+    /// Mean of `(P(occupied) - truly blocked)^2` over observed cells.
+    pub occupancy_brier: f64,
+    /// Observed cells truly step-blocked and mapped blocked.
+    pub step_true_blocked_mapped_blocked: u64,
+    /// Truly blocked, mapped drivable (free or traversable): unsafe.
+    pub step_true_blocked_mapped_traversable: u64,
+    /// Truly drivable, mapped blocked: over-cautious.
+    pub step_true_traversable_mapped_blocked: u64,
+    /// Truly drivable, mapped drivable.
+    pub step_true_traversable_mapped_traversable: u64,
+    /// Same as `step_true_blocked_mapped_traversable`: the number that must be zero.
+    pub unsafe_step_cells: u64,
+    /// Same as `step_true_traversable_mapped_blocked`.
+    pub overcautious_step_cells: u64,
+    /// Observed cells under a structure (a gap higher than a step within 3 m above the ground).
+    pub num_clearance_cells: u64,
+    /// Under a structure lower than the robot, mapped drivable.
+    pub unsafe_clearance_cells: u64,
+    /// Under a structure the robot passes under, mapped blocked.
+    pub overcautious_clearance_cells: u64,
+    /// Bytes the map holds.
+    pub map_bytes: u64,
+    /// Scans integrated.
+    pub num_scans: u64,
+    /// Rays integrated.
+    pub num_rays: u64,
+    /// Whether every expectation of the scenario holds.
+    pub expectations_passed: bool,
+    /// Number of expectations that failed.
+    pub num_expectations_failed: u64,
+}
+
+/// Map decisions are `drivable` (free or traversable) or blocked; unknown cells are not scored.
+fn mapped_blocked(t: Traversability) -> Option<bool> {
+    match t {
+        Traversability::Unknown => None,
+        Traversability::Blocked => Some(true),
+        Traversability::Free | Traversability::Traversable => Some(false),
+    }
+}
+
+/// Computes every metric except the expectation fields (set by [`check_expectations`]).
+pub fn compute(
+    scenario: &str,
+    seed: u64,
+    map: &Map,
+    truth: &TruthRaster,
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+) -> Metrics {
+    let truth_profile = truth.profile;
+    let (mut observed, mut brier_sum) = (0u64, 0.0f64);
+    let mut errors: Vec<f64> = Vec::new();
+    let mut within = 0u64;
+    let mut step = [[0u64; 2]; 2]; // [truly blocked][mapped blocked]
+    let (mut clearance, mut unsafe_clearance, mut overcautious_clearance) = (0u64, 0u64, 0u64);
+    for (k, cell) in truth.region.cells().enumerate() {
+        let t = &truth.cells[k];
+        let c = map.cell(cell);
+        if !c.is_observed() {
+            continue;
+        }
+        observed += 1;
+        if t.elevation_m.is_nan() {
+            continue;
+        }
+        let p = f64::from(oeg::model::probability_from_log_odds(c.log_odds));
+        let o = if t.step_blocked { 1.0 } else { 0.0 };
+        brier_sum += (p - o) * (p - o);
+        if let Some(e) = c.elevation() {
+            let err = f64::from(e.mean_m) - f64::from(t.elevation_m);
+            errors.push(err);
+            if err.abs() <= 2.0 * f64::from(e.var_m2).sqrt() {
+                within += 1;
+            }
+        }
+        let Some(blocked) = mapped_blocked(map.traversability(cell, profile, rule)) else {
+            continue;
+        };
+        step[usize::from(t.step_blocked)][usize::from(blocked)] += 1;
+        if let Some(passable) = t.clearance_passable(&truth_profile) {
+            clearance += 1;
+            if !passable && !blocked {
+                unsafe_clearance += 1;
+            }
+            if passable && blocked {
+                overcautious_clearance += 1;
+            }
+        }
+    }
+    let n = errors.len() as f64;
+    let (rmse, mae, bias, p95, within_2sigma) = if errors.is_empty() {
+        (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
+    } else {
+        let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        (
+            (errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+            abs.iter().sum::<f64>() / n,
+            errors.iter().sum::<f64>() / n,
+            percentile(&abs, 0.95),
+            within as f64 / n,
+        )
+    };
+    let num_cells = truth.region.num_cells();
+    Metrics {
+        scenario: scenario.to_string(),
+        seed,
+        num_cells,
+        num_observed_cells: observed,
+        coverage: if num_cells > 0 {
+            observed as f64 / num_cells as f64
+        } else {
+            0.0
+        },
+        num_elevation_cells: errors.len() as u64,
+        elevation_rmse_m: rmse,
+        elevation_mae_m: mae,
+        elevation_bias_m: bias,
+        elevation_p95_abs_err_m: p95,
+        elevation_within_2sigma: within_2sigma,
+        occupancy_brier: if observed > 0 {
+            brier_sum / observed as f64
+        } else {
+            f64::NAN
+        },
+        step_true_blocked_mapped_blocked: step[1][1],
+        step_true_blocked_mapped_traversable: step[1][0],
+        step_true_traversable_mapped_blocked: step[0][1],
+        step_true_traversable_mapped_traversable: step[0][0],
+        unsafe_step_cells: step[1][0],
+        overcautious_step_cells: step[0][1],
+        num_clearance_cells: clearance,
+        unsafe_clearance_cells: unsafe_clearance,
+        overcautious_clearance_cells: overcautious_clearance,
+        map_bytes: map.memory_bytes(),
+        num_scans: map.num_scans(),
+        num_rays: map.totals().num_rays,
+        expectations_passed: true,
+        num_expectations_failed: 0,
+    }
+}
+
+/// The value at fraction `q` of sorted values (nearest rank).
+pub fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
+
+/// The metrics as name -> number (booleans as 0 / 1), for expectations.
+pub fn numeric(metrics: &Metrics) -> BTreeMap<String, f64> {
+    let value = serde_json::to_value(metrics).unwrap_or_default();
+    let mut out = BTreeMap::new();
+    if let Some(obj) = value.as_object() {
+        for (k, v) in obj {
+            if let Some(x) = v.as_f64() {
+                out.insert(k.clone(), x);
+            } else if let Some(b) = v.as_bool() {
+                out.insert(k.clone(), f64::from(u8::from(b)));
+            } else if v.is_null() {
+                out.insert(k.clone(), f64::NAN);
+            }
+        }
+    }
+    out
+}
+
+/// One failed expectation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailedExpectation {
+    /// Metric name.
+    pub metric: String,
+    /// Measured value.
+    pub measured: f64,
+    /// What was required, as text (`>= 0.9`, `<= 0`).
+    pub required: String,
+}
+
+impl std::fmt::Display for FailedExpectation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} = {} (required {})",
+            self.metric, self.measured, self.required
+        )
+    }
+}
+
+/// The names of every metric an expectation may name.
+pub fn metric_names() -> Vec<String> {
+    numeric(&compute_empty()).into_keys().collect()
+}
+
+fn compute_empty() -> Metrics {
+    Metrics {
+        scenario: String::new(),
+        seed: 0,
+        num_cells: 0,
+        num_observed_cells: 0,
+        coverage: 0.0,
+        num_elevation_cells: 0,
+        elevation_rmse_m: 0.0,
+        elevation_mae_m: 0.0,
+        elevation_bias_m: 0.0,
+        elevation_p95_abs_err_m: 0.0,
+        elevation_within_2sigma: 0.0,
+        occupancy_brier: 0.0,
+        step_true_blocked_mapped_blocked: 0,
+        step_true_blocked_mapped_traversable: 0,
+        step_true_traversable_mapped_blocked: 0,
+        step_true_traversable_mapped_traversable: 0,
+        unsafe_step_cells: 0,
+        overcautious_step_cells: 0,
+        num_clearance_cells: 0,
+        unsafe_clearance_cells: 0,
+        overcautious_clearance_cells: 0,
+        map_bytes: 0,
+        num_scans: 0,
+        num_rays: 0,
+        expectations_passed: true,
+        num_expectations_failed: 0,
+    }
+}
+
+/// Checks `expectations` against the metrics, records the outcome in them, and returns the failures. A NaN
+/// metric (nothing to measure) fails any threshold.
+pub fn check_expectations(
+    metrics: &mut Metrics,
+    expectations: &BTreeMap<String, sim::scenario::Expectation>,
+) -> Vec<FailedExpectation> {
+    let values = numeric(metrics);
+    let mut failed = Vec::new();
+    for (name, e) in expectations {
+        let measured = values.get(name).copied().unwrap_or(f64::NAN);
+        // NaN compares as neither: it fails both kinds of threshold.
+        if let Some(min) = e.min
+            && measured
+                .partial_cmp(&min)
+                .is_none_or(|o| o == std::cmp::Ordering::Less)
+        {
+            failed.push(FailedExpectation {
+                metric: name.clone(),
+                measured,
+                required: format!(">= {min}"),
+            });
+        }
+        if let Some(max) = e.max
+            && measured
+                .partial_cmp(&max)
+                .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
+            failed.push(FailedExpectation {
+                metric: name.clone(),
+                measured,
+                required: format!("<= {max}"),
+            });
+        }
+    }
+    metrics.num_expectations_failed = failed.len() as u64;
+    metrics.expectations_passed = failed.is_empty();
+    failed
+}

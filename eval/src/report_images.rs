@@ -1,0 +1,137 @@
+//! The run's comparison images: the true elevation, the elevation error, and the decisions.
+
+use std::path::{Path, PathBuf};
+
+use oeg::{Map, RobotProfile};
+use sim::scenario::Scenario;
+use sim::truth::TruthRaster;
+
+use crate::error::Result;
+use crate::metrics::Metrics;
+use crate::output::write_bytes;
+use crate::render::{Colormap, Figure, Legend, NO_DATA, Rgb, finite_range};
+
+/// Decision classes of `decisions.png`, in legend order.
+pub const DECISION_CLASSES: [(&str, Rgb); 5] = [
+    ("not observed", NO_DATA),
+    ("right, drivable", [255, 255, 255]),
+    ("right, blocked", [110, 110, 110]),
+    ("UNSAFE (mapped drivable)", [220, 20, 20]),
+    ("over-cautious (mapped blocked)", [255, 160, 30]),
+];
+
+const DRIVE: Rgb = [30, 80, 230];
+
+/// Writes `truth_elevation.png`, `elevation_error.png` and `decisions.png`.
+///
+/// # Errors
+/// A failed write.
+pub fn write(
+    out_dir: &Path,
+    s: &Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    profile: &RobotProfile,
+    metrics: &Metrics,
+) -> Result<Vec<PathBuf>> {
+    let region = truth.region;
+    let res = truth.resolution_m;
+    let drive: Vec<(f64, f64)> = s
+        .robot
+        .drive
+        .waypoints_xy_m
+        .iter()
+        .map(|w| (w[0], w[1]))
+        .collect();
+    let with_drive = |mut fig: Figure| {
+        fig.polyline(&drive, DRIVE);
+        fig
+    };
+    let mut files = Vec::new();
+
+    let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
+    let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
+    let legend = Legend::ColorBar {
+        colormap: Colormap::Viridis,
+        min: lo,
+        max: hi,
+        label: "elevation [m]".into(),
+    };
+    let fig = Figure::new(
+        region,
+        res,
+        &format!("{}: true elevation (drive in blue)", s.name),
+        |c| match truth.get(c) {
+            Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
+            _ => NO_DATA,
+        },
+        &legend,
+    );
+    let path = out_dir.join("truth_elevation.png");
+    write_bytes(&path, &with_drive(fig).to_png())?;
+    files.push(path);
+
+    let error_of = |c: oeg::CellIndex| -> Option<f32> {
+        let t = truth.get(c)?;
+        let e = map.cell(c).elevation()?;
+        t.elevation_m.is_finite().then(|| e.mean_m - t.elevation_m)
+    };
+    let span = if metrics.elevation_p95_abs_err_m.is_finite() {
+        (metrics.elevation_p95_abs_err_m as f32 * 1.5).max(0.02)
+    } else {
+        0.1
+    };
+    let legend = Legend::ColorBar {
+        colormap: Colormap::Diverging,
+        min: -span,
+        max: span,
+        label: "map - truth [m]".into(),
+    };
+    let fig = Figure::new(
+        region,
+        res,
+        &format!(
+            "{}: elevation error (RMSE {:.3} m)",
+            s.name, metrics.elevation_rmse_m
+        ),
+        |c| error_of(c).map_or(NO_DATA, |e| Colormap::Diverging.color((e + span) / (2.0 * span))),
+        &legend,
+    );
+    let path = out_dir.join("elevation_error.png");
+    write_bytes(&path, &with_drive(fig).to_png())?;
+    files.push(path);
+
+    let legend = Legend::Classes(
+        DECISION_CLASSES
+            .iter()
+            .map(|(n, c)| ((*n).to_string(), *c))
+            .collect(),
+    );
+    let fig = Figure::new(
+        region,
+        res,
+        &format!(
+            "{}: decisions ({} unsafe, {} over-cautious)",
+            s.name, metrics.unsafe_step_cells, metrics.overcautious_step_cells
+        ),
+        |c| {
+            let Some(t) = truth.get(c) else { return NO_DATA };
+            let mapped = map.traversability(c, profile, s.map.traversability);
+            if mapped == oeg::Traversability::Unknown || t.elevation_m.is_nan() {
+                return DECISION_CLASSES[0].1;
+            }
+            let blocked = mapped == oeg::Traversability::Blocked;
+            match (t.step_blocked, blocked) {
+                (false, false) => DECISION_CLASSES[1].1,
+                (true, true) => DECISION_CLASSES[2].1,
+                (true, false) => DECISION_CLASSES[3].1,
+                (false, true) => DECISION_CLASSES[4].1,
+            }
+        },
+        &legend,
+    );
+    let path = out_dir.join("decisions.png");
+    write_bytes(&path, &with_drive(fig).to_png())?;
+    files.push(path);
+    Ok(files)
+}

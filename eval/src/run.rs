@@ -1,0 +1,226 @@
+//! `oeg run`: drive the robot through a scenario, build the map from the simulated sensors at the estimated
+//! pose, compute the truth at the end of the run (people left out), and write the metrics, timing, images and
+//! map.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use oeg::{GridGeometry, Map, MapConfig, RobotProfile};
+use serde::Serialize;
+use sim::sensors::PoseSource;
+use sim::truth::{DEFAULT_SAMPLES_PER_SIDE, TruthProfile, TruthRaster};
+use sim::world::Actors;
+use sim::{Simulation, scenario};
+
+use crate::error::{EvalError, Result};
+use crate::mapping::write_layer_images;
+use crate::metrics::{self, FailedExpectation, Metrics};
+use crate::output::{create_dir, write_bytes, write_json};
+use crate::progress::Progress;
+use crate::report_images;
+
+/// What to run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// The scenario file.
+    pub scenario: PathBuf,
+    /// Output folder; default `out/<scenario name>`.
+    pub out_dir: Option<PathBuf>,
+    /// Replaces the scenario's seed.
+    pub seed: Option<u64>,
+    /// `key=value` overrides (see [`crate::overrides`]).
+    pub overrides: Vec<String>,
+}
+
+/// `timing.json`: wall times, kept apart from the metrics because they vary from run to run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunTiming {
+    /// Simulating the drive and the sensors, seconds.
+    pub simulation_wall_time_s: f64,
+    /// Simulated rays per second of simulation time.
+    pub simulation_rays_per_s: f64,
+    /// Integrating the scans into the map, seconds.
+    pub map_wall_time_s: f64,
+    /// Rays integrated per second of map time.
+    pub map_rays_per_s: f64,
+    /// Computing the truth raster, seconds.
+    pub truth_wall_time_s: f64,
+    /// The whole run, seconds.
+    pub total_wall_time_s: f64,
+    /// Threads available to the parallel parts (ray casts, truth).
+    pub threads: u64,
+}
+
+/// What a run produced.
+#[derive(Debug, Clone)]
+pub struct RunReport {
+    /// The metrics written.
+    pub metrics: Metrics,
+    /// The timing written.
+    pub timing: RunTiming,
+    /// Expectations that failed.
+    pub failed: Vec<FailedExpectation>,
+    /// The output folder.
+    pub out_dir: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+}
+
+/// Loads a scenario with `--set` overrides and a seed override applied.
+///
+/// # Errors
+/// A bad override, or a scenario that (after the overrides) is invalid.
+pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
+    let path = &options.scenario;
+    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let text = crate::overrides::apply(&text, &options.overrides).map_err(|message| EvalError::Input {
+        path: path.clone(),
+        message,
+    })?;
+    let mut loaded = scenario::load_str(path, &text).map_err(|e| {
+        if options.overrides.is_empty() {
+            EvalError::Sim(e)
+        } else {
+            EvalError::Input {
+                path: path.clone(),
+                message: format!("with the --set overrides: {e}"),
+            }
+        }
+    })?;
+    if let Some(seed) = options.seed {
+        loaded.scenario.seed = seed;
+    }
+    let known = metrics::metric_names();
+    if let Some(unknown) = loaded.scenario.expectations.keys().find(|k| !known.contains(k)) {
+        return Err(EvalError::Input {
+            path: path.clone(),
+            message: format!(
+                "[expectations] names an unknown metric `{unknown}`; metrics: {}",
+                known.join(", ")
+            ),
+        });
+    }
+    Ok(loaded)
+}
+
+/// The scenario's map region as cells.
+pub fn region_of(s: &scenario::Scenario, geometry: &GridGeometry) -> Result<oeg::CellRegion> {
+    let eps = s.map.resolution_m * 1e-6;
+    Ok(geometry.region_covering(
+        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
+        (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
+    )?)
+}
+
+/// Runs a scenario end to end and writes its report.
+///
+/// # Errors
+/// A bad scenario or override, or a failed write. Failed expectations are not errors: they are in the report.
+pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
+    let total_start = Instant::now();
+    let loaded = load(options)?;
+    let s = &loaded.scenario;
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&s.name));
+    let mut simulation = Simulation::new(&loaded)?;
+    let config = MapConfig {
+        resolution_m: s.map.resolution_m,
+        model: s.map.model,
+        memory_limit_bytes: oeg::DEFAULT_MEMORY_LIMIT_BYTES,
+    };
+    let mut map = Map::new(config)?;
+    let profile = RobotProfile {
+        max_step_m: s.robot.max_step_m as f32,
+        height_m: s.robot.height_m as f32,
+    };
+    profile.validate()?;
+    let models: Vec<oeg::SensorModel> = simulation.sensors().iter().map(|x| x.map_model()).collect();
+
+    progress.set_length(simulation.num_scans_total());
+    let (mut simulation_s, mut map_s) = (0.0, 0.0);
+    loop {
+        let t0 = Instant::now();
+        let Some(scan) = simulation.next_scan() else { break };
+        let t1 = Instant::now();
+        map.integrate(&scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]))?;
+        let t2 = Instant::now();
+        simulation_s += (t1 - t0).as_secs_f64();
+        map_s += (t2 - t1).as_secs_f64();
+        progress.inc(1);
+        if scan.scan_index % 10 == 0 {
+            progress.message(format!(
+                "t = {:.1} / {:.0} s, {:.2} M rays/s",
+                scan.stamp_s,
+                s.duration_s,
+                simulation.num_rays() as f64 / simulation_s.max(1e-9) / 1e6
+            ));
+        }
+    }
+    progress.finish();
+
+    // The truth at the end of the run, people left out: a person who left must have left the map too.
+    let truth_start = Instant::now();
+    simulation.world_mut().advance_to(s.duration_s);
+    let geometry = *map.geometry();
+    let region = region_of(s, &geometry)?;
+    let truth_profile = TruthProfile {
+        max_step_m: s.robot.max_step_m,
+        height_m: s.robot.height_m,
+    };
+    let truth = TruthRaster::compute(
+        simulation.world(),
+        &geometry,
+        region,
+        truth_profile,
+        Actors::Excluded,
+        DEFAULT_SAMPLES_PER_SIDE,
+    );
+    let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
+
+    let mut metrics = metrics::compute(&s.name, s.seed, &map, &truth, &profile, s.map.traversability);
+    let failed = metrics::check_expectations(&mut metrics, &s.expectations);
+
+    create_dir(&out_dir)?;
+    let mut files = Vec::new();
+    let map_path = out_dir.join("map.oeg");
+    write_bytes(&map_path, &oeg::io::mapfile::to_bytes(&map))?;
+    files.push(map_path);
+    files.extend(write_layer_images(
+        &map,
+        &out_dir,
+        &profile,
+        s.map.traversability,
+        Some(region),
+    )?);
+    files.extend(report_images::write(
+        &out_dir, s, &map, &truth, &profile, &metrics,
+    )?);
+    let metrics_path = out_dir.join("metrics.json");
+    write_json(&metrics_path, &metrics)?;
+    files.push(metrics_path);
+    let num_rays = simulation.num_rays() as f64;
+    let timing = RunTiming {
+        simulation_wall_time_s: simulation_s,
+        simulation_rays_per_s: num_rays / simulation_s.max(1e-9),
+        map_wall_time_s: map_s,
+        map_rays_per_s: map.totals().num_rays as f64 / map_s.max(1e-9),
+        truth_wall_time_s,
+        total_wall_time_s: total_start.elapsed().as_secs_f64(),
+        threads: rayon::current_num_threads() as u64,
+    };
+    let timing_path = out_dir.join("timing.json");
+    write_json(&timing_path, &timing)?;
+    files.push(timing_path);
+    Ok(RunReport {
+        metrics,
+        timing,
+        failed,
+        out_dir,
+        files,
+    })
+}
