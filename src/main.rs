@@ -360,7 +360,7 @@ fn run_scenario(args: &RunArgs) -> anyhow::Result<()> {
     );
     if !report.failed.is_empty() {
         for f in &report.failed {
-            esay!("expectation failed: {f}");
+            eprintln!("expectation failed: {f}");
         }
         anyhow::bail!("{} of the scenario's expectations failed", report.failed.len());
     }
@@ -374,7 +374,7 @@ fn run_validate(paths: &[PathBuf]) -> anyhow::Result<()> {
             Ok(loaded) => say!("{}", eval::preview::describe(&loaded)),
             Err(e) => {
                 num_bad += 1;
-                esay!("error: {e}");
+                eprintln!("error: {e}");
             }
         }
     }
@@ -448,7 +448,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            esay!("error: {e:#}");
+            eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
