@@ -66,8 +66,10 @@ fn set_in(here: &mut Value, path: &[&str], depth: usize, value: Value) -> Result
                 t.insert(seg.to_string(), value);
                 return Ok(());
             }
-            t.get_mut(seg)
-                .ok_or_else(|| format!("there is no `{seg}` in {at}"))?
+            // A missing table on the way is created: `expectations.coverage={ min = 0.9 }` works in a file
+            // without [expectations]. Whether the key is allowed there is the scenario check's business.
+            t.entry(seg.to_string())
+                .or_insert_with(|| Value::Table(Table::new()))
         }
         Value::Array(a) => {
             let i: usize = seg
@@ -116,12 +118,18 @@ mod tests {
     }
 
     #[test]
+    fn missing_tables_are_created() {
+        let out = apply(TEXT, &["expectations.coverage={ min = 0.9 }".into()]).expect("applied");
+        let t: Table = toml::from_str(&out).expect("toml");
+        assert_eq!(t["expectations"]["coverage"]["min"].as_float(), Some(0.9));
+    }
+
+    #[test]
     fn malformed_overrides_are_clear_errors() {
         for (o, expected) in [
             ("map.resolution_m", "expected key=value"),
             ("=3", "dotted key"),
             ("map..x=1", "dotted key"),
-            ("robot.speed=1", "no `robot` in the scenario"),
             ("sensors.4.name=b", "has 1 entries, no index 4"),
             ("sensors.first.name=b", "expected an index"),
             ("name.first=1", "is a value, not a table"),

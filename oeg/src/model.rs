@@ -57,11 +57,16 @@ pub enum ElevationFusion {
     Kalman,
     /// As elevation_mapping (Fankhauser et al.): a measurement more than `mahalanobis_threshold` standard
     /// deviations above the estimate is a higher surface and replaces it; one as far below is a lower surface
-    /// (the ground under a board, the foot of a curb's face) and is ignored; others are fused by eq. 8 and 9.
-    /// "The elevation is computed considering the higher point of the obstacle", across scans as within one.
+    /// (the ground under a board, the foot of a curb's face) and is ignored, but raises the variance by
+    /// `multi_height_noise_m2` so that a surface that is really gone (a person who left) is eventually replaced
+    /// by what is below it; others are fused by eq. 8 and 9. "The elevation is computed considering the higher
+    /// point of the obstacle", across scans as within one.
     HighestSurface {
         /// Threshold in standard deviations of the difference (`sqrt(sigma^2 + s^2)`).
         mahalanobis_threshold: f32,
+        /// Variance added for each ignored lower measurement, m^2 (elevation_mapping's `multi_height_noise`).
+        #[serde(default)]
+        multi_height_noise_m2: f32,
     },
 }
 
@@ -77,6 +82,7 @@ pub fn fuse_elevation(
         (
             ElevationFusion::HighestSurface {
                 mahalanobis_threshold,
+                multi_height_noise_m2,
             },
             Some(e),
         ) => {
@@ -87,7 +93,10 @@ pub fn fuse_elevation(
                     var_m2: s2_m2,
                 }
             } else if e.mean_m - h_m > mahalanobis_threshold * spread {
-                e
+                Elevation {
+                    mean_m: e.mean_m,
+                    var_m2: e.var_m2 + multi_height_noise_m2,
+                }
             } else {
                 kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2)
             }
@@ -233,8 +242,14 @@ impl ModelOptions {
         )?;
         if let ElevationFusion::HighestSurface {
             mahalanobis_threshold,
+            multi_height_noise_m2,
         } = o.elevation_fusion
         {
+            check(
+                multi_height_noise_m2.is_finite() && multi_height_noise_m2 >= 0.0,
+                "elevation_fusion",
+                format!("multi_height_noise_m2 must be a variance >= 0, got {multi_height_noise_m2}"),
+            )?;
             check(
                 mahalanobis_threshold.is_finite() && mahalanobis_threshold > 0.0,
                 "elevation_fusion",
@@ -485,6 +500,7 @@ mod tests {
     fn the_highest_surface_wins_across_scans() {
         let rule = ElevationFusion::HighestSurface {
             mahalanobis_threshold: 3.0,
+            multi_height_noise_m2: 1e-4,
         };
         let curb = Some(Elevation {
             mean_m: 0.03,
@@ -498,21 +514,14 @@ mod tests {
                 var_m2: 1e-4
             }
         );
-        // Much lower: ignored.
-        assert_eq!(
-            fuse_elevation(
-                rule,
-                Some(Elevation {
-                    mean_m: 0.05,
-                    var_m2: 1e-6
-                }),
-                0.0,
-                1e-4,
-                0.0
-            )
-            .mean_m,
-            0.05
-        );
+        // Much lower: ignored, but the variance grows (multi-height noise).
+        let prior = Some(Elevation {
+            mean_m: 0.05,
+            var_m2: 1e-6,
+        });
+        let kept = fuse_elevation(rule, prior, 0.0, 1e-4, 0.0);
+        assert_eq!(kept.mean_m, 0.05);
+        assert!((kept.var_m2 - (1e-6 + 1e-4)).abs() < 1e-9, "{kept:?}");
         // Close: fused as eq. 8-9.
         let near = fuse_elevation(rule, curb, 0.031, 1e-4, 0.0);
         assert_eq!(near, kalman_fuse(curb, 0.031, 1e-4, 0.0));
