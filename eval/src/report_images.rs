@@ -74,7 +74,7 @@ pub fn write(
     let error_of = |c: oeg::CellIndex| -> Option<f32> {
         let t = truth.get(c)?;
         let e = map.cell(c).elevation()?;
-        t.elevation_m.is_finite().then(|| e.mean_m - t.elevation_m)
+        t.elevation_m.is_finite().then_some(e.mean_m - t.elevation_m)
     };
     let span = if metrics.elevation_p95_abs_err_m.is_finite() {
         (metrics.elevation_p95_abs_err_m as f32 * 1.5).max(0.02)

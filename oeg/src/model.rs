@@ -507,13 +507,8 @@ mod tests {
             var_m2: 1e-6,
         });
         // Much higher: replaces.
-        assert_eq!(
-            fuse_elevation(rule, curb, 0.05, 1e-4, 0.0),
-            Elevation {
-                mean_m: 0.05,
-                var_m2: 1e-4
-            }
-        );
+        let higher = fuse_elevation(rule, curb, 0.05, 1e-6, 0.0);
+        assert_eq!((higher.mean_m, higher.var_m2), (0.05, 1e-6));
         // Much lower: ignored, but the variance grows (multi-height noise).
         let prior = Some(Elevation {
             mean_m: 0.05,
