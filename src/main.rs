@@ -46,6 +46,19 @@ enum Command {
     /// Run a scenario end to end: simulate, map, compare with the truth, write the report; exit non-zero when
     /// the scenario's expectations are not met.
     Run(RunArgs),
+    /// Run many scenarios (files, or folders of .toml files): print a table, write suite.csv and suite.json,
+    /// exit non-zero if any fails its expectations.
+    Suite {
+        /// Scenario files or folders.
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Output folder: one sub-folder per scenario, plus suite.csv and suite.json.
+        #[arg(long, default_value = "out/suite")]
+        out: PathBuf,
+        /// Override a value in every scenario (repeatable), as for `oeg run`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
+    },
     /// Check scenario files: print one line per file, exit non-zero if any is invalid.
     Validate {
         /// Scenario files (.toml).
@@ -367,6 +380,28 @@ fn run_scenario(args: &RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn run_suite(paths: &[PathBuf], out: &std::path::Path, overrides: &[String]) -> anyhow::Result<()> {
+    eprintln!("{}", eval::suite::table_header());
+    let rows = eval::suite::suite(paths, out, overrides)?;
+    say!("{}", eval::suite::table_header());
+    for r in &rows {
+        say!("{}", eval::suite::table_line(r));
+    }
+    for r in rows.iter().filter(|r| r.status != "pass") {
+        eprintln!("{} {}: {}", r.scenario, r.status, r.problems);
+    }
+    say!(
+        "wrote {} and {}",
+        out.join("suite.csv").display(),
+        out.join("suite.json").display()
+    );
+    let num_bad = rows.iter().filter(|r| r.status != "pass").count();
+    if num_bad > 0 {
+        anyhow::bail!("{num_bad} of {} scenarios did not pass", rows.len());
+    }
+    Ok(())
+}
+
 fn run_validate(paths: &[PathBuf]) -> anyhow::Result<()> {
     let mut num_bad = 0;
     for path in paths {
@@ -431,6 +466,11 @@ fn main() -> ExitCode {
             .map_err(Into::into),
         Some(Command::Demo { out }) => run_demo(out),
         Some(Command::Validate { scenarios }) => run_validate(&scenarios),
+        Some(Command::Suite {
+            paths,
+            out,
+            overrides,
+        }) => run_suite(&paths, &out, &overrides),
         Some(Command::Record {
             scenario,
             out,

@@ -7,6 +7,7 @@ pub mod error;
 pub mod inspect;
 pub mod mapping;
 pub mod metrics;
+pub mod obstacles;
 pub mod output;
 pub mod overrides;
 pub mod preview;
@@ -15,5 +16,6 @@ pub mod record;
 pub mod render;
 pub mod report_images;
 pub mod run;
+pub mod suite;
 
 pub use error::{EvalError, Result};

@@ -60,6 +60,8 @@ pub struct RunReport {
     pub timing: RunTiming,
     /// Expectations that failed.
     pub failed: Vec<FailedExpectation>,
+    /// Per-obstacle decisions (also in `obstacles.csv`).
+    pub obstacles: Vec<crate::obstacles::ObstacleDecision>,
     /// The output folder.
     pub out_dir: PathBuf,
     /// Every file written.
@@ -200,6 +202,14 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     files.extend(report_images::write(
         &out_dir, s, &map, &truth, &profile, &metrics,
     )?);
+    let obstacles = crate::obstacles::decisions(s, &map, &truth, &profile);
+    let obstacles_path = out_dir.join("obstacles.csv");
+    let csv = crate::obstacles::to_csv(&obstacles).map_err(|message| EvalError::Input {
+        path: obstacles_path.clone(),
+        message,
+    })?;
+    write_bytes(&obstacles_path, &csv)?;
+    files.push(obstacles_path);
     let metrics_path = out_dir.join("metrics.json");
     write_json(&metrics_path, &metrics)?;
     files.push(metrics_path);
@@ -220,6 +230,7 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         metrics,
         timing,
         failed,
+        obstacles,
         out_dir,
         files,
     })

@@ -1,0 +1,178 @@
+//! Per-obstacle decisions (`obstacles.csv`): for each obstacle of the scenario, what the truth and the map say
+//! about the cells of its footprint, so a user sees where the decision boundary fell (which curb heights were
+//! mapped blocked, which boards the robot was allowed under).
+
+use nalgebra::{Isometry2, Point2, Vector2};
+use oeg::{Map, RobotProfile, Traversability};
+use serde::Serialize;
+use sim::scenario::{Obstacle, Scenario};
+use sim::truth::TruthRaster;
+
+/// One row of `obstacles.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ObstacleDecision {
+    /// Index in the scenario's `obstacles`.
+    pub index: usize,
+    /// Label.
+    pub name: String,
+    /// Kind (`box`, `cylinder`, `ramp`, `bush`, `overhang`).
+    pub kind: String,
+    /// The height that decides: a box's or cylinder's height, a ramp's or bush's top, an overhang's clearance
+    /// (the free gap under it), metres.
+    pub height_m: f64,
+    /// Cells whose centre lies in the footprint.
+    pub num_cells: u64,
+    /// Of those, observed by the map.
+    pub num_observed_cells: u64,
+    /// Observed cells the truth blocks (step, or a structure lower than the robot).
+    pub true_blocked_cells: u64,
+    /// Observed cells the map blocks.
+    pub mapped_blocked_cells: u64,
+    /// Truly blocked, mapped drivable.
+    pub unsafe_cells: u64,
+    /// Truly drivable, mapped blocked.
+    pub overcautious_cells: u64,
+    /// `blocked` when most observed cells are truly blocked, else `passable`.
+    pub true_decision: &'static str,
+    /// `blocked` when most observed cells are mapped blocked, `passable` otherwise, `unseen` when none was
+    /// observed.
+    pub mapped_decision: &'static str,
+    /// Whether the two decisions agree.
+    pub decision_right: bool,
+}
+
+/// Whether the world point `p` lies in the obstacle's footprint.
+pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
+    let [cx, cy] = o.center_xy_m();
+    let rect = |length: f64, width: f64, yaw_deg: f64| {
+        let local = Isometry2::new(Vector2::new(cx, cy), yaw_deg.to_radians()).inverse() * p;
+        local.x.abs() <= length / 2.0 && local.y.abs() <= width / 2.0
+    };
+    match o {
+        Obstacle::Box { size_m, yaw_deg, .. } | Obstacle::Overhang { size_m, yaw_deg, .. } => {
+            rect(size_m[0], size_m[1], *yaw_deg)
+        }
+        Obstacle::Ramp {
+            length_m,
+            width_m,
+            yaw_deg,
+            ..
+        } => rect(*length_m, *width_m, *yaw_deg),
+        Obstacle::Cylinder { radius_m, .. } | Obstacle::Bush { radius_m, .. } => {
+            (p - Point2::new(cx, cy)).norm() <= *radius_m
+        }
+    }
+}
+
+fn deciding_height(o: &Obstacle) -> f64 {
+    match o {
+        Obstacle::Box { size_m, base_m, .. } => base_m + size_m[2],
+        Obstacle::Cylinder { height_m, base_m, .. } => base_m + height_m,
+        Obstacle::Ramp { height_m, .. } | Obstacle::Bush { height_m, .. } => *height_m,
+        Obstacle::Overhang { clearance_m, .. } => *clearance_m,
+    }
+}
+
+/// The decision table of every obstacle.
+pub fn decisions(
+    s: &Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    profile: &RobotProfile,
+) -> Vec<ObstacleDecision> {
+    let geometry = *map.geometry();
+    s.obstacles
+        .iter()
+        .enumerate()
+        .map(|(index, o)| {
+            let mut row = ObstacleDecision {
+                index,
+                name: o.label(index),
+                kind: o.kind().to_string(),
+                height_m: deciding_height(o),
+                num_cells: 0,
+                num_observed_cells: 0,
+                true_blocked_cells: 0,
+                mapped_blocked_cells: 0,
+                unsafe_cells: 0,
+                overcautious_cells: 0,
+                true_decision: "passable",
+                mapped_decision: "unseen",
+                decision_right: false,
+            };
+            for (k, cell) in truth.region.cells().enumerate() {
+                let (x, y) = geometry.cell_center(cell);
+                if !footprint_contains(o, Point2::new(x, y)) {
+                    continue;
+                }
+                row.num_cells += 1;
+                let t = &truth.cells[k];
+                let mapped = map.traversability(cell, profile, s.map.traversability);
+                if mapped == Traversability::Unknown || t.elevation_m.is_nan() {
+                    continue;
+                }
+                row.num_observed_cells += 1;
+                let truly = t.step_blocked || t.clearance_passable(&truth.profile) == Some(false);
+                let blocked = mapped == Traversability::Blocked;
+                row.true_blocked_cells += u64::from(truly);
+                row.mapped_blocked_cells += u64::from(blocked);
+                row.unsafe_cells += u64::from(truly && !blocked);
+                row.overcautious_cells += u64::from(!truly && blocked);
+            }
+            if row.num_observed_cells > 0 {
+                row.true_decision = if 2 * row.true_blocked_cells > row.num_observed_cells {
+                    "blocked"
+                } else {
+                    "passable"
+                };
+                row.mapped_decision = if 2 * row.mapped_blocked_cells > row.num_observed_cells {
+                    "blocked"
+                } else {
+                    "passable"
+                };
+                row.decision_right = row.true_decision == row.mapped_decision;
+            }
+            row
+        })
+        .collect()
+}
+
+/// `obstacles.csv` as bytes.
+///
+/// # Errors
+/// Never in practice (writing CSV into memory); a message otherwise.
+pub fn to_csv(rows: &[ObstacleDecision]) -> Result<Vec<u8>, String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| e.to_string())?;
+    }
+    w.into_inner().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn footprints_follow_position_yaw_and_radius() {
+        let board = Obstacle::Overhang {
+            name: None,
+            center_xy_m: [2.0, 0.0],
+            size_m: [0.4, 2.0, 0.02],
+            clearance_m: 0.35,
+            yaw_deg: 90.0,
+        };
+        // Turned 90 degrees: 2 m along x, 0.4 m along y.
+        assert!(footprint_contains(&board, Point2::new(2.9, 0.1)));
+        assert!(!footprint_contains(&board, Point2::new(2.0, 0.5)));
+        let pole = Obstacle::Cylinder {
+            name: None,
+            center_xy_m: [0.0, 0.0],
+            radius_m: 0.1,
+            height_m: 2.0,
+            base_m: 0.0,
+        };
+        assert!(footprint_contains(&pole, Point2::new(0.07, 0.07)));
+        assert!(!footprint_contains(&pole, Point2::new(0.08, 0.08)));
+    }
+}

@@ -1,0 +1,172 @@
+//! `oeg suite`: run many scenarios, print a table, write `suite.csv` and `suite.json`, and fail if any
+//! scenario fails its expectations. Scenarios run one after another: each run already uses every core for its
+//! ray casts and truth, so running two at once on a small machine only trades memory for nothing.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::{EvalError, Result};
+use crate::output::{create_dir, write_bytes, write_json};
+use crate::progress::Progress;
+use crate::run::{RunOptions, run};
+
+/// One row of the suite's table (`suite.csv`, `suite.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SuiteRow {
+    /// Scenario name (or the file, if it could not be read).
+    pub scenario: String,
+    /// The scenario file.
+    pub file: String,
+    /// `pass`, `fail` (expectations) or `error` (the run could not complete).
+    pub status: String,
+    /// Coverage of the map region.
+    pub coverage: f64,
+    /// Elevation RMSE, metres.
+    pub elevation_rmse_m: f64,
+    /// Unsafe step cells.
+    pub unsafe_step_cells: u64,
+    /// Over-cautious step cells.
+    pub overcautious_step_cells: u64,
+    /// Unsafe clearance cells.
+    pub unsafe_clearance_cells: u64,
+    /// Over-cautious clearance cells.
+    pub overcautious_clearance_cells: u64,
+    /// Wall time of the run, seconds.
+    pub wall_time_s: f64,
+    /// Failed expectations, or the error, `; `-separated.
+    pub problems: String,
+}
+
+/// The scenario files named by `paths`: files as given, folders' `*.toml` files sorted by name.
+///
+/// # Errors
+/// A path that does not exist or a folder that cannot be read.
+pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let mut files: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|source| EvalError::Io {
+                    path: p.clone(),
+                    source,
+                })?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| f.extension().is_some_and(|e| e == "toml"))
+                .collect();
+            files.sort();
+            out.extend(files);
+        } else if p.is_file() {
+            out.push(p.clone());
+        } else {
+            return Err(EvalError::Input {
+                path: p.clone(),
+                message: "no such scenario file or folder".into(),
+            });
+        }
+    }
+    if out.is_empty() {
+        return Err(EvalError::Input {
+            path: PathBuf::from("(command line)"),
+            message: "no scenario files found".into(),
+        });
+    }
+    Ok(out)
+}
+
+/// Runs every scenario into `out_dir/<name>/` and writes `suite.csv` and `suite.json` into `out_dir`.
+///
+/// # Errors
+/// Bad paths or a failed write; a scenario that fails or errors is a row, not an error.
+pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String]) -> Result<Vec<SuiteRow>> {
+    let files = expand(paths)?;
+    create_dir(out_dir)?;
+    let mut rows = Vec::with_capacity(files.len());
+    for file in &files {
+        let start = Instant::now();
+        let stem = file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let options = RunOptions {
+            scenario: file.clone(),
+            out_dir: Some(out_dir.join(&stem)),
+            seed: None,
+            overrides: overrides.to_vec(),
+        };
+        let row = match run(&options, &Progress::hidden()) {
+            Ok(r) => SuiteRow {
+                scenario: r.metrics.scenario.clone(),
+                file: file.display().to_string(),
+                status: if r.failed.is_empty() { "pass" } else { "fail" }.into(),
+                coverage: r.metrics.coverage,
+                elevation_rmse_m: r.metrics.elevation_rmse_m,
+                unsafe_step_cells: r.metrics.unsafe_step_cells,
+                overcautious_step_cells: r.metrics.overcautious_step_cells,
+                unsafe_clearance_cells: r.metrics.unsafe_clearance_cells,
+                overcautious_clearance_cells: r.metrics.overcautious_clearance_cells,
+                wall_time_s: start.elapsed().as_secs_f64(),
+                problems: r
+                    .failed
+                    .iter()
+                    .map(ToString::to_string)
+                    .collect::<Vec<_>>()
+                    .join("; "),
+            },
+            Err(e) => SuiteRow {
+                scenario: stem,
+                file: file.display().to_string(),
+                status: "error".into(),
+                coverage: f64::NAN,
+                elevation_rmse_m: f64::NAN,
+                unsafe_step_cells: 0,
+                overcautious_step_cells: 0,
+                unsafe_clearance_cells: 0,
+                overcautious_clearance_cells: 0,
+                wall_time_s: start.elapsed().as_secs_f64(),
+                problems: e.to_string(),
+            },
+        };
+        eprintln!("{}", table_line(&row));
+        rows.push(row);
+    }
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in &rows {
+        w.serialize(r).map_err(|e| EvalError::Input {
+            path: out_dir.join("suite.csv"),
+            message: e.to_string(),
+        })?;
+    }
+    let bytes = w.into_inner().map_err(|e| EvalError::Input {
+        path: out_dir.join("suite.csv"),
+        message: e.to_string(),
+    })?;
+    write_bytes(&out_dir.join("suite.csv"), &bytes)?;
+    write_json(&out_dir.join("suite.json"), &rows)?;
+    Ok(rows)
+}
+
+/// The table's header.
+pub fn table_header() -> String {
+    format!(
+        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "scenario", "status", "coverage", "rmse [m]", "unsafe", "cautious", "unsafe-c", "caut.-c", "time [s]"
+    )
+}
+
+/// One row of the table.
+pub fn table_line(r: &SuiteRow) -> String {
+    format!(
+        "{:<26} {:>6} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>8} {:>8.1}",
+        r.scenario,
+        r.status,
+        r.coverage,
+        r.elevation_rmse_m,
+        r.unsafe_step_cells,
+        r.overcautious_step_cells,
+        r.unsafe_clearance_cells,
+        r.overcautious_clearance_cells,
+        r.wall_time_s
+    )
+}
