@@ -65,6 +65,17 @@ pub struct Metrics {
     pub num_expectations_failed: u64,
 }
 
+/// The truth's step reference that matches the map's rule: the terrain rule measures steps against the
+/// neighbouring surface, the others against the ground under the cell.
+pub fn step_reference(rule: TraversabilityRule) -> sim::truth::StepReference {
+    match rule {
+        TraversabilityRule::Terrain => sim::truth::StepReference::Neighbours,
+        TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => {
+            sim::truth::StepReference::Ground
+        }
+    }
+}
+
 /// Map decisions are `drivable` (free or traversable) or blocked; unknown cells are not scored.
 fn mapped_blocked(t: Traversability) -> Option<bool> {
     match t {
@@ -84,6 +95,7 @@ pub fn compute(
     rule: TraversabilityRule,
 ) -> Metrics {
     let truth_profile = truth.profile;
+    let reference = step_reference(rule);
     let (mut observed, mut brier_sum) = (0u64, 0.0f64);
     let mut errors: Vec<f64> = Vec::new();
     let mut within = 0u64;
@@ -100,7 +112,8 @@ pub fn compute(
             continue;
         }
         let p = f64::from(oeg::model::probability_from_log_odds(c.log_odds));
-        let o = if t.step_blocked { 1.0 } else { 0.0 };
+        let truly_step_blocked = truth.step_blocked(k, reference);
+        let o = if truly_step_blocked { 1.0 } else { 0.0 };
         brier_sum += (p - o) * (p - o);
         if let Some(e) = c.elevation() {
             let err = f64::from(e.mean_m) - f64::from(t.elevation_m);
@@ -112,7 +125,7 @@ pub fn compute(
         let Some(blocked) = mapped_blocked(map.traversability(cell, profile, rule)) else {
             continue;
         };
-        step[usize::from(t.step_blocked)][usize::from(blocked)] += 1;
+        step[usize::from(truly_step_blocked)][usize::from(blocked)] += 1;
         if let Some(passable) = t.clearance_passable(&truth_profile) {
             clearance += 1;
             if !passable && !blocked {

@@ -20,7 +20,7 @@ pub struct ObstacleDecision {
     /// The height that decides: a box's or cylinder's height, a ramp's or bush's top, an overhang's clearance
     /// (the free gap under it), metres.
     pub height_m: f64,
-    /// Cells whose centre lies in the footprint.
+    /// Cells whose centre lies in the footprint, plus the cell of the obstacle's centre.
     pub num_cells: u64,
     /// Of those, observed by the map.
     pub num_observed_cells: u64,
@@ -81,6 +81,7 @@ pub fn decisions(
     profile: &RobotProfile,
 ) -> Vec<ObstacleDecision> {
     let geometry = *map.geometry();
+    let reference = crate::metrics::step_reference(s.map.traversability);
     s.obstacles
         .iter()
         .enumerate()
@@ -89,7 +90,8 @@ pub fn decisions(
                 index,
                 name: o.label(index),
                 kind: o.kind().to_string(),
-                height_m: deciding_height(o),
+                // Rounded to the micrometre: 0.036, not 0.036000000000000004.
+                height_m: (deciding_height(o) * 1e6).round() / 1e6,
                 num_cells: 0,
                 num_observed_cells: 0,
                 true_blocked_cells: 0,
@@ -100,9 +102,13 @@ pub fn decisions(
                 mapped_decision: "unseen",
                 decision_right: false,
             };
+            // The cells whose centre lies in the footprint, and the cell of the obstacle's centre (a 2 cm pole
+            // covers no cell centre).
+            let [cx, cy] = o.center_xy_m();
+            let center_cell = geometry.cell_of(cx, cy);
             for (k, cell) in truth.region.cells().enumerate() {
                 let (x, y) = geometry.cell_center(cell);
-                if !footprint_contains(o, Point2::new(x, y)) {
+                if !footprint_contains(o, Point2::new(x, y)) && center_cell != Some(cell) {
                     continue;
                 }
                 row.num_cells += 1;
@@ -112,7 +118,8 @@ pub fn decisions(
                     continue;
                 }
                 row.num_observed_cells += 1;
-                let truly = t.step_blocked || t.clearance_passable(&truth.profile) == Some(false);
+                let truly =
+                    truth.step_blocked(k, reference) || t.clearance_passable(&truth.profile) == Some(false);
                 let blocked = mapped == Traversability::Blocked;
                 row.true_blocked_cells += u64::from(truly);
                 row.mapped_blocked_cells += u64::from(blocked);

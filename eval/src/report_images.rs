@@ -101,6 +101,7 @@ pub fn write(
     write_bytes(&path, &with_drive(fig).to_png())?;
     files.push(path);
 
+    let reference = crate::metrics::step_reference(s.map.traversability);
     let legend = Legend::Classes(
         DECISION_CLASSES
             .iter()
@@ -115,13 +116,15 @@ pub fn write(
             s.name, metrics.unsafe_step_cells, metrics.overcautious_step_cells
         ),
         |c| {
-            let Some(t) = truth.get(c) else { return NO_DATA };
+            let (Some(t), Some(k)) = (truth.get(c), truth.region.offset(c)) else {
+                return NO_DATA;
+            };
             let mapped = map.traversability(c, profile, s.map.traversability);
             if mapped == oeg::Traversability::Unknown || t.elevation_m.is_nan() {
                 return DECISION_CLASSES[0].1;
             }
             let blocked = mapped == oeg::Traversability::Blocked;
-            match (t.step_blocked, blocked) {
+            match (truth.step_blocked(k, reference), blocked) {
                 (false, false) => DECISION_CLASSES[1].1,
                 (true, true) => DECISION_CLASSES[2].1,
                 (true, false) => DECISION_CLASSES[3].1,

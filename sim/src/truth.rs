@@ -35,6 +35,18 @@ pub struct TruthProfile {
     pub height_m: f64,
 }
 
+/// What a cell's step is measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StepReference {
+    /// The ground under the cell: a ramp on flat ground is a step as high as the ramp (pairs with the map's
+    /// absolute rule).
+    #[default]
+    Ground,
+    /// The lowest surface among the cell and its 8 neighbours: a ramp or a slope is drivable, a curb's edge is
+    /// not (pairs with the map's terrain rule).
+    Neighbours,
+}
+
 /// One cell's truth.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellTruth {
@@ -103,6 +115,35 @@ impl TruthRaster {
             time_s: world.time_s(),
             actors,
             cells,
+        }
+    }
+
+    /// Whether the cell at raster offset `k` is a step the robot cannot drive over, measured against
+    /// `reference`. Cells off the terrain are not blocked.
+    pub fn step_blocked(&self, k: usize, reference: StepReference) -> bool {
+        let t = &self.cells[k];
+        match reference {
+            StepReference::Ground => t.step_blocked,
+            StepReference::Neighbours => {
+                if t.elevation_m.is_nan() {
+                    return false;
+                }
+                let (nx, ny) = (self.region.num_x as i64, self.region.num_y as i64);
+                let (u, v) = ((k as i64) % nx, (k as i64) / nx);
+                let mut lowest = t.elevation_m;
+                for dv in -1..=1 {
+                    for du in -1..=1 {
+                        let (a, b) = (u + du, v + dv);
+                        if a >= 0 && b >= 0 && a < nx && b < ny {
+                            let n = self.cells[(b * nx + a) as usize].elevation_m;
+                            if n < lowest {
+                                lowest = n;
+                            }
+                        }
+                    }
+                }
+                f64::from(t.elevation_m - lowest) > self.profile.max_step_m
+            }
         }
     }
 

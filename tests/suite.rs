@@ -1,0 +1,165 @@
+//! The regression suite: every scenario in `scenarios/` runs through `oeg suite` and meets its expectations,
+//! and a few small runs' `metrics.json` match their golden digests, so an unintended change in map behaviour
+//! fails loudly. After an intended change, refresh the digests with `OEG_BLESS=1 cargo test --test suite` and
+//! commit them with the change that explains them.
+//!
+//! The scenarios run at their full duration: the whole suite takes about 40 s in a release build and a few
+//! minutes in the test build, well inside CI's limit, so no reduced mode is needed.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Scenarios whose `metrics.json` is pinned: small, fast, and together they use lasers, drift and spurious
+/// returns.
+const GOLDEN: [&str; 3] = ["corridor_lasers", "pose_drift", "spurious_returns"];
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn oeg(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_oeg"))
+        .args(args)
+        .output()
+        .expect("the oeg binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("oeg-suite-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+fn check_golden(out: &Path) {
+    let bless = std::env::var_os("OEG_BLESS").is_some();
+    let mut stale = Vec::new();
+    for name in GOLDEN {
+        let metrics = std::fs::read(out.join(name).join("metrics.json")).expect("metrics.json");
+        let digest = format!("{:016x}\n", fnv1a64(&metrics));
+        let golden = root().join("tests/golden").join(format!("{name}.digest"));
+        if bless {
+            std::fs::write(&golden, &digest).expect("write golden digest");
+            continue;
+        }
+        let expected = std::fs::read_to_string(&golden).unwrap_or_default();
+        if expected != digest {
+            stale.push(format!(
+                "{name}: metrics.json digest {} differs from {} ({}); its metrics:\n{}",
+                digest.trim(),
+                expected.trim(),
+                golden.display(),
+                String::from_utf8_lossy(&metrics)
+            ));
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "map behaviour changed; if intended, run OEG_BLESS=1 cargo test --test suite and commit the digests:\n{}",
+        stale.join("\n")
+    );
+}
+
+#[test]
+fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
+    let out = temp_dir("all");
+    let o = oeg(&[
+        "suite",
+        root().join("scenarios").to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rows: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("suite.json")).expect("suite.json")).expect("json");
+    let rows = rows.as_array().expect("rows");
+    assert!(rows.len() >= 12, "{} scenarios", rows.len());
+    assert!(rows.iter().all(|r| r["status"] == "pass"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("suite.csv")).expect("suite.csv");
+    assert_eq!(csv.lines().count(), rows.len() + 1);
+    assert!(csv.starts_with("scenario,file,status,coverage,elevation_rmse_m,unsafe_step_cells"));
+
+    // The boundaries are reported per obstacle: the staircase flips between 3.0 and 3.6 cm (the paper's 3.5 cm,
+    // within the 1 cm noise the scenario sets), and the robot is let under 0.50 and 0.70 m only.
+    let decisions = |scenario: &str| -> Vec<(String, String)> {
+        let text = std::fs::read_to_string(out.join(scenario).join("obstacles.csv")).expect("obstacles.csv");
+        let mut r = csv_rows(&text);
+        r.iter_mut()
+            .map(|row| (std::mem::take(&mut row[1]), std::mem::take(&mut row[11])))
+            .collect()
+    };
+    let staircase = decisions("curb_staircase");
+    for (name, mapped) in &staircase {
+        let cm: f64 = name
+            .trim_start_matches("curb ")
+            .trim_end_matches(" cm")
+            .parse()
+            .expect("height");
+        if cm <= 3.0 {
+            assert_eq!(mapped, "passable", "{name}");
+        }
+        if cm >= 3.6 {
+            assert_eq!(mapped, "blocked", "{name}");
+        }
+    }
+    let boards = decisions("boards_and_branches");
+    assert_eq!(
+        boards
+            .iter()
+            .find(|(n, _)| n == "branch 0.50 m")
+            .map(|(_, d)| d.as_str()),
+        Some("passable")
+    );
+    assert_eq!(
+        boards
+            .iter()
+            .find(|(n, _)| n == "branch 0.70 m")
+            .map(|(_, d)| d.as_str()),
+        Some("passable")
+    );
+
+    check_golden(&out);
+}
+
+/// A minimal CSV splitter for the files this project writes (no quoted commas in obstacle rows).
+fn csv_rows(text: &str) -> Vec<Vec<String>> {
+    text.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn a_broken_setting_fails_the_suite() {
+    // Spurious returns on one laser of the people scene: false obstacles the scene's bounds do not allow.
+    let out = temp_dir("broken");
+    let scenario = root().join("scenarios/people_walking.toml");
+    let o = oeg(&[
+        "suite",
+        scenario.to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+        "--set",
+        "sensors.1.noise.spurious_probability=0.3",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("people_walking fail") && err.contains("overcautious_step_cells"),
+        "{err}"
+    );
+    assert!(err.contains("1 of 1 scenarios did not pass"), "{err}");
+}
