@@ -1,25 +1,14 @@
 //! `oeg map`, `oeg inspect` and `oeg` (the demo) through the built binary.
 
+mod common;
+
+use common::{oeg, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use nalgebra::Point3;
 use oeg::io::graph::write_graph;
 use oeg::{Scan, SensorModel};
-
-fn oeg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_oeg"))
-        .args(args)
-        .output()
-        .expect("the oeg binary runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -49,7 +38,7 @@ fn write_scans(path: &Path) {
 
 #[test]
 fn map_writes_every_output_and_inspect_reads_the_map() {
-    let dir = temp_dir("ok");
+    let dir = temp_dir("map", "ok");
     let input = dir.join("scans.graph");
     write_scans(&input);
     let out = dir.join("out");
@@ -108,7 +97,7 @@ fn map_writes_every_output_and_inspect_reads_the_map() {
 
 #[test]
 fn the_same_inputs_give_the_same_summary_map_and_images() {
-    let dir = temp_dir("determinism");
+    let dir = temp_dir("map", "determinism");
     let input = dir.join("scans.graph");
     write_scans(&input);
     let run = |name: &str| {
@@ -136,7 +125,7 @@ fn the_same_inputs_give_the_same_summary_map_and_images() {
 
 #[test]
 fn bad_inputs_fail_with_the_file_named_and_write_nothing() {
-    let dir = temp_dir("bad");
+    let dir = temp_dir("map", "bad");
     let input = dir.join("scans.graph");
     write_scans(&input);
     let bytes = std::fs::read(&input).expect("read");
@@ -216,7 +205,7 @@ fn bad_inputs_fail_with_the_file_named_and_write_nothing() {
 
 #[test]
 fn inspect_rejects_a_corrupt_map() {
-    let dir = temp_dir("inspect");
+    let dir = temp_dir("map", "inspect");
     let input = dir.join("scans.graph");
     write_scans(&input);
     let out = dir.join("out");
@@ -256,7 +245,7 @@ fn inspect_rejects_a_corrupt_map() {
 
 #[test]
 fn the_demo_runs_with_no_arguments_style_output() {
-    let dir = temp_dir("demo");
+    let dir = temp_dir("map", "demo");
     let out = dir.join("demo");
     let o = oeg(&["demo", "--out", out.to_str().expect("utf8")]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -280,7 +269,7 @@ fn the_shared_real_scans_map_when_present() {
         );
         return;
     }
-    let out = temp_dir("real").join("out");
+    let out = temp_dir("map", "real").join("out");
     let o = oeg(&[
         "map",
         input.to_str().expect("utf8"),

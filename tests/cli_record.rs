@@ -1,26 +1,12 @@
 //! `oeg record` and the replay of its logs through `oeg map`.
 
+mod common;
+
+use common::{oeg_with_threads, temp_dir};
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 use oeg::{Map, MapConfig};
 use sim::sensors::PoseSource;
-
-fn oeg_with(args: &[&str], threads: Option<&str>) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_oeg"));
-    c.args(args);
-    if let Some(t) = threads {
-        c.env("RAYON_NUM_THREADS", t);
-    }
-    c.output().expect("the oeg binary runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-cli-rec-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
 
 /// A short run of the curbs scenario with a noisy laser and drift, written beside a copy of the robot.
 fn short_scenario(dir: &std::path::Path) -> PathBuf {
@@ -46,7 +32,7 @@ fn short_scenario(dir: &std::path::Path) -> PathBuf {
 
 #[test]
 fn logs_are_identical_on_one_and_two_threads_and_differ_with_the_seed() {
-    let dir = temp_dir("threads");
+    let dir = temp_dir("rec", "threads");
     let scenario = short_scenario(&dir);
     let s = scenario.to_str().expect("utf8");
     let record = |name: &str, threads: &str, seed: Option<&str>| {
@@ -55,7 +41,7 @@ fn logs_are_identical_on_one_and_two_threads_and_differ_with_the_seed() {
         if let Some(seed) = seed {
             args.extend(["--seed", seed]);
         }
-        let o = oeg_with(&args, Some(threads));
+        let o = oeg_with_threads(&args, Some(threads));
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         std::fs::read(out).expect("log")
     };
@@ -68,10 +54,10 @@ fn logs_are_identical_on_one_and_two_threads_and_differ_with_the_seed() {
 
 #[test]
 fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
-    let dir = temp_dir("replay");
+    let dir = temp_dir("rec", "replay");
     let scenario = short_scenario(&dir);
     let log = dir.join("run.oeglog");
-    let o = oeg_with(
+    let o = oeg_with_threads(
         &[
             "record",
             scenario.to_str().expect("utf8"),
@@ -83,7 +69,7 @@ fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("M simulated rays/s"));
     let out = dir.join("map");
-    let o = oeg_with(
+    let o = oeg_with_threads(
         &[
             "map",
             log.to_str().expect("utf8"),
@@ -120,10 +106,10 @@ fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
 
 #[test]
 fn graph_export_keeps_the_hits() {
-    let dir = temp_dir("graph");
+    let dir = temp_dir("rec", "graph");
     let scenario = short_scenario(&dir);
     let graph = dir.join("run.graph");
-    let o = oeg_with(
+    let o = oeg_with_threads(
         &[
             "record",
             scenario.to_str().expect("utf8"),
@@ -144,14 +130,14 @@ fn graph_export_keeps_the_hits() {
 
 #[test]
 fn recording_a_bad_scenario_fails_cleanly() {
-    let dir = temp_dir("bad");
+    let dir = temp_dir("rec", "bad");
     let scenario = short_scenario(&dir);
     let text = std::fs::read_to_string(&scenario)
         .expect("read")
         .replace("dropout_probability = 0.05", "dropout_probability = -1.0");
     std::fs::write(&scenario, text).expect("write");
     let out = dir.join("never.oeglog");
-    let o = oeg_with(
+    let o = oeg_with_threads(
         &[
             "record",
             scenario.to_str().expect("utf8"),

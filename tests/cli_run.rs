@@ -1,28 +1,15 @@
 //! `oeg run` end to end through the built binary, on the hand-built decision scene (`tests/scenes/`).
 
+mod common;
+
+use common::{oeg_with_threads, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use oeg::{RobotProfile, Traversability, TraversabilityRule};
 
-fn oeg(args: &[&str], threads: Option<&str>) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_oeg"));
-    c.args(args);
-    if let Some(t) = threads {
-        c.env("RAYON_NUM_THREADS", t);
-    }
-    c.output().expect("the oeg binary runs")
-}
-
 fn scene() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/decisions.toml")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-cli-run-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
 }
 
 fn run(out: &Path, extra: &[&str], threads: Option<&str>) -> Output {
@@ -34,7 +21,7 @@ fn run(out: &Path, extra: &[&str], threads: Option<&str>) -> Output {
         out.to_str().expect("utf8"),
     ];
     args.extend_from_slice(extra);
-    oeg(&args, threads)
+    oeg_with_threads(&args, threads)
 }
 
 fn metrics(out: &Path) -> serde_json::Value {
@@ -61,7 +48,7 @@ fn blocked_fraction(map: &oeg::Map, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) 
 
 #[test]
 fn the_decision_scene_gets_the_papers_decisions_right() {
-    let out = temp_dir("decisions");
+    let out = temp_dir("run", "decisions");
     let o = run(&out, &[], None);
     assert!(
         o.status.success(),
@@ -142,7 +129,7 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
 
 #[test]
 fn metrics_are_identical_across_runs_and_thread_counts() {
-    let dir = temp_dir("determinism");
+    let dir = temp_dir("run", "determinism");
     let short = ["--set", "duration_s=5.0"];
     let bytes = |name: &str, threads: &str| {
         let out = dir.join(name);
@@ -162,7 +149,7 @@ fn metrics_are_identical_across_runs_and_thread_counts() {
 
 #[test]
 fn a_failed_expectation_exits_non_zero_and_names_it() {
-    let out = temp_dir("expect");
+    let out = temp_dir("run", "expect");
     let o = run(
         &out,
         &[
@@ -184,7 +171,7 @@ fn a_failed_expectation_exits_non_zero_and_names_it() {
 
 #[test]
 fn bad_overrides_and_unknown_metrics_are_clear_errors() {
-    let out = temp_dir("bad");
+    let out = temp_dir("run", "bad");
     for (args, expected) in [
         (vec!["--set", "duration_s"], "expected key=value"),
         (vec!["--set", "robot.wheels=4"], "unknown field `wheels`"),

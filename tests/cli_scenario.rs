@@ -1,24 +1,12 @@
 //! `oeg validate` and `oeg preview` through the built binary.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn oeg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_oeg"))
-        .args(args)
-        .output()
-        .expect("the oeg binary runs")
-}
+use common::{oeg, temp_dir};
+use std::path::PathBuf;
 
 fn scenarios_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-cli-scn-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
 }
 
 #[test]
@@ -38,7 +26,7 @@ fn validate_prints_one_line_per_valid_file() {
 
 #[test]
 fn validate_fails_on_a_bad_file_and_names_its_place() {
-    let dir = temp_dir("bad");
+    let dir = temp_dir("scn", "bad");
     let good = scenarios_dir().join("curbs_and_boards.toml");
     let text = std::fs::read_to_string(&good)
         .expect("read")
@@ -75,7 +63,7 @@ fn validate_fails_on_a_bad_file_and_names_its_place() {
 
 #[test]
 fn preview_draws_the_truth() {
-    let out = temp_dir("preview");
+    let out = temp_dir("scn", "preview");
     let scenario = scenarios_dir().join("curbs_and_boards.toml");
     let o = oeg(&[
         "preview",
@@ -101,7 +89,7 @@ fn the_documented_example_validates() {
         .nth(1)
         .and_then(|s| s.split("```").next())
         .expect("a toml block");
-    let dir = temp_dir("doc");
+    let dir = temp_dir("scn", "doc");
     std::fs::create_dir_all(dir.join("robots")).expect("dir");
     std::fs::copy(
         scenarios_dir().join("robots/pioneer3at.urdf"),

@@ -6,29 +6,14 @@
 //! The scenarios run at their full duration: the whole suite takes about 40 s in a release build and a few
 //! minutes in the test build, well inside CI's limit, so no reduced mode is needed.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
+use common::{oeg, root, temp_dir};
+use std::path::Path;
 
 /// Scenarios whose `metrics.json` is pinned: small, fast, and together they use lasers, drift and spurious
 /// returns.
 const GOLDEN: [&str; 3] = ["corridor_lasers", "pose_drift", "spurious_returns"];
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn oeg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_oeg"))
-        .args(args)
-        .output()
-        .expect("the oeg binary runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-suite-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
 
 fn fnv1a64(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -70,7 +55,7 @@ fn check_golden(out: &Path) {
 
 #[test]
 fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
-    let out = temp_dir("all");
+    let out = temp_dir("suite", "all");
     let o = oeg(&[
         "suite",
         root().join("scenarios").to_str().expect("utf8"),
@@ -145,7 +130,7 @@ fn csv_rows(text: &str) -> Vec<Vec<String>> {
 #[test]
 fn a_broken_setting_fails_the_suite() {
     // Spurious returns on one laser of the people scene: false obstacles the scene's bounds do not allow.
-    let out = temp_dir("broken");
+    let out = temp_dir("suite", "broken");
     let scenario = root().join("scenarios/people_walking.toml");
     let o = oeg(&[
         "suite",

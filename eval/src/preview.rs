@@ -9,7 +9,7 @@ use sim::world::{Actors, World};
 
 use crate::error::Result;
 use crate::output::{create_dir, write_bytes};
-use crate::render::{Colormap, Figure, Legend, NO_DATA, Rgb, finite_range};
+use crate::render::{Figure, Legend, NO_DATA, Rgb};
 
 /// Sample points per cell side for the preview's truth (the evaluation uses more).
 pub const PREVIEW_SAMPLES_PER_SIDE: u32 = 2;
@@ -86,13 +86,7 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
         PREVIEW_SAMPLES_PER_SIDE,
     );
 
-    let drive: Vec<(f64, f64)> = s
-        .robot
-        .drive
-        .waypoints_xy_m
-        .iter()
-        .map(|w| (w[0], w[1]))
-        .collect();
+    let drive = crate::report_images::drive_polyline(s);
     let mounts: Vec<(f64, f64)> = s
         .sensors
         .iter()
@@ -109,25 +103,8 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
         }
     };
 
-    let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
-    let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
-    let legend = Legend::ColorBar {
-        colormap: Colormap::Viridis,
-        min: lo,
-        max: hi,
-        label: "elevation [m]".into(),
-    };
     let title = format!("{}: true elevation (drive red, sensors yellow)", s.name);
-    let mut fig = Figure::new(
-        region,
-        geometry.resolution_m(),
-        &title,
-        |c| match truth.get(c) {
-            Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
-            _ => NO_DATA,
-        },
-        &legend,
-    );
+    let mut fig = crate::report_images::truth_elevation_figure(&truth, &title);
     overlay(&mut fig);
     create_dir(out_dir)?;
     let elevation_path = out_dir.join("preview_elevation.png");

@@ -22,6 +22,38 @@ pub const DECISION_CLASSES: [(&str, Rgb); 5] = [
 
 const DRIVE: Rgb = [30, 80, 230];
 
+/// The scenario's drive as a polyline of world points.
+pub fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
+    s.robot
+        .drive
+        .waypoints_xy_m
+        .iter()
+        .map(|w| (w[0], w[1]))
+        .collect()
+}
+
+/// The true elevation of every cell, with a colour bar over its range.
+pub fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
+    let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
+    let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
+    let legend = Legend::ColorBar {
+        colormap: Colormap::Viridis,
+        min: lo,
+        max: hi,
+        label: "elevation [m]".into(),
+    };
+    Figure::new(
+        truth.region,
+        truth.resolution_m,
+        title,
+        |c| match truth.get(c) {
+            Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
+            _ => NO_DATA,
+        },
+        &legend,
+    )
+}
+
 /// Writes `truth_elevation.png`, `elevation_error.png` and `decisions.png`.
 ///
 /// # Errors
@@ -36,37 +68,14 @@ pub fn write(
 ) -> Result<Vec<PathBuf>> {
     let region = truth.region;
     let res = truth.resolution_m;
-    let drive: Vec<(f64, f64)> = s
-        .robot
-        .drive
-        .waypoints_xy_m
-        .iter()
-        .map(|w| (w[0], w[1]))
-        .collect();
+    let drive = drive_polyline(s);
     let with_drive = |mut fig: Figure| {
         fig.polyline(&drive, DRIVE);
         fig
     };
     let mut files = Vec::new();
 
-    let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
-    let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
-    let legend = Legend::ColorBar {
-        colormap: Colormap::Viridis,
-        min: lo,
-        max: hi,
-        label: "elevation [m]".into(),
-    };
-    let fig = Figure::new(
-        region,
-        res,
-        &format!("{}: true elevation (drive in blue)", s.name),
-        |c| match truth.get(c) {
-            Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
-            _ => NO_DATA,
-        },
-        &legend,
-    );
+    let fig = truth_elevation_figure(truth, &format!("{}: true elevation (drive in blue)", s.name));
     let path = out_dir.join("truth_elevation.png");
     write_bytes(&path, &with_drive(fig).to_png())?;
     files.push(path);
