@@ -106,12 +106,13 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
         serde_json::from_slice(&std::fs::read(out.join("timing.json")).expect("read")).expect("json");
     assert!(timing["simulation_rays_per_s"].as_f64().expect("number") > 0.0);
 
-    // A handful of unsafe cells remain, measured at 4 of about 1,300 obstacle and structure cells: three under
-    // the far side of the 0.35 m board, where the sensors see the ground beneath it but never its top, and one
-    // at a curb corner (README, "What the map gets wrong"). This bound keeps it from getting worse.
+    // Not quite zero: 2 unsafe cells of about 1,300 obstacle and structure cells remain (measured over seeds 1
+    // to 5: 1 or 2), one under the 0.35 m board where the sensors saw the ground beneath it but never its top,
+    // one at a curb corner whose highest measured point stayed 1 mm under the step limit (README, "What the
+    // map gets wrong"). These bounds keep it from getting worse.
     let unsafe_step = m["unsafe_step_cells"].as_u64().expect("count");
-    assert!(unsafe_step <= 6, "{unsafe_step} unsafe cells");
-    assert!(m["unsafe_clearance_cells"].as_u64().expect("count") <= 5);
+    assert!(unsafe_step <= 3, "{unsafe_step} unsafe cells");
+    assert!(m["unsafe_clearance_cells"].as_u64().expect("count") <= 2);
 
     let map = oeg::io::mapfile::load_map(&out.join("map.oeg")).expect("map");
     let curb_3cm = blocked_fraction(&map, (3.3, -1.4), (3.7, -0.6));
