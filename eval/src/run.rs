@@ -145,6 +145,7 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
 
     progress.set_length(simulation.num_scans_total());
     let (mut simulation_s, mut map_s) = (0.0, 0.0);
+    let mut last_tick = -1i64;
     loop {
         let t0 = Instant::now();
         let Some(scan) = simulation.next_scan() else { break };
@@ -154,7 +155,10 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         simulation_s += (t1 - t0).as_secs_f64();
         map_s += (t2 - t1).as_secs_f64();
         progress.inc(1);
-        if scan.scan_index % 10 == 0 {
+        // The progress line is refreshed once per simulation tick (`tick_s`).
+        let tick = (scan.stamp_s / s.tick_s).floor() as i64;
+        if tick != last_tick {
+            last_tick = tick;
             progress.message(format!(
                 "t = {:.1} / {:.0} s, {:.2} M rays/s",
                 scan.stamp_s,

@@ -21,7 +21,8 @@ pub struct Scenario {
     pub seed: u64,
     /// Simulated duration, seconds.
     pub duration_s: f64,
-    /// Simulation tick, seconds (the clock step of the drive, actors and sensors).
+    /// Reporting step, seconds: progress is refreshed once per tick. The world is moved to each sensor scan's
+    /// time, whatever the tick.
     #[serde(default = "default_tick_s")]
     pub tick_s: f64,
     /// The map's region and model.
