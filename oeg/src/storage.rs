@@ -306,16 +306,6 @@ impl<T: Copy> TileGrid<T> {
         self.num_tiles = 0;
     }
 
-    /// Removes the tile at `tile` and returns its cells, for recycling.
-    pub fn take_tile(&mut self, tile: TileIndex) -> Option<Tile<T>> {
-        let slot = self.slot(tile)?;
-        let t = self.slots[slot].take();
-        if t.is_some() {
-            self.num_tiles -= 1;
-        }
-        t
-    }
-
     /// The cell region spanned by the allocated tiles, or `None` if there are none.
     pub fn tile_region(&self) -> Option<CellRegion> {
         let mut it = self.tiles().map(|(t, _)| t);

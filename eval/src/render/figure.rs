@@ -2,7 +2,7 @@
 
 use oeg::{CellIndex, CellRegion};
 
-use super::canvas::{BLACK, Canvas, GLYPH_PX, Rgb, WHITE};
+use super::canvas::{BLACK, Canvas, Rgb, WHITE};
 use super::colormap::Colormap;
 
 /// Colour of cells with no value (never observed, no estimate).
@@ -262,9 +262,6 @@ pub fn finite_range(values: &[f32]) -> Option<(f32, f32)> {
         (lo, hi)
     })
 }
-
-/// Glyph height, re-exported for overlays that label things.
-pub const TEXT_PX: usize = GLYPH_PX;
 
 #[cfg(test)]
 mod tests {
