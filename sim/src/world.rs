@@ -22,8 +22,9 @@ use crate::scenario::{Actor, LoadedScenario, Obstacle, Scenario};
 use crate::seed;
 use crate::terrain::{self, HeightGrid};
 
-/// How far obstacles standing on the ground reach below it, metres: on uneven terrain their footprint stays
-/// sealed against the ground instead of floating over its dips.
+/// How far boxes and ramps standing on the ground reach below it, metres: on uneven terrain their footprint
+/// stays sealed against the ground instead of floating over its dips. Cylinders stand on the ground at their
+/// centre's height.
 pub const OBSTACLE_FOOTING_M: f64 = 0.5;
 
 const KIND_TERRAIN: u32 = 0;
@@ -265,10 +266,13 @@ impl World {
                 base_m,
                 ..
             } => {
-                let h = size_m.map(|v| v / 2.0);
+                // Standing on the ground: extended below it by the footing; the top stays where the file says.
+                let footing = if *base_m == 0.0 { OBSTACLE_FOOTING_M } else { 0.0 };
+                let (hx, hy, hz) = (size_m[0] / 2.0, size_m[1] / 2.0, (size_m[2] + footing) / 2.0);
+                let top = ground + base_m + size_m[2];
                 vec![
-                    ColliderBuilder::cuboid(h[0] as f32, h[1] as f32, h[2] as f32)
-                        .position(yaw_pose(ground + base_m + h[2], *yaw_deg)),
+                    ColliderBuilder::cuboid(hx as f32, hy as f32, hz as f32)
+                        .position(yaw_pose(top - hz, *yaw_deg)),
                 ]
             }
             Obstacle::Cylinder {
@@ -277,6 +281,8 @@ impl World {
                 base_m,
                 ..
             } => {
+                // No footing: parry casts rays on cylinders with GJK, and a cylinder reaching below the ground
+                // was measured to let grazing rays through its wall near the ground (trees_no_threshold).
                 let mut pose = yaw_pose(ground + base_m + height_m / 2.0, 0.0);
                 pose.rotation = Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2);
                 vec![ColliderBuilder::cylinder((height_m / 2.0) as f32, *radius_m as f32).position(pose)]
