@@ -144,6 +144,10 @@ struct MapArgs {
     /// Whether free samples above a cell's elevation lower its occupancy: always (the paper) or below_elevation.
     #[arg(long, value_enum, default_value_t = FreeOccArg::Always)]
     free_space_occupancy: FreeOccArg,
+    /// Free samples more than this far (metres) below a cell's elevation say nothing about it (they may pass
+    /// under an overhang). Default: no limit (the paper).
+    #[arg(long)]
+    free_space_max_depth: Option<f32>,
     /// Height threshold in metres (world z): beam parts above it are ignored. Default: none.
     #[arg(long)]
     max_height: Option<f32>,
@@ -236,6 +240,7 @@ impl MapArgs {
                 FreeOccArg::Always => oeg::FreeSpaceOccupancy::Always,
                 FreeOccArg::BelowElevation => oeg::FreeSpaceOccupancy::BelowElevation,
             },
+            free_space_max_depth_m: self.free_space_max_depth,
             max_height_m: self.max_height,
             max_range_m: self.max_range,
             no_return_clear_range_m: self.no_return_clear_range,
@@ -322,6 +327,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
         log_pose: PoseArg::Estimated,
         free_space: FreeSpaceArg::Zero,
         free_space_occupancy: FreeOccArg::Always,
+        free_space_max_depth: None,
         max_height: Some(0.5),
         max_range: None,
         no_return_clear_range: None,

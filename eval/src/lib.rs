@@ -17,5 +17,6 @@ pub mod render;
 pub mod report_images;
 pub mod run;
 pub mod suite;
+pub mod wrong_cells;
 
 pub use error::{EvalError, Result};

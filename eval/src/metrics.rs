@@ -76,6 +76,12 @@ pub fn step_reference(rule: TraversabilityRule) -> sim::truth::StepReference {
     }
 }
 
+/// Whether the robot truly cannot enter cell `k` of the truth: its step blocks it, or a structure over it is
+/// lower than the robot. (The metrics keep the step and clearance counts apart.)
+pub fn truly_blocked(truth: &TruthRaster, k: usize, reference: sim::truth::StepReference) -> bool {
+    truth.step_blocked(k, reference) || truth.cells[k].clearance_passable(&truth.profile) == Some(false)
+}
+
 /// Map decisions are `drivable` (free or traversable) or blocked; unknown cells are not scored.
 fn mapped_blocked(t: Traversability) -> Option<bool> {
     match t {

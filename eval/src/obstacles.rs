@@ -118,8 +118,7 @@ pub fn decisions(
                     continue;
                 }
                 row.num_observed_cells += 1;
-                let truly =
-                    truth.step_blocked(k, reference) || t.clearance_passable(&truth.profile) == Some(false);
+                let truly = crate::metrics::truly_blocked(truth, k, reference);
                 let blocked = mapped == Traversability::Blocked;
                 row.true_blocked_cells += u64::from(truly);
                 row.mapped_blocked_cells += u64::from(blocked);

@@ -214,6 +214,14 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     })?;
     write_bytes(&obstacles_path, &csv)?;
     files.push(obstacles_path);
+    let wrong = crate::wrong_cells::wrong_cells(&map, &truth, &profile, s.map.traversability);
+    let wrong_path = out_dir.join("wrong_cells.csv");
+    let csv = crate::wrong_cells::to_csv(&wrong).map_err(|message| EvalError::Input {
+        path: wrong_path.clone(),
+        message,
+    })?;
+    write_bytes(&wrong_path, &csv)?;
+    files.push(wrong_path);
     let metrics_path = out_dir.join("metrics.json");
     write_json(&metrics_path, &metrics)?;
     files.push(metrics_path);

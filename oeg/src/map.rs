@@ -437,6 +437,16 @@ impl Map {
                 let beam_top = (o.z + dir.z * l_top) as f32;
                 if crossing.l_exit < free_until {
                     if hit_range_m.is_some() {
+                        if let Some(depth) = opts.free_space_max_depth_m
+                            && self
+                                .cells
+                                .get(crossing.cell)
+                                .and_then(Cell::elevation)
+                                .is_some_and(|e| e.mean_m - beam_top > depth)
+                        {
+                            // Far below the cell's surface: perhaps under an overhang, so it says nothing.
+                            continue;
+                        }
                         evidence.add_free(opts.p_min, beam_top, s2);
                     } else {
                         // A ray that returned nothing clears, but bounds no height: it may have left through

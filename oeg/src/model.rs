@@ -64,6 +64,12 @@ pub enum ElevationFusion {
     HighestSurface {
         /// Threshold in standard deviations of the difference (`sqrt(sigma^2 + s^2)`).
         mahalanobis_threshold: f32,
+        /// A measurement this many standard deviations below the estimate is already a lower surface; `None`:
+        /// `mahalanobis_threshold`. A smaller value keeps a cell at its highest surface when most of its hits
+        /// lie lower (a push-broom laser climbing a curb's face, whose hits fall in the curb's first cells),
+        /// at the price of a slight upward bias from noise.
+        #[serde(default)]
+        lower_threshold: Option<f32>,
         /// Variance added for each ignored lower measurement, m^2 (elevation_mapping's `multi_height_noise`).
         #[serde(default)]
         multi_height_noise_m2: f32,
@@ -82,6 +88,7 @@ pub fn fuse_elevation(
         (
             ElevationFusion::HighestSurface {
                 mahalanobis_threshold,
+                lower_threshold,
                 multi_height_noise_m2,
             },
             Some(e),
@@ -92,7 +99,7 @@ pub fn fuse_elevation(
                     mean_m: h_m,
                     var_m2: s2_m2,
                 }
-            } else if e.mean_m - h_m > mahalanobis_threshold * spread {
+            } else if e.mean_m - h_m > lower_threshold.unwrap_or(mahalanobis_threshold) * spread {
                 Elevation {
                     mean_m: e.mean_m,
                     var_m2: e.var_m2 + multi_height_noise_m2,
@@ -123,7 +130,8 @@ pub enum FreeSpaceOccupancy {
 }
 
 /// Whether a free sample passing at `beam_top_m` (its highest point in the cell) may update a cell whose
-/// elevation estimate is `prior` under `rule`.
+/// elevation estimate is `prior` under `rule`. (Samples deeper than `free_space_max_depth_m` below the
+/// estimate were dropped before this: see [`ModelOptions::free_space_max_depth_m`].)
 pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, beam_top_m: f32) -> bool {
     match (rule, prior) {
         (FreeSpaceOccupancy::Always, _) | (FreeSpaceOccupancy::BelowElevation, None) => true,
@@ -153,6 +161,11 @@ pub struct ModelOptions {
     pub free_space_elevation: FreeSpaceElevation,
     /// Whether free samples above a cell's elevation lower its occupancy.
     pub free_space_occupancy: FreeSpaceOccupancy,
+    /// A free sample that passes more than this far below a cell's elevation estimate says nothing about the
+    /// cell, in metres: the beam may have gone under an overhang (a board, a table) whose top the map holds.
+    /// `None` (the paper): no limit. Moving obstacles are then removed by the hits on what is behind or under
+    /// them (see [`ElevationFusion::HighestSurface`]'s `multi_height_noise_m2`) and by beams near their top.
+    pub free_space_max_depth_m: Option<f32>,
     /// How hit elevations are fused.
     pub elevation_fusion: ElevationFusion,
     /// Variance added to a cell's elevation variance before each fusion, m^2 per update. 0 (the paper) keeps
@@ -182,6 +195,7 @@ impl Default for ModelOptions {
             elevation_threshold: DEFAULT_ELEVATION_THRESHOLD,
             free_space_elevation: FreeSpaceElevation::Zero,
             free_space_occupancy: FreeSpaceOccupancy::Always,
+            free_space_max_depth_m: None,
             elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,
             max_height_m: None,
@@ -242,9 +256,17 @@ impl ModelOptions {
         )?;
         if let ElevationFusion::HighestSurface {
             mahalanobis_threshold,
+            lower_threshold,
             multi_height_noise_m2,
         } = o.elevation_fusion
         {
+            if let Some(t) = lower_threshold {
+                check(
+                    t.is_finite() && t > 0.0,
+                    "elevation_fusion",
+                    format!("lower_threshold must be a positive number of standard deviations, got {t}"),
+                )?;
+            }
             check(
                 multi_height_noise_m2.is_finite() && multi_height_noise_m2 >= 0.0,
                 "elevation_fusion",
@@ -268,6 +290,13 @@ impl ModelOptions {
                 h.is_finite(),
                 "max_height_m",
                 format!("must be a finite height in metres, got {h}"),
+            )?;
+        }
+        if let Some(d) = o.free_space_max_depth_m {
+            check(
+                d.is_finite() && d >= 0.0,
+                "free_space_max_depth_m",
+                format!("must be a depth in metres >= 0, got {d}"),
             )?;
         }
         for (name, v) in [
@@ -500,6 +529,7 @@ mod tests {
     fn the_highest_surface_wins_across_scans() {
         let rule = ElevationFusion::HighestSurface {
             mahalanobis_threshold: 3.0,
+            lower_threshold: None,
             multi_height_noise_m2: 1e-4,
         };
         let curb = Some(Elevation {
@@ -520,6 +550,25 @@ mod tests {
         // Close: fused as eq. 8-9.
         let near = fuse_elevation(rule, curb, 0.031, 1e-4, 0.0);
         assert_eq!(near, kalman_fuse(curb, 0.031, 1e-4, 0.0));
+        // A lower threshold of 1 sigma: a face hit 2 sigma under a curb's top no longer pulls it down.
+        let strict = ElevationFusion::HighestSurface {
+            mahalanobis_threshold: 3.0,
+            lower_threshold: Some(1.0),
+            multi_height_noise_m2: 1e-4,
+        };
+        let top = Some(Elevation {
+            mean_m: 0.05,
+            var_m2: 0.0,
+        });
+        assert_eq!(
+            fuse_elevation(rule, top, 0.03, 1e-4, 0.0).mean_m,
+            kalman_fuse(top, 0.03, 1e-4, 0.0).mean_m
+        );
+        assert_eq!(fuse_elevation(strict, top, 0.03, 1e-4, 0.0).mean_m, 0.05);
+        assert_eq!(
+            fuse_elevation(strict, top, 0.045, 1e-4, 0.0),
+            kalman_fuse(top, 0.045, 1e-4, 0.0)
+        );
         // The paper's rule always fuses.
         assert_eq!(
             fuse_elevation(ElevationFusion::Kalman, curb, 0.05, 1e-4, 0.0),
@@ -565,5 +614,21 @@ mod tests {
             ..ModelOptions::default()
         };
         assert!(bad.validate().is_err());
+        let bad = ModelOptions {
+            free_space_max_depth_m: Some(-0.01),
+            ..ModelOptions::default()
+        };
+        let message = bad.validate().expect_err("negative depth").to_string();
+        assert!(message.contains("free_space_max_depth_m"), "{message}");
+        let bad = ModelOptions {
+            elevation_fusion: ElevationFusion::HighestSurface {
+                mahalanobis_threshold: 3.0,
+                lower_threshold: Some(f32::NAN),
+                multi_height_noise_m2: 0.0,
+            },
+            ..ModelOptions::default()
+        };
+        let message = bad.validate().expect_err("NaN threshold").to_string();
+        assert!(message.contains("lower_threshold"), "{message}");
     }
 }

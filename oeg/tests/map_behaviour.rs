@@ -410,3 +410,50 @@ fn below_elevation_still_clears_people() {
     }
     assert_eq!(map.is_occupied(cell(&map, 2.05, 0.05)), Some(false));
 }
+
+/// A board's top at 0.34 m seen from above, then a laser low on the robot whose beams pass under the board to
+/// the ground beyond it, under the given depth limit.
+fn board_then_underpass(max_depth_m: Option<f32>) -> Map {
+    let mut map = map_with(
+        0.1,
+        ModelOptions {
+            free_space_occupancy: oeg::FreeSpaceOccupancy::BelowElevation,
+            free_space_max_depth_m: max_depth_m,
+            ..ModelOptions::default()
+        },
+    );
+    for _ in 0..5 {
+        map.integrate(&scan_of(Point3::new(0.05, 0.05, 0.45), &[(2.05, 0.05, 0.34)]))
+            .expect("integrated");
+    }
+    // From 0.25 m, level: 9 cm under the board's top.
+    for _ in 0..30 {
+        map.integrate(&scan_of(Point3::new(0.05, 0.05, 0.25), &[(4.05, 0.05, 0.25)]))
+            .expect("integrated");
+    }
+    map
+}
+
+#[test]
+fn free_samples_far_below_a_surface_leave_it_only_with_a_depth_limit() {
+    let p = RobotProfile::default();
+    let paper = board_then_underpass(None);
+    let c = cell(&paper, 2.05, 0.05);
+    assert_eq!(
+        paper.traversability(c, &p, TraversabilityRule::Absolute),
+        Traversability::Free,
+        "the beams under the board cleared it"
+    );
+    let limited = board_then_underpass(Some(0.05));
+    assert_eq!(
+        limited.traversability(c, &p, TraversabilityRule::Absolute),
+        Traversability::Blocked,
+        "9 cm under the top is deeper than 5 cm: kept"
+    );
+    let deep = board_then_underpass(Some(0.1));
+    assert_eq!(
+        deep.traversability(c, &p, TraversabilityRule::Absolute),
+        Traversability::Free,
+        "within 10 cm: the beams count again"
+    );
+}

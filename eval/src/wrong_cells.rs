@@ -1,0 +1,154 @@
+//! Every cell whose decision the map got wrong (`wrong_cells.csv`), with what the map held and what the truth
+//! says, so a user can see why: a board top never seen, a curb edge averaged with the road, a person not yet
+//! cleared.
+
+use oeg::{Map, RobotProfile, Traversability, TraversabilityRule};
+use serde::Serialize;
+use sim::truth::TruthRaster;
+
+/// One row of `wrong_cells.csv`. Empty fields are values that do not exist (no elevation estimate, no
+/// structure over the cell).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WrongCell {
+    /// Cell centre, world x, metres.
+    pub x_m: f64,
+    /// Cell centre, world y, metres.
+    pub y_m: f64,
+    /// `unsafe` (truly blocked, mapped drivable) or `over_cautious` (truly drivable, mapped blocked).
+    pub error: &'static str,
+    /// The map's class: `free`, `traversable` or `blocked`.
+    pub mapped: &'static str,
+    /// The map's occupancy probability.
+    pub occupancy_probability: f32,
+    /// The map's elevation mean, metres.
+    pub elevation_m: Option<f32>,
+    /// The map's elevation standard deviation, metres.
+    pub elevation_std_m: Option<f32>,
+    /// The truth: highest surface below the robot's height, metres.
+    pub true_elevation_m: f32,
+    /// The truth: mean ground height, metres.
+    pub true_ground_m: f32,
+    /// The truth: largest step above the ground beside it, metres.
+    pub true_step_m: f32,
+    /// The truth: whether the step blocks the robot (against the reference the map's rule uses).
+    pub true_step_blocked: bool,
+    /// The truth: smallest free gap under a structure over the cell, metres.
+    pub true_structure_gap_m: Option<f32>,
+}
+
+fn class_name(t: Traversability) -> &'static str {
+    match t {
+        Traversability::Unknown => "unknown",
+        Traversability::Free => "free",
+        Traversability::Traversable => "traversable",
+        Traversability::Blocked => "blocked",
+    }
+}
+
+/// The observed cells of the truth's region whose decision is wrong, row-major from the region's min corner.
+/// A cell is truly blocked when its step blocks the robot or a structure over it is lower than the robot, as
+/// in `obstacles.csv`.
+pub fn wrong_cells(
+    map: &Map,
+    truth: &TruthRaster,
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+) -> Vec<WrongCell> {
+    let geometry = *map.geometry();
+    let reference = crate::metrics::step_reference(rule);
+    let mut rows = Vec::new();
+    for (k, cell) in truth.region.cells().enumerate() {
+        let t = &truth.cells[k];
+        let mapped = map.traversability(cell, profile, rule);
+        if mapped == Traversability::Unknown || t.elevation_m.is_nan() {
+            continue;
+        }
+        let truly = crate::metrics::truly_blocked(truth, k, reference);
+        let blocked = mapped == Traversability::Blocked;
+        if truly == blocked {
+            continue;
+        }
+        let c = map.cell(cell);
+        let e = c.elevation();
+        let (x_m, y_m) = geometry.cell_center(cell);
+        rows.push(WrongCell {
+            x_m,
+            y_m,
+            error: if truly { "unsafe" } else { "over_cautious" },
+            mapped: class_name(mapped),
+            occupancy_probability: c.occupancy_probability().unwrap_or(f32::NAN),
+            elevation_m: e.map(|e| e.mean_m),
+            elevation_std_m: e.map(|e| e.var_m2.sqrt()),
+            true_elevation_m: t.elevation_m,
+            true_ground_m: t.ground_m,
+            true_step_m: t.step_m,
+            true_step_blocked: truth.step_blocked(k, reference),
+            true_structure_gap_m: (!t.structure_gap_m.is_nan()).then_some(t.structure_gap_m),
+        });
+    }
+    rows
+}
+
+/// `wrong_cells.csv` as bytes (a header line even when no cell is wrong).
+///
+/// # Errors
+/// Never in practice (writing CSV into memory); a message otherwise.
+pub fn to_csv(rows: &[WrongCell]) -> Result<Vec<u8>, String> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.write_record([
+        "x_m",
+        "y_m",
+        "error",
+        "mapped",
+        "occupancy_probability",
+        "elevation_m",
+        "elevation_std_m",
+        "true_elevation_m",
+        "true_ground_m",
+        "true_step_m",
+        "true_step_blocked",
+        "true_structure_gap_m",
+    ])
+    .map_err(|e| e.to_string())?;
+    for r in rows {
+        w.serialize(r).map_err(|e| e.to_string())?;
+    }
+    w.into_inner().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_header_names_every_field_in_order() {
+        let row = WrongCell {
+            x_m: 1.0,
+            y_m: 2.0,
+            error: "unsafe",
+            mapped: "free",
+            occupancy_probability: 0.2,
+            elevation_m: None,
+            elevation_std_m: Some(0.01),
+            true_elevation_m: 0.3,
+            true_ground_m: 0.0,
+            true_step_m: 0.3,
+            true_step_blocked: true,
+            true_structure_gap_m: None,
+        };
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.serialize(&row).unwrap();
+        let derived = String::from_utf8(w.into_inner().unwrap()).unwrap();
+        let ours = String::from_utf8(to_csv(std::slice::from_ref(&row)).unwrap()).unwrap();
+        assert_eq!(ours, derived);
+        assert_eq!(
+            ours.lines().nth(1),
+            Some("1.0,2.0,unsafe,free,0.2,,0.01,0.3,0.0,0.3,true,")
+        );
+        let empty = String::from_utf8(to_csv(&[]).unwrap()).unwrap();
+        assert_eq!(empty.lines().count(), 1);
+        assert_eq!(empty.lines().next(), derived.lines().next());
+    }
+}
