@@ -77,17 +77,33 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     assert_eq!(csv.lines().count(), rows.len() + 1);
     assert!(csv.starts_with("scenario,file,status,coverage,elevation_rmse_m,unsafe_step_cells"));
 
+    // The decision-boundary scenes map no truly blocked cell drivable, per scene and per obstacle.
+    for scenario in ["curb_staircase", "boards_and_branches"] {
+        let row = rows
+            .iter()
+            .find(|r| r["scenario"] == scenario)
+            .expect("scenario row");
+        assert_eq!(row["unsafe_step_cells"], 0, "{scenario}");
+        assert_eq!(row["unsafe_clearance_cells"], 0, "{scenario}");
+    }
     // The boundaries are reported per obstacle: the staircase flips between 3.0 and 3.6 cm (the paper's 3.5 cm,
-    // within the 1 cm noise the scenario sets), and the robot is let under 0.50 and 0.70 m only.
-    let decisions = |scenario: &str| -> Vec<(String, String)> {
+    // within the 1 cm noise the scenario sets; the 3.4 cm curb is mapped at about 3.6 cm), and the robot is let
+    // under 0.50 and 0.70 m only.
+    let decisions = |scenario: &str| -> Vec<(String, String, String)> {
         let text = std::fs::read_to_string(out.join(scenario).join("obstacles.csv")).expect("obstacles.csv");
-        let mut r = csv_rows(&text);
-        r.iter_mut()
-            .map(|row| (std::mem::take(&mut row[1]), std::mem::take(&mut row[11])))
+        let header: Vec<&str> = text.lines().next().expect("header").split(',').collect();
+        let column = |name: &str| header.iter().position(|h| *h == name).expect(name);
+        let (name, mapped, unsafe_cells) =
+            (column("name"), column("mapped_decision"), column("unsafe_cells"));
+        csv_rows(&text)
+            .into_iter()
+            .map(|row| (row[name].clone(), row[mapped].clone(), row[unsafe_cells].clone()))
             .collect()
     };
     let staircase = decisions("curb_staircase");
-    for (name, mapped) in &staircase {
+    assert_eq!(staircase.len(), 8);
+    for (name, mapped, unsafe_cells) in &staircase {
+        assert_eq!(unsafe_cells, "0", "{name}");
         let cm: f64 = name
             .trim_start_matches("curb ")
             .trim_end_matches(" cm")
@@ -101,20 +117,16 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
         }
     }
     let boards = decisions("boards_and_branches");
-    assert_eq!(
-        boards
-            .iter()
-            .find(|(n, _)| n == "branch 0.50 m")
-            .map(|(_, d)| d.as_str()),
-        Some("passable")
-    );
-    assert_eq!(
-        boards
-            .iter()
-            .find(|(n, _)| n == "branch 0.70 m")
-            .map(|(_, d)| d.as_str()),
-        Some("passable")
-    );
+    let expected = [
+        ("board 0.30 m", "blocked"),
+        ("board 0.42 m", "blocked"),
+        ("branch 0.50 m", "passable"),
+        ("branch 0.70 m", "passable"),
+    ];
+    for (name, decision) in expected {
+        let row = boards.iter().find(|(n, _, _)| n == name).expect(name);
+        assert_eq!((row.1.as_str(), row.2.as_str()), (decision, "0"), "{name}");
+    }
 
     check_golden(&out);
 }
@@ -147,4 +159,22 @@ fn a_broken_setting_fails_the_suite() {
         "{err}"
     );
     assert!(err.contains("1 of 1 scenarios did not pass"), "{err}");
+
+    // The boards scene with the paper's clearing (every free sample counts, however far below the board's top
+    // it passed): beams under the boards erase them, and the zero-unsafe bound catches it.
+    let scenario = root().join("scenarios/boards_and_branches.toml");
+    let o = oeg(&[
+        "suite",
+        scenario.to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+        "--set",
+        "map.model.free_space_max_depth_m=10.0",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("boards_and_branches fail") && err.contains("unsafe_step_cells"),
+        "{err}"
+    );
 }

@@ -32,6 +32,11 @@ pub struct ObstacleDecision {
     pub unsafe_cells: u64,
     /// Truly drivable, mapped blocked.
     pub overcautious_cells: u64,
+    /// Mean true elevation (highest surface below the robot's height) over the observed cells, metres.
+    pub true_elevation_mean_m: Option<f64>,
+    /// Mean mapped elevation over the observed cells with an estimate, metres: how high the map thinks the
+    /// obstacle is (a curb mapped at 3.6 cm is blocked even if it is 3.4 cm high).
+    pub mapped_elevation_mean_m: Option<f64>,
     /// `blocked` when most observed cells are truly blocked, else `passable`.
     pub true_decision: &'static str,
     /// `blocked` when most observed cells are mapped blocked, `passable` otherwise, `unseen` when none was
@@ -98,6 +103,8 @@ pub fn decisions(
                 mapped_blocked_cells: 0,
                 unsafe_cells: 0,
                 overcautious_cells: 0,
+                true_elevation_mean_m: None,
+                mapped_elevation_mean_m: None,
                 true_decision: "passable",
                 mapped_decision: "unseen",
                 decision_right: false,
@@ -106,6 +113,7 @@ pub fn decisions(
             // covers no cell centre).
             let [cx, cy] = o.center_xy_m();
             let center_cell = geometry.cell_of(cx, cy);
+            let (mut true_sum, mut mapped_sum, mut num_mapped) = (0.0, 0.0, 0u64);
             for (k, cell) in truth.region.cells().enumerate() {
                 let (x, y) = geometry.cell_center(cell);
                 if !footprint_contains(o, Point2::new(x, y)) && center_cell != Some(cell) {
@@ -124,6 +132,19 @@ pub fn decisions(
                 row.mapped_blocked_cells += u64::from(blocked);
                 row.unsafe_cells += u64::from(truly && !blocked);
                 row.overcautious_cells += u64::from(!truly && blocked);
+                true_sum += f64::from(t.elevation_m);
+                if let Some(e) = map.cell(cell).elevation() {
+                    mapped_sum += f64::from(e.mean_m);
+                    num_mapped += 1;
+                }
+            }
+            // Rounded to the tenth of a millimetre, so the CSV reads 0.0361, not 0.036112...
+            let round = |v: f64| (v * 1e4).round() / 1e4;
+            if row.num_observed_cells > 0 {
+                row.true_elevation_mean_m = Some(round(true_sum / row.num_observed_cells as f64));
+            }
+            if num_mapped > 0 {
+                row.mapped_elevation_mean_m = Some(round(mapped_sum / num_mapped as f64));
             }
             if row.num_observed_cells > 0 {
                 row.true_decision = if 2 * row.true_blocked_cells > row.num_observed_cells {
