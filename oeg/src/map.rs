@@ -86,9 +86,6 @@ struct ScanEvidence {
     free_z_m: f32,
     /// The smallest measurement variance among the free samples.
     free_var_m2: f32,
-    /// The cell's elevation mean before this scan, looked up once per scan when
-    /// [`ModelOptions::free_space_max_depth_m`] needs it; NaN: not looked up yet, -inf: no estimate.
-    surface_m: f32,
 }
 
 impl ScanEvidence {
@@ -98,7 +95,6 @@ impl ScanEvidence {
         hit_var_m2: f32::INFINITY,
         free_z_m: f32::INFINITY,
         free_var_m2: f32::INFINITY,
-        surface_m: f32::NAN,
     };
 
     fn is_untouched(&self) -> bool {
@@ -441,18 +437,15 @@ impl Map {
                 let beam_top = (o.z + dir.z * l_top) as f32;
                 if crossing.l_exit < free_until {
                     if hit_range_m.is_some() {
-                        if let Some(depth) = opts.free_space_max_depth_m {
-                            if evidence.surface_m.is_nan() {
-                                evidence.surface_m = self
-                                    .cells
-                                    .get(crossing.cell)
-                                    .and_then(Cell::elevation)
-                                    .map_or(f32::NEG_INFINITY, |e| e.mean_m);
-                            }
-                            if evidence.surface_m - beam_top > depth {
-                                // Far below the cell's surface: perhaps under an overhang, so it says nothing.
-                                continue;
-                            }
+                        if let Some(depth) = opts.free_space_max_depth_m
+                            && self
+                                .cells
+                                .get(crossing.cell)
+                                .and_then(Cell::elevation)
+                                .is_some_and(|e| e.mean_m - beam_top > depth)
+                        {
+                            // Far below the cell's surface: perhaps under an overhang, so it says nothing.
+                            continue;
                         }
                         evidence.add_free(opts.p_min, beam_top, s2);
                     } else {
