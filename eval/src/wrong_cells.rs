@@ -139,15 +139,15 @@ mod tests {
             true_structure_gap_m: None,
         };
         let mut w = csv::Writer::from_writer(Vec::new());
-        w.serialize(&row).unwrap();
-        let derived = String::from_utf8(w.into_inner().unwrap()).unwrap();
-        let ours = String::from_utf8(to_csv(std::slice::from_ref(&row)).unwrap()).unwrap();
+        w.serialize(&row).expect("serialize");
+        let derived = String::from_utf8(w.into_inner().expect("flush")).expect("utf8");
+        let ours = String::from_utf8(to_csv(std::slice::from_ref(&row)).expect("csv")).expect("utf8");
         assert_eq!(ours, derived);
         assert_eq!(
             ours.lines().nth(1),
             Some("1.0,2.0,unsafe,free,0.2,,0.01,0.3,0.0,0.3,true,")
         );
-        let empty = String::from_utf8(to_csv(&[]).unwrap()).unwrap();
+        let empty = String::from_utf8(to_csv(&[]).expect("csv")).expect("utf8");
         assert_eq!(empty.lines().count(), 1);
         assert_eq!(empty.lines().next(), derived.lines().next());
     }
