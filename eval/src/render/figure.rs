@@ -16,6 +16,8 @@ const LEFT: usize = 72;
 const RIGHT: usize = 240;
 const TOP: usize = 40;
 const BOTTOM: usize = 52;
+/// Space between the plot and its legend, pixels.
+const LEGEND_GAP: usize = 24;
 
 /// What explains the colours.
 #[derive(Debug, Clone)]
@@ -33,6 +35,22 @@ pub enum Legend {
     },
     /// Discrete classes.
     Classes(Vec<(String, Rgb)>),
+}
+
+impl Legend {
+    /// The legend's width in pixels, so that the figure can make room for its longest label.
+    fn width_px(&self) -> usize {
+        match self {
+            Legend::ColorBar { label, .. } => (27 + Canvas::text_width("-00.000", 1))
+                .max(Canvas::text_width(label, 1).saturating_sub(4))
+                .max(18 + Canvas::text_width("no data", 1)),
+            Legend::Classes(classes) => classes
+                .iter()
+                .map(|(name, _)| 20 + Canvas::text_width(name, 1))
+                .max()
+                .unwrap_or(0),
+        }
+    }
 }
 
 /// A figure being drawn; overlays are added in world coordinates.
@@ -59,7 +77,7 @@ impl Figure {
         let px_per_cell = (TARGET_PLOT_PX / longest).min(MAX_PX_PER_CELL);
         let plot_w = ((f64::from(region.num_x) * px_per_cell).round() as usize).max(1);
         let plot_h = ((f64::from(region.num_y) * px_per_cell).round() as usize).max(1);
-        let width = LEFT + plot_w + RIGHT;
+        let width = LEFT + plot_w + RIGHT.max(LEGEND_GAP + legend.width_px() + 16);
         let height = TOP + plot_h.max(200) + BOTTOM;
         let mut fig = Self {
             canvas: Canvas::new(width, height, WHITE),
@@ -130,7 +148,7 @@ impl Figure {
     }
 
     fn draw_legend(&mut self, legend: &Legend) {
-        let x = (LEFT + self.plot_w + 24) as i64;
+        let x = (LEFT + self.plot_w + LEGEND_GAP) as i64;
         let y = TOP as i64;
         match legend {
             Legend::ColorBar {
@@ -283,6 +301,26 @@ mod tests {
         assert_eq!(finite_range(&[f32::NAN, 1.0, 3.0]), Some((1.0, 3.0)));
         assert_eq!(finite_range(&[2.0, 2.0]), Some((1.5, 2.5)));
         assert_eq!(finite_range(&[f32::NAN]), None);
+    }
+
+    #[test]
+    fn the_figure_widens_to_fit_long_legend_labels() {
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(9, 9)).expect("valid");
+        let name = "over-cautious (mapped blocked, truly drivable), a long label";
+        let legend = Legend::Classes(vec![(name.to_string(), BLACK)]);
+        let fig = Figure::new(region, 0.1, "t", |_| WHITE, &legend);
+        let text_end = LEFT + fig.plot_w + LEGEND_GAP + 20 + Canvas::text_width(name, 1);
+        assert!(
+            fig.canvas().width() > text_end,
+            "{} <= {text_end}",
+            fig.canvas().width()
+        );
+        // The label's last character is drawn: some pixel in its cell is black.
+        let last_char_x = text_end - Canvas::text_width("l", 1);
+        let y = TOP + 3;
+        let drawn =
+            (last_char_x..text_end).any(|x| (y..y + 8).any(|y| fig.canvas().pixel(x, y) == Some(BLACK)));
+        assert!(drawn, "the end of the label is cut off");
     }
 
     #[test]
