@@ -58,6 +58,10 @@ enum Command {
         /// Override a value in every scenario (repeatable), as for `oeg run`.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
+        /// Scenarios run at once, on as many threads [default: RAYON_NUM_THREADS, else one per core]. Results
+        /// do not depend on it.
+        #[arg(long, value_parser = clap::value_parser!(u16).range(1..=256))]
+        jobs: Option<u16>,
     },
     /// Check scenario files: print one line per file, exit non-zero if any is invalid.
     Validate {
@@ -386,9 +390,14 @@ fn run_scenario(args: &RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn run_suite(paths: &[PathBuf], out: &std::path::Path, overrides: &[String]) -> anyhow::Result<()> {
+fn run_suite(
+    paths: &[PathBuf],
+    out: &std::path::Path,
+    overrides: &[String],
+    jobs: usize,
+) -> anyhow::Result<()> {
     eprintln!("{}", eval::suite::table_header());
-    let rows = eval::suite::suite(paths, out, overrides)?;
+    let rows = eval::suite::suite(paths, out, overrides, jobs)?;
     say!("{}", eval::suite::table_header());
     for r in &rows {
         say!("{}", eval::suite::table_line(r));
@@ -476,7 +485,13 @@ fn main() -> ExitCode {
             paths,
             out,
             overrides,
-        }) => run_suite(&paths, &out, &overrides),
+            jobs,
+        }) => run_suite(
+            &paths,
+            &out,
+            &overrides,
+            jobs.map_or_else(eval::suite::default_jobs, usize::from),
+        ),
         Some(Command::Record {
             scenario,
             out,

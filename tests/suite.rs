@@ -3,8 +3,9 @@
 //! fails loudly. After an intended change, refresh the digests with `OEG_BLESS=1 cargo test --test suite` and
 //! commit them with the change that explains them.
 //!
-//! The scenarios run at their full duration: the whole suite takes about 40 s in a release build and a few
-//! minutes in the test build, well inside CI's limit, so no reduced mode is needed.
+//! The scenarios run at their full duration: the whole suite takes about 30 s in a release build and under a
+//! minute and a half in the test build on a 2-core machine (two scenarios at once), well inside CI's limit, so
+//! no reduced mode is needed.
 
 mod common;
 
@@ -177,4 +178,36 @@ fn a_broken_setting_fails_the_suite() {
         err.contains("boards_and_branches fail") && err.contains("unsafe_step_cells"),
         "{err}"
     );
+}
+
+#[test]
+fn scenarios_run_at_once_give_the_same_bytes_as_one_after_another() {
+    let dir = temp_dir("suite", "jobs");
+    let files: Vec<String> = ["corridor_lasers", "spurious_returns", "thin_pole"]
+        .iter()
+        .map(|n| root().join(format!("scenarios/{n}.toml")).display().to_string())
+        .collect();
+    let run = |jobs: &str| {
+        let out = dir.join(format!("jobs{jobs}"));
+        let mut args = vec!["suite"];
+        args.extend(files.iter().map(String::as_str));
+        let out_s = out.display().to_string();
+        args.extend(["--out", out_s.as_str(), "--jobs", jobs]);
+        let o = oeg(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let (one, three) = (run("1"), run("3"));
+    for name in ["corridor_lasers", "spurious_returns", "thin_pole"] {
+        let a = std::fs::read(one.join(name).join("metrics.json")).expect("metrics");
+        let b = std::fs::read(three.join(name).join("metrics.json")).expect("metrics");
+        assert!(a == b, "{name}: --jobs 1 and --jobs 3 differ");
+    }
+    // The rows keep the order of the files, however the runs finished.
+    let csv = std::fs::read_to_string(three.join("suite.csv")).expect("suite.csv");
+    let names: Vec<&str> = csv.lines().skip(1).filter_map(|l| l.split(',').next()).collect();
+    assert_eq!(names, ["corridor_lasers", "spurious_returns", "thin_pole"]);
+    let bad = oeg(&["suite", files[0].as_str(), "--jobs", "0"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--jobs"));
 }

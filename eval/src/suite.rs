@@ -1,6 +1,7 @@
 //! `oeg suite`: run many scenarios, print a table, write `suite.csv` and `suite.json`, and fail if any
-//! scenario fails its expectations. Scenarios run one after another: each run already uses every core for its
-//! ray casts and truth, so running two at once on a small machine only trades memory for nothing.
+//! scenario fails its expectations. Several scenarios run at once (`jobs`): a run's ray casts and truth use
+//! every thread, but its map integration is one thread, so a second scenario fills the idle cores. A scenario's
+//! results do not depend on it (the same bytes on any thread count).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -75,62 +76,35 @@ pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-/// Runs every scenario into `out_dir/<name>/` and writes `suite.csv` and `suite.json` into `out_dir`.
+/// Runs every scenario into `out_dir/<name>/`, up to `jobs` at once on a pool of `jobs` threads (1: one
+/// after another on the current threads), and writes `suite.csv` and `suite.json` into `out_dir`, rows in the
+/// order of the files.
 ///
 /// # Errors
-/// Bad paths or a failed write; a scenario that fails or errors is a row, not an error.
-pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String]) -> Result<Vec<SuiteRow>> {
+/// Bad paths, a thread pool that cannot start, or a failed write; a scenario that fails or errors is a row,
+/// not an error.
+pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usize) -> Result<Vec<SuiteRow>> {
+    use rayon::prelude::*;
     let files = expand(paths)?;
     create_dir(out_dir)?;
-    let mut rows = Vec::with_capacity(files.len());
-    for file in &files {
-        let start = Instant::now();
-        let stem = file
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let options = RunOptions {
-            scenario: file.clone(),
-            out_dir: Some(out_dir.join(&stem)),
-            seed: None,
-            overrides: overrides.to_vec(),
-        };
-        let row = match run(&options, &Progress::hidden()) {
-            Ok(r) => SuiteRow {
-                scenario: r.metrics.scenario.clone(),
-                file: file.display().to_string(),
-                status: if r.failed.is_empty() { "pass" } else { "fail" }.into(),
-                coverage: r.metrics.coverage,
-                elevation_rmse_m: r.metrics.elevation_rmse_m,
-                unsafe_step_cells: r.metrics.unsafe_step_cells,
-                overcautious_step_cells: r.metrics.overcautious_step_cells,
-                unsafe_clearance_cells: r.metrics.unsafe_clearance_cells,
-                overcautious_clearance_cells: r.metrics.overcautious_clearance_cells,
-                wall_time_s: start.elapsed().as_secs_f64(),
-                problems: r
-                    .failed
-                    .iter()
-                    .map(ToString::to_string)
-                    .collect::<Vec<_>>()
-                    .join("; "),
-            },
-            Err(e) => SuiteRow {
-                scenario: stem,
-                file: file.display().to_string(),
-                status: "error".into(),
-                coverage: f64::NAN,
-                elevation_rmse_m: f64::NAN,
-                unsafe_step_cells: 0,
-                overcautious_step_cells: 0,
-                unsafe_clearance_cells: 0,
-                overcautious_clearance_cells: 0,
-                wall_time_s: start.elapsed().as_secs_f64(),
-                problems: e.to_string(),
-            },
-        };
-        eprintln!("{}", table_line(&row));
-        rows.push(row);
-    }
+    let rows: Vec<SuiteRow> = if jobs <= 1 {
+        files.iter().map(|f| run_one(f, out_dir, overrides)).collect()
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(jobs)
+            .build()
+            .map_err(|e| EvalError::Input {
+                path: PathBuf::from("(command line)"),
+                message: format!("cannot start {jobs} threads for --jobs: {e}"),
+            })?;
+        pool.install(|| {
+            files
+                .par_iter()
+                .with_max_len(1)
+                .map(|f| run_one(f, out_dir, overrides))
+                .collect()
+        })
+    };
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in &rows {
         w.serialize(r).map_err(|e| EvalError::Input {
@@ -145,6 +119,62 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String]) -> Result<
     write_bytes(&out_dir.join("suite.csv"), &bytes)?;
     write_json(&out_dir.join("suite.json"), &rows)?;
     Ok(rows)
+}
+
+/// The default number of scenarios at once: the threads rayon would use (`RAYON_NUM_THREADS`, else one per
+/// core).
+pub fn default_jobs() -> usize {
+    rayon::current_num_threads()
+}
+
+/// Runs one scenario of the suite into `out_dir/<file stem>/` and prints its table line as it finishes.
+fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
+    let start = Instant::now();
+    let stem = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let options = RunOptions {
+        scenario: file.to_path_buf(),
+        out_dir: Some(out_dir.join(&stem)),
+        seed: None,
+        overrides: overrides.to_vec(),
+    };
+    let row = match run(&options, &Progress::hidden()) {
+        Ok(r) => SuiteRow {
+            scenario: r.metrics.scenario.clone(),
+            file: file.display().to_string(),
+            status: if r.failed.is_empty() { "pass" } else { "fail" }.into(),
+            coverage: r.metrics.coverage,
+            elevation_rmse_m: r.metrics.elevation_rmse_m,
+            unsafe_step_cells: r.metrics.unsafe_step_cells,
+            overcautious_step_cells: r.metrics.overcautious_step_cells,
+            unsafe_clearance_cells: r.metrics.unsafe_clearance_cells,
+            overcautious_clearance_cells: r.metrics.overcautious_clearance_cells,
+            wall_time_s: start.elapsed().as_secs_f64(),
+            problems: r
+                .failed
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join("; "),
+        },
+        Err(e) => SuiteRow {
+            scenario: stem,
+            file: file.display().to_string(),
+            status: "error".into(),
+            coverage: f64::NAN,
+            elevation_rmse_m: f64::NAN,
+            unsafe_step_cells: 0,
+            overcautious_step_cells: 0,
+            unsafe_clearance_cells: 0,
+            overcautious_clearance_cells: 0,
+            wall_time_s: start.elapsed().as_secs_f64(),
+            problems: e.to_string(),
+        },
+    };
+    eprintln!("{}", table_line(&row));
+    row
 }
 
 /// The table's header.
