@@ -223,6 +223,10 @@ fn bad_overrides_and_unknown_metrics_are_clear_errors() {
             "unknown metric `speed`",
         ),
         (vec!["--set", "name.first=1"], "is a value, not a table"),
+        (
+            vec!["--set", "map.model.free_space_max_depth_m=-1"],
+            "invalid setting `free_space_max_depth_m`: must be a depth in metres >= 0, got -1",
+        ),
     ] {
         let o = run(&out, &args, None);
         assert!(!o.status.success(), "{args:?}");
