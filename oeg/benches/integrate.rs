@@ -4,6 +4,9 @@
 //!   `$OEG_SHARED_DATA`) into a fresh map, single thread; skipped with a printed reason when absent. Compare
 //!   with OctoMap's `graph2tree -i 3dtk_frames.graph -res <res>` run in the same session (README).
 //! * `synthetic/fan/<res>`: a 100,000-ray scan of a room with a floor and walls, always available.
+//! * `options/<settings>`: the room scan integrated 5 times at 0.05 m under the paper's model and under the
+//!   static settings of the README (`below_elevation`, `highest_surface`, `free_space_max_depth_m`), in the
+//!   same run, so their ratio is the cost of those options.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -24,7 +27,11 @@ fn shared_graph() -> Option<PathBuf> {
 }
 
 fn build(scans: &[Scan], resolution_m: f64) -> Map {
-    let mut map = Map::new(MapConfig::new(resolution_m)).expect("valid config");
+    build_with(scans, MapConfig::new(resolution_m))
+}
+
+fn build_with(scans: &[Scan], config: MapConfig) -> Map {
+    let mut map = Map::new(config).expect("valid config");
     for scan in scans {
         map.integrate(scan).expect("integrated");
     }
@@ -90,5 +97,31 @@ fn synthetic(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, real, synthetic);
+fn options(c: &mut Criterion) {
+    let scan = room_scan();
+    let scans = vec![scan; 5];
+    let mut group = c.benchmark_group("options");
+    group.throughput(Throughput::Elements(5 * scans[0].rays.len() as u64));
+    group.sample_size(20);
+    let paper = MapConfig::new(0.05);
+    let static_settings = MapConfig {
+        model: oeg::ModelOptions {
+            free_space_occupancy: oeg::FreeSpaceOccupancy::BelowElevation,
+            free_space_max_depth_m: Some(0.01),
+            elevation_fusion: oeg::ElevationFusion::HighestSurface {
+                mahalanobis_threshold: 3.0,
+                lower_threshold: Some(1.0),
+                multi_height_noise_m2: 1e-4,
+            },
+            ..oeg::ModelOptions::default()
+        },
+        ..MapConfig::new(0.05)
+    };
+    for (name, config) in [("paper", paper), ("static_settings", static_settings)] {
+        group.bench_function(name, |b| b.iter(|| black_box(build_with(&scans, config.clone()))));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, real, synthetic, options);
 criterion_main!(benches);
