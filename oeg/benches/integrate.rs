@@ -118,7 +118,7 @@ fn options(c: &mut Criterion) {
         ..MapConfig::new(0.05)
     };
     for (name, config) in [("paper", paper), ("static_settings", static_settings)] {
-        group.bench_function(name, |b| b.iter(|| black_box(build_with(&scans, config.clone()))));
+        group.bench_function(name, |b| b.iter(|| black_box(build_with(&scans, config))));
     }
     group.finish();
 }
