@@ -10,6 +10,7 @@ pub mod metrics;
 pub mod obstacles;
 pub mod output;
 pub mod overrides;
+pub mod plan;
 pub mod preview;
 pub mod progress;
 pub mod record;

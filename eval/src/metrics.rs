@@ -59,6 +59,20 @@ pub struct Metrics {
     pub num_scans: u64,
     /// Rays integrated.
     pub num_rays: u64,
+    /// Whether the planner found a path on the map from the drive's first waypoint to its last.
+    pub plan_found: bool,
+    /// Length of the map's path, metres (null when there is none).
+    pub plan_length_m: f64,
+    /// Cells of the map's path within the planner's inflation radius of a truly blocked cell: where the robot
+    /// would touch an obstacle. The number that must be zero.
+    pub plan_unsafe_cells: u64,
+    /// Whether a path exists on the truth.
+    pub truth_plan_found: bool,
+    /// Length of the truth's path, metres (null when there is none).
+    pub truth_plan_length_m: f64,
+    /// `plan_length_m / truth_plan_length_m`: the detour the map's decisions cost (1 = none; null when either
+    /// path is missing).
+    pub plan_length_ratio: f64,
     /// Whether every expectation of the scenario holds.
     pub expectations_passed: bool,
     /// Number of expectations that failed.
@@ -190,9 +204,26 @@ pub fn compute(
         map_bytes: map.memory_bytes(),
         num_scans: map.num_scans(),
         num_rays: map.totals().num_rays,
+        plan_found: false,
+        plan_length_m: f64::NAN,
+        plan_unsafe_cells: 0,
+        truth_plan_found: false,
+        truth_plan_length_m: f64::NAN,
+        plan_length_ratio: f64::NAN,
         expectations_passed: true,
         num_expectations_failed: 0,
     }
+}
+
+/// Records the planner check in the metrics (the `plan_*` keys).
+pub fn record_plan(metrics: &mut Metrics, check: &crate::plan::PlanCheck) {
+    let length = |p: &Option<oeg::Plan>| p.as_ref().map_or(f64::NAN, |p| p.length_m);
+    metrics.plan_found = check.map_plan.is_some();
+    metrics.plan_length_m = length(&check.map_plan);
+    metrics.plan_unsafe_cells = check.unsafe_cells.len() as u64;
+    metrics.truth_plan_found = check.truth_plan.is_some();
+    metrics.truth_plan_length_m = length(&check.truth_plan);
+    metrics.plan_length_ratio = metrics.plan_length_m / metrics.truth_plan_length_m;
 }
 
 /// The value at fraction `q` of sorted values (nearest rank).
@@ -274,6 +305,12 @@ fn compute_empty() -> Metrics {
         map_bytes: 0,
         num_scans: 0,
         num_rays: 0,
+        plan_found: false,
+        plan_length_m: 0.0,
+        plan_unsafe_cells: 0,
+        truth_plan_found: false,
+        truth_plan_length_m: 0.0,
+        plan_length_ratio: 0.0,
         expectations_passed: true,
         num_expectations_failed: 0,
     }

@@ -37,3 +37,9 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(oeg::io::write_atomically(path, bytes)?)
 }
+
+/// A coordinate rounded to the micrometre for CSV files: cell centres such as `1180.5 * 0.1` print as
+/// `118.05`, not `118.05000000000001`.
+pub fn round_m(v_m: f64) -> f64 {
+    (v_m * 1e6).round() / 1e6
+}

@@ -21,6 +21,8 @@ pub const DECISION_CLASSES: [(&str, Rgb); 5] = [
 ];
 
 const DRIVE: Rgb = [30, 80, 230];
+/// The path planned on the map, on `decisions.png`.
+const PLAN: Rgb = [200, 0, 200];
 
 /// The scenario's drive as a polyline of world points.
 pub fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
@@ -65,6 +67,7 @@ pub fn write(
     truth: &TruthRaster,
     profile: &RobotProfile,
     metrics: &Metrics,
+    plan: &crate::plan::PlanCheck,
 ) -> Result<Vec<PathBuf>> {
     let region = truth.region;
     let res = truth.resolution_m;
@@ -111,12 +114,20 @@ pub fn write(
     files.push(path);
 
     let reference = crate::metrics::step_reference(s.map.traversability);
-    let legend = Legend::Classes(
-        DECISION_CLASSES
-            .iter()
-            .map(|(n, c)| ((*n).to_string(), *c))
-            .collect(),
-    );
+    let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
+        .iter()
+        .map(|(n, c)| ((*n).to_string(), *c))
+        .collect();
+    classes.push(("drive".into(), DRIVE));
+    classes.push((
+        if plan.map_plan.is_some() {
+            "path planned on the map".into()
+        } else {
+            "no path on the map".into()
+        },
+        PLAN,
+    ));
+    let legend = Legend::Classes(classes);
     let fig = Figure::new(
         region,
         res,
@@ -142,8 +153,12 @@ pub fn write(
         },
         &legend,
     );
+    let mut fig = with_drive(fig);
+    if let Some(p) = &plan.map_plan {
+        fig.polyline(&crate::plan::polyline(p, map.geometry()), PLAN);
+    }
     let path = out_dir.join("decisions.png");
-    write_bytes(&path, &with_drive(fig).to_png())?;
+    write_bytes(&path, &fig.to_png())?;
     files.push(path);
     Ok(files)
 }

@@ -189,6 +189,8 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
 
     let mut metrics = metrics::compute(&s.name, s.seed, &map, &truth, &profile, s.map.traversability);
+    let plan = crate::plan::check(s, &map, &truth, &profile)?;
+    metrics::record_plan(&mut metrics, &plan);
     let failed = metrics::check_expectations(&mut metrics, &s.expectations);
 
     create_dir(&out_dir)?;
@@ -204,8 +206,16 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         Some(region),
     )?);
     files.extend(report_images::write(
-        &out_dir, s, &map, &truth, &profile, &metrics,
+        &out_dir, s, &map, &truth, &profile, &metrics, &plan,
     )?);
+    let plan_path = out_dir.join("plan.csv");
+    let csv =
+        crate::plan::to_csv(&crate::plan::rows(&plan, &geometry)).map_err(|message| EvalError::Input {
+            path: plan_path.clone(),
+            message,
+        })?;
+    write_bytes(&plan_path, &csv)?;
+    files.push(plan_path);
     let obstacles = crate::obstacles::decisions(s, &map, &truth, &profile);
     let obstacles_path = out_dir.join("obstacles.csv");
     let csv = crate::obstacles::to_csv(&obstacles).map_err(|message| EvalError::Input {

@@ -72,8 +72,8 @@ pub fn wrong_cells(
         let e = c.elevation();
         let (x_m, y_m) = geometry.cell_center(cell);
         rows.push(WrongCell {
-            x_m,
-            y_m,
+            x_m: crate::output::round_m(x_m),
+            y_m: crate::output::round_m(y_m),
             error: if truly { "unsafe" } else { "over_cautious" },
             mapped: class_name(mapped),
             occupancy_probability: c.occupancy_probability().unwrap_or(f32::NAN),

@@ -241,6 +241,10 @@ impl Checker<'_> {
             )?;
         }
 
+        if let Err(e) = s.planner.validate() {
+            return Err(self.error(&[K("planner"), K("inflation_radius_m")], e.to_string()));
+        }
+
         // The robot.
         let r = &s.robot;
         self.positive(

@@ -29,6 +29,10 @@ pub struct Scenario {
     pub map: MapSettings,
     /// The robot, its drive and odometry.
     pub robot: RobotSettings,
+    /// How the run's path planner reads the map (`oeg::PlannerOptions`; every field optional, defaults
+    /// documented there): it plans from the drive's first waypoint to its last, on the map and on the truth.
+    #[serde(default)]
+    pub planner: oeg::PlannerOptions,
     /// The ground.
     #[serde(default)]
     pub terrain: Terrain,

@@ -1,0 +1,240 @@
+//! The planner check (`plan.csv` and the `plan_*` metrics): would a planner using this map send the robot
+//! somewhere it cannot go, or refuse a way that is open? The run plans from the drive's first waypoint to its
+//! last on the final map, checks every cell of that path against the truth, and plans on the truth too, for
+//! the path the robot could have had.
+
+use oeg::planner::{self, Plan, PlannerOptions, UnknownCells};
+use oeg::{CellIndex, CellRegion, Map, RobotProfile, Traversability, TraversabilityRule};
+use serde::Serialize;
+use sim::scenario::Scenario;
+use sim::truth::TruthRaster;
+
+use crate::error::{EvalError, Result};
+
+/// The outcome of the planner check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanCheck {
+    /// The path planned on the map, if there is one.
+    pub map_plan: Option<Plan>,
+    /// The path planned on the truth (every cell known), if there is one.
+    pub truth_plan: Option<Plan>,
+    /// Cells of the map's path whose centre lies within the inflation radius of a truly blocked cell: where
+    /// the robot following the map's path would touch an obstacle.
+    pub unsafe_cells: Vec<CellIndex>,
+}
+
+/// The map's decision for every cell of `region`, row-major.
+pub fn map_decisions(
+    map: &Map,
+    region: &CellRegion,
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+) -> Vec<Traversability> {
+    region
+        .cells()
+        .map(|c| map.traversability(c, profile, rule))
+        .collect()
+}
+
+/// The truth's decision for every cell of its region, row-major: blocked when the robot truly cannot enter
+/// (a step, or a structure lower than the robot), free otherwise, unknown where the truth found no surface.
+pub fn truth_decisions(truth: &TruthRaster, rule: TraversabilityRule) -> Vec<Traversability> {
+    let reference = crate::metrics::step_reference(rule);
+    (0..truth.cells.len())
+        .map(|k| {
+            if truth.cells[k].elevation_m.is_nan() {
+                Traversability::Unknown
+            } else if crate::metrics::truly_blocked(truth, k, reference) {
+                Traversability::Blocked
+            } else {
+                Traversability::Free
+            }
+        })
+        .collect()
+}
+
+/// Plans on the map and on the truth from the drive's first waypoint to its last.
+///
+/// # Errors
+/// A planner input the scenario's validation should have caught (a waypoint outside the region, bad
+/// options), reported against the scenario.
+pub fn check(s: &Scenario, map: &Map, truth: &TruthRaster, profile: &RobotProfile) -> Result<PlanCheck> {
+    let geometry = *map.geometry();
+    let region = truth.region;
+    let res = geometry.resolution_m();
+    let rule = s.map.traversability;
+    let waypoints = &s.robot.drive.waypoints_xy_m;
+    let cell_of = |w: Option<&[f64; 2]>| {
+        w.and_then(|w| geometry.cell_of(w[0], w[1]))
+            .ok_or_else(|| EvalError::Input {
+                path: s.name.clone().into(),
+                message: "the drive needs a waypoint inside the map region to plan from".into(),
+            })
+    };
+    let (start, goal) = (cell_of(waypoints.first())?, cell_of(waypoints.last())?);
+    let planner_error = |e: oeg::Error| EvalError::Input {
+        path: s.name.clone().into(),
+        message: format!("planner: {e}"),
+    };
+    let options = s.planner;
+    let mapped = map_decisions(map, &region, profile, rule);
+    let map_plan = planner::plan(&region, res, &mapped, start, goal, &options).map_err(planner_error)?;
+    let truly = truth_decisions(truth, rule);
+    let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
+    let truth_forbidden = planner::forbidden_mask(
+        &region,
+        res,
+        &truly,
+        &PlannerOptions {
+            unknown: UnknownCells::Drivable,
+            ..options
+        },
+    )
+    .map_err(planner_error)?;
+    let unsafe_cells = map_plan
+        .iter()
+        .flat_map(|p| &p.cells)
+        .filter(|c| region.offset(**c).is_some_and(|k| truth_forbidden[k]))
+        .copied()
+        .collect();
+    Ok(PlanCheck {
+        map_plan,
+        truth_plan,
+        unsafe_cells,
+    })
+}
+
+/// One row of `plan.csv`: a cell of a planned path.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanRow {
+    /// `map` (planned on the map) or `truth` (planned on the truth).
+    pub path: &'static str,
+    /// Position along the path, 0 at the start.
+    pub step: u64,
+    /// Cell centre, world x, metres.
+    pub x_m: f64,
+    /// Cell centre, world y, metres.
+    pub y_m: f64,
+    /// Whether the cell lies within the inflation radius of a truly blocked cell (always false on the truth's
+    /// path).
+    pub unsafe_cell: bool,
+}
+
+/// The rows of `plan.csv`: the map's path, then the truth's.
+pub fn rows(check: &PlanCheck, geometry: &oeg::GridGeometry) -> Vec<PlanRow> {
+    let mut rows = Vec::new();
+    for (name, plan) in [("map", &check.map_plan), ("truth", &check.truth_plan)] {
+        for (step, c) in plan.iter().flat_map(|p| p.cells.iter()).enumerate() {
+            let (x_m, y_m) = geometry.cell_center(*c);
+            rows.push(PlanRow {
+                path: name,
+                step: step as u64,
+                x_m: crate::output::round_m(x_m),
+                y_m: crate::output::round_m(y_m),
+                unsafe_cell: name == "map" && check.unsafe_cells.contains(c),
+            });
+        }
+    }
+    rows
+}
+
+/// `plan.csv`: a header and one row per path cell.
+///
+/// # Errors
+/// A CSV writer failure, as text.
+pub fn to_csv(rows: &[PlanRow]) -> std::result::Result<Vec<u8>, String> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.write_record(["path", "step", "x_m", "y_m", "unsafe_cell"])
+        .map_err(|e| e.to_string())?;
+    for r in rows {
+        w.serialize(r).map_err(|e| e.to_string())?;
+    }
+    w.into_inner().map_err(|e| e.to_string())
+}
+
+/// The path's cell centres as a polyline of world points, for the images.
+pub fn polyline(plan: &Plan, geometry: &oeg::GridGeometry) -> Vec<(f64, f64)> {
+    plan.cells.iter().map(|c| geometry.cell_center(*c)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use oeg::MapConfig;
+    use sim::truth::{CellTruth, TruthProfile};
+    use sim::world::Actors;
+
+    fn truth_cell(step_blocked: bool) -> CellTruth {
+        CellTruth {
+            elevation_m: if step_blocked { 0.2 } else { 0.0 },
+            ground_m: 0.0,
+            step_m: if step_blocked { 0.2 } else { 0.0 },
+            step_blocked,
+            structure_gap_m: f32::NAN,
+        }
+    }
+
+    #[test]
+    fn a_path_through_a_wall_the_map_missed_is_unsafe_and_the_truth_goes_around() {
+        // 1 m cells, 7 x 5; the truth has a wall at x = 3 m from y = 0 to 3 m, the map (all free) misses it.
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(6, 4)).expect("region");
+        let truth = TruthRaster {
+            region,
+            resolution_m: 1.0,
+            profile: TruthProfile {
+                max_step_m: 0.035,
+                height_m: 0.46,
+            },
+            time_s: 0.0,
+            actors: Actors::Excluded,
+            cells: region.cells().map(|c| truth_cell(c.i == 3 && c.j <= 3)).collect(),
+        };
+        let truly = truth_decisions(&truth, TraversabilityRule::Absolute);
+        let options = PlannerOptions {
+            inflation_radius_m: 0.0,
+            unknown: UnknownCells::Drivable,
+        };
+        let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
+        let truth_plan = planner::plan(&region, 1.0, &truly, s, g, &options)
+            .expect("valid")
+            .expect("around the wall");
+        assert!(
+            truth_plan.cells.contains(&CellIndex::new(3, 4)),
+            "over the top of the wall"
+        );
+        // The map: nothing observed; with unknown cells drivable it goes straight through the wall.
+        let map = Map::new(MapConfig::new(1.0)).expect("map");
+        let mapped = map_decisions(
+            &map,
+            &region,
+            &RobotProfile::default(),
+            TraversabilityRule::Absolute,
+        );
+        assert!(mapped.iter().all(|t| *t == Traversability::Unknown));
+        let straight = planner::plan(&region, 1.0, &mapped, s, g, &options)
+            .expect("valid")
+            .expect("straight");
+        assert!((straight.length_m - 6.0).abs() < 1e-9);
+        let forbidden = planner::forbidden_mask(&region, 1.0, &truly, &options).expect("valid");
+        let unsafe_cells: Vec<_> = straight
+            .cells
+            .iter()
+            .filter(|c| forbidden[region.offset(**c).expect("inside")])
+            .collect();
+        assert_eq!(unsafe_cells, [&CellIndex::new(3, 0)]);
+        let check = PlanCheck {
+            map_plan: Some(straight),
+            truth_plan: Some(truth_plan),
+            unsafe_cells: vec![CellIndex::new(3, 0)],
+        };
+        let geometry = oeg::GridGeometry::new(1.0).expect("geometry");
+        let csv = String::from_utf8(to_csv(&rows(&check, &geometry)).expect("csv")).expect("utf8");
+        let mut lines = csv.lines();
+        assert_eq!(lines.next(), Some("path,step,x_m,y_m,unsafe_cell"));
+        assert_eq!(lines.next(), Some("map,0,0.5,0.5,false"));
+        assert!(csv.contains("map,3,3.5,0.5,true\n"), "{csv}");
+        assert!(csv.lines().any(|l| l.starts_with("truth,0,")));
+    }
+}

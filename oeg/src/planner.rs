@@ -1,0 +1,580 @@
+//! A path planner on the map's decisions: the check a navigation stack makes with a 2.5D map.
+//!
+//! 8-connected A* over a [`CellRegion`] from a start cell to a goal cell. The robot's centre may enter a cell
+//! when the cell is drivable and no blocked cell lies within [`PlannerOptions::inflation_radius_m`] of it (ROS
+//! costmap_2d's lethal inscribed radius); unknown cells follow [`UnknownCells`]. Diagonal moves may not cut a
+//! corner (both cells beside the diagonal must be enterable). Costs are integers (1000 a side, 1414 a diagonal)
+//! and ties are broken by cell offset, so the same decisions always give the same path.
+//!
+//! ```
+//! use oeg::planner::{PlannerOptions, plan};
+//! use oeg::{CellIndex, CellRegion, Traversability};
+//!
+//! // A 10 x 5 region of 0.1 m cells with a wall across x = 0.5 m except at its top row.
+//! let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(9, 4)).expect("region");
+//! let decisions: Vec<Traversability> = region
+//!     .cells()
+//!     .map(|c| if c.i == 5 && c.j < 4 { Traversability::Blocked } else { Traversability::Free })
+//!     .collect();
+//! let options = PlannerOptions { inflation_radius_m: 0.0, ..PlannerOptions::default() };
+//! let path = plan(&region, 0.1, &decisions, CellIndex::new(0, 0), CellIndex::new(9, 0), &options)?
+//!     .expect("through the gap");
+//! assert!(path.cells.contains(&CellIndex::new(5, 4)));
+//! # Ok::<(), oeg::Error>(())
+//! ```
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::geometry::{CellIndex, CellRegion};
+use crate::traversability::Traversability;
+
+/// Default inflation radius, metres: half the Pioneer 3-AT's 0.50 m width (its inscribed radius).
+pub const DEFAULT_INFLATION_RADIUS_M: f64 = 0.25;
+
+/// Cost of a move to a side neighbour; a diagonal costs [`DIAGONAL_COST`] (1000 sqrt 2, rounded).
+const SIDE_COST: u64 = 1000;
+const DIAGONAL_COST: u64 = 1414;
+
+/// What the planner makes of cells the map never observed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnknownCells {
+    /// The robot's centre never enters an unknown cell, but unknown cells are not inflated: costmap_2d with
+    /// `track_unknown_space` and a planner that does not allow unknown space. See [`plan`] for the cells
+    /// around the start and the goal.
+    #[default]
+    Avoid,
+    /// Unknown cells are obstacles, inflated like blocked ones: the most cautious reading.
+    Inflate,
+    /// Unknown cells are drivable: optimistic planning, as when exploring.
+    Drivable,
+}
+
+/// How the planner reads the map. Every field has a documented default.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlannerOptions {
+    /// The robot's centre keeps at least this far from every blocked cell (centre to centre), metres. Default
+    /// [`DEFAULT_INFLATION_RADIUS_M`].
+    pub inflation_radius_m: f64,
+    /// Unknown cells: default [`UnknownCells::Avoid`].
+    pub unknown: UnknownCells,
+}
+
+impl Default for PlannerOptions {
+    fn default() -> Self {
+        Self {
+            inflation_radius_m: DEFAULT_INFLATION_RADIUS_M,
+            unknown: UnknownCells::default(),
+        }
+    }
+}
+
+impl PlannerOptions {
+    /// Checks the options for sense.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for a negative, non-finite or absurd (over 100 m) inflation radius.
+    pub fn validate(&self) -> Result<()> {
+        let r = self.inflation_radius_m;
+        if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
+            return Err(Error::setting(
+                "inflation_radius_m",
+                format!("must be a distance in metres from 0 to 100, got {r}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A planned path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// The cells the robot's centre passes, start first, goal last, each an 8-neighbour of the one before.
+    pub cells: Vec<CellIndex>,
+    /// Length of the path through the cell centres, metres.
+    pub length_m: f64,
+}
+
+/// Where the robot's centre may not be, row-major over `region`: blocked cells inflated by the radius, and
+/// unknown cells as `options.unknown` says. Start and goal exemptions are [`plan`]'s, not this mask's.
+///
+/// # Errors
+/// [`Error::InvalidSetting`] for bad options or a resolution that is not a positive number; a `decisions`
+/// slice whose length is not the region's cell count.
+pub fn forbidden_mask(
+    region: &CellRegion,
+    resolution_m: f64,
+    decisions: &[Traversability],
+    options: &PlannerOptions,
+) -> Result<Vec<bool>> {
+    options.validate()?;
+    if !(resolution_m.is_finite() && resolution_m > 0.0) {
+        return Err(Error::setting(
+            "resolution_m",
+            format!("must be a positive number of metres, got {resolution_m}"),
+        ));
+    }
+    if decisions.len() as u64 != region.num_cells() {
+        return Err(Error::setting(
+            "decisions",
+            format!(
+                "one decision per region cell: {} cells, {} decisions",
+                region.num_cells(),
+                decisions.len()
+            ),
+        ));
+    }
+    let (nx, ny) = (region.num_x as i64, region.num_y as i64);
+    let is_obstacle = |t: Traversability| match t {
+        Traversability::Blocked => true,
+        Traversability::Unknown => options.unknown == UnknownCells::Inflate,
+        Traversability::Free | Traversability::Traversable => false,
+    };
+    let obstacle: Vec<bool> = decisions.iter().map(|t| is_obstacle(*t)).collect();
+    let mut forbidden: Vec<bool> = decisions
+        .iter()
+        .zip(&obstacle)
+        .map(|(t, o)| *o || (*t == Traversability::Unknown && options.unknown == UnknownCells::Avoid))
+        .collect();
+
+    // The disc of cell offsets within the radius, centre to centre.
+    let r_cells = (options.inflation_radius_m / resolution_m + 1e-9).floor() as i64;
+    let r2 = options.inflation_radius_m / resolution_m + 1e-9;
+    let r2 = r2 * r2;
+    let disc: Vec<(i64, i64)> = (-r_cells..=r_cells)
+        .flat_map(|dy| (-r_cells..=r_cells).map(move |dx| (dx, dy)))
+        .filter(|(dx, dy)| ((dx * dx + dy * dy) as f64) <= r2 && (*dx, *dy) != (0, 0))
+        .collect();
+    if disc.is_empty() {
+        return Ok(forbidden);
+    }
+    // Only an obstacle's edge cells (a side neighbour not an obstacle) need stamping: the obstacle cell nearest
+    // a free cell is always an edge cell, since an inner cell's side neighbour towards the free cell is nearer.
+    let at = |x: i64, y: i64| (y * nx + x) as usize;
+    for y in 0..ny {
+        for x in 0..nx {
+            if !obstacle[at(x, y)] {
+                continue;
+            }
+            let edge = [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|(dx, dy)| {
+                let (u, v) = (x + dx, y + dy);
+                (0..nx).contains(&u) && (0..ny).contains(&v) && !obstacle[at(u, v)]
+            });
+            if !edge {
+                continue;
+            }
+            for (dx, dy) in &disc {
+                let (u, v) = (x + dx, y + dy);
+                if (0..nx).contains(&u) && (0..ny).contains(&v) {
+                    forbidden[at(u, v)] = true;
+                }
+            }
+        }
+    }
+    Ok(forbidden)
+}
+
+/// The shortest path from `start` to `goal` through `region` on `decisions` (one per region cell, row-major),
+/// or `None` if there is none.
+///
+/// Unknown cells within the inflation radius of the start or the goal count as drivable, whatever
+/// [`UnknownCells`] says: the robot stands on them at the start and at the end (navigation stacks clear the
+/// robot's footprint the same way), and no sensor on the robot sees under it. Start and goal must still keep
+/// the inflation radius from blocked cells.
+///
+/// # Errors
+/// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the region.
+pub fn plan(
+    region: &CellRegion,
+    resolution_m: f64,
+    decisions: &[Traversability],
+    start: CellIndex,
+    goal: CellIndex,
+    options: &PlannerOptions,
+) -> Result<Option<Plan>> {
+    let offset_of = |name: &'static str, c: CellIndex| {
+        region.offset(c).ok_or_else(|| {
+            Error::setting(
+                name,
+                format!("cell ({}, {}) lies outside the planning region", c.i, c.j),
+            )
+        })
+    };
+    let (s, g) = (offset_of("start", start)?, offset_of("goal", goal)?);
+    let mut decisions = decisions.to_vec();
+    if decisions.len() as u64 == region.num_cells() && resolution_m > 0.0 {
+        let r = options.inflation_radius_m.max(0.0) / resolution_m + 1e-9;
+        let rc = r.floor().min(f64::from(region.num_x.max(region.num_y))) as i64;
+        for centre in [start, goal] {
+            for dj in -rc..=rc {
+                for di in -rc..=rc {
+                    if ((di * di + dj * dj) as f64) > r * r {
+                        continue;
+                    }
+                    let c = CellIndex::new(
+                        (i64::from(centre.i) + di) as i32,
+                        (i64::from(centre.j) + dj) as i32,
+                    );
+                    if let Some(k) = region.offset(c)
+                        && decisions[k] == Traversability::Unknown
+                    {
+                        decisions[k] = Traversability::Free;
+                    }
+                }
+            }
+        }
+    }
+    let forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
+    if forbidden[s] || forbidden[g] {
+        return Ok(None);
+    }
+    Ok(astar(region, &forbidden, s, g).map(|offsets| {
+        let nx = region.num_x as usize;
+        let cells: Vec<CellIndex> = offsets
+            .iter()
+            .map(|k| region.cell_at((*k % nx) as u32, (*k / nx) as u32))
+            .collect();
+        let num_diagonal = cells
+            .windows(2)
+            .filter(|w| w[0].i != w[1].i && w[0].j != w[1].j)
+            .count();
+        let num_side = cells.len().saturating_sub(1) - num_diagonal;
+        let length_m = (num_side as f64 + num_diagonal as f64 * std::f64::consts::SQRT_2) * resolution_m;
+        Plan { cells, length_m }
+    }))
+}
+
+/// Octile distance in cost units: exact for 8-connected moves on an empty grid, so A* stays optimal.
+fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
+    let (ax, ay) = ((a % nx) as i64, (a / nx) as i64);
+    let (bx, by) = ((b % nx) as i64, (b / nx) as i64);
+    let (dx, dy) = ((ax - bx).unsigned_abs(), (ay - by).unsigned_abs());
+    let (lo, hi) = (dx.min(dy), dx.max(dy));
+    SIDE_COST * hi + (DIAGONAL_COST - SIDE_COST) * lo
+}
+
+/// A* over the offsets of a `region`-shaped mask; the path's offsets, start first.
+fn astar(region: &CellRegion, forbidden: &[bool], start: usize, goal: usize) -> Option<Vec<usize>> {
+    const UNSEEN: u64 = u64::MAX;
+    const NO_PARENT: u32 = u32::MAX;
+    let (nx, ny) = (region.num_x as usize, region.num_y as usize);
+    let mut cost = vec![UNSEEN; forbidden.len()];
+    let mut parent = vec![NO_PARENT; forbidden.len()];
+    let mut closed = vec![false; forbidden.len()];
+    // (f, g, offset), smallest first; the offset breaks ties deterministically.
+    let mut open = BinaryHeap::new();
+    cost[start] = 0;
+    open.push(Reverse((heuristic(nx, start, goal), 0u64, start)));
+    while let Some(Reverse((_, g, k))) = open.pop() {
+        if closed[k] {
+            continue;
+        }
+        closed[k] = true;
+        if k == goal {
+            let mut path = vec![goal];
+            let mut at = goal;
+            while at != start {
+                at = parent[at] as usize;
+                path.push(at);
+            }
+            path.reverse();
+            return Some(path);
+        }
+        let (x, y) = (k % nx, k / nx);
+        for (dx, dy) in [
+            (-1i64, 0i64),
+            (1, 0),
+            (0, -1),
+            (0, 1),
+            (-1, -1),
+            (1, -1),
+            (-1, 1),
+            (1, 1),
+        ] {
+            let (u, v) = (x as i64 + dx, y as i64 + dy);
+            if u < 0 || v < 0 || u >= nx as i64 || v >= ny as i64 {
+                continue;
+            }
+            let n = v as usize * nx + u as usize;
+            if forbidden[n] || closed[n] {
+                continue;
+            }
+            let diagonal = dx != 0 && dy != 0;
+            if diagonal && (forbidden[y * nx + u as usize] || forbidden[v as usize * nx + x]) {
+                continue; // no corner cutting
+            }
+            let step = if diagonal { DIAGONAL_COST } else { SIDE_COST };
+            let g_n = g + step;
+            if g_n < cost[n] {
+                cost[n] = g_n;
+                parent[n] = k as u32;
+                open.push(Reverse((g_n + heuristic(nx, n, goal), g_n, n)));
+            }
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn region(nx: i32, ny: i32) -> CellRegion {
+        CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(nx - 1, ny - 1)).expect("region")
+    }
+
+    fn no_inflation(unknown: UnknownCells) -> PlannerOptions {
+        PlannerOptions {
+            inflation_radius_m: 0.0,
+            unknown,
+        }
+    }
+
+    #[test]
+    fn an_open_grid_gives_the_octile_distance() {
+        let r = region(10, 6);
+        let d = vec![Traversability::Free; 60];
+        let p = plan(
+            &r,
+            0.1,
+            &d,
+            CellIndex::new(0, 0),
+            CellIndex::new(9, 3),
+            &no_inflation(UnknownCells::Avoid),
+        )
+        .expect("valid")
+        .expect("a path");
+        // 3 diagonals and 6 straight moves.
+        assert!(
+            (p.length_m - (0.6 + 0.3 * std::f64::consts::SQRT_2)).abs() < 1e-9,
+            "{}",
+            p.length_m
+        );
+        assert_eq!(p.cells.first(), Some(&CellIndex::new(0, 0)));
+        assert_eq!(p.cells.last(), Some(&CellIndex::new(9, 3)));
+        for w in p.cells.windows(2) {
+            assert!((w[0].i - w[1].i).abs() <= 1 && (w[0].j - w[1].j).abs() <= 1 && w[0] != w[1]);
+        }
+    }
+
+    #[test]
+    fn a_wall_with_no_gap_leaves_no_path_and_inflation_closes_a_narrow_gap() {
+        let r = region(11, 11);
+        // A wall at i = 5 with a one-cell gap at j = 5.
+        let d: Vec<Traversability> = r
+            .cells()
+            .map(|c| {
+                if c.i == 5 && c.j != 5 {
+                    Traversability::Blocked
+                } else {
+                    Traversability::Free
+                }
+            })
+            .collect();
+        let (s, g) = (CellIndex::new(0, 5), CellIndex::new(10, 5));
+        let open = plan(&r, 0.1, &d, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid");
+        assert!(open.is_some(), "the gap lets a point robot through");
+        let wide = PlannerOptions {
+            inflation_radius_m: 0.1,
+            unknown: UnknownCells::Avoid,
+        };
+        assert_eq!(
+            plan(&r, 0.1, &d, s, g, &wide).expect("valid"),
+            None,
+            "a 0.1 m robot does not fit"
+        );
+        let closed: Vec<Traversability> = r
+            .cells()
+            .map(|c| {
+                if c.i == 5 {
+                    Traversability::Blocked
+                } else {
+                    Traversability::Free
+                }
+            })
+            .collect();
+        assert_eq!(
+            plan(&r, 0.1, &closed, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid"),
+            None
+        );
+    }
+
+    #[test]
+    fn diagonals_do_not_cut_corners() {
+        let r = region(2, 2);
+        // Free (0,0) and (1,1); blocked (1,0) and (0,1): only a corner-cutting diagonal would connect them.
+        let d = vec![
+            Traversability::Free,
+            Traversability::Blocked,
+            Traversability::Blocked,
+            Traversability::Free,
+        ];
+        let p = plan(
+            &r,
+            1.0,
+            &d,
+            CellIndex::new(0, 0),
+            CellIndex::new(1, 1),
+            &no_inflation(UnknownCells::Avoid),
+        );
+        assert_eq!(p.expect("valid"), None);
+    }
+
+    #[test]
+    fn unknown_cells_follow_the_option() {
+        let r = region(7, 3);
+        // The middle column is unknown; the start cell is unknown too (the robot stands on it).
+        let d: Vec<Traversability> = r
+            .cells()
+            .map(|c| {
+                if c.i == 3 || c == CellIndex::new(0, 1) {
+                    Traversability::Unknown
+                } else {
+                    Traversability::Free
+                }
+            })
+            .collect();
+        let (s, g) = (CellIndex::new(0, 1), CellIndex::new(6, 1));
+        let go = |unknown| plan(&r, 1.0, &d, s, g, &no_inflation(unknown)).expect("valid");
+        assert_eq!(go(UnknownCells::Avoid), None, "the unknown column is not entered");
+        assert!(go(UnknownCells::Drivable).is_some());
+        assert_eq!(go(UnknownCells::Inflate), None);
+        // The start's own unknown cell is exempt: with the column known, a path exists.
+        let mut known = d.clone();
+        for c in r.cells().filter(|c| c.i == 3) {
+            known[r.offset(c).expect("inside")] = Traversability::Traversable;
+        }
+        assert!(
+            plan(&r, 1.0, &known, s, g, &no_inflation(UnknownCells::Avoid))
+                .expect("valid")
+                .is_some()
+        );
+        // Inflated unknown cells close a corridor that avoided unknown cells leave open.
+        let opts = |unknown| PlannerOptions {
+            inflation_radius_m: 2.0,
+            unknown,
+        };
+        let corridor: Vec<Traversability> = r
+            .cells()
+            .map(|c| {
+                if c.j == 2 {
+                    Traversability::Unknown
+                } else {
+                    Traversability::Free
+                }
+            })
+            .collect();
+        let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
+        assert!(
+            plan(&r, 1.0, &corridor, s, g, &opts(UnknownCells::Avoid))
+                .expect("valid")
+                .is_some()
+        );
+        assert_eq!(
+            plan(&r, 1.0, &corridor, s, g, &opts(UnknownCells::Inflate)).expect("valid"),
+            None
+        );
+    }
+
+    #[test]
+    fn the_robot_stands_on_its_unobserved_footprint() {
+        // 0.1 m cells; nothing within 0.2 m of the start was observed (no sensor sees under the robot).
+        let r = region(12, 5);
+        let s = CellIndex::new(2, 2);
+        let d: Vec<Traversability> = r
+            .cells()
+            .map(|c| {
+                if (c.i - 2).abs() <= 2 && (c.j - 2).abs() <= 2 {
+                    Traversability::Unknown
+                } else {
+                    Traversability::Free
+                }
+            })
+            .collect();
+        let g = CellIndex::new(11, 2);
+        let footprint = PlannerOptions {
+            inflation_radius_m: 0.2,
+            unknown: UnknownCells::Avoid,
+        };
+        assert!(plan(&r, 0.1, &d, s, g, &footprint).expect("valid").is_some());
+        let point = no_inflation(UnknownCells::Avoid);
+        assert_eq!(
+            plan(&r, 0.1, &d, s, g, &point).expect("valid"),
+            None,
+            "only the start cell is exempt"
+        );
+    }
+
+    #[test]
+    fn bad_inputs_are_errors() {
+        let r = region(3, 3);
+        let d = vec![Traversability::Free; 9];
+        let o = PlannerOptions::default();
+        assert!(plan(&r, 0.1, &d[..8], CellIndex::new(0, 0), CellIndex::new(2, 2), &o).is_err());
+        assert!(plan(&r, 0.1, &d, CellIndex::new(0, 0), CellIndex::new(3, 2), &o).is_err());
+        assert!(plan(&r, 0.0, &d, CellIndex::new(0, 0), CellIndex::new(2, 2), &o).is_err());
+        let bad = PlannerOptions {
+            inflation_radius_m: f64::NAN,
+            ..o
+        };
+        let err =
+            plan(&r, 0.1, &d, CellIndex::new(0, 0), CellIndex::new(2, 2), &bad).expect_err("NaN radius");
+        assert!(err.to_string().contains("inflation_radius_m"), "{err}");
+    }
+
+    /// Brute force: a cell is forbidden when a blocked cell lies within the radius of it.
+    fn brute_mask(r: &CellRegion, d: &[Traversability], radius_cells: f64) -> Vec<bool> {
+        r.cells()
+            .map(|c| {
+                r.cells().any(|o| {
+                    let (dx, dy) = (f64::from(o.i - c.i), f64::from(o.j - c.j));
+                    d[r.offset(o).expect("inside")] == Traversability::Blocked
+                        && dx * dx + dy * dy <= radius_cells * radius_cells + 1e-9
+                })
+            })
+            .collect()
+    }
+
+    proptest! {
+        #[test]
+        fn the_inflated_mask_matches_brute_force(
+            cells in proptest::collection::vec(0u8..4, 12 * 9),
+            radius_cells in 0.0f64..3.5,
+        ) {
+            let r = region(12, 9);
+            let d: Vec<Traversability> = cells
+                .iter()
+                .map(|v| if *v == 0 { Traversability::Blocked } else { Traversability::Free })
+                .collect();
+            let options = PlannerOptions { inflation_radius_m: radius_cells * 0.1, unknown: UnknownCells::Avoid };
+            let mask = forbidden_mask(&r, 0.1, &d, &options).expect("valid");
+            prop_assert_eq!(mask, brute_mask(&r, &d, radius_cells));
+        }
+
+        #[test]
+        fn a_path_is_never_shorter_than_the_straight_line_and_avoids_the_mask(
+            cells in proptest::collection::vec(0u8..5, 10 * 10),
+        ) {
+            let r = region(10, 10);
+            let mut d: Vec<Traversability> = cells
+                .iter()
+                .map(|v| if *v == 0 { Traversability::Blocked } else { Traversability::Free })
+                .collect();
+            d[0] = Traversability::Free;
+            d[99] = Traversability::Free;
+            let o = no_inflation(UnknownCells::Avoid);
+            if let Some(p) = plan(&r, 1.0, &d, CellIndex::new(0, 0), CellIndex::new(9, 9), &o).expect("valid") {
+                prop_assert!(p.length_m >= 9.0 * std::f64::consts::SQRT_2 - 1e-9);
+                for c in &p.cells {
+                    prop_assert!(d[r.offset(*c).expect("inside")] != Traversability::Blocked);
+                }
+            }
+        }
+    }
+}
