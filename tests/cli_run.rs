@@ -72,6 +72,7 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
         "truth_elevation.png",
         "elevation_error.png",
         "decisions.png",
+        "plan.csv",
     ] {
         assert!(out.join(name).is_file(), "{name} missing");
     }
@@ -100,6 +101,12 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
         "map_bytes",
         "num_scans",
         "num_rays",
+        "plan_found",
+        "plan_length_m",
+        "plan_unsafe_cells",
+        "truth_plan_found",
+        "truth_plan_length_m",
+        "plan_length_ratio",
         "expectations_passed",
     ] {
         assert!(m.get(key).is_some(), "metrics.json lacks {key}");
@@ -123,6 +130,17 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
         m["overcautious_step_cells"].as_u64().expect("count"),
         "one row per wrong cell, all over-cautious"
     );
+
+    // The planner drives from the start to the goal on the map as it would on the truth, near no obstacle.
+    assert_eq!(m["plan_found"], true);
+    assert_eq!(m["plan_unsafe_cells"], 0);
+    assert_eq!(m["plan_length_ratio"], 1.0);
+    let plan = std::fs::read_to_string(out.join("plan.csv")).expect("plan.csv");
+    assert!(
+        plan.starts_with("path,step,x_m,y_m,unsafe_cell\nmap,0,"),
+        "{plan}"
+    );
+    assert!(plan.lines().any(|l| l.starts_with("truth,")), "{plan}");
 
     let map = oeg::io::mapfile::load_map(&out.join("map.oeg")).expect("map");
     let curb_3cm = blocked_fraction(&map, (3.3, -1.4), (3.7, -0.6));
@@ -151,6 +169,10 @@ fn the_person_who_crossed_and_left_is_gone_from_the_map() {
     // The person crossed x = 3 from y = -2 to 2 while the robot watched from 2.5 m.
     let crossing = blocked_fraction(&map, (2.7, -1.9), (3.3, 1.9));
     assert_eq!(crossing, 0.0, "the person is gone from the map");
+    assert_eq!(
+        m["plan_found"], true,
+        "the planner reaches the goal where the person walked"
+    );
     // And the person was seen: without the clearing the crossing stays blocked.
     let frozen = temp_dir("run", "person_frozen");
     let o = run_scene(
@@ -166,6 +188,9 @@ fn the_person_who_crossed_and_left_is_gone_from_the_map() {
     let map = oeg::io::mapfile::load_map(&frozen.join("map.oeg")).expect("map");
     let crossing = blocked_fraction(&map, (2.7, -1.9), (3.3, 1.9));
     assert!(crossing > 0.2, "{crossing}");
+    let m = metrics(&frozen);
+    assert_eq!(m["plan_found"], false, "the person left behind blocks the goal");
+    assert_eq!(m["truth_plan_found"], true);
 }
 
 #[test]

@@ -129,6 +129,22 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
         assert_eq!((row.1.as_str(), row.2.as_str()), (decision, "0"), "{name}");
     }
 
+    // Fig. 12: without height thresholding the branches block the way and the planner detours round them;
+    // with it the path is open.
+    let metric = |scenario: &str, key: &str| -> f64 {
+        let m: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.join(scenario).join("metrics.json")).expect("metrics.json"),
+        )
+        .expect("json");
+        m[key].as_f64().unwrap_or(f64::NAN)
+    };
+    assert!(metric("trees_no_threshold", "plan_length_ratio") > 1.05);
+    assert!(metric("trees_threshold", "plan_length_ratio") <= 1.01);
+    for row in rows {
+        let name = row["scenario"].as_str().expect("name");
+        assert_eq!(metric(name, "plan_unsafe_cells"), 0.0, "{name}");
+    }
+
     check_golden(&out);
 }
 
@@ -140,43 +156,50 @@ fn csv_rows(text: &str) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// Runs `oeg suite` on one scenario with one override and returns its standard error, asserting that the suite
+/// failed and named `scenario` and `metric` among the failed expectations.
+fn suite_fails(scenario: &str, setting: &str, metric: &str) -> String {
+    let out = temp_dir("suite", &format!("broken_{scenario}"));
+    let file = root().join(format!("scenarios/{scenario}.toml"));
+    let o = oeg(&[
+        "suite",
+        file.to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+        "--set",
+        setting,
+    ]);
+    assert!(!o.status.success(), "{scenario} with {setting} passed");
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        err.contains(&format!("{scenario} fail")) && err.contains(metric),
+        "{err}"
+    );
+    err
+}
+
 #[test]
 fn a_broken_setting_fails_the_suite() {
     // Spurious returns on one laser of the people scene: false obstacles the scene's bounds do not allow.
-    let out = temp_dir("suite", "broken");
-    let scenario = root().join("scenarios/people_walking.toml");
-    let o = oeg(&[
-        "suite",
-        scenario.to_str().expect("utf8"),
-        "--out",
-        out.to_str().expect("utf8"),
-        "--set",
+    let err = suite_fails(
+        "people_walking",
         "sensors.1.noise.spurious_probability=0.3",
-    ]);
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.contains("people_walking fail") && err.contains("overcautious_step_cells"),
-        "{err}"
+        "overcautious_step_cells",
     );
     assert!(err.contains("1 of 1 scenarios did not pass"), "{err}");
-
     // The boards scene with the paper's clearing (every free sample counts, however far below the board's top
     // it passed): beams under the boards erase them, and the zero-unsafe bound catches it.
-    let scenario = root().join("scenarios/boards_and_branches.toml");
-    let o = oeg(&[
-        "suite",
-        scenario.to_str().expect("utf8"),
-        "--out",
-        out.to_str().expect("utf8"),
-        "--set",
+    suite_fails(
+        "boards_and_branches",
         "map.model.free_space_max_depth_m=10.0",
-    ]);
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.contains("boards_and_branches fail") && err.contains("unsafe_step_cells"),
-        "{err}"
+        "unsafe_step_cells",
+    );
+    // The trees scene with its height threshold lifted far above the branches: Fig. 12 (b) instead of (c),
+    // and the open-path bound catches the detour.
+    suite_fails(
+        "trees_threshold",
+        "map.model.max_height_m=5.0",
+        "plan_length_ratio",
     );
 }
 

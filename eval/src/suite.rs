@@ -34,6 +34,11 @@ pub struct SuiteRow {
     pub unsafe_clearance_cells: u64,
     /// Over-cautious clearance cells.
     pub overcautious_clearance_cells: u64,
+    /// The planner check: the map's path length over the truth's (1 = no detour; empty when the map or the
+    /// truth has no path).
+    pub plan_length_ratio: Option<f64>,
+    /// Cells of the map's path near a true obstacle.
+    pub plan_unsafe_cells: u64,
     /// Wall time of the run, seconds.
     pub wall_time_s: f64,
     /// Failed expectations, or the error, `; `-separated.
@@ -151,6 +156,8 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
             overcautious_step_cells: r.metrics.overcautious_step_cells,
             unsafe_clearance_cells: r.metrics.unsafe_clearance_cells,
             overcautious_clearance_cells: r.metrics.overcautious_clearance_cells,
+            plan_length_ratio: Some(r.metrics.plan_length_ratio).filter(|v| v.is_finite()),
+            plan_unsafe_cells: r.metrics.plan_unsafe_cells,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: r
                 .failed
@@ -169,6 +176,8 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
             overcautious_step_cells: 0,
             unsafe_clearance_cells: 0,
             overcautious_clearance_cells: 0,
+            plan_length_ratio: None,
+            plan_unsafe_cells: 0,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: e.to_string(),
         },
@@ -180,15 +189,24 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
 /// The table's header.
 pub fn table_header() -> String {
     format!(
-        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
-        "scenario", "status", "coverage", "rmse [m]", "unsafe", "cautious", "unsafe-c", "caut.-c", "time [s]"
+        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8}",
+        "scenario",
+        "status",
+        "coverage",
+        "rmse [m]",
+        "unsafe",
+        "cautious",
+        "unsafe-c",
+        "caut.-c",
+        "path",
+        "time [s]"
     )
 }
 
 /// One row of the table.
 pub fn table_line(r: &SuiteRow) -> String {
     format!(
-        "{:<26} {:>6} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>8} {:>8.1}",
+        "{:<26} {:>6} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8.1}",
         r.scenario,
         r.status,
         r.coverage,
@@ -197,6 +215,8 @@ pub fn table_line(r: &SuiteRow) -> String {
         r.overcautious_step_cells,
         r.unsafe_clearance_cells,
         r.overcautious_clearance_cells,
+        r.plan_length_ratio
+            .map_or_else(|| "none".to_string(), |v| format!("{v:.2}")),
         r.wall_time_s
     )
 }
