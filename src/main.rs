@@ -148,6 +148,10 @@ struct MapArgs {
     /// Whether free samples above a cell's elevation lower its occupancy: always (the paper) or below_elevation.
     #[arg(long, value_enum, default_value_t = FreeOccArg::Always)]
     free_space_occupancy: FreeOccArg,
+    /// Which of a scan's hits in a cell make its elevation: highest (the paper) or weighted_mean (every hit an
+    /// independent measurement, as elevation_mapping fuses points; not biased upwards by noisy stereo clouds).
+    #[arg(long, value_enum, default_value_t = ScanHitArg::Highest)]
+    scan_hit_elevation: ScanHitArg,
     /// Free samples more than this far (metres) below a cell's elevation say nothing about it (they may pass
     /// under an overhang). Default: no limit (the paper).
     #[arg(long)]
@@ -226,6 +230,13 @@ enum InvalidArg {
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
 #[value(rename_all = "snake_case")]
+enum ScanHitArg {
+    Highest,
+    WeightedMean,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
 enum FreeSpaceArg {
     Zero,
     Skip,
@@ -245,6 +256,10 @@ impl MapArgs {
                 FreeOccArg::BelowElevation => oeg::FreeSpaceOccupancy::BelowElevation,
             },
             free_space_max_depth_m: self.free_space_max_depth,
+            scan_hit_elevation: match self.scan_hit_elevation {
+                ScanHitArg::Highest => oeg::ScanHitElevation::Highest,
+                ScanHitArg::WeightedMean => oeg::ScanHitElevation::WeightedMean,
+            },
             max_height_m: self.max_height,
             max_range_m: self.max_range,
             no_return_clear_range_m: self.no_return_clear_range,
@@ -332,6 +347,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
         free_space: FreeSpaceArg::Zero,
         free_space_occupancy: FreeOccArg::Always,
         free_space_max_depth: None,
+        scan_hit_elevation: ScanHitArg::Highest,
         max_height: Some(0.5),
         max_range: None,
         no_return_clear_range: None,

@@ -19,7 +19,9 @@ pub use error::{Error, Result};
 pub use geometry::{CellIndex, CellRegion, GridGeometry};
 pub use layers::{Layer, LayerKind, Raster, TraversabilityCounts};
 pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Map, MapConfig};
-pub use model::{Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions};
+pub use model::{
+    Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions, ScanHitElevation,
+};
 pub use planner::{Plan, PlannerOptions, UnknownCells};
 pub use scan::{Ray, RayKind, Scan};
 pub use sensor::{RangeNoiseModel, SensorModel};

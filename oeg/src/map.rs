@@ -8,8 +8,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
 use crate::model::{
     Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    clamp_probability, elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds,
-    ray_bound, update_log_odds,
+    ScanHitElevation, clamp_probability, elevation_observation, fuse_elevation, inverse_sensor_model,
+    kalman_fuse, log_odds, ray_bound, update_log_odds,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -77,7 +77,8 @@ struct ScanEvidence {
     /// The largest inverse-sensor-model probability of any ray's sample in the cell; 0: untouched (a sample's
     /// probability is at least `p_min` > 0).
     p_max: f32,
-    /// The highest elevation measurement (eq. 12 with `p > l_occ`); -inf: none.
+    /// The scan's elevation measurement (eq. 12 with `p > l_occ`) from its hits as
+    /// [`ModelOptions::scan_hit_elevation`] says (the paper: the highest); -inf: none.
     hit_z_m: f32,
     /// Variance of that measurement.
     hit_var_m2: f32,
@@ -110,12 +111,9 @@ impl ScanEvidence {
 
     /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12).
     #[inline(always)]
-    fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32) {
+    fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation) {
         self.raise_p(p);
-        if z_m > self.hit_z_m {
-            self.hit_z_m = z_m;
-            self.hit_var_m2 = var_m2;
-        }
+        (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
     }
 
     /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
@@ -468,7 +466,7 @@ impl Map {
                 );
                 let p = clamp_probability(p, opts.p_min, opts.p_max);
                 match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold) {
-                    Some(z) => evidence.add_hit(p, z, s2),
+                    Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation),
                     // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
                     // the occupancy, but its height bounds nothing (a noisy long reading would otherwise
                     // "prove" free space under the ground).

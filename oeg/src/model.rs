@@ -112,6 +112,48 @@ pub fn fuse_elevation(
     }
 }
 
+/// Which of one scan's hits in a cell make its elevation measurement (eq. 12's `z`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScanHitElevation {
+    /// The paper (section 4: "the elevation is computed considering the higher point of the obstacle"): the
+    /// highest hit of the scan, with its variance. Exact for a precise laser; with many noisy hits in a cell
+    /// (a stereo camera's pixels) the highest is biased upwards by about two standard deviations.
+    #[default]
+    Highest,
+    /// Every hit is an independent measurement, as elevation_mapping fuses each point: the scan's
+    /// measurement is the hits' inverse-variance weighted mean, with variance `1 / sum(1 / s_i^2)`
+    /// (sequential Kalman updates with the same result). Noise no longer biases it upwards; a cell that spans an
+    /// obstacle's edge gets a height between its top and the ground.
+    WeightedMean,
+}
+
+impl ScanHitElevation {
+    /// Adds the hit `(z_m, var_m2)` to the scan's measurement `(z, var)` of a cell (`z = -inf`,
+    /// `var = +inf` before the first hit).
+    #[inline(always)]
+    pub fn combine(self, (z, var): (f32, f32), z_m: f32, var_m2: f32) -> (f32, f32) {
+        match self {
+            Self::Highest => {
+                if z_m > z {
+                    (z_m, var_m2)
+                } else {
+                    (z, var)
+                }
+            }
+            Self::WeightedMean => {
+                if z == f32::NEG_INFINITY {
+                    (z_m, var_m2)
+                } else {
+                    // One Kalman step with gain var / (var + var_m2).
+                    let k = var / (var + var_m2);
+                    (z + k * (z_m - z), var * var_m2 / (var + var_m2))
+                }
+            }
+        }
+    }
+}
+
 /// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -166,6 +208,8 @@ pub struct ModelOptions {
     /// `None` (the paper): no limit. Moving obstacles are then removed by the hits on what is behind or under
     /// them (see [`ElevationFusion::HighestSurface`]'s `multi_height_noise_m2`) and by beams near their top.
     pub free_space_max_depth_m: Option<f32>,
+    /// Which of a scan's hits in a cell make its elevation measurement.
+    pub scan_hit_elevation: ScanHitElevation,
     /// How hit elevations are fused.
     pub elevation_fusion: ElevationFusion,
     /// Variance added to a cell's elevation variance before each fusion, m^2 per update. 0 (the paper) keeps
@@ -196,6 +240,7 @@ impl Default for ModelOptions {
             free_space_elevation: FreeSpaceElevation::Zero,
             free_space_occupancy: FreeSpaceOccupancy::Always,
             free_space_max_depth_m: None,
+            scan_hit_elevation: ScanHitElevation::Highest,
             elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,
             max_height_m: None,
@@ -419,6 +464,23 @@ mod tests {
 
     fn close(a: f32, b: f32, tol: f32) -> bool {
         (a - b).abs() <= tol
+    }
+
+    #[test]
+    fn a_scans_hits_combine_as_the_highest_or_the_weighted_mean() {
+        let none = (f32::NEG_INFINITY, f32::INFINITY);
+        let highest = ScanHitElevation::Highest;
+        let first = highest.combine(none, 0.1, 0.01);
+        assert_eq!(first, (0.1, 0.01));
+        assert_eq!(highest.combine(first, 0.3, 0.04), (0.3, 0.04));
+        assert_eq!(highest.combine((0.3, 0.04), 0.1, 0.01), (0.3, 0.04));
+        // Weighted mean: weights 1 / 0.01 and 1 / 0.03 -> (0.1 * 100 + 0.3 * 33.3) / 133.3 = 0.15, variance
+        // 1 / 133.3 = 0.0075.
+        let mean = ScanHitElevation::WeightedMean;
+        let first = mean.combine(none, 0.1, 0.01);
+        assert_eq!(first, (0.1, 0.01));
+        let (z, var) = mean.combine(first, 0.3, 0.03);
+        assert!(close(z, 0.15, 1e-6) && close(var, 0.0075, 1e-7), "{z} {var}");
     }
 
     #[test]

@@ -182,10 +182,11 @@ pub fn forbidden_mask(
 /// The shortest path from `start` to `goal` through `region` on `decisions` (one per region cell, row-major),
 /// or `None` if there is none.
 ///
-/// Unknown cells within the inflation radius of the start or the goal count as drivable, whatever
-/// [`UnknownCells`] says: the robot stands on them at the start and at the end (navigation stacks clear the
-/// robot's footprint the same way), and no sensor on the robot sees under it. Start and goal must still keep
-/// the inflation radius from blocked cells.
+/// The robot stands at the start, so every cell within the inflation radius of the start counts as drivable,
+/// blocked or unknown (costmap_2d's footprint clearing: no sensor sees under the robot, and nothing stands
+/// where the robot is; a spurious hit there would otherwise pin it). Unknown cells within the radius of the
+/// goal count as drivable too, whatever [`UnknownCells`] says (the ground under the robot's final footprint
+/// need not have been seen), but blocked cells near the goal still count.
 ///
 /// # Errors
 /// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the region.
@@ -210,7 +211,7 @@ pub fn plan(
     if decisions.len() as u64 == region.num_cells() && resolution_m > 0.0 {
         let r = options.inflation_radius_m.max(0.0) / resolution_m + 1e-9;
         let rc = r.floor().min(f64::from(region.num_x.max(region.num_y))) as i64;
-        for centre in [start, goal] {
+        for (centre, clear_blocked) in [(start, true), (goal, false)] {
             for dj in -rc..=rc {
                 for di in -rc..=rc {
                     if ((di * di + dj * dj) as f64) > r * r {
@@ -221,7 +222,8 @@ pub fn plan(
                         (i64::from(centre.j) + dj) as i32,
                     );
                     if let Some(k) = region.offset(c)
-                        && decisions[k] == Traversability::Unknown
+                        && (decisions[k] == Traversability::Unknown
+                            || (clear_blocked && decisions[k] == Traversability::Blocked))
                     {
                         decisions[k] = Traversability::Free;
                     }
@@ -509,6 +511,36 @@ mod tests {
             None,
             "only the start cell is exempt"
         );
+    }
+
+    #[test]
+    fn blocked_cells_under_the_robot_at_the_start_are_cleared_but_not_at_the_goal() {
+        // A false hit 0.1 m beside the start would pin a 0.2 m robot; the same next to the goal blocks it.
+        let r = region(12, 5);
+        let (s, g) = (CellIndex::new(2, 2), CellIndex::new(9, 2));
+        let options = PlannerOptions {
+            inflation_radius_m: 0.2,
+            unknown: UnknownCells::Avoid,
+        };
+        let with_hit_at = |hit: CellIndex| -> Vec<Traversability> {
+            r.cells()
+                .map(|c| {
+                    if c == hit {
+                        Traversability::Blocked
+                    } else {
+                        Traversability::Free
+                    }
+                })
+                .collect()
+        };
+        let near_start = with_hit_at(CellIndex::new(3, 2));
+        assert!(
+            plan(&r, 0.1, &near_start, s, g, &options)
+                .expect("valid")
+                .is_some()
+        );
+        let near_goal = with_hit_at(CellIndex::new(10, 2));
+        assert_eq!(plan(&r, 0.1, &near_goal, s, g, &options).expect("valid"), None);
     }
 
     #[test]

@@ -2,8 +2,8 @@
 
 use nalgebra::{Point3, Vector3};
 use oeg::{
-    CellIndex, FreeSpaceElevation, Map, MapConfig, ModelOptions, Ray, RobotProfile, Scan, SensorModel,
-    Traversability, TraversabilityRule,
+    CellIndex, FreeSpaceElevation, Map, MapConfig, ModelOptions, Ray, RobotProfile, Scan, ScanHitElevation,
+    SensorModel, Traversability, TraversabilityRule,
 };
 use proptest::prelude::*;
 
@@ -456,4 +456,40 @@ fn free_samples_far_below_a_surface_leave_it_only_with_a_depth_limit() {
         Traversability::Free,
         "within 10 cm: the beams count again"
     );
+}
+
+#[test]
+fn many_noisy_hits_in_a_cell_bias_the_highest_upwards_but_not_the_weighted_mean() {
+    // A stereo-like scan: 21 hits on flat ground at z = 0 inside one 0.2 m cell, their heights spread evenly
+    // over +-5 cm (zero-mean noise). The paper's highest hit reads 5 cm, a step that blocks the Pioneer; the
+    // weighted mean reads the ground.
+    let targets: Vec<(f64, f64, f64)> = (0..21)
+        .map(|k| (2.1, 0.1, -0.05 + 0.005 * f64::from(k)))
+        .collect();
+    let scan = scan_of(Point3::new(0.1, 0.1, 0.5), &targets);
+    let elevation_with = |rule| {
+        let mut map = map_with(
+            0.2,
+            ModelOptions {
+                scan_hit_elevation: rule,
+                ..ModelOptions::default()
+            },
+        );
+        map.integrate(&scan).expect("integrated");
+        let c = cell(&map, 2.1, 0.1);
+        (
+            map.cell(c).elevation().expect("elevation"),
+            map.traversability(c, &RobotProfile::default(), TraversabilityRule::Absolute),
+        )
+    };
+    let (highest, class) = elevation_with(ScanHitElevation::Highest);
+    assert!((highest.mean_m - 0.05).abs() < 1e-4, "{highest:?}");
+    assert_eq!(class, Traversability::Blocked);
+    let (mean, class) = elevation_with(ScanHitElevation::WeightedMean);
+    assert!(mean.mean_m.abs() < 1e-4, "{mean:?}");
+    assert!(
+        mean.var_m2 < highest.var_m2 / 20.0,
+        "21 measurements: {mean:?} against {highest:?}"
+    );
+    assert_eq!(class, Traversability::Traversable);
 }
