@@ -485,6 +485,20 @@ fn run_preview(path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<
     Ok(())
 }
 
+/// The error and its causes on one line, each cause once: the library errors already name their source in
+/// their message (`file: No such file or directory`), so a cause whose text is already there is not repeated.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -525,7 +539,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             ExitCode::FAILURE
         }
     }

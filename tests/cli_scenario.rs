@@ -62,6 +62,15 @@ fn validate_fails_on_a_bad_file_and_names_its_place() {
 }
 
 #[test]
+fn a_missing_scenario_file_is_named_once_with_its_cause_once() {
+    let o = oeg(&["run", "no_such_scenario.toml"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.starts_with("error: no_such_scenario.toml: "), "{err}");
+    assert_eq!(err.matches("os error 2").count(), 1, "{err}");
+}
+
+#[test]
 fn preview_draws_the_truth() {
     let out = temp_dir("scn", "preview");
     let scenario = scenarios_dir().join("curbs_and_boards.toml");
