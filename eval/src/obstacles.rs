@@ -69,6 +69,39 @@ pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
     }
 }
 
+/// The obstacle's footprint as a closed polygon of world points (a circle as 32 sides), for the images.
+pub fn footprint_outline(o: &Obstacle) -> Vec<(f64, f64)> {
+    let [cx, cy] = o.center_xy_m();
+    let rect = |length: f64, width: f64, yaw_deg: f64| {
+        let pose = Isometry2::new(Vector2::new(cx, cy), yaw_deg.to_radians());
+        let (hl, hw) = (length / 2.0, width / 2.0);
+        [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)]
+            .iter()
+            .map(|(x, y)| {
+                let p = pose * Point2::new(*x, *y);
+                (p.x, p.y)
+            })
+            .collect()
+    };
+    match o {
+        Obstacle::Box { size_m, yaw_deg, .. } | Obstacle::Overhang { size_m, yaw_deg, .. } => {
+            rect(size_m[0], size_m[1], *yaw_deg)
+        }
+        Obstacle::Ramp {
+            length_m,
+            width_m,
+            yaw_deg,
+            ..
+        } => rect(*length_m, *width_m, *yaw_deg),
+        Obstacle::Cylinder { radius_m, .. } | Obstacle::Bush { radius_m, .. } => (0..=32)
+            .map(|k| {
+                let a = std::f64::consts::TAU * f64::from(k) / 32.0;
+                (cx + radius_m * a.cos(), cy + radius_m * a.sin())
+            })
+            .collect(),
+    }
+}
+
 fn deciding_height(o: &Obstacle) -> f64 {
     match o {
         Obstacle::Box { size_m, base_m, .. } => base_m + size_m[2],
@@ -201,5 +234,28 @@ mod tests {
         };
         assert!(footprint_contains(&pole, Point2::new(0.07, 0.07)));
         assert!(!footprint_contains(&pole, Point2::new(0.08, 0.08)));
+
+        // The outlines agree: closed, every vertex on the footprint's edge (just inside when moved 0.1 % towards
+        // the centre, just outside when moved 0.1 % away).
+        for o in [&board, &pole] {
+            let outline = footprint_outline(o);
+            let (a, b) = (outline[0], outline[outline.len() - 1]);
+            assert!(
+                (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12,
+                "closed: {a:?} {b:?}"
+            );
+            let [cx, cy] = o.center_xy_m();
+            let scaled = |(x, y): (f64, f64), f: f64| Point2::new(cx + f * (x - cx), cy + f * (y - cy));
+            for p in &outline {
+                assert!(footprint_contains(o, scaled(*p, 0.999)), "{p:?}");
+                assert!(!footprint_contains(o, scaled(*p, 1.001)), "{p:?}");
+            }
+        }
+        let board_outline = footprint_outline(&board);
+        let max_x = board_outline
+            .iter()
+            .map(|p| p.0)
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!((max_x - 3.0).abs() < 1e-9, "{board_outline:?}");
     }
 }

@@ -23,6 +23,8 @@ pub const DECISION_CLASSES: [(&str, Rgb); 5] = [
 const DRIVE: Rgb = [30, 80, 230];
 /// The path planned on the map, on `decisions.png`.
 const PLAN: Rgb = [200, 0, 200];
+/// Obstacle footprints and names on `decisions.png`.
+const OUTLINE: Rgb = [0, 0, 0];
 
 /// The scenario's drive as a polyline of world points.
 pub fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
@@ -119,6 +121,7 @@ pub fn write(
         .map(|(n, c)| ((*n).to_string(), *c))
         .collect();
     classes.push(("drive".into(), DRIVE));
+    classes.push(("obstacle footprint".into(), OUTLINE));
     classes.push((
         if plan.map_plan.is_some() {
             "path planned on the map".into()
@@ -154,6 +157,19 @@ pub fn write(
         &legend,
     );
     let mut fig = with_drive(fig);
+    // The scene under the decisions: every obstacle's footprint, and the names of the named ones.
+    for o in &s.obstacles {
+        let outline = crate::obstacles::footprint_outline(o);
+        fig.polyline(&outline, OUTLINE);
+        if let Some(name) = o.name() {
+            let (x, y) = outline
+                .iter()
+                .fold((f64::NEG_INFINITY, f64::NEG_INFINITY), |(x, y), p| {
+                    (x.max(p.0), y.max(p.1))
+                });
+            fig.label(x, y, name, OUTLINE);
+        }
+    }
     if let Some(p) = &plan.map_plan {
         fig.polyline(&crate::plan::polyline(p, map.geometry()), PLAN);
     }

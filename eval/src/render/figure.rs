@@ -205,6 +205,12 @@ impl Figure {
         }
     }
 
+    /// A line of text whose lower-left corner is at a world point, clipped to the canvas.
+    pub fn label(&mut self, x_m: f64, y_m: f64, text: &str, color: Rgb) {
+        let (px, py) = self.world_to_px(x_m, y_m);
+        self.canvas.text(px + 2, py - 10, text, 1, color);
+    }
+
     /// A small filled square marker at a world point.
     pub fn marker(&mut self, x_m: f64, y_m: f64, color: Rgb) {
         let (px, py) = self.world_to_px(x_m, y_m);

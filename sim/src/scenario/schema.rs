@@ -297,16 +297,21 @@ impl Obstacle {
         }
     }
 
-    /// The obstacle's label, or `<kind> <index>`.
-    pub fn label(&self, index: usize) -> String {
-        let name = match self {
+    /// The obstacle's name, if the file gives one.
+    pub fn name(&self) -> Option<&str> {
+        match self {
             Self::Box { name, .. }
             | Self::Cylinder { name, .. }
             | Self::Ramp { name, .. }
             | Self::Bush { name, .. }
-            | Self::Overhang { name, .. } => name.clone(),
-        };
-        name.unwrap_or_else(|| format!("{} {index}", self.kind()))
+            | Self::Overhang { name, .. } => name.as_deref(),
+        }
+    }
+
+    /// The obstacle's label: its name, or `<kind> <index>`.
+    pub fn label(&self, index: usize) -> String {
+        self.name()
+            .map_or_else(|| format!("{} {index}", self.kind()), str::to_string)
     }
 
     /// The footprint's centre.
