@@ -38,6 +38,9 @@ enum Command {
     /// Build a map from OctoMap scan graphs (.graph) and point clouds (.pcd); write map.oeg, layer images,
     /// summary.json and timing.json.
     Map(MapArgs),
+    /// Plan a path on a saved map (map.oeg) from one point to another: write plan.json, path.csv and
+    /// plan.png.
+    Plan(PlanArgs),
     /// Print a saved map's header and statistics.
     Inspect {
         /// A map file written by `oeg map` (map.oeg).
@@ -114,6 +117,99 @@ struct RunArgs {
     /// --set sensors.0.noise.dropout_probability=0.05 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
+}
+
+#[derive(clap::Args, Debug)]
+struct PlanArgs {
+    /// A map file (map.oeg, from `oeg map` or `oeg run`).
+    map: PathBuf,
+    /// Start, world frame, metres: X,Y.
+    #[arg(long, value_parser = parse_xy, allow_hyphen_values = true)]
+    from: (f64, f64),
+    /// Goal, world frame, metres: X,Y.
+    #[arg(long, value_parser = parse_xy, allow_hyphen_values = true)]
+    to: (f64, f64),
+    /// Output folder (created if needed).
+    #[arg(long, default_value = "out/plan")]
+    out: PathBuf,
+    /// The robot's centre keeps at least this far from blocked cells, metres (the Pioneer 3-AT's inscribed
+    /// radius).
+    #[arg(long, default_value_t = oeg::planner::DEFAULT_INFLATION_RADIUS_M)]
+    inflation_radius: f64,
+    /// Cells the map never observed: avoid (never entered, not inflated), inflate (obstacles), or drivable.
+    #[arg(long, value_enum, default_value_t = UnknownArg::Avoid)]
+    unknown: UnknownArg,
+    /// The robot's largest climbable step in metres.
+    #[arg(long, default_value_t = oeg::traversability::DEFAULT_MAX_STEP_M)]
+    max_step: f32,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+#[value(rename_all = "snake_case")]
+enum UnknownArg {
+    Avoid,
+    Inflate,
+    Drivable,
+}
+
+/// `X,Y` in metres, as `--from` and `--to` take them.
+fn parse_xy(text: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let number = |s: &str| {
+        s.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("expected X,Y in metres (two finite numbers), got `{text}`"))
+    };
+    match parts.as_slice() {
+        [x, y] => Ok((number(x)?, number(y)?)),
+        _ => Err(format!(
+            "expected X,Y in metres (two numbers separated by a comma), got `{text}`"
+        )),
+    }
+}
+
+fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
+    let job = eval::plan::PlanJob {
+        map: args.map.clone(),
+        from_xy_m: args.from,
+        to_xy_m: args.to,
+        out_dir: args.out.clone(),
+        options: oeg::PlannerOptions {
+            inflation_radius_m: args.inflation_radius,
+            unknown: match args.unknown {
+                UnknownArg::Avoid => oeg::UnknownCells::Avoid,
+                UnknownArg::Inflate => oeg::UnknownCells::Inflate,
+                UnknownArg::Drivable => oeg::UnknownCells::Drivable,
+            },
+        },
+        profile: RobotProfile {
+            max_step_m: args.max_step,
+            ..RobotProfile::default()
+        },
+        rule: TraversabilityRule::Absolute,
+    };
+    job.profile.validate()?;
+    let (summary, files) = eval::plan::run_job(&job)?;
+    if summary.plan_found {
+        say!(
+            "path found: {:.2} m, {} cells",
+            summary.plan_length_m,
+            summary.num_path_cells
+        );
+    } else {
+        say!(
+            "no path from ({}, {}) to ({}, {}) m",
+            args.from.0,
+            args.from.1,
+            args.to.0,
+            args.to.1
+        );
+    }
+    for f in files {
+        say!("wrote {}", f.display());
+    }
+    Ok(())
 }
 
 #[derive(clap::Args, Debug)]
@@ -504,6 +600,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Map(args)) => run_map(&args),
         Some(Command::Run(args)) => run_scenario(&args),
+        Some(Command::Plan(args)) => run_plan(&args),
         Some(Command::Inspect { map }) => eval::inspect::inspect(&map)
             .map(|text| {
                 let _ = write!(std::io::stdout(), "{text}");

@@ -257,6 +257,65 @@ fn the_demo_runs_with_no_arguments_style_output() {
 }
 
 #[test]
+fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
+    let dir = temp_dir("map", "plan");
+    let demo = dir.join("demo");
+    let o = oeg(&["demo", "--out", demo.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let map = demo.join("map.oeg");
+    let plan = |to: &str, name: &str| -> (serde_json::Value, PathBuf) {
+        let out = dir.join(name);
+        let o = oeg(&[
+            "plan",
+            map.to_str().expect("utf8"),
+            "--from",
+            "0.5,0",
+            "--to",
+            to,
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let summary =
+            serde_json::from_slice(&std::fs::read(out.join("plan.json")).expect("plan.json")).expect("json");
+        (summary, out)
+    };
+    // Along the corridor between the 3 cm and the 5 cm curb (0.8 m apart): the straight 5.5 m.
+    let (open, out) = plan("6,0", "open");
+    assert_eq!(open["plan_found"], true);
+    assert!(
+        (open["plan_length_m"].as_f64().expect("length") - 5.5).abs() < 1e-9,
+        "{open}"
+    );
+    let path = std::fs::read_to_string(out.join("path.csv")).expect("path.csv");
+    assert!(path.starts_with("step,x_m,y_m\n0,0.525,0.025\n"), "{path}");
+    assert_eq!(
+        path.lines().count() as u64 - 1,
+        open["num_path_cells"].as_u64().expect("cells")
+    );
+    assert!(out.join("plan.png").is_file());
+    // Onto the 5 cm curb: blocked, so no path (and an empty path.csv).
+    let (blocked, out) = plan("3.15,1.2", "blocked");
+    assert_eq!(blocked["plan_found"], false);
+    assert!(blocked["plan_length_m"].is_null());
+    assert_eq!(
+        std::fs::read_to_string(out.join("path.csv")).expect("path.csv"),
+        "step,x_m,y_m\n"
+    );
+    // A malformed point is a clear error.
+    let o = oeg(&[
+        "plan",
+        map.to_str().expect("utf8"),
+        "--from",
+        "0.5",
+        "--to",
+        "6,0",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("expected X,Y in metres"), "{}", stderr(&o));
+}
+
+#[test]
 fn the_shared_real_scans_map_when_present() {
     let dir = std::env::var_os("OEG_SHARED_DATA")
         .map(PathBuf::from)

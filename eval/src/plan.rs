@@ -4,6 +4,8 @@
 //! the path the robot could have had.
 
 use oeg::planner::{self, Plan, PlannerOptions, UnknownCells};
+use std::path::PathBuf;
+
 use oeg::{CellIndex, CellRegion, Map, RobotProfile, Traversability, TraversabilityRule};
 use serde::Serialize;
 use sim::scenario::Scenario;
@@ -21,19 +23,6 @@ pub struct PlanCheck {
     /// Cells of the map's path whose centre lies within the inflation radius of a truly blocked cell: where
     /// the robot following the map's path would touch an obstacle.
     pub unsafe_cells: Vec<CellIndex>,
-}
-
-/// The map's decision for every cell of `region`, row-major.
-pub fn map_decisions(
-    map: &Map,
-    region: &CellRegion,
-    profile: &RobotProfile,
-    rule: TraversabilityRule,
-) -> Vec<Traversability> {
-    region
-        .cells()
-        .map(|c| map.traversability(c, profile, rule))
-        .collect()
 }
 
 /// The truth's decision for every cell of its region, row-major: blocked when the robot truly cannot enter
@@ -77,7 +66,7 @@ pub fn check(s: &Scenario, map: &Map, truth: &TruthRaster, profile: &RobotProfil
         message: format!("planner: {e}"),
     };
     let options = s.planner;
-    let mapped = map_decisions(map, &region, profile, rule);
+    let mapped = map.traversability_layer(region, profile, rule)?.values;
     let map_plan = planner::plan(&region, res, &mapped, start, goal, &options).map_err(planner_error)?;
     let truly = truth_decisions(truth, rule);
     let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
@@ -159,6 +148,130 @@ pub fn polyline(plan: &Plan, geometry: &oeg::GridGeometry) -> Vec<(f64, f64)> {
     plan.cells.iter().map(|c| geometry.cell_center(*c)).collect()
 }
 
+/// `oeg plan`: a path on a saved map (real data or a run's `map.oeg`).
+#[derive(Debug, Clone)]
+pub struct PlanJob {
+    /// The map file.
+    pub map: PathBuf,
+    /// Start, world x and y, metres.
+    pub from_xy_m: (f64, f64),
+    /// Goal, world x and y, metres.
+    pub to_xy_m: (f64, f64),
+    /// Output folder.
+    pub out_dir: PathBuf,
+    /// How the planner reads the map.
+    pub options: PlannerOptions,
+    /// The robot, for the decisions.
+    pub profile: RobotProfile,
+    /// The step rule.
+    pub rule: TraversabilityRule,
+}
+
+/// `plan.json` of `oeg plan`: one flat object.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanSummary {
+    /// Whether a path was found.
+    pub plan_found: bool,
+    /// Its length through the cell centres, metres (null when there is none).
+    pub plan_length_m: f64,
+    /// Cells of the path.
+    pub num_path_cells: u64,
+    /// Start, world x, metres.
+    pub from_x_m: f64,
+    /// Start, world y, metres.
+    pub from_y_m: f64,
+    /// Goal, world x, metres.
+    pub to_x_m: f64,
+    /// Goal, world y, metres.
+    pub to_y_m: f64,
+    /// The planner's inflation radius, metres.
+    pub inflation_radius_m: f64,
+    /// The planner's rule for unknown cells.
+    pub unknown: UnknownCells,
+    /// The robot's step limit, metres.
+    pub max_step_m: f32,
+}
+
+/// Plans on a saved map and writes `plan.json`, `path.csv` (one row per path cell: `step,x_m,y_m`) and
+/// `plan.png` (the traversability classes with the path, the start and the goal) into the output folder. The
+/// planning region is the map's observed region, grown to hold the start and the goal.
+///
+/// # Errors
+/// The map cannot be read, a point is not finite, the options are invalid, or a write fails.
+pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
+    let map = oeg::io::mapfile::load_map(&job.map)?;
+    let geometry = *map.geometry();
+    let point_error = |what: &str, (x, y): (f64, f64)| EvalError::Input {
+        path: job.map.clone(),
+        message: format!("the {what} ({x}, {y}) m is not a finite point on the map's grid"),
+    };
+    let start = geometry
+        .cell_of(job.from_xy_m.0, job.from_xy_m.1)
+        .ok_or_else(|| point_error("start", job.from_xy_m))?;
+    let goal = geometry
+        .cell_of(job.to_xy_m.0, job.to_xy_m.1)
+        .ok_or_else(|| point_error("goal", job.to_xy_m))?;
+    let ends = CellRegion::from_corners(
+        CellIndex::new(start.i.min(goal.i), start.j.min(goal.j)),
+        CellIndex::new(start.i.max(goal.i), start.j.max(goal.j)),
+    )
+    .ok_or_else(|| point_error("start", job.from_xy_m))?;
+    let region = map.observed_region().map_or(ends, |r| r.union(&ends));
+    let classes = map.traversability_layer(region, &job.profile, job.rule)?;
+    let plan = planner::plan(
+        &region,
+        geometry.resolution_m(),
+        &classes.values,
+        start,
+        goal,
+        &job.options,
+    )
+    .map_err(|e| EvalError::Input {
+        path: job.map.clone(),
+        message: format!("planner: {e}"),
+    })?;
+    let summary = PlanSummary {
+        plan_found: plan.is_some(),
+        plan_length_m: plan.as_ref().map_or(f64::NAN, |p| p.length_m),
+        num_path_cells: plan.as_ref().map_or(0, |p| p.cells.len() as u64),
+        from_x_m: job.from_xy_m.0,
+        from_y_m: job.from_xy_m.1,
+        to_x_m: job.to_xy_m.0,
+        to_y_m: job.to_xy_m.1,
+        inflation_radius_m: job.options.inflation_radius_m,
+        unknown: job.options.unknown,
+        max_step_m: job.profile.max_step_m,
+    };
+    crate::output::create_dir(&job.out_dir)?;
+    let mut files = Vec::new();
+    let mut csv = String::from("step,x_m,y_m\n");
+    for (step, c) in plan.iter().flat_map(|p| p.cells.iter()).enumerate() {
+        let (x, y) = geometry.cell_center(*c);
+        let (x, y) = (crate::output::round_m(x), crate::output::round_m(y));
+        csv.push_str(&format!("{step},{x},{y}\n"));
+    }
+    let path_csv = job.out_dir.join("path.csv");
+    crate::output::write_bytes(&path_csv, csv.as_bytes())?;
+    files.push(path_csv);
+    let title = match &plan {
+        Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
+        None => "No path on the map".to_string(),
+    };
+    let mut fig = crate::render::traversability_figure(&classes, &title);
+    if let Some(p) = &plan {
+        fig.polyline(&polyline(p, &geometry), crate::report_images::PLAN);
+    }
+    fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::report_images::DRIVE);
+    fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::report_images::PLAN);
+    let png = job.out_dir.join("plan.png");
+    crate::output::write_bytes(&png, &fig.to_png())?;
+    files.push(png);
+    let json = job.out_dir.join("plan.json");
+    crate::output::write_json(&json, &summary)?;
+    files.push(json);
+    Ok((summary, files))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,12 +319,10 @@ mod tests {
         );
         // The map: nothing observed; with unknown cells drivable it goes straight through the wall.
         let map = Map::new(MapConfig::new(1.0)).expect("map");
-        let mapped = map_decisions(
-            &map,
-            &region,
-            &RobotProfile::default(),
-            TraversabilityRule::Absolute,
-        );
+        let mapped = map
+            .traversability_layer(region, &RobotProfile::default(), TraversabilityRule::Absolute)
+            .expect("raster")
+            .values;
         assert!(mapped.iter().all(|t| *t == Traversability::Unknown));
         let straight = planner::plan(&region, 1.0, &mapped, s, g, &options)
             .expect("valid")

@@ -20,9 +20,10 @@ pub const DECISION_CLASSES: [(&str, Rgb); 5] = [
     ("over-cautious (mapped blocked)", [255, 160, 30]),
 ];
 
-const DRIVE: Rgb = [30, 80, 230];
+/// The drive on the run's images.
+pub const DRIVE: Rgb = [30, 80, 230];
 /// The path planned on the map, on `decisions.png`.
-const PLAN: Rgb = [200, 0, 200];
+pub const PLAN: Rgb = [200, 0, 200];
 /// Obstacle footprints and names on `decisions.png`.
 const OUTLINE: Rgb = [0, 0, 0];
 
