@@ -140,6 +140,8 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     };
     assert!(metric("trees_no_threshold", "plan_length_ratio") > 1.05);
     assert!(metric("trees_threshold", "plan_length_ratio") <= 1.01);
+    // The staircase's truth lets the robot over the 3.4 cm curb; the map, which maps it blocked, crosses at 3 cm.
+    assert!(metric("curb_staircase", "plan_length_ratio") > 1.03);
     for row in rows {
         let name = row["scenario"].as_str().expect("name");
         assert_eq!(metric(name, "plan_unsafe_cells"), 0.0, "{name}");
@@ -189,10 +191,14 @@ fn a_broken_setting_fails_the_suite() {
     assert!(err.contains("1 of 1 scenarios did not pass"), "{err}");
     // The boards scene with the paper's clearing (every free sample counts, however far below the board's top
     // it passed): beams under the boards erase them, and the zero-unsafe bound catches it.
-    suite_fails(
+    let err = suite_fails(
         "boards_and_branches",
         "map.model.free_space_max_depth_m=10.0",
         "unsafe_step_cells",
+    );
+    assert!(
+        err.contains("plan_unsafe_cells"),
+        "the planner's path goes under the erased board: {err}"
     );
     // The trees scene with its height threshold lifted far above the branches: Fig. 12 (b) instead of (c),
     // and the open-path bound catches the detour.

@@ -59,7 +59,8 @@ pub struct Metrics {
     pub num_scans: u64,
     /// Rays integrated.
     pub num_rays: u64,
-    /// Whether the planner found a path on the map from the drive's first waypoint to its last.
+    /// Whether the planner found a path on the map from its start to its goal (by default the drive's first and
+    /// last waypoints).
     pub plan_found: bool,
     /// Length of the map's path, metres (null when there is none).
     pub plan_length_m: f64,

@@ -1,7 +1,7 @@
 //! The planner check (`plan.csv` and the `plan_*` metrics): would a planner using this map send the robot
 //! somewhere it cannot go, or refuse a way that is open? The run plans from the drive's first waypoint to its
-//! last on the final map, checks every cell of that path against the truth, and plans on the truth too, for
-//! the path the robot could have had.
+//! last (or the scenario's `[planner]` start and goal) on the final map, checks every cell of that path
+//! against the truth, and plans on the truth too, for the path the robot could have had.
 
 use oeg::planner::{self, Plan, PlannerOptions, UnknownCells};
 use std::path::PathBuf;
@@ -52,20 +52,30 @@ pub fn check(s: &Scenario, map: &Map, truth: &TruthRaster, profile: &RobotProfil
     let region = truth.region;
     let res = geometry.resolution_m();
     let rule = s.map.traversability;
-    let waypoints = &s.robot.drive.waypoints_xy_m;
-    let cell_of = |w: Option<&[f64; 2]>| {
-        w.and_then(|w| geometry.cell_of(w[0], w[1]))
-            .ok_or_else(|| EvalError::Input {
-                path: s.name.clone().into(),
-                message: "the drive needs a waypoint inside the map region to plan from".into(),
-            })
+    let missing = || EvalError::Input {
+        path: s.name.clone().into(),
+        message: "the planner needs a start and a goal inside the map region (the drive's first and last \
+                  waypoints, or [planner] start_xy_m and goal_xy_m)"
+            .into(),
     };
-    let (start, goal) = (cell_of(waypoints.first())?, cell_of(waypoints.last())?);
+    let (from, to) = s
+        .planner
+        .ends(&s.robot.drive.waypoints_xy_m)
+        .ok_or_else(missing)?;
+    // A point on the region's max edge (valid in a scenario) lies in the cell just outside: take the edge cell.
+    let (lo, hi) = (region.min, region.max());
+    let cell_of = |[x, y]: [f64; 2]| {
+        geometry
+            .cell_of(x, y)
+            .map(|c| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
+            .ok_or_else(missing)
+    };
+    let (start, goal) = (cell_of(from)?, cell_of(to)?);
     let planner_error = |e: oeg::Error| EvalError::Input {
         path: s.name.clone().into(),
         message: format!("planner: {e}"),
     };
-    let options = s.planner;
+    let options = s.planner.options();
     let mapped = map.traversability_layer(region, profile, rule)?.values;
     let map_plan = planner::plan(&region, res, &mapped, start, goal, &options).map_err(planner_error)?;
     let truly = truth_decisions(truth, rule);

@@ -241,8 +241,14 @@ impl Checker<'_> {
             )?;
         }
 
-        if let Err(e) = s.planner.validate() {
+        if let Err(e) = s.planner.options().validate() {
             return Err(self.error(&[K("planner"), K("inflation_radius_m")], e.to_string()));
+        }
+        if let Some(xy) = s.planner.start_xy_m {
+            self.inside(s, xy, &[K("planner"), K("start_xy_m")])?;
+        }
+        if let Some(xy) = s.planner.goal_xy_m {
+            self.inside(s, xy, &[K("planner"), K("goal_xy_m")])?;
         }
 
         // The robot.

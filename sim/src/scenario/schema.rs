@@ -29,10 +29,9 @@ pub struct Scenario {
     pub map: MapSettings,
     /// The robot, its drive and odometry.
     pub robot: RobotSettings,
-    /// How the run's path planner reads the map (`oeg::PlannerOptions`; every field optional, defaults
-    /// documented there): it plans from the drive's first waypoint to its last, on the map and on the truth.
+    /// The run's planner check: where it plans from and to, and how it reads the map.
     #[serde(default)]
-    pub planner: oeg::PlannerOptions,
+    pub planner: PlannerSettings,
     /// The ground.
     #[serde(default)]
     pub terrain: Terrain,
@@ -73,6 +72,42 @@ pub struct MapSettings {
     /// How the map's step decision is taken.
     #[serde(default)]
     pub traversability: TraversabilityRule,
+}
+
+/// The run's planner check: a path on the map and on the truth, from a start to a goal. Every field optional.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerSettings {
+    /// Where the planner starts, `[x, y]` metres; default the drive's first waypoint. The cells within the
+    /// inflation radius count as the robot's footprint (see `oeg::planner::plan`).
+    pub start_xy_m: Option<[f64; 2]>,
+    /// Where it plans to, `[x, y]` metres; default the drive's last waypoint.
+    pub goal_xy_m: Option<[f64; 2]>,
+    /// The robot's centre keeps at least this far from blocked cells, metres; default
+    /// `oeg::planner::DEFAULT_INFLATION_RADIUS_M` (0.25).
+    pub inflation_radius_m: Option<f64>,
+    /// Cells the map never observed; default `avoid`.
+    pub unknown: oeg::UnknownCells,
+}
+
+impl PlannerSettings {
+    /// The planner's options.
+    pub fn options(&self) -> oeg::PlannerOptions {
+        oeg::PlannerOptions {
+            inflation_radius_m: self
+                .inflation_radius_m
+                .unwrap_or(oeg::planner::DEFAULT_INFLATION_RADIUS_M),
+            unknown: self.unknown,
+        }
+    }
+
+    /// The start and the goal for a drive through `waypoints` (`None` without waypoints).
+    pub fn ends(&self, waypoints: &[[f64; 2]]) -> Option<([f64; 2], [f64; 2])> {
+        Some((
+            self.start_xy_m.or_else(|| waypoints.first().copied())?,
+            self.goal_xy_m.or_else(|| waypoints.last().copied())?,
+        ))
+    }
 }
 
 /// The robot.
