@@ -5,8 +5,8 @@
 //!   with OctoMap's `graph2tree -i 3dtk_frames.graph -res <res>` run in the same session (README).
 //! * `synthetic/fan/<res>`: a 100,000-ray scan of a room with a floor and walls, always available.
 //! * `options/<settings>`: the room scan integrated 5 times at 0.05 m under the paper's model and under the
-//!   static settings of the README (`below_elevation`, `highest_surface`, `free_space_max_depth_m`), in the
-//!   same run, so their ratio is the cost of those options.
+//!   static settings of the README (`below_elevation`, `highest_surface`, `free_space_max_depth_m`) and with
+//!   `scan_hit_elevation = weighted_mean`, in the same run, so their ratios are the cost of those options.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -117,7 +117,18 @@ fn options(c: &mut Criterion) {
         },
         ..MapConfig::new(0.05)
     };
-    for (name, config) in [("paper", paper), ("static_settings", static_settings)] {
+    let weighted_mean = MapConfig {
+        model: oeg::ModelOptions {
+            scan_hit_elevation: oeg::ScanHitElevation::WeightedMean,
+            ..oeg::ModelOptions::default()
+        },
+        ..MapConfig::new(0.05)
+    };
+    for (name, config) in [
+        ("paper", paper),
+        ("static_settings", static_settings),
+        ("weighted_mean", weighted_mean),
+    ] {
         group.bench_function(name, |b| b.iter(|| black_box(build_with(&scans, config))));
     }
     group.finish();
