@@ -142,41 +142,80 @@ pub fn forbidden_mask(
         .map(|(t, o)| *o || (*t == Traversability::Unknown && options.unknown == UnknownCells::Avoid))
         .collect();
 
-    // The disc of cell offsets within the radius, centre to centre.
-    let r_cells = (options.inflation_radius_m / resolution_m + 1e-9).floor() as i64;
-    let r2 = options.inflation_radius_m / resolution_m + 1e-9;
-    let r2 = r2 * r2;
-    let disc: Vec<(i64, i64)> = (-r_cells..=r_cells)
-        .flat_map(|dy| (-r_cells..=r_cells).map(move |dx| (dx, dy)))
-        .filter(|(dx, dy)| ((dx * dx + dy * dy) as f64) <= r2 && (*dx, *dy) != (0, 0))
-        .collect();
-    if disc.is_empty() {
-        return Ok(forbidden);
-    }
-    // Only an obstacle's edge cells (a side neighbour not an obstacle) need stamping: the obstacle cell nearest
-    // a free cell is always an edge cell, since an inner cell's side neighbour towards the free cell is nearer.
-    let at = |x: i64, y: i64| (y * nx + x) as usize;
-    for y in 0..ny {
-        for x in 0..nx {
-            if !obstacle[at(x, y)] {
-                continue;
-            }
-            let edge = [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|(dx, dy)| {
-                let (u, v) = (x + dx, y + dy);
-                (0..nx).contains(&u) && (0..ny).contains(&v) && !obstacle[at(u, v)]
-            });
-            if !edge {
-                continue;
-            }
-            for (dx, dy) in &disc {
-                let (u, v) = (x + dx, y + dy);
-                if (0..nx).contains(&u) && (0..ny).contains(&v) {
-                    forbidden[at(u, v)] = true;
-                }
-            }
+    // Exact squared distances (in cells, centre to centre) to the nearest obstacle: linear in the region's size
+    // whatever the radius, so a large radius at a fine resolution costs no more than a small one.
+    let r = options.inflation_radius_m / resolution_m + 1e-9;
+    if r >= 1.0 && obstacle.iter().any(|o| *o) {
+        let d2 = squared_distances(&obstacle, nx as usize, ny as usize);
+        for (f, d) in forbidden.iter_mut().zip(&d2) {
+            *f |= *d <= r * r;
         }
     }
     Ok(forbidden)
+}
+
+/// Stands for "no obstacle on this line" in the distance transform: far above any squared distance of a grid
+/// the scenario limits allow, yet exact arithmetic keeps it finite.
+const FAR: f64 = 1e30;
+
+/// The squared Euclidean distance, in cells, from every cell of an `nx` x `ny` row-major grid to the nearest
+/// `true` cell (Felzenszwalb and Huttenlocher's separable transform: columns, then rows).
+fn squared_distances(obstacle: &[bool], nx: usize, ny: usize) -> Vec<f64> {
+    let mut d: Vec<f64> = obstacle.iter().map(|o| if *o { 0.0 } else { FAR }).collect();
+    let n = nx.max(ny);
+    let (mut f, mut out) = (vec![0.0; n], vec![0.0; n]);
+    let (mut v, mut z) = (vec![0usize; n], vec![0.0; n + 1]);
+    for x in 0..nx {
+        for y in 0..ny {
+            f[y] = d[y * nx + x];
+        }
+        lower_envelope(&f[..ny], &mut out[..ny], &mut v, &mut z);
+        for y in 0..ny {
+            d[y * nx + x] = out[y];
+        }
+    }
+    for y in 0..ny {
+        let row = &mut d[y * nx..(y + 1) * nx];
+        f[..nx].copy_from_slice(row);
+        lower_envelope(&f[..nx], &mut out[..nx], &mut v, &mut z);
+        row.copy_from_slice(&out[..nx]);
+    }
+    d
+}
+
+/// One line of the transform: `out[q] = min_p (q - p)^2 + f[p]`, by the lower envelope of the parabolas.
+fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
+    let n = f.len();
+    if n == 0 {
+        return;
+    }
+    let meet = |f: &[f64], q: usize, p: usize| {
+        let (qf, pf) = (q as f64, p as f64);
+        ((f[q] + qf * qf) - (f[p] + pf * pf)) / (2.0 * (qf - pf))
+    };
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = f64::NEG_INFINITY;
+    z[1] = f64::INFINITY;
+    for q in 1..n {
+        let mut s = meet(f, q, v[k]);
+        while s <= z[k] {
+            k -= 1;
+            s = meet(f, q, v[k]);
+        }
+        k += 1;
+        v[k] = q;
+        z[k] = s;
+        z[k + 1] = f64::INFINITY;
+    }
+    k = 0;
+    for (q, o) in out.iter_mut().enumerate() {
+        while z[k + 1] < q as f64 {
+            k += 1;
+        }
+        let dq = q as f64 - v[k] as f64;
+        *o = dq * dq + f[v[k]];
+    }
 }
 
 /// The shortest path from `start` to `goal` through `region` on `decisions` (one per region cell, row-major),
@@ -576,8 +615,8 @@ mod tests {
     proptest! {
         #[test]
         fn the_inflated_mask_matches_brute_force(
-            cells in proptest::collection::vec(0u8..4, 12 * 9),
-            radius_cells in 0.0f64..3.5,
+            cells in proptest::collection::vec(0u8..12, 12 * 9),
+            radius_cells in 0.0f64..16.0,
         ) {
             let r = region(12, 9);
             let d: Vec<Traversability> = cells
