@@ -90,6 +90,10 @@ fn map_writes_every_output_and_inspect_reads_the_map() {
     assert!(text.contains("resolution:           0.1 m"), "{text}");
     assert!(text.contains("scans integrated:     3"), "{text}");
     assert!(
+        text.contains(r#""scan_hit_elevation":"highest""#),
+        "every model option is printed: {text}"
+    );
+    assert!(
         text.contains(&format!("observed cells:       {observed}")),
         "{text}"
     );

@@ -43,6 +43,12 @@ pub fn inspect(path: &Path) -> Result<String> {
         m.p_min, m.p_max, m.significance_k_m
     );
     let _ = writeln!(out, "free-space elevation: {:?}", m.free_space_elevation);
+    // Every model option, as the scenario files and the map file's header spell them.
+    let _ = writeln!(
+        out,
+        "model options:        {}",
+        serde_json::to_string(m).unwrap_or_default()
+    );
     let _ = writeln!(
         out,
         "max height:           {}",
