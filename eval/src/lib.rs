@@ -18,6 +18,8 @@ pub mod render;
 pub mod report_images;
 pub mod run;
 pub mod suite;
+#[cfg(test)]
+mod test_support;
 pub mod wrong_cells;
 
 pub use error::{EvalError, Result};

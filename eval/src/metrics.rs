@@ -358,22 +358,10 @@ pub fn check_expectations(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use crate::test_support::{truth_cell, truth_raster};
     use nalgebra::Point3;
     use oeg::{CellIndex, CellRegion, MapConfig, Scan, SensorModel};
-    use sim::truth::{CellTruth, TruthProfile};
-    use sim::world::Actors;
-
-    use super::*;
-
-    fn truth_cell(elevation_m: f32, step_blocked: bool, structure_gap_m: f32) -> CellTruth {
-        CellTruth {
-            elevation_m,
-            ground_m: 0.0,
-            step_m: elevation_m,
-            step_blocked,
-            structure_gap_m,
-        }
-    }
 
     /// Four 1 m cells: ground seen at 0 (truly flat), a 0.2 m block seen at 0.2, a 0.1 m block seen at 0.01
     /// (unsafe), and one cell never observed; the third lies under a 0.3 m structure.
@@ -387,22 +375,15 @@ mod tests {
             }
         }
         let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(3, 0)).expect("region");
-        let truth = TruthRaster {
+        let truth = truth_raster(
             region,
-            resolution_m: 1.0,
-            profile: TruthProfile {
-                max_step_m: 0.035,
-                height_m: 0.46,
-            },
-            time_s: 0.0,
-            actors: Actors::Excluded,
-            cells: vec![
+            vec![
                 truth_cell(0.0, false, f32::NAN),
                 truth_cell(0.2, true, f32::NAN),
                 truth_cell(0.1, true, 0.3),
                 truth_cell(0.0, false, f32::NAN),
             ],
-        };
+        );
         (map, truth)
     }
 

@@ -46,12 +46,24 @@ pub struct ObstacleDecision {
     pub decision_right: bool,
 }
 
-/// Whether the world point `p` lies in the obstacle's footprint.
-pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
+/// An obstacle's footprint on the ground plane.
+enum Footprint {
+    /// A rectangle: its centre and heading, and half its length (local x) and width (local y), metres.
+    Rect {
+        pose: Isometry2<f64>,
+        half_length_m: f64,
+        half_width_m: f64,
+    },
+    /// A disc.
+    Disc { center: Point2<f64>, radius_m: f64 },
+}
+
+fn footprint(o: &Obstacle) -> Footprint {
     let [cx, cy] = o.center_xy_m();
-    let rect = |length: f64, width: f64, yaw_deg: f64| {
-        let local = Isometry2::new(Vector2::new(cx, cy), yaw_deg.to_radians()).inverse() * p;
-        local.x.abs() <= length / 2.0 && local.y.abs() <= width / 2.0
+    let rect = |length: f64, width: f64, yaw_deg: f64| Footprint::Rect {
+        pose: Isometry2::new(Vector2::new(cx, cy), yaw_deg.to_radians()),
+        half_length_m: length / 2.0,
+        half_width_m: width / 2.0,
     };
     match o {
         Obstacle::Box { size_m, yaw_deg, .. } | Obstacle::Overhang { size_m, yaw_deg, .. } => {
@@ -63,40 +75,46 @@ pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
             yaw_deg,
             ..
         } => rect(*length_m, *width_m, *yaw_deg),
-        Obstacle::Cylinder { radius_m, .. } | Obstacle::Bush { radius_m, .. } => {
-            (p - Point2::new(cx, cy)).norm() <= *radius_m
+        Obstacle::Cylinder { radius_m, .. } | Obstacle::Bush { radius_m, .. } => Footprint::Disc {
+            center: Point2::new(cx, cy),
+            radius_m: *radius_m,
+        },
+    }
+}
+
+/// Whether the world point `p` lies in the obstacle's footprint.
+pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
+    match footprint(o) {
+        Footprint::Rect {
+            pose,
+            half_length_m,
+            half_width_m,
+        } => {
+            let local = pose.inverse() * p;
+            local.x.abs() <= half_length_m && local.y.abs() <= half_width_m
         }
+        Footprint::Disc { center, radius_m } => (p - center).norm() <= radius_m,
     }
 }
 
 /// The obstacle's footprint as a closed polygon of world points (a circle as 32 sides), for the images.
 pub fn footprint_outline(o: &Obstacle) -> Vec<(f64, f64)> {
-    let [cx, cy] = o.center_xy_m();
-    let rect = |length: f64, width: f64, yaw_deg: f64| {
-        let pose = Isometry2::new(Vector2::new(cx, cy), yaw_deg.to_radians());
-        let (hl, hw) = (length / 2.0, width / 2.0);
-        [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)]
+    match footprint(o) {
+        Footprint::Rect {
+            pose,
+            half_length_m: hl,
+            half_width_m: hw,
+        } => [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)]
             .iter()
             .map(|(x, y)| {
                 let p = pose * Point2::new(*x, *y);
                 (p.x, p.y)
             })
-            .collect()
-    };
-    match o {
-        Obstacle::Box { size_m, yaw_deg, .. } | Obstacle::Overhang { size_m, yaw_deg, .. } => {
-            rect(size_m[0], size_m[1], *yaw_deg)
-        }
-        Obstacle::Ramp {
-            length_m,
-            width_m,
-            yaw_deg,
-            ..
-        } => rect(*length_m, *width_m, *yaw_deg),
-        Obstacle::Cylinder { radius_m, .. } | Obstacle::Bush { radius_m, .. } => (0..=32)
+            .collect(),
+        Footprint::Disc { center, radius_m } => (0..=32)
             .map(|k| {
                 let a = std::f64::consts::TAU * f64::from(k) / 32.0;
-                (cx + radius_m * a.cos(), cy + radius_m * a.sin())
+                (center.x + radius_m * a.cos(), center.y + radius_m * a.sin())
             })
             .collect(),
     }

@@ -80,27 +80,44 @@ pub fn check(s: &Scenario, map: &Map, truth: &TruthRaster, profile: &RobotProfil
     let map_plan = planner::plan(&region, res, &mapped, start, goal, &options).map_err(planner_error)?;
     let truly = truth_decisions(truth, rule);
     let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
-    let truth_forbidden = planner::forbidden_mask(
-        &region,
-        res,
-        &truly,
-        &PlannerOptions {
-            unknown: UnknownCells::Drivable,
-            ..options
-        },
-    )
-    .map_err(planner_error)?;
-    let unsafe_cells = map_plan
-        .iter()
-        .flat_map(|p| &p.cells)
-        .filter(|c| region.offset(**c).is_some_and(|k| truth_forbidden[k]))
-        .copied()
-        .collect();
+    let unsafe_cells = match &map_plan {
+        Some(p) => unsafe_path_cells(p, &region, res, &truly, &options).map_err(planner_error)?,
+        None => Vec::new(),
+    };
     Ok(PlanCheck {
         map_plan,
         truth_plan,
         unsafe_cells,
     })
+}
+
+/// The cells of `plan` whose centre lies within the inflation radius of a blocked cell of the truth's
+/// decisions `truly` (row-major over `region`): where the robot following the path would touch an obstacle.
+///
+/// # Errors
+/// As [`planner::forbidden_mask`].
+pub fn unsafe_path_cells(
+    plan: &Plan,
+    region: &CellRegion,
+    resolution_m: f64,
+    truly: &[Traversability],
+    options: &PlannerOptions,
+) -> oeg::Result<Vec<CellIndex>> {
+    let forbidden = planner::forbidden_mask(
+        region,
+        resolution_m,
+        truly,
+        &PlannerOptions {
+            unknown: UnknownCells::Drivable,
+            ..*options
+        },
+    )?;
+    Ok(plan
+        .cells
+        .iter()
+        .filter(|c| region.offset(**c).is_some_and(|k| forbidden[k]))
+        .copied()
+        .collect())
 }
 
 /// One row of `plan.csv`: a cell of a planned path.
@@ -254,14 +271,12 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     };
     crate::output::create_dir(&job.out_dir)?;
     let mut files = Vec::new();
-    let mut csv = String::from("step,x_m,y_m\n");
-    for (step, c) in plan.iter().flat_map(|p| p.cells.iter()).enumerate() {
-        let (x, y) = geometry.cell_center(*c);
-        let (x, y) = (crate::output::round_m(x), crate::output::round_m(y));
-        csv.push_str(&format!("{step},{x},{y}\n"));
-    }
     let path_csv = job.out_dir.join("path.csv");
-    crate::output::write_bytes(&path_csv, csv.as_bytes())?;
+    let csv = path_csv_bytes(plan.as_ref(), &geometry).map_err(|message| EvalError::Input {
+        path: path_csv.clone(),
+        message,
+    })?;
+    crate::output::write_bytes(&path_csv, &csv)?;
     files.push(path_csv);
     let title = match &plan {
         Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
@@ -282,38 +297,40 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     Ok((summary, files))
 }
 
+/// `path.csv` of `oeg plan`: a header and one `step,x_m,y_m` row per path cell (the header alone without a
+/// path).
+fn path_csv_bytes(plan: Option<&Plan>, geometry: &oeg::GridGeometry) -> std::result::Result<Vec<u8>, String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(["step", "x_m", "y_m"])
+        .map_err(|e| e.to_string())?;
+    for (step, c) in plan.iter().flat_map(|p| p.cells.iter()).enumerate() {
+        let (x, y) = geometry.cell_center(*c);
+        let (x, y) = (crate::output::round_m(x), crate::output::round_m(y));
+        w.serialize((step, x, y)).map_err(|e| e.to_string())?;
+    }
+    w.into_inner().map_err(|e| e.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_support::{truth_cell, truth_raster};
     use oeg::MapConfig;
-    use sim::truth::{CellTruth, TruthProfile};
-    use sim::world::Actors;
-
-    fn truth_cell(step_blocked: bool) -> CellTruth {
-        CellTruth {
-            elevation_m: if step_blocked { 0.2 } else { 0.0 },
-            ground_m: 0.0,
-            step_m: if step_blocked { 0.2 } else { 0.0 },
-            step_blocked,
-            structure_gap_m: f32::NAN,
-        }
-    }
 
     #[test]
     fn a_path_through_a_wall_the_map_missed_is_unsafe_and_the_truth_goes_around() {
         // 1 m cells, 7 x 5; the truth has a wall at x = 3 m from y = 0 to 3 m, the map (all free) misses it.
         let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(6, 4)).expect("region");
-        let truth = TruthRaster {
+        let truth = truth_raster(
             region,
-            resolution_m: 1.0,
-            profile: TruthProfile {
-                max_step_m: 0.035,
-                height_m: 0.46,
-            },
-            time_s: 0.0,
-            actors: Actors::Excluded,
-            cells: region.cells().map(|c| truth_cell(c.i == 3 && c.j <= 3)).collect(),
-        };
+            region
+                .cells()
+                .map(|c| {
+                    let wall = c.i == 3 && c.j <= 3;
+                    truth_cell(if wall { 0.2 } else { 0.0 }, wall, f32::NAN)
+                })
+                .collect(),
+        );
         let truly = truth_decisions(&truth, TraversabilityRule::Absolute);
         let options = PlannerOptions {
             inflation_radius_m: 0.0,
@@ -338,17 +355,17 @@ mod tests {
             .expect("valid")
             .expect("straight");
         assert!((straight.length_m - 6.0).abs() < 1e-9);
-        let forbidden = planner::forbidden_mask(&region, 1.0, &truly, &options).expect("valid");
-        let unsafe_cells: Vec<_> = straight
-            .cells
-            .iter()
-            .filter(|c| forbidden[region.offset(**c).expect("inside")])
-            .collect();
-        assert_eq!(unsafe_cells, [&CellIndex::new(3, 0)]);
+        let unsafe_cells = unsafe_path_cells(&straight, &region, 1.0, &truly, &options).expect("valid");
+        assert_eq!(unsafe_cells, [CellIndex::new(3, 0)]);
+        assert_eq!(
+            unsafe_path_cells(&truth_plan, &region, 1.0, &truly, &options).expect("valid"),
+            [],
+            "the truth's own path is safe"
+        );
         let check = PlanCheck {
             map_plan: Some(straight),
             truth_plan: Some(truth_plan),
-            unsafe_cells: vec![CellIndex::new(3, 0)],
+            unsafe_cells,
         };
         let geometry = oeg::GridGeometry::new(1.0).expect("geometry");
         let csv = String::from_utf8(to_csv(&rows(&check, &geometry)).expect("csv")).expect("utf8");
