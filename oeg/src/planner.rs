@@ -129,7 +129,6 @@ pub fn forbidden_mask(
             ),
         ));
     }
-    let (nx, ny) = (region.num_x as i64, region.num_y as i64);
     let is_obstacle = |t: Traversability| match t {
         Traversability::Blocked => true,
         Traversability::Unknown => options.unknown == UnknownCells::Inflate,
@@ -146,7 +145,7 @@ pub fn forbidden_mask(
     // whatever the radius, so a large radius at a fine resolution costs no more than a small one.
     let r = options.inflation_radius_m / resolution_m + 1e-9;
     if r >= 1.0 && obstacle.iter().any(|o| *o) {
-        let d2 = squared_distances(&obstacle, nx as usize, ny as usize);
+        let d2 = squared_distances(&obstacle, region.num_x as usize, region.num_y as usize);
         for (f, d) in forbidden.iter_mut().zip(&d2) {
             *f |= *d <= r * r;
         }
