@@ -140,13 +140,13 @@ pub struct PlanRow {
 pub fn rows(check: &PlanCheck, geometry: &oeg::GridGeometry) -> Vec<PlanRow> {
     let mut rows = Vec::new();
     for (name, plan) in [("map", &check.map_plan), ("truth", &check.truth_plan)] {
-        for (step, c) in plan.iter().flat_map(|p| p.cells.iter()).enumerate() {
-            let (x_m, y_m) = geometry.cell_center(*c);
+        let Some(plan) = plan else { continue };
+        for (step, (c, (x_m, y_m))) in plan.cells.iter().zip(polyline(plan, geometry)).enumerate() {
             rows.push(PlanRow {
                 path: name,
                 step: step as u64,
-                x_m: crate::output::round_m(x_m),
-                y_m: crate::output::round_m(y_m),
+                x_m,
+                y_m,
                 unsafe_cell: name == "map" && check.unsafe_cells.contains(c),
             });
         }
@@ -170,9 +170,16 @@ pub fn to_csv(rows: &[PlanRow]) -> std::result::Result<Vec<u8>, String> {
     w.into_inner().map_err(|e| e.to_string())
 }
 
-/// The path's cell centres as a polyline of world points, for the images.
+/// The path's cell centres as world points, rounded to the micrometre (`crate::output::round_m`): the
+/// images' polyline and the CSV files' rows.
 pub fn polyline(plan: &Plan, geometry: &oeg::GridGeometry) -> Vec<(f64, f64)> {
-    plan.cells.iter().map(|c| geometry.cell_center(*c)).collect()
+    plan.cells
+        .iter()
+        .map(|c| {
+            let (x, y) = geometry.cell_center(*c);
+            (crate::output::round_m(x), crate::output::round_m(y))
+        })
+        .collect()
 }
 
 /// `oeg plan`: a path on a saved map (real data or a run's `map.oeg`).
@@ -303,9 +310,7 @@ fn path_csv_bytes(plan: Option<&Plan>, geometry: &oeg::GridGeometry) -> std::res
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(["step", "x_m", "y_m"])
         .map_err(|e| e.to_string())?;
-    for (step, c) in plan.iter().flat_map(|p| p.cells.iter()).enumerate() {
-        let (x, y) = geometry.cell_center(*c);
-        let (x, y) = (crate::output::round_m(x), crate::output::round_m(y));
+    for (step, (x, y)) in plan.iter().flat_map(|p| polyline(p, geometry)).enumerate() {
         w.serialize((step, x, y)).map_err(|e| e.to_string())?;
     }
     w.into_inner().map_err(|e| e.to_string())

@@ -112,23 +112,7 @@ pub fn forbidden_mask(
     decisions: &[Traversability],
     options: &PlannerOptions,
 ) -> Result<Vec<bool>> {
-    options.validate()?;
-    if !(resolution_m.is_finite() && resolution_m > 0.0) {
-        return Err(Error::setting(
-            "resolution_m",
-            format!("must be a positive number of metres, got {resolution_m}"),
-        ));
-    }
-    if decisions.len() as u64 != region.num_cells() {
-        return Err(Error::setting(
-            "decisions",
-            format!(
-                "one decision per region cell: {} cells, {} decisions",
-                region.num_cells(),
-                decisions.len()
-            ),
-        ));
-    }
+    validate_inputs(region, resolution_m, decisions, options)?;
     let is_obstacle = |t: Traversability| match t {
         Traversability::Blocked => true,
         Traversability::Unknown => options.unknown == UnknownCells::Inflate,
@@ -151,6 +135,62 @@ pub fn forbidden_mask(
         }
     }
     Ok(forbidden)
+}
+
+/// The checks every entry point makes: sane options, a positive resolution, one decision per region cell.
+fn validate_inputs(
+    region: &CellRegion,
+    resolution_m: f64,
+    decisions: &[Traversability],
+    options: &PlannerOptions,
+) -> Result<()> {
+    options.validate()?;
+    if !(resolution_m.is_finite() && resolution_m > 0.0) {
+        return Err(Error::setting(
+            "resolution_m",
+            format!("must be a positive number of metres, got {resolution_m}"),
+        ));
+    }
+    if decisions.len() as u64 != region.num_cells() {
+        return Err(Error::setting(
+            "decisions",
+            format!(
+                "one decision per region cell: {} cells, {} decisions",
+                region.num_cells(),
+                decisions.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Marks drivable the cells within `radius_cells` (centre to centre) of `centre` that are unknown, or also
+/// blocked when `clear_blocked`: the robot's own footprint.
+fn clear_footprint(
+    region: &CellRegion,
+    decisions: &mut [Traversability],
+    centre: CellIndex,
+    radius_cells: f64,
+    clear_blocked: bool,
+) {
+    let rc = radius_cells
+        .floor()
+        .min(f64::from(region.num_x.max(region.num_y))) as i64;
+    for dj in -rc..=rc {
+        for di in -rc..=rc {
+            let c = CellIndex::new(
+                (i64::from(centre.i) + di) as i32,
+                (i64::from(centre.j) + dj) as i32,
+            );
+            let Some(k) = region.offset(c) else { continue };
+            let inside = ((di * di + dj * dj) as f64) <= radius_cells * radius_cells;
+            let clearable = decisions[k] == Traversability::Unknown
+                || (clear_blocked && decisions[k] == Traversability::Blocked);
+            if inside && clearable {
+                decisions[k] = Traversability::Free;
+            }
+        }
+    }
 }
 
 /// Stands for "no obstacle on this line" in the distance transform: far above any squared distance of a grid
@@ -245,30 +285,11 @@ pub fn plan(
         })
     };
     let (s, g) = (offset_of("start", start)?, offset_of("goal", goal)?);
+    validate_inputs(region, resolution_m, decisions, options)?;
     let mut decisions = decisions.to_vec();
-    if decisions.len() as u64 == region.num_cells() && resolution_m > 0.0 {
-        let r = options.inflation_radius_m.max(0.0) / resolution_m + 1e-9;
-        let rc = r.floor().min(f64::from(region.num_x.max(region.num_y))) as i64;
-        for (centre, clear_blocked) in [(start, true), (goal, false)] {
-            for dj in -rc..=rc {
-                for di in -rc..=rc {
-                    if ((di * di + dj * dj) as f64) > r * r {
-                        continue;
-                    }
-                    let c = CellIndex::new(
-                        (i64::from(centre.i) + di) as i32,
-                        (i64::from(centre.j) + dj) as i32,
-                    );
-                    if let Some(k) = region.offset(c)
-                        && (decisions[k] == Traversability::Unknown
-                            || (clear_blocked && decisions[k] == Traversability::Blocked))
-                    {
-                        decisions[k] = Traversability::Free;
-                    }
-                }
-            }
-        }
-    }
+    let r = options.inflation_radius_m / resolution_m + 1e-9;
+    clear_footprint(region, &mut decisions, start, r, true);
+    clear_footprint(region, &mut decisions, goal, r, false);
     let forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
     if forbidden[s] || forbidden[g] {
         return Ok(None);
