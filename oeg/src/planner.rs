@@ -390,6 +390,17 @@ mod tests {
         CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(nx - 1, ny - 1)).expect("region")
     }
 
+    /// Every cell of `r` Free, except those `mark` picks, which are `class`.
+    fn marked(
+        r: &CellRegion,
+        class: Traversability,
+        mark: impl Fn(CellIndex) -> bool,
+    ) -> Vec<Traversability> {
+        r.cells()
+            .map(|c| if mark(c) { class } else { Traversability::Free })
+            .collect()
+    }
+
     fn no_inflation(unknown: UnknownCells) -> PlannerOptions {
         PlannerOptions {
             inflation_radius_m: 0.0,
@@ -428,16 +439,7 @@ mod tests {
     fn a_wall_with_no_gap_leaves_no_path_and_inflation_closes_a_narrow_gap() {
         let r = region(11, 11);
         // A wall at i = 5 with a one-cell gap at j = 5.
-        let d: Vec<Traversability> = r
-            .cells()
-            .map(|c| {
-                if c.i == 5 && c.j != 5 {
-                    Traversability::Blocked
-                } else {
-                    Traversability::Free
-                }
-            })
-            .collect();
+        let d = marked(&r, Traversability::Blocked, |c| c.i == 5 && c.j != 5);
         let (s, g) = (CellIndex::new(0, 5), CellIndex::new(10, 5));
         let open = plan(&r, 0.1, &d, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid");
         assert!(open.is_some(), "the gap lets a point robot through");
@@ -450,16 +452,7 @@ mod tests {
             None,
             "a 0.1 m robot does not fit"
         );
-        let closed: Vec<Traversability> = r
-            .cells()
-            .map(|c| {
-                if c.i == 5 {
-                    Traversability::Blocked
-                } else {
-                    Traversability::Free
-                }
-            })
-            .collect();
+        let closed = marked(&r, Traversability::Blocked, |c| c.i == 5);
         assert_eq!(
             plan(&r, 0.1, &closed, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid"),
             None
@@ -491,16 +484,9 @@ mod tests {
     fn unknown_cells_follow_the_option() {
         let r = region(7, 3);
         // The middle column is unknown; the start cell is unknown too (the robot stands on it).
-        let d: Vec<Traversability> = r
-            .cells()
-            .map(|c| {
-                if c.i == 3 || c == CellIndex::new(0, 1) {
-                    Traversability::Unknown
-                } else {
-                    Traversability::Free
-                }
-            })
-            .collect();
+        let d = marked(&r, Traversability::Unknown, |c| {
+            c.i == 3 || c == CellIndex::new(0, 1)
+        });
         let (s, g) = (CellIndex::new(0, 1), CellIndex::new(6, 1));
         let go = |unknown| plan(&r, 1.0, &d, s, g, &no_inflation(unknown)).expect("valid");
         assert_eq!(go(UnknownCells::Avoid), None, "the unknown column is not entered");
@@ -521,16 +507,7 @@ mod tests {
             inflation_radius_m: 2.0,
             unknown,
         };
-        let corridor: Vec<Traversability> = r
-            .cells()
-            .map(|c| {
-                if c.j == 2 {
-                    Traversability::Unknown
-                } else {
-                    Traversability::Free
-                }
-            })
-            .collect();
+        let corridor = marked(&r, Traversability::Unknown, |c| c.j == 2);
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
         assert!(
             plan(&r, 1.0, &corridor, s, g, &opts(UnknownCells::Avoid))
@@ -548,16 +525,9 @@ mod tests {
         // 0.1 m cells; nothing within 0.2 m of the start was observed (no sensor sees under the robot).
         let r = region(12, 5);
         let s = CellIndex::new(2, 2);
-        let d: Vec<Traversability> = r
-            .cells()
-            .map(|c| {
-                if (c.i - 2).abs() <= 2 && (c.j - 2).abs() <= 2 {
-                    Traversability::Unknown
-                } else {
-                    Traversability::Free
-                }
-            })
-            .collect();
+        let d = marked(&r, Traversability::Unknown, |c| {
+            (c.i - 2).abs() <= 2 && (c.j - 2).abs() <= 2
+        });
         let g = CellIndex::new(11, 2);
         let footprint = PlannerOptions {
             inflation_radius_m: 0.2,
@@ -581,17 +551,8 @@ mod tests {
             inflation_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
         };
-        let with_hit_at = |hit: CellIndex| -> Vec<Traversability> {
-            r.cells()
-                .map(|c| {
-                    if c == hit {
-                        Traversability::Blocked
-                    } else {
-                        Traversability::Free
-                    }
-                })
-                .collect()
-        };
+        let with_hit_at =
+            |hit: CellIndex| -> Vec<Traversability> { marked(&r, Traversability::Blocked, |c| c == hit) };
         let near_start = with_hit_at(CellIndex::new(3, 2));
         assert!(
             plan(&r, 0.1, &near_start, s, g, &options)
