@@ -117,43 +117,55 @@ pub fn region_of(s: &scenario::Scenario, geometry: &GridGeometry) -> Result<oeg:
     )?)
 }
 
-/// Runs a scenario end to end and writes its report.
+/// Wall times of a simulation shared by several maps.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SimulatedTiming {
+    /// Simulating the drive and the sensors, seconds.
+    pub simulation_wall_time_s: f64,
+    /// Integrating the scans, seconds, per map.
+    pub map_wall_time_s: f64,
+    /// Rays simulated.
+    pub num_rays: u64,
+}
+
+/// Simulates `loaded` once and integrates every scan, at the estimated pose, into one map per entry of
+/// `maps` (the map settings of runs that share this simulation: they differ only in the map's model,
+/// resolution or rule). The simulation is returned at the end of its drive.
 ///
 /// # Errors
-/// A bad scenario or override, or a failed write. Failed expectations are not errors: they are in the report.
-pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
-    let total_start = Instant::now();
-    let loaded = load(options)?;
+/// A world or map that cannot be built, or a scan the map rejects.
+pub fn simulate_and_map(
+    loaded: &scenario::LoadedScenario,
+    maps: &[&scenario::MapSettings],
+    progress: &Progress,
+) -> Result<(Simulation, Vec<Map>, Vec<f64>, SimulatedTiming)> {
     let s = &loaded.scenario;
-    let out_dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&s.name));
-    let mut simulation = Simulation::new(&loaded)?;
-    let config = MapConfig {
-        resolution_m: s.map.resolution_m,
-        model: s.map.model,
-        memory_limit_bytes: oeg::DEFAULT_MEMORY_LIMIT_BYTES,
-    };
-    let mut map = Map::new(config)?;
-    let profile = RobotProfile {
-        max_step_m: s.robot.max_step_m as f32,
-        height_m: s.robot.height_m as f32,
-    };
-    profile.validate()?;
+    let mut simulation = Simulation::new(loaded)?;
+    let mut built = maps
+        .iter()
+        .map(|m| {
+            Map::new(MapConfig {
+                resolution_m: m.resolution_m,
+                model: m.model,
+                memory_limit_bytes: oeg::DEFAULT_MEMORY_LIMIT_BYTES,
+            })
+        })
+        .collect::<std::result::Result<Vec<_>, _>>()?;
     let models: Vec<oeg::SensorModel> = simulation.sensors().iter().map(|x| x.map_model()).collect();
-
     progress.set_length(simulation.num_scans_total());
-    let (mut simulation_s, mut map_s) = (0.0, 0.0);
+    let mut simulation_s = 0.0;
+    let mut map_s = vec![0.0; built.len()];
     let mut last_tick = -1i64;
     loop {
         let t0 = Instant::now();
         let Some(scan) = simulation.next_scan() else { break };
-        let t1 = Instant::now();
-        map.integrate(&scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]))?;
-        let t2 = Instant::now();
-        simulation_s += (t1 - t0).as_secs_f64();
-        map_s += (t2 - t1).as_secs_f64();
+        simulation_s += t0.elapsed().as_secs_f64();
+        let scan = scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]);
+        for (map, seconds) in built.iter_mut().zip(&mut map_s) {
+            let t1 = Instant::now();
+            map.integrate(&scan)?;
+            *seconds += t1.elapsed().as_secs_f64();
+        }
         progress.inc(1);
         // The progress line is refreshed once per simulation tick (`tick_s`).
         let tick = (scan.stamp_s / s.tick_s).floor() as i64;
@@ -168,30 +180,112 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         }
     }
     progress.finish();
-
-    // The truth at the end of the run, people left out: a person who left must have left the map too.
-    let truth_start = Instant::now();
+    // The truth is taken at the end of the run: a person who left must have left the map too.
     simulation.world_mut().advance_to(s.duration_s);
-    let geometry = *map.geometry();
-    let region = region_of(s, &geometry)?;
+    let timing = SimulatedTiming {
+        simulation_wall_time_s: simulation_s,
+        map_wall_time_s: map_s.iter().sum(),
+        num_rays: simulation.num_rays(),
+    };
+    Ok((simulation, built, map_s, timing))
+}
+
+/// The truth over the scenario's map region on `geometry`'s cells, people left out, from the world at the end
+/// of the run.
+///
+/// # Errors
+/// A region that does not fit the grid.
+pub fn truth_of(s: &scenario::Scenario, world: &sim::World, geometry: &GridGeometry) -> Result<TruthRaster> {
+    let region = region_of(s, geometry)?;
     let truth_profile = TruthProfile {
         max_step_m: s.robot.max_step_m,
         height_m: s.robot.height_m,
     };
-    let truth = TruthRaster::compute(
-        simulation.world(),
-        &geometry,
+    Ok(TruthRaster::compute(
+        world,
+        geometry,
         region,
         truth_profile,
         Actors::Excluded,
         DEFAULT_SAMPLES_PER_SIDE,
-    );
-    let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
+    ))
+}
 
-    let mut metrics = metrics::compute(&s.name, s.seed, &map, &truth, &profile, s.map.traversability);
-    let plan = crate::plan::check(s, &map, &truth, &profile)?;
+/// The robot's decision profile of a scenario.
+///
+/// # Errors
+/// A step or height that makes no sense.
+pub fn profile_of(s: &scenario::Scenario) -> Result<RobotProfile> {
+    let profile = RobotProfile {
+        max_step_m: s.robot.max_step_m as f32,
+        height_m: s.robot.height_m as f32,
+    };
+    profile.validate()?;
+    Ok(profile)
+}
+
+/// A map judged against the truth: metrics (with the planner check and the expectations), per-obstacle
+/// decisions.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// The metrics.
+    pub metrics: Metrics,
+    /// Expectations that failed.
+    pub failed: Vec<FailedExpectation>,
+    /// The planner check.
+    pub plan: crate::plan::PlanCheck,
+    /// Per-obstacle decisions.
+    pub obstacles: Vec<crate::obstacles::ObstacleDecision>,
+}
+
+/// Judges `map` against `truth` under the scenario's decisions.
+///
+/// # Errors
+/// A planner check that cannot run (a start or goal outside the region).
+pub fn evaluate(s: &scenario::Scenario, map: &Map, truth: &TruthRaster) -> Result<Evaluation> {
+    let profile = profile_of(s)?;
+    let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &profile, s.map.traversability);
+    let plan = crate::plan::check(s, map, truth, &profile)?;
     metrics::record_plan(&mut metrics, &plan);
     let failed = metrics::check_expectations(&mut metrics, &s.expectations);
+    let obstacles = crate::obstacles::decisions(s, map, truth, &profile);
+    Ok(Evaluation {
+        metrics,
+        failed,
+        plan,
+        obstacles,
+    })
+}
+
+/// Runs a scenario end to end and writes its report.
+///
+/// # Errors
+/// A bad scenario or override, or a failed write. Failed expectations are not errors: they are in the report.
+pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
+    let total_start = Instant::now();
+    let loaded = load(options)?;
+    let s = &loaded.scenario;
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&s.name));
+    let (simulation, maps, _, sim_timing) = simulate_and_map(&loaded, &[&s.map], progress)?;
+    let map = maps.into_iter().next().ok_or_else(|| EvalError::Input {
+        path: options.scenario.clone(),
+        message: "the simulation built no map".into(),
+    })?;
+    let profile = profile_of(s)?;
+    let truth_start = Instant::now();
+    let geometry = *map.geometry();
+    let truth = truth_of(s, simulation.world(), &geometry)?;
+    let region = truth.region;
+    let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
+    let Evaluation {
+        metrics,
+        failed,
+        plan,
+        obstacles,
+    } = evaluate(s, &map, &truth)?;
 
     create_dir(&out_dir)?;
     let mut files = Vec::new();
@@ -216,7 +310,6 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         })?;
     write_bytes(&plan_path, &csv)?;
     files.push(plan_path);
-    let obstacles = crate::obstacles::decisions(s, &map, &truth, &profile);
     let obstacles_path = out_dir.join("obstacles.csv");
     let csv = crate::obstacles::to_csv(&obstacles).map_err(|message| EvalError::Input {
         path: obstacles_path.clone(),
@@ -235,7 +328,8 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     let metrics_path = out_dir.join("metrics.json");
     write_json(&metrics_path, &metrics)?;
     files.push(metrics_path);
-    let num_rays = simulation.num_rays() as f64;
+    let num_rays = sim_timing.num_rays as f64;
+    let (simulation_s, map_s) = (sim_timing.simulation_wall_time_s, sim_timing.map_wall_time_s);
     let timing = RunTiming {
         simulation_wall_time_s: simulation_s,
         simulation_rays_per_s: num_rays / simulation_s.max(1e-9),

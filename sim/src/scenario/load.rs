@@ -96,6 +96,37 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
     })
 }
 
+/// The byte offset of the value at `path` in a parsed TOML document, or of its nearest existing parent.
+pub fn value_offset(doc: &DeTable<'_>, path: &[KeySeg<'_>]) -> Option<usize> {
+    let mut best = None;
+    let mut table = Some(doc);
+    let mut array: Option<&[toml::Spanned<DeValue<'_>>]> = None;
+    for seg in path {
+        let value = match (*seg, table, array) {
+            (KeySeg::Key(k), Some(t), _) => t.iter().find(|(key, _)| key.get_ref() == k).map(|(_, v)| v),
+            (KeySeg::Index(i), _, Some(a)) => a.get(i),
+            _ => None,
+        };
+        let Some(value) = value else { break };
+        best = Some(value.span().start);
+        table = None;
+        array = None;
+        match value.get_ref() {
+            DeValue::Table(t) => table = Some(t),
+            DeValue::Array(a) => array = Some(a),
+            _ => {}
+        }
+    }
+    best
+}
+
+/// Where the value at `path` lies in TOML `text` (or its nearest existing parent), as line and column; `None`
+/// when the text does not parse or holds none of the path.
+pub fn position_of(text: &str, path: &[KeySeg<'_>]) -> Option<TextPosition> {
+    let doc = DeTable::parse(text).ok()?;
+    value_offset(doc.get_ref(), path).map(|o| TextPosition::of_offset(text, o))
+}
+
 struct Checker<'a> {
     source: &'a ScenarioSource,
     document: Option<DeTable<'a>>,
@@ -104,27 +135,7 @@ struct Checker<'a> {
 impl Checker<'_> {
     /// The byte offset of the value at `path`, or of its nearest existing parent.
     fn offset(&self, path: &[KeySeg<'_>]) -> Option<usize> {
-        let doc = self.document.as_ref()?;
-        let mut best = None;
-        let mut table = Some(doc);
-        let mut array: Option<&[toml::Spanned<DeValue<'_>>]> = None;
-        for seg in path {
-            let value = match (*seg, table, array) {
-                (KeySeg::Key(k), Some(t), _) => t.iter().find(|(key, _)| key.get_ref() == k).map(|(_, v)| v),
-                (KeySeg::Index(i), _, Some(a)) => a.get(i),
-                _ => None,
-            };
-            let Some(value) = value else { break };
-            best = Some(value.span().start);
-            table = None;
-            array = None;
-            match value.get_ref() {
-                DeValue::Table(t) => table = Some(t),
-                DeValue::Array(a) => array = Some(a),
-                _ => {}
-            }
-        }
-        best
+        value_offset(self.document.as_ref()?, path)
     }
 
     fn error(&self, path: &[KeySeg<'_>], message: impl Into<String>) -> SimError {

@@ -3,5 +3,5 @@
 mod load;
 mod schema;
 
-pub use load::{KeySeg, LoadedScenario, MAX_DURATION_S, MAX_MAP_CELLS, load, load_str};
+pub use load::{KeySeg, LoadedScenario, MAX_DURATION_S, MAX_MAP_CELLS, load, load_str, position_of};
 pub use schema::*;
