@@ -95,12 +95,137 @@ enum Command {
         #[arg(long)]
         seed: Option<u64>,
     },
+    /// Studies of many runs: axes of settings, seeds and randomized scenes, with confidence intervals
+    /// (docs/sweep-format.md).
+    #[command(subcommand)]
+    Sweep(SweepCommand),
     /// Map the built-in demonstration scans (what `oeg` with no arguments does).
     Demo {
         /// Output folder.
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
     },
+}
+
+#[derive(Subcommand, Debug)]
+enum SweepCommand {
+    /// Print the plan: every run's id, axis values and seed, and how many simulations they share.
+    Plan {
+        /// A sweep file (.toml).
+        file: PathBuf,
+    },
+    /// Run the plan (or one shard of it) in parallel; killed and started again, it resumes.
+    Run {
+        /// A sweep file (.toml).
+        file: PathBuf,
+        /// Output folder: plan.json, runs/<id>/, runs.csv, runs.jsonl, obstacles.csv.
+        #[arg(long)]
+        out: PathBuf,
+        /// Simulations at once [default: RAYON_NUM_THREADS, else one per core]. Results do not depend on it.
+        #[arg(long, value_parser = clap::value_parser!(u16).range(1..=256))]
+        jobs: Option<u16>,
+        /// Run only shard I of N (1-based; runs are dealt by id). Without it: SLURM_ARRAY_TASK_ID within
+        /// SLURM_ARRAY_TASK_MIN..MAX, or JOB_COMPLETION_INDEX with --shards, or the whole plan.
+        #[arg(long, value_name = "I/N", value_parser = eval::sweep::execute::parse_shard)]
+        shard: Option<(usize, usize)>,
+        /// The number of shards of a Kubernetes Indexed Job (its completions), with JOB_COMPLETION_INDEX.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        shards: Option<u32>,
+        /// Simulate every run on its own, even runs that could share a simulation (to measure sharing).
+        #[arg(long)]
+        simulate_each: bool,
+    },
+    /// Combine the outputs of a sweep's shards into one set of rows; fails naming any missing or duplicated
+    /// run.
+    Merge {
+        /// The shards' output folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Write summary.csv (means and 95 % intervals) and plots of a sweep's output folder.
+    Report {
+        /// A folder written by `oeg sweep run` or `oeg sweep merge`.
+        dir: PathBuf,
+    },
+}
+
+fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
+    use eval::sweep::{Plan, Sweep, execute};
+    match command {
+        SweepCommand::Plan { file } => {
+            let plan = Plan::new(Sweep::load(&file)?)?;
+            say!(
+                "{}: {} runs, {} simulations",
+                plan.sweep.spec.name,
+                plan.runs.len(),
+                plan.num_groups()
+            );
+            for r in &plan.runs {
+                say!(
+                    "{} {} replicate {} seed {}: {}",
+                    r.id,
+                    r.scenario,
+                    r.replicate,
+                    r.seed,
+                    eval::sweep::plan::describe(&r.axis_values)
+                );
+            }
+        }
+        SweepCommand::Run {
+            file,
+            out,
+            jobs,
+            shard,
+            shards,
+            simulate_each,
+        } => {
+            let plan = Plan::new(Sweep::load(&file)?)?;
+            let shard = match shard {
+                Some(s) => Some(s),
+                None => execute::shard_from_env(|k| std::env::var(k).ok(), shards.map(|n| n as usize))
+                    .map_err(|e| anyhow::anyhow!("the shard: {e}"))?,
+            };
+            let options = execute::RunOptions {
+                out_dir: out,
+                shard,
+                jobs: jobs.map_or_else(eval::suite::default_jobs, usize::from),
+                simulate_each,
+            };
+            let progress = Progress::with_eta(0, "runs");
+            let start = std::time::Instant::now();
+            let summary = execute::run(&plan, &options, &progress)?;
+            say!(
+                "{}{}: {} runs, {} finished before, {} run now in {} simulations ({} errors) in {:.1} s",
+                plan.sweep.spec.name,
+                shard.map(|(i, n)| format!(" shard {i}/{n}")).unwrap_or_default(),
+                summary.num_selected,
+                summary.num_already_done,
+                summary.num_run,
+                summary.num_simulations,
+                summary.num_errors,
+                start.elapsed().as_secs_f64()
+            );
+            for f in summary.files {
+                say!("wrote {}", f.display());
+            }
+        }
+        SweepCommand::Merge { dirs, out } => {
+            let summary = eval::sweep::merge::merge(&dirs, &out)?;
+            say!("merged {} runs from {} folders", summary.num_runs, dirs.len());
+            for f in summary.files {
+                say!("wrote {}", f.display());
+            }
+        }
+        SweepCommand::Report { dir } => {
+            for f in eval::sweep::report::report(&dir)? {
+                say!("wrote {}", f.display());
+            }
+        }
+    }
+    Ok(())
 }
 
 #[derive(clap::Args, Debug)]
@@ -626,6 +751,7 @@ fn main() -> ExitCode {
             seed,
         }) => run_record(&scenario, &out, format, seed),
         Some(Command::Preview { scenario, out }) => run_preview(&scenario, &out),
+        Some(Command::Sweep(command)) => run_sweep(command),
         None => run_scenario(&RunArgs {
             scenario: PathBuf::from(DEFAULT_SCENARIO),
             out: None,

@@ -20,6 +20,16 @@ pub enum EvalError {
         /// What is wrong and what was expected.
         message: String,
     },
+    /// A place in a text file (a sweep file) is wrong. Displayed as `file:line:column: message`.
+    #[error("{}{}: {message}", path.display(), position.map(|p| format!(":{p}")).unwrap_or_default())]
+    At {
+        /// The file.
+        path: PathBuf,
+        /// Where in it, when known.
+        position: Option<sim::TextPosition>,
+        /// What is wrong and what was expected.
+        message: String,
+    },
     /// A file or folder could not be created or written.
     #[error("{}: {source}", path.display())]
     Io {

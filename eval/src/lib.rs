@@ -18,6 +18,7 @@ pub mod render;
 pub mod report_images;
 pub mod run;
 pub mod suite;
+pub mod sweep;
 #[cfg(test)]
 mod test_support;
 pub mod wrong_cells;

@@ -19,6 +19,18 @@ impl Progress {
         Self { bar }
     }
 
+    /// A bar of `len` runs with the time left (a sweep).
+    pub fn with_eta(len: u64, unit: &str) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+        let template = format!(
+            "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit}, ETA {{eta}} {{msg}}"
+        );
+        if let Ok(style) = ProgressStyle::with_template(&template) {
+            bar.set_style(style);
+        }
+        Self { bar }
+    }
+
     /// A bar that never draws (for library callers and tests).
     pub fn hidden() -> Self {
         Self {

@@ -4,6 +4,7 @@
 //! are byte-identical across machines and the build stays light.
 
 pub mod canvas;
+pub mod chart;
 pub mod colormap;
 pub mod figure;
 mod layers;

@@ -113,7 +113,7 @@ impl<'a> ByteReader<'a> {
 }
 
 /// FNV-1a, 64 bit: the map file's checksum. Not cryptographic; it catches truncation and bit rot.
-pub(crate) fn fnv1a64(bytes: &[u8]) -> u64 {
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for &b in bytes {
         h ^= u64::from(b);

@@ -1,0 +1,591 @@
+//! `oeg sweep run`: the plan's runs in parallel, resumable and shardable.
+//!
+//! Layout of the output folder:
+//! * `plan.json`: the whole plan (every run's id, axis values and seed);
+//! * `runs/<id>/`: `scenario.toml` (the resolved scenario, a plain scenario file), `metrics.json`,
+//!   `obstacles.csv`, and last `row.json`, written atomically: a run is finished once its `row.json` exists;
+//! * `runs.csv`, `runs.jsonl`, `obstacles.csv`: every finished run of this shard in plan order, rebuilt from the
+//!   `row.json` files at the end of each invocation.
+//!
+//! Killed at any moment and started again with the same command, it runs only what has no `row.json`, and ends
+//! with the same rows. Runs that share a simulation (they differ only in the map's model, rule or resolution,
+//! the planner or the expectations) are simulated once and mapped once per setting.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde_json::{Map as JsonMap, Value as Json};
+
+use super::plan::{Plan, Run, to_json};
+use crate::error::{EvalError, Result};
+use crate::output::{create_dir, write_bytes, write_json};
+use crate::progress::Progress;
+
+/// How to run a plan.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The output folder.
+    pub out_dir: PathBuf,
+    /// `(i, n)`: run only shard `i` of `n` (1-based).
+    pub shard: Option<(usize, usize)>,
+    /// Simulations at once.
+    pub jobs: usize,
+    /// Simulate every run on its own, even where runs could share a simulation (to measure what sharing
+    /// saves).
+    pub simulate_each: bool,
+}
+
+/// What an invocation did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Runs of this shard.
+    pub num_selected: usize,
+    /// Of those, finished by an earlier invocation.
+    pub num_already_done: usize,
+    /// Run now.
+    pub num_run: usize,
+    /// Simulations run now.
+    pub num_simulations: usize,
+    /// Rows with status `error`.
+    pub num_errors: usize,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+/// Parses `--shard i/n` (1-based).
+///
+/// # Errors
+/// A message saying what was expected.
+pub fn parse_shard(text: &str) -> std::result::Result<(usize, usize), String> {
+    let parsed = text
+        .split_once('/')
+        .and_then(|(i, n)| Some((i.trim().parse::<usize>().ok()?, n.trim().parse::<usize>().ok()?)));
+    match parsed {
+        Some((i, n)) if n >= 1 && (1..=n).contains(&i) => Ok((i, n)),
+        Some((i, n)) => Err(format!(
+            "shard {i} of {n}: expected i/n with 1 <= i <= n (shards count from 1)"
+        )),
+        None => Err(format!("expected i/n, such as 2/5, got `{text}`")),
+    }
+}
+
+/// The shard from a cluster's environment when `--shard` is absent: a Slurm job array
+/// (`SLURM_ARRAY_TASK_ID` within `SLURM_ARRAY_TASK_MIN` .. `SLURM_ARRAY_TASK_MAX`), or a Kubernetes Indexed
+/// Job (`JOB_COMPLETION_INDEX`, from 0, with `shards` given by `--shards`).
+///
+/// # Errors
+/// A variable that is not a number, or a task outside its array's bounds.
+pub fn shard_from_env(
+    get: impl Fn(&str) -> Option<String>,
+    shards: Option<usize>,
+) -> std::result::Result<Option<(usize, usize)>, String> {
+    let number = |name: &str| -> std::result::Result<Option<usize>, String> {
+        get(name)
+            .map(|v| {
+                v.trim()
+                    .parse::<usize>()
+                    .map_err(|_| format!("{name}={v}: expected a whole number"))
+            })
+            .transpose()
+    };
+    if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
+        let (Some(min), Some(max)) = (number("SLURM_ARRAY_TASK_MIN")?, number("SLURM_ARRAY_TASK_MAX")?)
+        else {
+            return Err("SLURM_ARRAY_TASK_ID is set without SLURM_ARRAY_TASK_MIN and _MAX".into());
+        };
+        if !(min..=max).contains(&id) {
+            return Err(format!(
+                "SLURM_ARRAY_TASK_ID={id} lies outside the array {min}-{max}"
+            ));
+        }
+        return Ok(Some((id - min + 1, max - min + 1)));
+    }
+    if let Some(index) = number("JOB_COMPLETION_INDEX")? {
+        let Some(n) = shards else {
+            return Err("JOB_COMPLETION_INDEX is set: give the job's completions as --shards N".into());
+        };
+        if index >= n {
+            return Err(format!(
+                "JOB_COMPLETION_INDEX={index} with --shards {n}: expected an index below {n}"
+            ));
+        }
+        return Ok(Some((index + 1, n)));
+    }
+    Ok(None)
+}
+
+/// Runs the plan (or one shard of it) into `options.out_dir`.
+///
+/// # Errors
+/// An output folder holding another plan, a thread pool that cannot start, or a failed write. A run whose
+/// simulation or map fails is a row with status `error`, not an error.
+pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<RunSummary> {
+    use rayon::prelude::*;
+    let out = &options.out_dir;
+    create_dir(&out.join("runs"))?;
+    check_same_plan(plan, out)?;
+    let plan_path = out.join("plan.json");
+    write_json(&plan_path, &plan.listing())?;
+    let selected: Vec<&Run> = match options.shard {
+        Some((i, n)) => plan.shard(i, n),
+        None => plan.runs.iter().collect(),
+    };
+    let pending: Vec<&Run> = selected
+        .iter()
+        .copied()
+        .filter(|r| !row_path(out, &r.id).is_file())
+        .collect();
+    // Groups in plan order; each is one simulation.
+    let mut groups: Vec<(String, Vec<&Run>)> = Vec::new();
+    for r in &pending {
+        let key = if options.simulate_each { &r.id } else { &r.group };
+        match groups.iter_mut().find(|(g, _)| g == key) {
+            Some((_, runs)) => runs.push(r),
+            None => groups.push((key.clone(), vec![r])),
+        }
+    }
+    progress.set_length(pending.len() as u64);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.jobs.max(1))
+        .build()
+        .map_err(|e| EvalError::Input {
+            path: PathBuf::from("(command line)"),
+            message: format!("cannot start {} threads for --jobs: {e}", options.jobs),
+        })?;
+    let errors: Vec<usize> = pool.install(|| {
+        groups
+            .par_iter()
+            .with_max_len(1)
+            .map(|(_, runs)| {
+                let n = run_group(runs, out)?;
+                progress.inc(runs.len() as u64);
+                Ok(n)
+            })
+            .collect::<Result<Vec<usize>>>()
+    })?;
+    progress.finish();
+    let files = write_tables(plan, &selected, out)?;
+    Ok(RunSummary {
+        num_selected: selected.len(),
+        num_already_done: selected.len() - pending.len(),
+        num_run: pending.len(),
+        num_simulations: groups.len(),
+        num_errors: errors.iter().sum(),
+        files: std::iter::once(plan_path).chain(files).collect(),
+    })
+}
+
+/// The finished-run marker of a run.
+pub fn row_path(out: &Path, id: &str) -> PathBuf {
+    out.join("runs").join(id).join("row.json")
+}
+
+/// Refuses a folder that holds another plan's runs: its rows would be mixed with this plan's.
+fn check_same_plan(plan: &Plan, out: &Path) -> Result<()> {
+    let path = out.join("plan.json");
+    let Ok(bytes) = std::fs::read(&path) else {
+        return Ok(());
+    };
+    let old: Json = serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
+        path: path.clone(),
+        message: format!("not a plan written by `oeg sweep run`: {e}"),
+    })?;
+    let ids = |v: &Json| -> Vec<String> {
+        v["runs"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|r| r["id"].as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    if ids(&old) != ids(&plan.listing()) {
+        return Err(EvalError::Input {
+            path,
+            message:
+                "this folder holds the runs of another plan (the sweep file changed); give another --out, or \
+                      remove the folder to start again"
+                    .into(),
+        });
+    }
+    Ok(())
+}
+
+/// One simulation, mapped once per run; writes each run's files, `row.json` last. Returns the error rows.
+fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
+    let start = Instant::now();
+    let loaded: Vec<std::result::Result<sim::LoadedScenario, String>> =
+        runs.iter().map(|r| r.load().map_err(|e| e.to_string())).collect();
+    let first = loaded.iter().find_map(|l| l.as_ref().ok());
+    let outcome: std::result::Result<Vec<std::result::Result<RunOutcome, String>>, String> = match first {
+        None => Err(loaded
+            .iter()
+            .find_map(|l| l.as_ref().err().cloned())
+            .unwrap_or_default()),
+        Some(first) => simulate_group(first, &loaded),
+    };
+    let shared_s = start.elapsed().as_secs_f64();
+    let mut num_errors = 0;
+    for (k, run) in runs.iter().enumerate() {
+        let dir = out.join("runs").join(&run.id);
+        create_dir(&dir)?;
+        write_bytes(&dir.join("scenario.toml"), run.scenario_text().as_bytes())?;
+        let result = match &outcome {
+            Ok(outcomes) => outcomes[k].clone(),
+            Err(e) => Err(e.clone()),
+        };
+        let mut row = lead_columns(run);
+        let obstacles = match result {
+            Ok(o) => {
+                write_json(&dir.join("metrics.json"), &o.evaluation.metrics)?;
+                let csv = crate::obstacles::to_csv(&o.evaluation.obstacles).map_err(|message| {
+                    EvalError::Input {
+                        path: dir.join("obstacles.csv"),
+                        message,
+                    }
+                })?;
+                write_bytes(&dir.join("obstacles.csv"), &csv)?;
+                row.insert("status".into(), Json::from("ok"));
+                row.insert("error".into(), Json::from(""));
+                metric_columns(&mut row, &o);
+                obstacle_rows(run, &o)
+            }
+            Err(message) => {
+                num_errors += 1;
+                row.insert("status".into(), Json::from("error"));
+                row.insert("error".into(), Json::from(message));
+                Vec::new()
+            }
+        };
+        // The shared simulation's time split over its runs: the column adds up to the study's time.
+        row.insert(
+            "wall_time_s".into(),
+            Json::from(round3(shared_s / runs.len() as f64)),
+        );
+        let record = serde_json::json!({ "row": row, "obstacles": obstacles });
+        write_json(&row_path(out, &run.id), &record)?;
+    }
+    Ok(num_errors)
+}
+
+#[derive(Debug, Clone)]
+struct RunOutcome {
+    evaluation: crate::run::Evaluation,
+    max_step_m: f64,
+    height_m: f64,
+}
+
+/// Simulates the group's first valid scenario and judges one map per run.
+fn simulate_group(
+    first: &sim::LoadedScenario,
+    loaded: &[std::result::Result<sim::LoadedScenario, String>],
+) -> std::result::Result<Vec<std::result::Result<RunOutcome, String>>, String> {
+    let settings: Vec<&sim::scenario::MapSettings> = loaded
+        .iter()
+        .map(|l| l.as_ref().map_or(&first.scenario.map, |l| &l.scenario.map))
+        .collect();
+    let (simulation, maps, _, _) =
+        crate::run::simulate_and_map(first, &settings, &Progress::hidden()).map_err(|e| e.to_string())?;
+    let mut truths: Vec<(String, sim::truth::TruthRaster)> = Vec::new();
+    let outcomes = loaded
+        .iter()
+        .zip(&maps)
+        .map(|(l, map)| {
+            let s = &l.as_ref().map_err(Clone::clone)?.scenario;
+            let geometry = *map.geometry();
+            let key = format!(
+                "{:?} {:?} {:?}",
+                s.map.resolution_m, s.map.min_xy_m, s.map.max_xy_m
+            );
+            if !truths.iter().any(|(k, _)| *k == key) {
+                let truth =
+                    crate::run::truth_of(s, simulation.world(), &geometry).map_err(|e| e.to_string())?;
+                truths.push((key.clone(), truth));
+            }
+            let truth = &truths.iter().find(|(k, _)| *k == key).ok_or("no truth")?.1;
+            let evaluation = crate::run::evaluate(s, map, truth).map_err(|e| e.to_string())?;
+            Ok(RunOutcome {
+                evaluation,
+                max_step_m: s.robot.max_step_m,
+                height_m: s.robot.height_m,
+            })
+        })
+        .collect::<Vec<_>>();
+    Ok(outcomes)
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1e3).round() / 1e3
+}
+
+/// `id`, `scenario`, `replicate`, `seed` and the axis values.
+fn lead_columns(run: &Run) -> JsonMap<String, Json> {
+    let mut row = JsonMap::new();
+    row.insert("id".into(), Json::from(run.id.clone()));
+    row.insert("scenario".into(), Json::from(run.scenario.clone()));
+    row.insert("replicate".into(), Json::from(run.replicate));
+    row.insert("seed".into(), Json::from(run.seed));
+    for (k, v) in &run.axis_values {
+        row.insert(k.clone(), to_json(v));
+    }
+    row
+}
+
+/// Every metric of `metrics.json` (but the scenario name and seed, already in the row) and the obstacle
+/// decision counts.
+fn metric_columns(row: &mut JsonMap<String, Json>, o: &RunOutcome) {
+    if let Ok(Json::Object(m)) = serde_json::to_value(&o.evaluation.metrics) {
+        for (k, v) in m {
+            if k != "scenario" && k != "seed" {
+                row.insert(k, v);
+            }
+        }
+    }
+    let (mut right, mut unsafe_, mut cautious, mut unseen) = (0u64, 0u64, 0u64, 0u64);
+    for d in &o.evaluation.obstacles {
+        match decision_class(d) {
+            "right" => right += 1,
+            "unsafe" => unsafe_ += 1,
+            "overcautious" => cautious += 1,
+            _ => unseen += 1,
+        }
+    }
+    row.insert("obstacles_right".into(), Json::from(right));
+    row.insert("obstacles_unsafe".into(), Json::from(unsafe_));
+    row.insert("obstacles_overcautious".into(), Json::from(cautious));
+    row.insert("obstacles_unseen".into(), Json::from(unseen));
+    let seen = right + unsafe_ + cautious;
+    let rate = if seen > 0 {
+        Json::from((unsafe_ + cautious) as f64 / seen as f64)
+    } else {
+        Json::Null
+    };
+    row.insert("obstacle_decision_error_rate".into(), rate);
+}
+
+/// `right`, `unsafe` (truly blocked, mapped passable), `overcautious` (the reverse) or `unseen`.
+pub fn decision_class(d: &crate::obstacles::ObstacleDecision) -> &'static str {
+    match (d.true_decision, d.mapped_decision) {
+        (_, "unseen") => "unseen",
+        (t, m) if t == m => "right",
+        ("blocked", _) => "unsafe",
+        _ => "overcautious",
+    }
+}
+
+/// The run's obstacles with the distance of each to its threshold: height minus the robot's step, or an
+/// overhang's clearance minus the robot's height.
+fn obstacle_rows(run: &Run, o: &RunOutcome) -> Vec<Json> {
+    o.evaluation
+        .obstacles
+        .iter()
+        .map(|d| {
+            let (threshold, decides) = if d.kind == "overhang" {
+                (o.height_m, "clearance")
+            } else {
+                (o.max_step_m, "step")
+            };
+            let mut row = lead_columns(run);
+            row.insert("obstacle".into(), Json::from(d.index));
+            row.insert("name".into(), Json::from(d.name.clone()));
+            row.insert("kind".into(), Json::from(d.kind.clone()));
+            row.insert("decides".into(), Json::from(decides));
+            row.insert("height_m".into(), Json::from(d.height_m));
+            row.insert(
+                "threshold_distance_m".into(),
+                Json::from(((d.height_m - threshold) * 1e6).round() / 1e6),
+            );
+            row.insert("num_observed_cells".into(), Json::from(d.num_observed_cells));
+            row.insert("unsafe_cells".into(), Json::from(d.unsafe_cells));
+            row.insert("overcautious_cells".into(), Json::from(d.overcautious_cells));
+            row.insert("true_decision".into(), Json::from(d.true_decision));
+            row.insert("mapped_decision".into(), Json::from(d.mapped_decision));
+            row.insert("decision".into(), Json::from(decision_class(d)));
+            Json::Object(row)
+        })
+        .collect()
+}
+
+/// The finished rows of `runs`, in their order: `(row, obstacle rows)`.
+///
+/// # Errors
+/// A `row.json` that cannot be read.
+pub fn read_rows(out: &Path, runs: &[&Run]) -> Result<Vec<(Json, Vec<Json>)>> {
+    let mut rows = Vec::new();
+    for r in runs {
+        let path = row_path(out, &r.id);
+        if let Some(record) = read_record(&path)? {
+            rows.push(record);
+        }
+    }
+    Ok(rows)
+}
+
+/// A `row.json`: `None` when it does not exist.
+///
+/// # Errors
+/// A file that is not a row.
+pub fn read_record(path: &Path) -> Result<Option<(Json, Vec<Json>)>> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(source) => {
+            return Err(EvalError::Io {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+    };
+    let mut record: Json = serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
+        path: path.to_path_buf(),
+        message: format!("not a run's row: {e}"),
+    })?;
+    let obstacles = record["obstacles"].as_array().cloned().unwrap_or_default();
+    let row = record["row"].take();
+    if !row.is_object() {
+        return Err(EvalError::Input {
+            path: path.to_path_buf(),
+            message: "not a run's row: no `row` object".into(),
+        });
+    }
+    Ok(Some((row, obstacles)))
+}
+
+/// Writes `runs.csv`, `runs.jsonl` and `obstacles.csv` of the finished `runs` into `out`.
+///
+/// # Errors
+/// A row that cannot be read, or a failed write.
+pub fn write_tables(plan: &Plan, runs: &[&Run], out: &Path) -> Result<Vec<PathBuf>> {
+    let rows = read_rows(out, runs)?;
+    let axis_keys: Vec<String> = plan.sweep.axes.iter().map(|a| a.key.clone()).collect();
+    write_row_tables(&axis_keys, &rows, out)
+}
+
+/// Writes the tables of `rows` (from [`read_rows`]) into `out`.
+///
+/// # Errors
+/// A failed write.
+pub fn write_row_tables(
+    axis_keys: &[String],
+    rows: &[(Json, Vec<Json>)],
+    out: &Path,
+) -> Result<Vec<PathBuf>> {
+    let lead: Vec<String> = ["id", "scenario", "replicate", "seed"]
+        .iter()
+        .map(|s| (*s).to_string())
+        .chain(axis_keys.iter().cloned())
+        .collect();
+    let mut jsonl = Vec::new();
+    for (row, _) in rows {
+        jsonl.extend(serde_json::to_vec(row).unwrap_or_default());
+        jsonl.push(b'\n');
+    }
+    let runs_csv = out.join("runs.csv");
+    let csv = to_csv(
+        rows.iter().map(|(r, _)| r),
+        &lead,
+        &["status", "error"],
+        &["wall_time_s"],
+    )
+    .map_err(|message| EvalError::Input {
+        path: runs_csv.clone(),
+        message,
+    })?;
+    write_bytes(&runs_csv, &csv)?;
+    let runs_jsonl = out.join("runs.jsonl");
+    write_bytes(&runs_jsonl, &jsonl)?;
+    let obstacles_csv = out.join("obstacles.csv");
+    let mut obstacle_lead = lead.clone();
+    obstacle_lead.extend(
+        ["obstacle", "name", "kind", "decides"]
+            .iter()
+            .map(|s| (*s).to_string()),
+    );
+    let csv =
+        to_csv(rows.iter().flat_map(|(_, o)| o.iter()), &obstacle_lead, &[], &[]).map_err(|message| {
+            EvalError::Input {
+                path: obstacles_csv.clone(),
+                message,
+            }
+        })?;
+    write_bytes(&obstacles_csv, &csv)?;
+    Ok(vec![runs_csv, runs_jsonl, obstacles_csv])
+}
+
+/// CSV of JSON objects: `lead` columns first, then `then`, the rest sorted, `last` at the end. Null is an
+/// empty cell; nested values are written as JSON.
+fn to_csv<'a>(
+    rows: impl Iterator<Item = &'a Json> + Clone,
+    lead: &[String],
+    then: &[&str],
+    last: &[&str],
+) -> std::result::Result<Vec<u8>, String> {
+    let mut rest: BTreeMap<&str, ()> = BTreeMap::new();
+    for r in rows.clone() {
+        if let Json::Object(m) = r {
+            for k in m.keys() {
+                rest.insert(k, ());
+            }
+        }
+    }
+    let mut columns: Vec<&str> = lead.iter().map(String::as_str).collect();
+    columns.extend(then.iter().copied());
+    for k in rest.keys() {
+        if !columns.contains(k) && !last.contains(k) {
+            columns.push(k);
+        }
+    }
+    columns.extend(last.iter().copied());
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&columns).map_err(|e| e.to_string())?;
+    for r in rows {
+        let cells: Vec<String> = columns
+            .iter()
+            .map(|c| match &r[*c] {
+                Json::Null => String::new(),
+                Json::String(s) => s.clone(),
+                other => other.to_string(),
+            })
+            .collect();
+        w.write_record(&cells).map_err(|e| e.to_string())?;
+    }
+    w.into_inner().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_are_parsed_from_one() {
+        assert_eq!(parse_shard("2/5"), Ok((2, 5)));
+        assert_eq!(parse_shard("1/1"), Ok((1, 1)));
+        for bad in ["0/3", "4/3", "1/0", "x/3", "3"] {
+            let e = parse_shard(bad).expect_err(bad);
+            assert!(e.contains("expected"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn cluster_variables_give_the_shard() {
+        let env = |pairs: &'static [(&'static str, &'static str)]| {
+            move |k: &str| pairs.iter().find(|(n, _)| *n == k).map(|(_, v)| (*v).to_string())
+        };
+        let slurm = [
+            ("SLURM_ARRAY_TASK_ID", "5"),
+            ("SLURM_ARRAY_TASK_MIN", "4"),
+            ("SLURM_ARRAY_TASK_MAX", "6"),
+        ];
+        assert_eq!(shard_from_env(env(&slurm), None), Ok(Some((2, 3))));
+        assert_eq!(
+            shard_from_env(env(&[("JOB_COMPLETION_INDEX", "0")]), Some(3)),
+            Ok(Some((1, 3)))
+        );
+        assert!(shard_from_env(env(&[("JOB_COMPLETION_INDEX", "3")]), Some(3)).is_err());
+        assert!(shard_from_env(env(&[("JOB_COMPLETION_INDEX", "0")]), None).is_err());
+        assert!(shard_from_env(env(&[("SLURM_ARRAY_TASK_ID", "1")]), None).is_err());
+        assert_eq!(shard_from_env(env(&[]), None), Ok(None));
+    }
+}

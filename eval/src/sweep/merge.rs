@@ -1,0 +1,137 @@
+//! `oeg sweep merge`: shard outputs back into one set of rows, checked to cover the plan exactly once.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value as Json;
+
+use super::execute::{read_record, row_path, write_row_tables};
+use crate::error::{EvalError, Result};
+use crate::output::{create_dir, write_bytes};
+
+/// What a merge found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MergeSummary {
+    /// Runs in the plan, all present once.
+    pub num_runs: usize,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+fn read_plan(dir: &Path) -> Result<Json> {
+    let path = dir.join("plan.json");
+    let bytes = std::fs::read(&path).map_err(|source| EvalError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
+        path,
+        message: format!("not a plan written by `oeg sweep run`: {e}"),
+    })
+}
+
+/// The run ids of a `plan.json`, in plan order.
+pub fn plan_ids(plan: &Json) -> Vec<String> {
+    plan["runs"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|r| r["id"].as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The axis keys of a `plan.json`.
+pub fn plan_axes(plan: &Json) -> Vec<String> {
+    plan["axes"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|x| x["key"].as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Merges the finished runs of `dirs` (outputs of `oeg sweep run`, one per shard) into `out`: `plan.json`,
+/// `runs.csv`, `runs.jsonl`, `obstacles.csv`.
+///
+/// # Errors
+/// Folders of different plans, and a plan not covered exactly once: every missing and duplicated run is
+/// named.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
+    let Some(first) = dirs.first() else {
+        return Err(EvalError::Input {
+            path: PathBuf::from("(command line)"),
+            message: "expected at least one folder to merge".into(),
+        });
+    };
+    let plan = read_plan(first)?;
+    let ids = plan_ids(&plan);
+    for d in &dirs[1..] {
+        if plan_ids(&read_plan(d)?) != ids {
+            return Err(EvalError::Input {
+                path: d.join("plan.json"),
+                message: format!("holds another plan than {}", first.join("plan.json").display()),
+            });
+        }
+    }
+    let mut rows = Vec::with_capacity(ids.len());
+    let (mut missing, mut duplicated) = (Vec::new(), Vec::new());
+    for id in &ids {
+        let mut found: Vec<(&PathBuf, (Json, Vec<Json>))> = Vec::new();
+        for d in dirs {
+            if let Some(record) = read_record(&row_path(d, id))? {
+                found.push((d, record));
+            }
+        }
+        match found.len() {
+            0 => missing.push(id.clone()),
+            1 => rows.extend(found.into_iter().map(|(_, r)| r)),
+            _ => duplicated.push(format!(
+                "{id} (in {})",
+                found
+                    .iter()
+                    .map(|(d, _)| d.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        }
+    }
+    if !missing.is_empty() || !duplicated.is_empty() {
+        let mut problems = Vec::new();
+        if !missing.is_empty() {
+            problems.push(format!(
+                "{} missing run(s): {}",
+                missing.len(),
+                missing.join(", ")
+            ));
+        }
+        if !duplicated.is_empty() {
+            problems.push(format!(
+                "{} duplicated run(s): {}",
+                duplicated.len(),
+                duplicated.join("; ")
+            ));
+        }
+        return Err(EvalError::Input {
+            path: first.clone(),
+            message: format!(
+                "the folders do not cover the plan of {} runs exactly once: {}",
+                ids.len(),
+                problems.join("; ")
+            ),
+        });
+    }
+    create_dir(out)?;
+    let plan_path = out.join("plan.json");
+    let mut bytes = serde_json::to_vec_pretty(&plan).unwrap_or_default();
+    bytes.push(b'\n');
+    write_bytes(&plan_path, &bytes)?;
+    let mut files = vec![plan_path];
+    files.extend(write_row_tables(&plan_axes(&plan), &rows, out)?);
+    Ok(MergeSummary {
+        num_runs: ids.len(),
+        files,
+    })
+}

@@ -1,0 +1,22 @@
+//! `oeg sweep`: studies of many runs over axes of settings, seeds and randomized scenes, on one machine or a
+//! cluster (`docs/sweep-format.md`).
+//!
+//! * [`spec`]: the sweep file and its checks;
+//! * [`presets`]: named model presets;
+//! * [`generate`]: randomized scenes;
+//! * [`plan`]: every run resolved, with its id, its shard and the simulation it shares;
+//! * [`execute`]: running, resuming, sharding;
+//! * [`merge`]: shards back into one set of rows;
+//! * [`stats`] and [`report`]: means with confidence intervals, `summary.csv` and plots.
+
+pub mod execute;
+pub mod generate;
+pub mod merge;
+pub mod plan;
+pub mod presets;
+pub mod report;
+pub mod spec;
+pub mod stats;
+
+pub use plan::Plan;
+pub use spec::Sweep;

@@ -1,0 +1,70 @@
+//! Named model presets: sets of `--set` overrides a sweep's `preset` axis applies (`docs/sweep-format.md`).
+//!
+//! * `paper`: the update rules as published (every rule option back to its default). The height threshold,
+//!   the range limit and the no-return clearing range stay as the scenario sets them: they describe the
+//!   robot and its sensors, not the rules.
+//! * `static`: the README's static settings (a beam passing above or far below a cell's surface says nothing
+//!   about it; a much higher hit replaces the estimate), for scenes without moving people.
+
+use toml::Value;
+
+/// The axis key that selects presets.
+pub const PRESET_KEY: &str = "preset";
+
+/// The built-in presets and what they are.
+pub const BUILT_IN: [(&str, &str); 2] = [
+    ("paper", "the paper's update rules as published"),
+    (
+        "static",
+        "the static settings: free_space_occupancy = below_elevation, free_space_max_depth_m = 0.01, highest_surface fusion",
+    ),
+];
+
+/// The model options that are update rules; `paper` returns each to its default.
+const RULE_KEYS: [&str; 13] = [
+    "map.model.log_odds_min",
+    "map.model.log_odds_max",
+    "map.model.occupied_threshold",
+    "map.model.significance_k_m",
+    "map.model.p_min",
+    "map.model.p_max",
+    "map.model.elevation_threshold",
+    "map.model.free_space_elevation",
+    "map.model.free_space_occupancy",
+    "map.model.free_space_max_depth_m",
+    "map.model.scan_hit_elevation",
+    "map.model.elevation_fusion",
+    "map.model.process_noise_var_m2",
+];
+
+/// A built-in preset's overrides in order: `(key, Some(value))` sets, `(key, None)` removes (the default).
+pub fn built_in(name: &str) -> Option<Vec<(String, Option<Value>)>> {
+    let paper = || {
+        RULE_KEYS
+            .iter()
+            .map(|k| ((*k).to_string(), None))
+            .collect::<Vec<_>>()
+    };
+    match name {
+        "paper" => Some(paper()),
+        "static" => {
+            let mut o = paper();
+            let fusion: toml::Table = toml::from_str(
+                "kind = \"highest_surface\"\nmahalanobis_threshold = 3.0\nlower_threshold = 1.0\n\
+                 multi_height_noise_m2 = 0.0001\n",
+            )
+            .ok()?;
+            o.push((
+                "map.model.free_space_occupancy".into(),
+                Some(Value::String("below_elevation".into())),
+            ));
+            o.push((
+                "map.model.free_space_max_depth_m".into(),
+                Some(Value::Float(0.01)),
+            ));
+            o.push(("map.model.elevation_fusion".into(), Some(Value::Table(fusion))));
+            Some(o)
+        }
+        _ => None,
+    }
+}
