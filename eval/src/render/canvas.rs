@@ -78,12 +78,24 @@ impl Canvas {
 
     /// A one-pixel line (Bresenham), clipped to the canvas.
     pub fn line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb) {
+        self.stroke(x0, y0, x1, y1, color, |_| true);
+    }
+
+    /// A dashed one-pixel line: 4 pixels drawn, 4 left out.
+    pub fn dashed_line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb) {
+        self.stroke(x0, y0, x1, y1, color, |k| (k / 4) % 2 == 0);
+    }
+
+    /// Bresenham from `(x0, y0)` to `(x1, y1)`, drawing the `k`-th pixel when `draw(k)`.
+    fn stroke(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb, draw: impl Fn(i64) -> bool) {
         let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
         let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
         let (mut x, mut y, mut err) = (x0, y0, dx + dy);
         // Bound the loop: a line never needs more steps than its longer side.
-        for _ in 0..=(dx.max(-dy) + 1) {
-            self.set(x, y, color);
+        for k in 0..=(dx.max(-dy) + 1) {
+            if draw(k) {
+                self.set(x, y, color);
+            }
             if x == x1 && y == y1 {
                 break;
             }

@@ -137,6 +137,18 @@ impl Chart {
             }
         }
         self.draw_axes(&mut c, (x0, x1), (y0, y1));
+        // Band edges, so that a band behind another stays visible.
+        for (k, s) in self.series.iter().enumerate() {
+            let color = SERIES_COLORS[k % SERIES_COLORS.len()];
+            for w in s.points.windows(2) {
+                let (a, b) = (w[0], w[1]);
+                for (ya, yb) in [(a.low, b.low), (a.high, b.high)] {
+                    if [a.x, b.x, ya, yb].iter().all(|v| v.is_finite()) {
+                        c.dashed_line(px(a.x), py(ya), px(b.x), py(yb), color);
+                    }
+                }
+            }
+        }
         for (k, s) in self.series.iter().enumerate() {
             let color = SERIES_COLORS[k % SERIES_COLORS.len()];
             let pts: Vec<(i64, i64)> = s

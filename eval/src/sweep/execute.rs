@@ -136,6 +136,13 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
         .copied()
         .filter(|r| !row_path(out, &r.id).is_file())
         .collect();
+    // A pending run's folder holds no finished row: whatever a killed invocation left there goes.
+    for r in &pending {
+        let dir = out.join("runs").join(&r.id);
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).map_err(|source| EvalError::Io { path: dir, source })?;
+        }
+    }
     // Groups in plan order; each is one simulation.
     let mut groups: Vec<(String, Vec<&Run>)> = Vec::new();
     for r in &pending {
@@ -573,12 +580,12 @@ mod tests {
         let env = |pairs: &'static [(&'static str, &'static str)]| {
             move |k: &str| pairs.iter().find(|(n, _)| *n == k).map(|(_, v)| (*v).to_string())
         };
-        let slurm = [
+        const SLURM: [(&str, &str); 3] = [
             ("SLURM_ARRAY_TASK_ID", "5"),
             ("SLURM_ARRAY_TASK_MIN", "4"),
             ("SLURM_ARRAY_TASK_MAX", "6"),
         ];
-        assert_eq!(shard_from_env(env(&slurm), None), Ok(Some((2, 3))));
+        assert_eq!(shard_from_env(env(&SLURM), None), Ok(Some((2, 3))));
         assert_eq!(
             shard_from_env(env(&[("JOB_COMPLETION_INDEX", "0")]), Some(3)),
             Ok(Some((1, 3)))

@@ -696,3 +696,81 @@ fn set(doc: &mut Table, path: &[&str], value: Value) {
     }
     here.insert((*last).to_string(), value);
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+
+    fn spec() -> GenerateSpec {
+        toml::from_str(
+            "base = \"x.toml\"\ncurbs = { count = [2, 4] }\nboards = { count = [1, 3] }\nwalls = { count = [1, 2] }\n\
+             bushes = { count = [0, 2] }\nramps = { count = [0, 2] }\npeople = { count = [1, 3] }\n",
+        )
+        .expect("spec")
+    }
+
+    fn base() -> (std::path::PathBuf, Table) {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/sweeps/tiny_base.toml");
+        let text = std::fs::read_to_string(&path).expect("base");
+        (path, toml::from_str(&text).expect("toml"))
+    }
+
+    #[test]
+    fn generated_scenes_are_valid_deterministic_and_keep_the_drive_clear() {
+        let (path, base) = base();
+        let g = spec();
+        for seed in 0..40u64 {
+            let mut a = base.clone();
+            g.place(seed, &mut a);
+            let mut b = base.clone();
+            g.place(seed, &mut b);
+            assert_eq!(a, b, "seed {seed}: the same scene twice");
+            let text = toml::to_string(&a).expect("text");
+            let loaded = sim::scenario::load_str(&path, &text).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+            let s = &loaded.scenario;
+            assert!(!s.obstacles.is_empty() && !s.actors.is_empty(), "seed {seed}");
+            for o in &s.obstacles {
+                let [x, y] = o.center_xy_m();
+                assert!((g.field_start_m..=g.field_end_m()).contains(&x), "{o:?}");
+                assert!(y.abs() <= g.field_half_width_m, "{o:?}");
+                // Nothing stands in the lane the robot drives.
+                if x < g.drive_length_m {
+                    assert!(y.abs() > g.lane_half_width_m, "seed {seed}: {o:?} in the lane");
+                }
+            }
+            // People leave before the run ends, and the robot faces the field.
+            for sim::scenario::Actor::Person { waypoints, .. } in &s.actors {
+                let last = waypoints[waypoints.len() - 1];
+                assert!(last[0] < s.duration_s, "seed {seed}");
+            }
+            assert_eq!(
+                s.robot.drive.waypoints_xy_m,
+                vec![[0.0, 0.0], [g.drive_length_m, 0.0]]
+            );
+        }
+        let (mut a, mut b) = (base.clone(), base);
+        g.place(1, &mut a);
+        g.place(2, &mut b);
+        assert_ne!(a, b, "another seed, another scene");
+    }
+
+    #[test]
+    fn heights_fall_in_their_ranges_and_straddle_the_step() {
+        let (_, base) = base();
+        let g = spec();
+        let mut heights = Vec::new();
+        for seed in 0..40u64 {
+            let mut doc = base.clone();
+            g.place(seed, &mut doc);
+            for o in doc["obstacles"].as_array().expect("obstacles") {
+                if o["name"].as_str().is_some_and(|n| n.starts_with("curb")) {
+                    heights.push(o["size_m"][2].as_float().expect("height"));
+                }
+            }
+        }
+        assert!(heights.iter().all(|h| (0.02..=0.05).contains(h)));
+        assert!(heights.iter().any(|h| *h < 0.035) && heights.iter().any(|h| *h > 0.035));
+    }
+}
