@@ -699,7 +699,7 @@ fn set(doc: &mut Table, path: &[&str], value: Value) {
 
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
+    use std::path::{Path, PathBuf};
 
     use super::*;
 
@@ -711,7 +711,7 @@ mod tests {
         .expect("spec")
     }
 
-    fn base() -> (std::path::PathBuf, Table) {
+    fn base() -> (PathBuf, Table) {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/sweeps/tiny_base.toml");
         let text = std::fs::read_to_string(&path).expect("base");
         (path, toml::from_str(&text).expect("toml"))
