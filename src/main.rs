@@ -16,11 +16,8 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use eval::mapping::{MapJob, MapReport};
 use eval::progress::Progress;
-use oeg::io::pcd::{InvalidPoints, PcdFrame, PcdOptions};
-use oeg::{
-    FreeSpaceElevation, MapConfig, ModelOptions, RangeNoiseModel, RobotProfile, SensorModel,
-    TraversabilityRule,
-};
+use oeg::MapConfig;
+use oeg::io::pcd::PcdOptions;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -257,24 +254,11 @@ struct PlanArgs {
     /// Output folder (created if needed).
     #[arg(long, default_value = "out/plan")]
     out: PathBuf,
-    /// The robot's centre keeps at least this far from blocked cells, metres (the Pioneer 3-AT's inscribed
-    /// radius).
-    #[arg(long, default_value_t = oeg::planner::DEFAULT_INFLATION_RADIUS_M)]
-    inflation_radius: f64,
-    /// Cells the map never observed: avoid (never entered, not inflated), inflate (obstacles), or drivable.
-    #[arg(long, value_enum, default_value_t = UnknownArg::Avoid)]
-    unknown: UnknownArg,
-    /// The robot's largest climbable step in metres.
-    #[arg(long, default_value_t = oeg::traversability::DEFAULT_MAX_STEP_M)]
-    max_step: f32,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum UnknownArg {
-    Avoid,
-    Inflate,
-    Drivable,
+    /// A setting by its scenario key (repeatable): planner.inflation_radius_m (0.25, the Pioneer 3-AT's
+    /// inscribed radius), planner.unknown (avoid, inflate or drivable), robot.max_step_m (0.035),
+    /// robot.height_m (0.46), map.traversability.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
 }
 
 /// `X,Y` in metres, as `--from` and `--to` take them.
@@ -295,26 +279,19 @@ fn parse_xy(text: &str) -> Result<(f64, f64), String> {
 }
 
 fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
+    let settings = eval::settings::plan_settings(&args.overrides).map_err(anyhow::Error::msg)?;
     let job = eval::plan::PlanJob {
         map: args.map.clone(),
         from_xy_m: args.from,
         to_xy_m: args.to,
         out_dir: args.out.clone(),
         options: oeg::PlannerOptions {
-            inflation_radius_m: args.inflation_radius,
-            unknown: match args.unknown {
-                UnknownArg::Avoid => oeg::UnknownCells::Avoid,
-                UnknownArg::Inflate => oeg::UnknownCells::Inflate,
-                UnknownArg::Drivable => oeg::UnknownCells::Drivable,
-            },
+            inflation_radius_m: settings.planner.inflation_radius_m,
+            unknown: settings.planner.unknown,
         },
-        profile: RobotProfile {
-            max_step_m: args.max_step,
-            ..RobotProfile::default()
-        },
-        rule: TraversabilityRule::Absolute,
+        profile: settings.robot.profile().map_err(anyhow::Error::msg)?,
+        rule: settings.map.traversability,
     };
-    job.profile.validate()?;
     let (summary, files) = eval::plan::run_job(&job)?;
     if summary.plan_found {
         say!(
@@ -339,86 +316,25 @@ fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
 
 #[derive(clap::Args, Debug)]
 struct MapArgs {
-    /// Input files: .graph (OctoMap scan graph) or .pcd (ascii, binary or binary_compressed).
+    /// Input files: .graph (OctoMap scan graph), .pcd (ascii, binary or binary_compressed), .oeglog (a
+    /// sensor log of `oeg record`).
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// Cell size in metres.
+    /// Cell size in metres (the setting map.resolution_m).
     #[arg(long)]
     resolution: f64,
     /// Output folder (created if needed).
     #[arg(long)]
     out: PathBuf,
-    /// Range-error model of the scan-graph rays.
-    #[arg(long, value_enum, default_value_t = SensorKind::Laser)]
-    graph_sensor: SensorKind,
-    /// Range-error model of the PCD rays.
-    #[arg(long, value_enum, default_value_t = SensorKind::Stereo)]
-    pcd_sensor: SensorKind,
-    /// Frame of the PCD points: as_is, or optical (x right, y down, z forward, as depth cameras write them).
-    #[arg(long, value_enum, default_value_t = FrameArg::AsIs)]
-    pcd_frame: FrameArg,
-    /// What NaN points of an organized PCD become: dropped, or no-return rays along their pixel.
-    #[arg(long, value_enum, default_value_t = InvalidArg::Drop)]
-    pcd_invalid: InvalidArg,
-    /// Pose of sensor-log scans: estimated (with odometry drift, as a robot maps) or true.
-    #[arg(long, value_enum, default_value_t = PoseArg::Estimated)]
-    log_pose: PoseArg,
-    /// Eq. 12's free-space rule: zero (the paper), skip, or ray_bound.
-    #[arg(long, value_enum, default_value_t = FreeSpaceArg::Zero)]
-    free_space: FreeSpaceArg,
-    /// Whether free samples above a cell's elevation lower its occupancy: always (the paper) or below_elevation.
-    #[arg(long, value_enum, default_value_t = FreeOccArg::Always)]
-    free_space_occupancy: FreeOccArg,
-    /// Which of a scan's hits in a cell make its elevation: highest (the paper) or weighted_mean (every hit an
-    /// independent measurement, as elevation_mapping fuses points; not biased upwards by noisy stereo clouds).
-    #[arg(long, value_enum, default_value_t = ScanHitArg::Highest)]
-    scan_hit_elevation: ScanHitArg,
-    /// Free samples more than this far (metres) below a cell's elevation say nothing about it (they may pass
-    /// under an overhang). Default: no limit (the paper).
-    #[arg(long)]
-    free_space_max_depth: Option<f32>,
-    /// Height threshold in metres (world z): beam parts above it are ignored. Default: none.
-    #[arg(long)]
-    max_height: Option<f32>,
-    /// Hits farther than this (metres) only clear up to it. Default: no limit.
-    #[arg(long)]
-    max_range: Option<f32>,
-    /// How far a no-return ray clears, metres. Default: the sensor's maximum range.
-    #[arg(long)]
-    no_return_clear_range: Option<f32>,
-    /// The robot's largest climbable step in metres, for the traversability image.
-    #[arg(long, default_value_t = oeg::traversability::DEFAULT_MAX_STEP_M)]
-    max_step: f32,
+    /// A setting by its scenario key (repeatable), e.g. --set map.model.max_height_m=0.5 or
+    /// --set input.pcd_frame=optical: map.model.* (every model option), map.traversability, robot.max_step_m,
+    /// robot.height_m, input.graph_sensor (laser|stereo), input.pcd_sensor (laser|stereo), input.pcd_frame
+    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true). README, "Settings".
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
     /// Memory limit of the map in MiB.
     #[arg(long, default_value_t = oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20)]
     memory_limit_mib: u64,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-enum SensorKind {
-    /// Laser scanner, 12 mm range error (SICK class).
-    Laser,
-    /// Stereo camera, 0.032 l^2 range error (the paper's Fig. 4).
-    Stereo,
-}
-
-impl SensorKind {
-    fn model(self) -> SensorModel {
-        match self {
-            Self::Laser => SensorModel::laser(),
-            Self::Stereo => SensorModel {
-                noise: RangeNoiseModel::stereo(),
-                ..SensorModel::stereo()
-            },
-        }
-    }
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum FreeOccArg {
-    Always,
-    BelowElevation,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -428,94 +344,28 @@ enum FormatArg {
     Graph,
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum PoseArg {
-    Estimated,
-    True,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum FrameArg {
-    AsIs,
-    Optical,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum InvalidArg {
-    Drop,
-    NoReturn,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum ScanHitArg {
-    Highest,
-    WeightedMean,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-#[value(rename_all = "snake_case")]
-enum FreeSpaceArg {
-    Zero,
-    Skip,
-    RayBound,
-}
-
 impl MapArgs {
-    fn job(&self) -> MapJob {
-        let model = ModelOptions {
-            free_space_elevation: match self.free_space {
-                FreeSpaceArg::Zero => FreeSpaceElevation::Zero,
-                FreeSpaceArg::Skip => FreeSpaceElevation::Skip,
-                FreeSpaceArg::RayBound => FreeSpaceElevation::RayBound,
-            },
-            free_space_occupancy: match self.free_space_occupancy {
-                FreeOccArg::Always => oeg::FreeSpaceOccupancy::Always,
-                FreeOccArg::BelowElevation => oeg::FreeSpaceOccupancy::BelowElevation,
-            },
-            free_space_max_depth_m: self.free_space_max_depth,
-            scan_hit_elevation: match self.scan_hit_elevation {
-                ScanHitArg::Highest => oeg::ScanHitElevation::Highest,
-                ScanHitArg::WeightedMean => oeg::ScanHitElevation::WeightedMean,
-            },
-            max_height_m: self.max_height,
-            max_range_m: self.max_range,
-            no_return_clear_range_m: self.no_return_clear_range,
-            ..ModelOptions::default()
-        };
-        MapJob {
+    fn job(&self) -> anyhow::Result<MapJob> {
+        let settings =
+            eval::settings::map_settings(self.resolution, &self.overrides).map_err(anyhow::Error::msg)?;
+        Ok(MapJob {
             inputs: self.inputs.clone(),
             out_dir: self.out.clone(),
             config: MapConfig {
-                resolution_m: self.resolution,
-                model,
+                resolution_m: settings.map.resolution_m,
+                model: settings.map.model,
                 memory_limit_bytes: self.memory_limit_mib.saturating_mul(1 << 20),
             },
-            graph_sensor: self.graph_sensor.model(),
+            graph_sensor: settings.input.graph_sensor.model(),
             pcd: PcdOptions {
-                frame: match self.pcd_frame {
-                    FrameArg::AsIs => PcdFrame::AsIs,
-                    FrameArg::Optical => PcdFrame::Optical,
-                },
-                invalid_points: match self.pcd_invalid {
-                    InvalidArg::Drop => InvalidPoints::Drop,
-                    InvalidArg::NoReturn => InvalidPoints::NoReturn,
-                },
-                sensor: self.pcd_sensor.model(),
+                frame: settings.input.pcd_frame,
+                invalid_points: settings.input.pcd_invalid,
+                sensor: settings.input.pcd_sensor.model(),
             },
-            log_pose: match self.log_pose {
-                PoseArg::Estimated => sim::sensors::PoseSource::Estimated,
-                PoseArg::True => sim::sensors::PoseSource::True,
-            },
-            profile: RobotProfile {
-                max_step_m: self.max_step,
-                ..RobotProfile::default()
-            },
-            rule: TraversabilityRule::Absolute,
-        }
+            log_pose: settings.input.log_pose,
+            profile: settings.robot.profile().map_err(anyhow::Error::msg)?,
+            rule: settings.map.traversability,
+        })
     }
 }
 
@@ -541,7 +391,7 @@ fn print_report(report: &MapReport) {
 }
 
 fn run_map(args: &MapArgs) -> anyhow::Result<()> {
-    let job = args.job();
+    let job = args.job()?;
     let progress = Progress::new(0, "scans");
     let report = eval::mapping::run(&job, &progress)?;
     print_report(&report);
@@ -560,19 +410,7 @@ fn run_demo(out: PathBuf) -> anyhow::Result<()> {
         inputs: vec![input],
         resolution: 0.05,
         out,
-        graph_sensor: SensorKind::Laser,
-        pcd_sensor: SensorKind::Stereo,
-        pcd_frame: FrameArg::AsIs,
-        pcd_invalid: InvalidArg::Drop,
-        log_pose: PoseArg::Estimated,
-        free_space: FreeSpaceArg::Zero,
-        free_space_occupancy: FreeOccArg::Always,
-        free_space_max_depth: None,
-        scan_hit_elevation: ScanHitArg::Highest,
-        max_height: Some(0.5),
-        max_range: None,
-        no_return_clear_range: None,
-        max_step: oeg::traversability::DEFAULT_MAX_STEP_M,
+        overrides: vec!["map.model.max_height_m=0.5".into()],
         memory_limit_mib: oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20,
     };
     run_map(&args)

@@ -347,3 +347,100 @@ fn the_shared_real_scans_map_when_present() {
     assert_eq!(summary["num_rays"], 233_028);
     assert_eq!(summary["num_scans"], 3);
 }
+
+#[test]
+fn map_and_plan_take_settings_by_their_scenario_keys() {
+    let dir = temp_dir("map", "settings");
+    let demo = dir.join("demo");
+    let o = oeg(&["demo", "--out", demo.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let graph = demo.join("demo.graph");
+    let map_path = demo.join("map.oeg");
+    let map_s = map_path.to_str().expect("utf8");
+    let out = dir.join("octomap_hit");
+    let o = oeg(&[
+        "map",
+        graph.to_str().expect("utf8"),
+        "--resolution",
+        "0.05",
+        "--out",
+        out.to_str().expect("utf8"),
+        "--set",
+        "map.model.p_max=0.7",
+        "--set",
+        "map.model.max_height_m=0.5",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let inspect = oeg(&["inspect", out.join("map.oeg").to_str().expect("utf8")]);
+    let text = String::from_utf8_lossy(&inspect.stdout);
+    assert!(
+        text.contains("\"p_max\":0.7") || text.contains("\"p_max\": 0.7"),
+        "{text}"
+    );
+    // A robot that climbs 6 cm may plan onto the 5 cm curb the default robot may not.
+    let plan = |extra: &[&str]| -> serde_json::Value {
+        let out = dir.join("plan");
+        let mut args = vec![
+            "plan",
+            map_s,
+            "--from",
+            "0.5,0",
+            "--to",
+            "3.15,1.2",
+            "--out",
+            out.to_str().expect("utf8"),
+        ];
+        args.extend_from_slice(extra);
+        let o = oeg(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&std::fs::read(out.join("plan.json")).expect("plan.json")).expect("json")
+    };
+    assert_eq!(plan(&[])["plan_found"], false);
+    assert_eq!(plan(&["--set", "robot.max_step_m=0.06"])["plan_found"], true);
+    // A bad value names its override.
+    for (args, expected) in [
+        (
+            vec![
+                "map",
+                graph.to_str().expect("utf8"),
+                "--resolution",
+                "0.05",
+                "--out",
+                "x",
+                "--set",
+                "map.model.p_max=2",
+            ],
+            "--set map.model.p_max=2: invalid setting `p_max`",
+        ),
+        (
+            vec![
+                "map",
+                graph.to_str().expect("utf8"),
+                "--resolution",
+                "0.05",
+                "--out",
+                "x",
+                "--set",
+                "input.pcd_frame=sideways",
+            ],
+            "--set input.pcd_frame=sideways: unknown variant `sideways`",
+        ),
+        (
+            vec![
+                "plan",
+                map_s,
+                "--from",
+                "0,0",
+                "--to",
+                "1,0",
+                "--set",
+                "planner.inflation_radius_m=-1",
+            ],
+            "--set planner.inflation_radius_m=-1: planner.inflation_radius_m",
+        ),
+    ] {
+        let o = oeg(&args);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(expected), "{args:?}: {}", stderr(&o));
+    }
+}

@@ -252,6 +252,11 @@ fn bad_overrides_and_unknown_metrics_are_clear_errors() {
             vec!["--set", "map.model.free_space_max_depth_m=-1"],
             "invalid setting `free_space_max_depth_m`: must be a depth in metres >= 0, got -1",
         ),
+        // The error names the override, not a line of the rewritten scenario.
+        (
+            vec!["--set", "map.resolution_m=0.05", "--set", "map.model.p_max=2"],
+            "decisions.toml: --set map.model.p_max=2: `map.model`: invalid setting `p_max`",
+        ),
     ] {
         let o = run(&out, &args, None);
         assert!(!o.status.success(), "{args:?}");

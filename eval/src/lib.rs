@@ -17,6 +17,7 @@ pub mod record;
 pub mod render;
 pub mod report_images;
 pub mod run;
+pub mod settings;
 pub mod suite;
 pub mod sweep;
 #[cfg(test)]

@@ -78,20 +78,17 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
         path: path.clone(),
         source,
     })?;
-    let text = crate::overrides::apply(&text, &options.overrides).map_err(|message| EvalError::Input {
-        path: path.clone(),
-        message,
-    })?;
-    let mut loaded = scenario::load_str(path, &text).map_err(|e| {
-        if options.overrides.is_empty() {
-            EvalError::Sim(e)
-        } else {
-            EvalError::Input {
-                path: path.clone(),
-                message: format!("with the --set overrides: {e}"),
-            }
-        }
-    })?;
+    let original = text;
+    let text =
+        crate::overrides::apply(&original, &options.overrides).map_err(|message| EvalError::Input {
+            path: path.clone(),
+            message,
+        })?;
+    let mut loaded = match scenario::load_str(path, &text) {
+        Ok(l) => l,
+        Err(e) if options.overrides.is_empty() => return Err(EvalError::Sim(e)),
+        Err(e) => return Err(blame_override(path, &original, &options.overrides, e)),
+    };
     if let Some(seed) = options.seed {
         loaded.scenario.seed = seed;
     }
@@ -106,6 +103,31 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
         });
     }
     Ok(loaded)
+}
+
+/// A scenario error's message without its `file:line:column` (which would point into a rewritten text).
+pub fn scenario_message(e: &sim::SimError) -> String {
+    match e {
+        sim::SimError::Scenario { message, .. } => message.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// The error of a scenario made invalid by `--set` overrides, naming the first override after which the
+/// scenario no longer loads (`--set map.model.p_max=2: ...`), not a place in the rewritten text.
+fn blame_override(path: &Path, original: &str, overrides: &[String], full: sim::SimError) -> EvalError {
+    for k in 1..=overrides.len() {
+        let broken = crate::overrides::apply(original, &overrides[..k])
+            .ok()
+            .and_then(|text| scenario::load_str(path, &text).err());
+        if let Some(e) = broken {
+            return EvalError::Input {
+                path: path.to_path_buf(),
+                message: format!("--set {}: {}", overrides[k - 1], scenario_message(&e)),
+            };
+        }
+    }
+    EvalError::Sim(full)
 }
 
 /// The scenario's map region as cells.

@@ -394,7 +394,7 @@ fn check_axes_against(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()
                 let text = toml::to_string(&doc).map_err(|e| e.to_string())?;
                 sim::scenario::load_str(base, &text)
                     .map(|_| ())
-                    .map_err(|e| strip_place(&e))
+                    .map_err(|e| crate::run::scenario_message(&e))
             });
             if let Err(message) = checked {
                 return Err(sweep.error(
@@ -405,14 +405,6 @@ fn check_axes_against(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()
         }
     }
     Ok(())
-}
-
-/// A scenario error without its `file:line:column` (which points into a rewritten text).
-fn strip_place(e: &sim::SimError) -> String {
-    match e {
-        sim::SimError::Scenario { message, .. } => message.clone(),
-        other => other.to_string(),
-    }
 }
 
 #[cfg(test)]

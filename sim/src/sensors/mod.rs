@@ -48,9 +48,11 @@ pub struct SensorRay {
 }
 
 /// Which pose a scan is placed with in the world.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum PoseSource {
     /// The estimated pose (odometry drift included): what a robot's mapper gets.
+    #[default]
     Estimated,
     /// The true pose.
     True,

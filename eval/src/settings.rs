@@ -1,0 +1,305 @@
+//! One door for settings: every job that takes settings (`oeg run`, `oeg suite`, `oeg map`, `oeg plan`,
+//! `oeg sweep`) takes them as `--set key=value` ([`crate::overrides`]), resolved here against one table of
+//! keys. The keys are the scenario file's (`docs/scenario-format.md`): `map.model.p_max` means the same
+//! thing in a scenario, on `oeg run --set`, on `oeg map --set` and in a sweep's axis. Jobs without a scenario
+//! take the part of the table they use:
+//!
+//! | key | `run`, `suite`, `sweep` | `map` | `plan` |
+//! |---|---|---|---|
+//! | `map.resolution_m`, `map.model.*` | yes | yes | no (the map file has them) |
+//! | `map.traversability` | yes | yes | yes |
+//! | `robot.max_step_m`, `robot.height_m` | yes | yes | yes |
+//! | `planner.inflation_radius_m`, `planner.unknown` | yes | no | yes |
+//! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose` | no | yes | no |
+//! | every other scenario key | yes | no | no |
+//!
+//! An override that makes the settings invalid is named in the error (`--set map.model.p_max=2: ...`).
+
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+use toml::Table;
+
+use crate::overrides::Override;
+
+/// The robot's decision limits (`[robot]` of a scenario, the part a map or a plan needs).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RobotDecisions {
+    /// Largest step the robot climbs, metres.
+    pub max_step_m: f64,
+    /// Robot height, metres.
+    pub height_m: f64,
+}
+
+impl Default for RobotDecisions {
+    fn default() -> Self {
+        Self {
+            max_step_m: sim::scenario::DEFAULT_MAX_STEP_M,
+            height_m: sim::scenario::DEFAULT_ROBOT_HEIGHT_M,
+        }
+    }
+}
+
+impl RobotDecisions {
+    /// The map crate's profile, checked.
+    ///
+    /// # Errors
+    /// A step or height that makes no sense.
+    pub fn profile(&self) -> Result<oeg::RobotProfile, String> {
+        let p = oeg::RobotProfile {
+            max_step_m: self.max_step_m as f32,
+            height_m: self.height_m as f32,
+        };
+        p.validate().map_err(|e| e.to_string())?;
+        Ok(p)
+    }
+}
+
+/// A range-error model of rays read from files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RangeModel {
+    /// Laser scanner, 12 mm range error (SICK class).
+    Laser,
+    /// Stereo camera, 0.032 l^2 range error (the paper's Fig. 4).
+    Stereo,
+}
+
+impl RangeModel {
+    /// The map crate's sensor model.
+    pub fn model(self) -> oeg::SensorModel {
+        match self {
+            Self::Laser => oeg::SensorModel::laser(),
+            Self::Stereo => oeg::SensorModel {
+                noise: oeg::RangeNoiseModel::stereo(),
+                ..oeg::SensorModel::stereo()
+            },
+        }
+    }
+}
+
+/// `[input]` of `oeg map`: how files become scans.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InputSettings {
+    /// Range-error model of scan-graph rays (`laser`).
+    pub graph_sensor: RangeModel,
+    /// Range-error model of PCD rays (`stereo`).
+    pub pcd_sensor: RangeModel,
+    /// Frame of PCD points: `as_is`, or `optical` (x right, y down, z forward).
+    pub pcd_frame: oeg::io::pcd::PcdFrame,
+    /// NaN points of an organized PCD: `drop`, or `no_return` rays along their pixel.
+    pub pcd_invalid: oeg::io::pcd::InvalidPoints,
+    /// Pose of sensor-log scans: `estimated` or `true`.
+    pub log_pose: sim::sensors::PoseSource,
+}
+
+impl Default for InputSettings {
+    fn default() -> Self {
+        Self {
+            graph_sensor: RangeModel::Laser,
+            pcd_sensor: RangeModel::Stereo,
+            pcd_frame: oeg::io::pcd::PcdFrame::default(),
+            pcd_invalid: oeg::io::pcd::InvalidPoints::default(),
+            log_pose: sim::sensors::PoseSource::Estimated,
+        }
+    }
+}
+
+/// `[map]` of `oeg map`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapPart {
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// The model.
+    #[serde(default)]
+    pub model: oeg::ModelOptions,
+    /// The step rule of the traversability image.
+    #[serde(default)]
+    pub traversability: oeg::TraversabilityRule,
+}
+
+/// Everything `oeg map` can be told.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapSettings {
+    /// Resolution and model.
+    pub map: MapPart,
+    /// Decision limits.
+    #[serde(default)]
+    pub robot: RobotDecisions,
+    /// How files become scans.
+    #[serde(default)]
+    pub input: InputSettings,
+}
+
+/// `[map]` of `oeg plan`: only the rule (the map file holds its model).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanMapPart {
+    /// The step rule.
+    pub traversability: oeg::TraversabilityRule,
+}
+
+/// `[planner]` of `oeg plan`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerPart {
+    /// The robot's centre keeps at least this far from blocked cells, metres.
+    pub inflation_radius_m: f64,
+    /// Cells the map never observed.
+    pub unknown: oeg::UnknownCells,
+}
+
+impl Default for PlannerPart {
+    fn default() -> Self {
+        Self {
+            inflation_radius_m: oeg::planner::DEFAULT_INFLATION_RADIUS_M,
+            unknown: oeg::UnknownCells::default(),
+        }
+    }
+}
+
+/// Everything `oeg plan` can be told.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanSettings {
+    /// The step rule.
+    pub map: PlanMapPart,
+    /// Decision limits.
+    pub robot: RobotDecisions,
+    /// The planner.
+    pub planner: PlannerPart,
+}
+
+/// Settings that can check themselves for sense.
+pub trait Checked: DeserializeOwned {
+    /// What makes no sense, if anything.
+    ///
+    /// # Errors
+    /// The first value that makes no sense.
+    fn check(&self) -> Result<(), String>;
+}
+
+impl Checked for MapSettings {
+    fn check(&self) -> Result<(), String> {
+        let r = self.map.resolution_m;
+        if !(r.is_finite() && (0.001..=100.0).contains(&r)) {
+            return Err(format!(
+                "map.resolution_m: expected a cell size in [0.001, 100] m, got {r}"
+            ));
+        }
+        self.map.model.validate().map_err(|e| e.to_string())?;
+        self.robot.profile().map(|_| ())
+    }
+}
+
+impl Checked for PlanSettings {
+    fn check(&self) -> Result<(), String> {
+        let r = self.planner.inflation_radius_m;
+        if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
+            return Err(format!(
+                "planner.inflation_radius_m: expected a radius in [0, 100] m, got {r}"
+            ));
+        }
+        self.robot.profile().map(|_| ())
+    }
+}
+
+fn read<T: Checked>(doc: &Table) -> Result<T, String> {
+    let text = toml::to_string(doc).map_err(|e| e.to_string())?;
+    let value: T = toml::from_str(&text).map_err(|e| e.message().trim().to_string())?;
+    value.check()?;
+    Ok(value)
+}
+
+/// Resolves `overrides` (`key=value` each) over `base`, in order. The first override after which the settings
+/// no longer make sense is named in the error.
+///
+/// # Errors
+/// A malformed override, or one that makes the settings invalid: `--set KEY=VALUE: what is wrong`.
+pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, String> {
+    let mut doc = base.clone();
+    read::<T>(&doc).map_err(|e| format!("the defaults: {e}"))?;
+    for text in overrides {
+        let o = Override::parse(text)?;
+        o.apply_to(&mut doc)?;
+        read::<T>(&doc).map_err(|e| format!("--set {text}: {e}"))?;
+    }
+    read(&doc)
+}
+
+/// `oeg map`'s settings: `--resolution` and the overrides.
+///
+/// # Errors
+/// A bad resolution (named as `--resolution`) or override.
+pub fn map_settings(resolution_m: f64, overrides: &[String]) -> Result<MapSettings, String> {
+    let mut map = Table::new();
+    map.insert("resolution_m".into(), toml::Value::Float(resolution_m));
+    let mut base = Table::new();
+    base.insert("map".into(), toml::Value::Table(map));
+    resolve(&base, overrides).map_err(|e| e.replace("the defaults: ", "--resolution: "))
+}
+
+/// `oeg plan`'s settings from the overrides.
+///
+/// # Errors
+/// A bad override.
+pub fn plan_settings(overrides: &[String]) -> Result<PlanSettings, String> {
+    resolve(&Table::new(), overrides)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map_base() -> Table {
+        toml::from_str("[map]\nresolution_m = 0.05\n").expect("toml")
+    }
+
+    #[test]
+    fn map_settings_take_the_scenario_keys() {
+        let s: MapSettings = resolve(
+            &map_base(),
+            &[
+                "map.model.p_max=0.7".into(),
+                "map.model.max_height_m=0.5".into(),
+                "input.pcd_frame=optical".into(),
+                "robot.max_step_m=0.05".into(),
+            ],
+        )
+        .expect("valid");
+        assert!((s.map.model.p_max - 0.7).abs() < 1e-6);
+        assert_eq!(s.map.model.max_height_m, Some(0.5));
+        assert_eq!(s.input.pcd_frame, oeg::io::pcd::PcdFrame::Optical);
+        assert!((s.robot.max_step_m - 0.05).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_bad_override_is_named() {
+        for (o, expected) in [
+            ("map.model.p_max=2", "--set map.model.p_max=2: "),
+            (
+                "map.model.p_maxx=0.7",
+                "--set map.model.p_maxx=0.7: unknown field `p_maxx`",
+            ),
+            (
+                "input.log_pose=maybe",
+                "--set input.log_pose=maybe: unknown variant `maybe`",
+            ),
+            ("map.resolution_m=0", "--set map.resolution_m=0: map.resolution_m"),
+        ] {
+            let e = resolve::<MapSettings>(&map_base(), &[o.into()]).expect_err(o);
+            assert!(e.starts_with(expected), "{o}: {e}");
+        }
+        let e =
+            resolve::<PlanSettings>(&Table::new(), &["planner.unknown=sometimes".into()]).expect_err("plan");
+        assert!(
+            e.starts_with("--set planner.unknown=sometimes: unknown variant"),
+            "{e}"
+        );
+        let e = resolve::<PlanSettings>(&Table::new(), &["map.model.p_max=0.7".into()]).expect_err("plan");
+        assert!(e.contains("unknown field `model`"), "{e}");
+    }
+}
