@@ -142,6 +142,21 @@ enum SweepCommand {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Measure a study: run the whole plan into temporary folders, with shared simulations and with one per run,
+    /// in turn, and print wall times, runs per hour and the speed-up of sharing.
+    Bench {
+        /// A sweep file (.toml).
+        file: PathBuf,
+        /// Simulations at once [default: RAYON_NUM_THREADS, else one per core].
+        #[arg(long, value_parser = clap::value_parser!(u16).range(1..=256))]
+        jobs: Option<u16>,
+        /// Repetitions of each way.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u16).range(1..=100))]
+        repeat: u16,
+        /// Only the shared way (runs per hour), without the one-simulation-per-run comparison.
+        #[arg(long)]
+        no_compare: bool,
+    },
     /// Write summary.csv (means and 95 % intervals) and plots of a sweep's output folder.
     Report {
         /// A folder written by `oeg sweep run` or `oeg sweep merge`.
@@ -214,6 +229,49 @@ fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
             say!("merged {} runs from {} folders", summary.num_runs, dirs.len());
             for f in summary.files {
                 say!("wrote {}", f.display());
+            }
+        }
+        SweepCommand::Bench {
+            file,
+            jobs,
+            repeat,
+            no_compare,
+        } => {
+            let plan = Plan::new(Sweep::load(&file)?)?;
+            let jobs = jobs.map_or_else(eval::suite::default_jobs, usize::from);
+            let f = eval::sweep::bench::bench(&plan, jobs, usize::from(repeat), !no_compare)?;
+            let line = |v: &[f64]| {
+                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                format!(
+                    "median {:.2} s (min {lo:.2}, max {hi:.2})",
+                    eval::sweep::bench::median(v)
+                )
+            };
+            say!(
+                "{}: {} runs, {} jobs, {} repetitions",
+                plan.sweep.spec.name,
+                f.num_runs,
+                jobs,
+                repeat
+            );
+            say!(
+                "shared simulations ({}): {}; {:.0} runs per hour",
+                f.num_shared_simulations,
+                line(&f.shared_s),
+                f.runs_per_hour()
+            );
+            if !f.each_s.is_empty() {
+                say!(
+                    "one simulation per run ({}): {}; {:.0} runs per hour",
+                    f.num_runs,
+                    line(&f.each_s),
+                    f.num_runs as f64 * 3600.0 / eval::sweep::bench::median(&f.each_s)
+                );
+                say!(
+                    "speed-up of sharing: {:.2}x (median of the pairwise ratios)",
+                    f.speed_up()
+                );
             }
         }
         SweepCommand::Report { dir } => {

@@ -8,8 +8,8 @@ use std::process::Output;
 
 use common::{oeg, root, temp_dir};
 
-fn tiny() -> PathBuf {
-    root().join("tests/sweeps/tiny.toml")
+fn smoke() -> PathBuf {
+    root().join("sweeps/smoke.toml")
 }
 
 fn ok(o: &Output) -> String {
@@ -53,14 +53,14 @@ fn rows_without_wall_time(dir: &Path) -> Vec<String> {
         .collect()
 }
 
-/// A copy of the tiny sweep with more seeds, so that a run lasts long enough to be killed half-way.
+/// A copy of the smoke sweep with more seeds, so that a run lasts long enough to be killed half-way.
 fn longer_sweep(dir: &Path, seeds: u32) -> PathBuf {
-    let text = std::fs::read_to_string(tiny())
-        .expect("tiny.toml")
+    let text = std::fs::read_to_string(smoke())
+        .expect("smoke.toml")
         .replace("seeds = 2", &format!("seeds = {seeds}"));
     let text = text.replace(
-        "base = \"tiny_base.toml\"",
-        &format!("base = {:?}", s(&root().join("tests/sweeps/tiny_base.toml"))),
+        "base = \"bases/smoke.toml\"",
+        &format!("base = {:?}", s(&root().join("sweeps/bases/smoke.toml"))),
     );
     let path = dir.join("longer.toml");
     std::fs::write(&path, text).expect("write");
@@ -69,8 +69,8 @@ fn longer_sweep(dir: &Path, seeds: u32) -> PathBuf {
 
 #[test]
 fn plan_lists_every_run_and_the_shared_simulations() {
-    let out = ok(&oeg(&["sweep", "plan", s(&tiny())]));
-    assert!(out.starts_with("tiny: 8 runs, 4 simulations"), "{out}");
+    let out = ok(&oeg(&["sweep", "plan", s(&smoke())]));
+    assert!(out.starts_with("smoke: 8 runs, 4 simulations"), "{out}");
     assert_eq!(out.lines().count(), 9, "{out}");
 }
 
@@ -153,13 +153,13 @@ fn a_killed_sweep_resumes_to_the_rows_of_an_uninterrupted_one() {
 fn shards_merge_into_the_rows_of_a_whole_run_and_gaps_are_named() {
     let dir = temp_dir("sweep", "shards");
     let whole = dir.join("whole");
-    ok(&oeg(&["sweep", "run", s(&tiny()), "--out", s(&whole)]));
+    ok(&oeg(&["sweep", "run", s(&smoke()), "--out", s(&whole)]));
     let shards: Vec<PathBuf> = (1..=3).map(|i| dir.join(format!("shard{i}"))).collect();
     for (i, d) in shards.iter().enumerate() {
         ok(&oeg(&[
             "sweep",
             "run",
-            s(&tiny()),
+            s(&smoke()),
             "--out",
             s(d),
             "--shard",
@@ -207,7 +207,7 @@ fn shards_merge_into_the_rows_of_a_whole_run_and_gaps_are_named() {
     // Slurm's array variables choose the shard when --shard is absent.
     let env_shard = dir.join("slurm2");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_oeg"))
-        .args(["sweep", "run", s(&tiny()), "--out", s(&env_shard)])
+        .args(["sweep", "run", s(&smoke()), "--out", s(&env_shard)])
         .env("SLURM_ARRAY_TASK_ID", "11")
         .env("SLURM_ARRAY_TASK_MIN", "10")
         .env("SLURM_ARRAY_TASK_MAX", "12")
@@ -223,7 +223,7 @@ fn shards_merge_into_the_rows_of_a_whole_run_and_gaps_are_named() {
 #[test]
 fn the_report_writes_intervals_and_plots() {
     let dir = temp_dir("sweep", "report");
-    ok(&oeg(&["sweep", "run", s(&tiny()), "--out", s(&dir)]));
+    ok(&oeg(&["sweep", "run", s(&smoke()), "--out", s(&dir)]));
     let out = ok(&oeg(&["sweep", "report", s(&dir)]));
     assert!(out.contains("summary.csv"), "{out}");
     let summary = std::fs::read_to_string(dir.join("summary.csv")).expect("summary");
@@ -264,7 +264,7 @@ fn the_report_writes_intervals_and_plots() {
 #[test]
 fn a_generated_scene_is_a_plain_scenario_that_oeg_run_reproduces() {
     let dir = temp_dir("sweep", "reproduce");
-    ok(&oeg(&["sweep", "run", s(&tiny()), "--out", s(&dir)]));
+    ok(&oeg(&["sweep", "run", s(&smoke()), "--out", s(&dir)]));
     let plan: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("plan.json")).expect("plan")).expect("json");
     let runs = plan["runs"].as_array().expect("runs");
@@ -291,7 +291,7 @@ fn a_generated_scene_is_a_plain_scenario_that_oeg_run_reproduces() {
 #[test]
 fn bad_sweeps_and_flags_are_clear_errors() {
     let dir = temp_dir("sweep", "bad");
-    let base = root().join("tests/sweeps/tiny_base.toml");
+    let base = root().join("sweeps/bases/smoke.toml");
     let head = format!("name = \"b\"\nseed = 1\nscenarios = [{:?}]\n", s(&base));
     for (body, expected) in [
         (
@@ -331,7 +331,7 @@ fn bad_sweeps_and_flags_are_clear_errors() {
         let e = err(&oeg(&[
             "sweep",
             "run",
-            s(&tiny()),
+            s(&smoke()),
             "--out",
             s(&dir.join("o")),
             "--shard",
@@ -339,4 +339,29 @@ fn bad_sweeps_and_flags_are_clear_errors() {
         ]));
         assert!(e.contains("--shard") && e.contains("1 <= i <= n"), "{shard}: {e}");
     }
+}
+
+#[test]
+fn every_shipped_study_plans_and_its_base_validates() {
+    let dir = root().join("sweeps");
+    let mut studies: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("sweeps/")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    studies.sort();
+    assert!(studies.len() >= 5, "{studies:?}");
+    for study in &studies {
+        let out = ok(&oeg(&["sweep", "plan", s(study)]));
+        assert!(out.lines().count() > 8, "{}: {out}", study.display());
+    }
+    let bases: Vec<PathBuf> = std::fs::read_dir(dir.join("bases"))
+        .expect("sweeps/bases/")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .collect();
+    let mut args = vec!["validate"];
+    args.extend(bases.iter().map(|p| s(p)));
+    ok(&oeg(&args));
 }

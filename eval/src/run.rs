@@ -78,17 +78,23 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
         path: path.clone(),
         source,
     })?;
-    let original = text;
-    let text =
-        crate::overrides::apply(&original, &options.overrides).map_err(|message| EvalError::Input {
+    // The file alone first, so that its own errors name its lines; then the overrides, each named if it breaks
+    // the scenario.
+    let mut loaded = scenario::load_str(path, &text)?;
+    if !options.overrides.is_empty() {
+        let doc: toml::Table = toml::from_str(&text).map_err(|e| EvalError::Input {
+            path: path.clone(),
+            message: format!("not valid TOML: {}", e.message()),
+        })?;
+        loaded = crate::settings::resolve_with(&doc, &options.overrides, |doc| {
+            let text = toml::to_string(doc).map_err(|e| e.to_string())?;
+            scenario::load_str(path, &text).map_err(|e| scenario_message(&e))
+        })
+        .map_err(|message| EvalError::Input {
             path: path.clone(),
             message,
         })?;
-    let mut loaded = match scenario::load_str(path, &text) {
-        Ok(l) => l,
-        Err(e) if options.overrides.is_empty() => return Err(EvalError::Sim(e)),
-        Err(e) => return Err(blame_override(path, &original, &options.overrides, e)),
-    };
+    }
     if let Some(seed) = options.seed {
         loaded.scenario.seed = seed;
     }
@@ -111,23 +117,6 @@ pub fn scenario_message(e: &sim::SimError) -> String {
         sim::SimError::Scenario { message, .. } => message.clone(),
         other => other.to_string(),
     }
-}
-
-/// The error of a scenario made invalid by `--set` overrides, naming the first override after which the
-/// scenario no longer loads (`--set map.model.p_max=2: ...`), not a place in the rewritten text.
-fn blame_override(path: &Path, original: &str, overrides: &[String], full: sim::SimError) -> EvalError {
-    for k in 1..=overrides.len() {
-        let broken = crate::overrides::apply(original, &overrides[..k])
-            .ok()
-            .and_then(|text| scenario::load_str(path, &text).err());
-        if let Some(e) = broken {
-            return EvalError::Input {
-                path: path.to_path_buf(),
-                message: format!("--set {}: {}", overrides[k - 1], scenario_message(&e)),
-            };
-        }
-    }
-    EvalError::Sim(full)
 }
 
 /// The scenario's map region as cells.

@@ -13,7 +13,8 @@
 //! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose` | no | yes | no |
 //! | every other scenario key | yes | no | no |
 //!
-//! An override that makes the settings invalid is named in the error (`--set map.model.p_max=2: ...`).
+//! An override that makes the settings invalid is named in the error (`--set map.model.p_max=2: ...`), by
+//! [`resolve_with`], which `oeg run` and `oeg suite` use too, with the scenario check as the reader.
 
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -214,20 +215,47 @@ fn read<T: Checked>(doc: &Table) -> Result<T, String> {
     Ok(value)
 }
 
-/// Resolves `overrides` (`key=value` each) over `base`, in order. The first override after which the settings
-/// no longer make sense is named in the error.
+/// Resolves `overrides` (`key=value` each) over `base`, in order, and reads the result with `read`. When the
+/// result does not read, the error names the first override after which it no longer does.
 ///
 /// # Errors
 /// A malformed override, or one that makes the settings invalid: `--set KEY=VALUE: what is wrong`.
-pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, String> {
+pub fn resolve_with<T>(
+    base: &Table,
+    overrides: &[String],
+    read: impl Fn(&Table) -> Result<T, String>,
+) -> Result<T, String> {
+    let parsed = overrides
+        .iter()
+        .map(|t| Override::parse(t))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut doc = base.clone();
-    read::<T>(&doc).map_err(|e| format!("the defaults: {e}"))?;
-    for text in overrides {
-        let o = Override::parse(text)?;
+    for o in &parsed {
         o.apply_to(&mut doc)?;
-        read::<T>(&doc).map_err(|e| format!("--set {text}: {e}"))?;
     }
-    read(&doc)
+    let full = match read(&doc) {
+        Ok(v) => return Ok(v),
+        Err(e) => e,
+    };
+    // Keys that only make sense together (a region's two corners) are applied together above; the blame goes
+    // to the first override after which the settings no longer read.
+    let mut doc = base.clone();
+    for o in &parsed {
+        o.apply_to(&mut doc)?;
+        if let Err(e) = read(&doc) {
+            return Err(format!("--set {}: {e}", o.source));
+        }
+    }
+    Err(full)
+}
+
+/// [`resolve_with`] for settings that check themselves; the defaults are checked first.
+///
+/// # Errors
+/// As [`resolve_with`], and bad defaults (`the defaults: ...`).
+pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, String> {
+    read::<T>(base).map_err(|e| format!("the defaults: {e}"))?;
+    resolve_with(base, overrides, read::<T>)
 }
 
 /// `oeg map`'s settings: `--resolution` and the overrides.

@@ -712,7 +712,7 @@ mod tests {
     }
 
     fn base() -> (PathBuf, Table) {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/sweeps/tiny_base.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../sweeps/bases/smoke.toml");
         let text = std::fs::read_to_string(&path).expect("base");
         (path, toml::from_str(&text).expect("toml"))
     }

@@ -7,8 +7,10 @@
 //! * [`plan`]: every run resolved, with its id, its shard and the simulation it shares;
 //! * [`execute`]: running, resuming, sharding;
 //! * [`merge`]: shards back into one set of rows;
-//! * [`stats`] and [`report`]: means with confidence intervals, `summary.csv` and plots.
+//! * [`stats`] and [`report`]: means with confidence intervals, `summary.csv` and plots;
+//! * [`bench`]: what a study costs, and what sharing simulations saves.
 
+pub mod bench;
 pub mod execute;
 pub mod generate;
 pub mod merge;

@@ -241,7 +241,7 @@ pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
                     .collect();
                 let chart = Chart {
                     title: format!("{sweep_name}: {label}"),
-                    x_label: a.key.clone(),
+                    x_label: with_unit(&a.key),
                     y_label: label.into(),
                     series,
                     note: if is_rate {
@@ -353,6 +353,25 @@ fn summarize(runs: &[&Json], metric: &str, is_rate: bool) -> Summary {
     } else {
         mean_interval(&values)
     }
+}
+
+/// An axis label with the unit its key's suffix names (`..._m` metres, `..._px` pixels, ...).
+fn with_unit(key: &str) -> String {
+    const UNITS: [(&str, &str); 9] = [
+        ("_m_per_sqrt_m", "m per sqrt(m)"),
+        ("_deg_per_sqrt_m", "deg per sqrt(m)"),
+        ("_m_s", "m/s"),
+        ("_s", "s"),
+        ("_m2", "m^2"),
+        ("_px", "px"),
+        ("_deg", "deg"),
+        ("_hz", "Hz"),
+        ("_m", "m"),
+    ];
+    UNITS
+        .iter()
+        .find(|(suffix, _)| key.ends_with(suffix))
+        .map_or_else(|| key.to_string(), |(_, unit)| format!("{key} [{unit}]"))
 }
 
 /// A key as a file name part: `sensors.*.noise.range_sigma_m` -> `sensors_all_noise_range_sigma_m`.
