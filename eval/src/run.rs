@@ -171,20 +171,34 @@ pub fn simulate_and_map(
         let t0 = Instant::now();
         let Some(scan) = simulation.next_scan() else { break };
         simulation_s += t0.elapsed().as_secs_f64();
+        let stamp_s = scan.stamp_s;
         let scan = scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]);
-        for (map, seconds) in built.iter_mut().zip(&mut map_s) {
+        // The maps are independent: with several, each scan goes into all of them at once (a map's integration
+        // is one thread, so the other cores would idle). The results do not depend on it.
+        let integrate = |(map, seconds): (&mut Map, &mut f64)| {
             let t1 = Instant::now();
-            map.integrate(&scan)?;
+            let r = map.integrate(&scan).map(|_| ());
             *seconds += t1.elapsed().as_secs_f64();
+            r
+        };
+        if built.len() > 1 {
+            use rayon::prelude::*;
+            built
+                .par_iter_mut()
+                .zip(map_s.par_iter_mut())
+                .map(integrate)
+                .collect::<std::result::Result<Vec<()>, _>>()?;
+        } else {
+            built.iter_mut().zip(map_s.iter_mut()).try_for_each(integrate)?;
         }
         progress.inc(1);
         // The progress line is refreshed once per simulation tick (`tick_s`).
-        let tick = (scan.stamp_s / s.tick_s).floor() as i64;
+        let tick = (stamp_s / s.tick_s).floor() as i64;
         if tick != last_tick {
             last_tick = tick;
             progress.message(format!(
                 "t = {:.1} / {:.0} s, {:.2} M rays/s",
-                scan.stamp_s,
+                stamp_s,
                 s.duration_s,
                 simulation.num_rays() as f64 / simulation_s.max(1e-9) / 1e6
             ));
