@@ -66,13 +66,13 @@ MpiDefault=none
 NodeName=$HOST CPUs=$CPUS RealMemory=$MEM_MB State=UNKNOWN
 PartitionName=check Nodes=$HOST Default=YES MaxTime=INFINITE State=UP
 CONF
-# No cgroup plugin is configured; some packages still read cgroup.conf.
-echo "CgroupPlugin=disabled" > "$CONF_DIR/cgroup.conf" 2>/dev/null || true
+# No cgroup.conf: slurmd detects the machine's cgroups itself (Debian 12's Slurm 22.05 has no "disabled"
+# cgroup plugin).
 pkill -x slurmctld 2>/dev/null || true
 pkill -x slurmd 2>/dev/null || true
 sleep 1
-slurmctld -c
-slurmd -c
+slurmctld -c || { tail -20 /var/log/slurm/slurmctld.log; exit 1; }
+slurmd -c || { tail -20 /var/log/slurm/slurmd.log; exit 1; }
 for _ in $(seq 1 30); do
     if sinfo -h -o %T 2>/dev/null | grep -qE 'idle|mixed'; then break; fi
     scontrol update nodename="$HOST" state=resume >/dev/null 2>&1 || true
