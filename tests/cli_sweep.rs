@@ -152,8 +152,12 @@ fn a_killed_sweep_resumes_to_the_rows_of_an_uninterrupted_one() {
 #[test]
 fn shards_merge_into_the_rows_of_a_whole_run_and_gaps_are_named() {
     let dir = temp_dir("sweep", "shards");
+    // The whole plan on one thread; the shards below on every core: the same rows.
     let whole = dir.join("whole");
-    ok(&oeg(&["sweep", "run", s(&smoke()), "--out", s(&whole)]));
+    ok(&common::oeg_with_threads(
+        &["sweep", "run", s(&smoke()), "--out", s(&whole), "--jobs", "1"],
+        Some("1"),
+    ));
     let shards: Vec<PathBuf> = (1..=3).map(|i| dir.join(format!("shard{i}"))).collect();
     for (i, d) in shards.iter().enumerate() {
         ok(&oeg(&[

@@ -1,6 +1,8 @@
-//! Runs OEG experiments end to end: maps from recorded data (`oeg map`), inspection of saved maps
-//! (`oeg inspect`), scenario checks and previews (`oeg validate`, `oeg preview`), reports and images. It ties the map crate (`oeg`) to the outside world; the command-line
-//! program is a thin layer over it.
+//! Runs OEG experiments end to end: scenario runs and suites (`oeg run`, `oeg suite`), studies over many runs
+//! (`oeg sweep`), maps from recorded data (`oeg map`), plans on saved maps (`oeg plan`), inspection of saved
+//! maps (`oeg inspect`), scenario checks and previews (`oeg validate`, `oeg preview`), reports and images.
+//! Every job's settings go through one resolver ([`settings`]). It ties the map crate (`oeg`) to the outside
+//! world; the command-line program is a thin layer over it.
 
 pub mod demo;
 pub mod error;
