@@ -358,7 +358,13 @@ fn every_shipped_study_plans_and_its_base_validates() {
     assert!(studies.len() >= 5, "{studies:?}");
     for study in &studies {
         let out = ok(&oeg(&["sweep", "plan", s(study)]));
-        assert!(out.lines().count() > 8, "{}: {out}", study.display());
+        // "name: N runs, M simulations", then one line per run.
+        let runs: usize = out
+            .split_once(": ")
+            .and_then(|(_, rest)| rest.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{}: {out}", study.display()));
+        assert!(runs >= 6 && out.lines().count() == runs + 1, "{}: {out}", study.display());
     }
     let bases: Vec<PathBuf> = std::fs::read_dir(dir.join("bases"))
         .expect("sweeps/bases/")
