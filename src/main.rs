@@ -110,11 +110,17 @@ enum SweepCommand {
     Plan {
         /// A sweep file (.toml).
         file: PathBuf,
+        /// Override a value in every run (repeatable), as for `oeg run`; the axes still set their keys.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
     },
     /// Run the plan (or one shard of it) in parallel; killed and started again, it resumes.
     Run {
         /// A sweep file (.toml).
         file: PathBuf,
+        /// Override a value in every run (repeatable), as for `oeg run`; give the same on a resumed run.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
         /// Output folder: plan.json, runs/<id>/, runs.csv, runs.jsonl, obstacles.csv.
         #[arg(long)]
         out: PathBuf,
@@ -147,6 +153,9 @@ enum SweepCommand {
     Bench {
         /// A sweep file (.toml).
         file: PathBuf,
+        /// Override a value in every run (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
         /// Simulations at once [default: RAYON_NUM_THREADS, else one per core].
         #[arg(long, value_parser = clap::value_parser!(u16).range(1..=256))]
         jobs: Option<u16>,
@@ -167,8 +176,8 @@ enum SweepCommand {
 fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
     use eval::sweep::{Plan, Sweep, execute};
     match command {
-        SweepCommand::Plan { file } => {
-            let plan = Plan::new(Sweep::load(&file)?)?;
+        SweepCommand::Plan { file, overrides } => {
+            let plan = Plan::new(Sweep::load(&file)?.with_overrides(&overrides)?)?;
             say!(
                 "{}: {} runs, {} simulations",
                 plan.sweep.spec.name,
@@ -188,13 +197,14 @@ fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
         }
         SweepCommand::Run {
             file,
+            overrides,
             out,
             jobs,
             shard,
             shards,
             simulate_each,
         } => {
-            let plan = Plan::new(Sweep::load(&file)?)?;
+            let plan = Plan::new(Sweep::load(&file)?.with_overrides(&overrides)?)?;
             let shard = match shard {
                 Some(s) => Some(s),
                 None => execute::shard_from_env(|k| std::env::var(k).ok(), shards.map(|n| n as usize))
@@ -233,11 +243,12 @@ fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
         }
         SweepCommand::Bench {
             file,
+            overrides,
             jobs,
             repeat,
             no_compare,
         } => {
-            let plan = Plan::new(Sweep::load(&file)?)?;
+            let plan = Plan::new(Sweep::load(&file)?.with_overrides(&overrides)?)?;
             let jobs = jobs.map_or_else(eval::suite::default_jobs, usize::from);
             let f = eval::sweep::bench::bench(&plan, jobs, usize::from(repeat), !no_compare)?;
             let line = |v: &[f64]| {

@@ -75,6 +75,46 @@ fn plan_lists_every_run_and_the_shared_simulations() {
 }
 
 #[test]
+fn set_holds_for_every_run_under_every_preset() {
+    let dir = temp_dir("sweep", "set");
+    let plain = ok(&oeg(&["sweep", "plan", s(&smoke())]));
+    let set = ok(&oeg(&[
+        "sweep",
+        "plan",
+        s(&smoke()),
+        "--set",
+        "map.model.p_max=0.7",
+    ]));
+    let ids = |out: &str| -> Vec<String> { out.lines().skip(1).map(|l| l[..16].to_string()).collect() };
+    assert!(
+        ids(&plain).iter().all(|id| !ids(&set).contains(id)),
+        "--set changes every run"
+    );
+    ok(&oeg(&[
+        "sweep",
+        "run",
+        s(&smoke()),
+        "--out",
+        s(&dir),
+        "--set",
+        "map.model.p_max=0.7",
+    ]));
+    for run in std::fs::read_dir(dir.join("runs"))
+        .expect("runs")
+        .filter_map(Result::ok)
+    {
+        let text = std::fs::read_to_string(run.path().join("scenario.toml")).expect("scenario");
+        let doc: toml::Table = toml::from_str(&text).expect("toml");
+        assert_eq!(
+            doc["map"]["model"]["p_max"].as_float(),
+            Some(0.7),
+            "{}",
+            run.path().display()
+        );
+    }
+}
+
+#[test]
 fn a_killed_sweep_resumes_to_the_rows_of_an_uninterrupted_one() {
     use std::process::{Command, Stdio};
     let dir = temp_dir("sweep", "resume");
@@ -331,6 +371,17 @@ fn bad_sweeps_and_flags_are_clear_errors() {
         e.contains("g.toml:5:") && e.contains("min 0.05 is above max 0.02"),
         "{e}"
     );
+    let e = err(&oeg(&[
+        "sweep",
+        "plan",
+        s(&smoke()),
+        "--set",
+        "map.model.p_max=2",
+    ]));
+    assert!(
+        e.contains("--set map.model.p_max=2: `map.model`: invalid setting `p_max`"),
+        "{e}"
+    );
     for shard in ["0/3", "4/3"] {
         let e = err(&oeg(&[
             "sweep",
@@ -364,7 +415,11 @@ fn every_shipped_study_plans_and_its_base_validates() {
             .and_then(|(_, rest)| rest.split(' ').next())
             .and_then(|n| n.parse().ok())
             .unwrap_or_else(|| panic!("{}: {out}", study.display()));
-        assert!(runs >= 6 && out.lines().count() == runs + 1, "{}: {out}", study.display());
+        assert!(
+            runs >= 6 && out.lines().count() == runs + 1,
+            "{}: {out}",
+            study.display()
+        );
     }
     let bases: Vec<PathBuf> = std::fs::read_dir(dir.join("bases"))
         .expect("sweeps/bases/")

@@ -1,7 +1,8 @@
 //! A sweep's plan: every run with its fully resolved scenario, its id and the simulation it shares.
 //!
 //! A run's scenario is resolved in one order, whatever the order of the axes in the file: the base scenario,
-//! the generated scene (from the replicate's seed), the file's `set`, the preset, then the other axes. Its id
+//! the generated scene (from the replicate's seed), the preset, the file's `set`, the command line's `--set`,
+//! then the other axes (by key). Its id
 //! is a hash of that resolved scenario (and of the base file's name as the sweep file writes it), so
 //! reordering axes or the values of an axis changes no id, and two runs with the same id are the same run.
 
@@ -133,6 +134,7 @@ impl Plan {
             let label = base
                 .file_stem()
                 .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned());
+            check_overrides(&sweep, &base_doc, base)?;
             check_axes_against(&sweep, &base_doc, base)?;
             for combo in &combos {
                 for r in 0..spec.seeds {
@@ -344,7 +346,7 @@ fn combinations(sweep: &Sweep) -> Vec<Vec<(String, Value)>> {
     }
 }
 
-/// One run's scenario: base, generated scene, `set`, preset, axes (sorted by key), seed.
+/// One run's scenario: base, generated scene, preset, `set`, `--set`, axes (sorted by key), seed.
 fn resolve(
     sweep: &Sweep,
     base: &Table,
@@ -356,9 +358,6 @@ fn resolve(
     if let Some(g) = &sweep.spec.generate {
         g.place(seed, &mut doc);
     }
-    for (key, value) in &sweep.spec.set {
-        Override::new(key, value.clone()).apply_to(&mut doc)?;
-    }
     let preset_key = super::presets::PRESET_KEY;
     if let Some((_, Value::String(name))) = combo.iter().find(|(k, _)| k == preset_key) {
         for (key, value) in sweep.preset(name).unwrap_or_default() {
@@ -368,6 +367,13 @@ fn resolve(
             }
         }
     }
+    // The file's `set` and the command line's `--set` hold for every preset; an axis on the same key wins.
+    for (key, value) in &sweep.spec.set {
+        Override::new(key, value.clone()).apply_to(&mut doc)?;
+    }
+    for o in &sweep.overrides {
+        o.apply_to(&mut doc)?;
+    }
     let mut sorted: Vec<&(String, Value)> = combo.iter().filter(|(k, _)| k != preset_key).collect();
     sorted.sort_by(|a, b| a.0.cmp(&b.0));
     for (key, value) in sorted {
@@ -376,6 +382,29 @@ fn resolve(
     // The seed is the replicate's, whatever an axis said: `seeds` is how a sweep varies it.
     doc.insert("seed".into(), Value::Integer(seed as i64));
     Ok(doc)
+}
+
+/// The command line's `--set` overrides on a base (with its first replicate's scene): one that makes the
+/// scenario invalid is named.
+fn check_overrides(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()> {
+    if sweep.overrides.is_empty() {
+        return Ok(());
+    }
+    let mut bare = sweep.clone();
+    bare.overrides.clear();
+    let input = |message: String| EvalError::Input {
+        path: PathBuf::from("(command line)"),
+        message,
+    };
+    let doc = resolve(&bare, base_doc, &[], replicate_seed(sweep.spec.seed, 0)).map_err(input)?;
+    let texts: Vec<String> = sweep.overrides.iter().map(|o| o.source.clone()).collect();
+    crate::settings::resolve_with(&doc, &texts, |d| {
+        let text = toml::to_string(d).map_err(|e| e.to_string())?;
+        sim::scenario::load_str(base, &text)
+            .map(|_| ())
+            .map_err(|e| crate::run::scenario_message(&e))
+    })
+    .map_err(|m| input(format!("{m} (on {})", base.display())))
 }
 
 /// Each axis alone (its first and last value) on a base: an unknown key or a value the scenario rejects is

@@ -141,6 +141,8 @@ pub struct Sweep {
     pub spec: SweepSpec,
     /// Its axes with their values.
     pub axes: Vec<Axis>,
+    /// `--set` overrides from the command line, applied to every run after the file's `set`.
+    pub overrides: Vec<crate::overrides::Override>,
 }
 
 impl Sweep {
@@ -172,9 +174,27 @@ impl Sweep {
             text: text.to_string(),
             spec,
             axes: Vec::new(),
+            overrides: Vec::new(),
         };
         sweep.axes = sweep.check()?;
         Ok(sweep)
+    }
+
+    /// The sweep with `--set` overrides from the command line (`key=value` each), applied to every run after
+    /// the preset and the file's `set` and before the other axes, so an axis still sets its key.
+    ///
+    /// # Errors
+    /// A malformed override, named.
+    pub fn with_overrides(mut self, overrides: &[String]) -> Result<Self> {
+        self.overrides = overrides
+            .iter()
+            .map(|o| crate::overrides::Override::parse(o))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|message| EvalError::Input {
+                path: PathBuf::from("(command line)"),
+                message,
+            })?;
+        Ok(self)
     }
 
     /// An error at the value of `at` in the file.
