@@ -251,38 +251,13 @@ fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
             let plan = Plan::new(Sweep::load(&file)?.with_overrides(&overrides)?)?;
             let jobs = jobs.map_or_else(eval::suite::default_jobs, usize::from);
             let f = eval::sweep::bench::bench(&plan, jobs, usize::from(repeat), !no_compare)?;
-            let line = |v: &[f64]| {
-                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                format!(
-                    "median {:.2} s (min {lo:.2}, max {hi:.2})",
-                    eval::sweep::bench::median(v)
-                )
-            };
             say!(
-                "{}: {} runs, {} jobs, {} repetitions",
+                "{}: {} runs, {jobs} jobs, {repeat} repetitions",
                 plan.sweep.spec.name,
-                f.num_runs,
-                jobs,
-                repeat
+                f.num_runs
             );
-            say!(
-                "shared simulations ({}): {}; {:.0} runs per hour",
-                f.num_shared_simulations,
-                line(&f.shared_s),
-                f.runs_per_hour()
-            );
-            if !f.each_s.is_empty() {
-                say!(
-                    "one simulation per run ({}): {}; {:.0} runs per hour",
-                    f.num_runs,
-                    line(&f.each_s),
-                    f.num_runs as f64 * 3600.0 / eval::sweep::bench::median(&f.each_s)
-                );
-                say!(
-                    "speed-up of sharing: {:.2}x (median of the pairwise ratios)",
-                    f.speed_up()
-                );
+            for line in f.lines() {
+                say!("{line}");
             }
         }
         SweepCommand::Report { dir } => {

@@ -398,31 +398,25 @@ fn map_and_plan_take_settings_by_their_scenario_keys() {
     assert_eq!(plan(&[])["plan_found"], false);
     assert_eq!(plan(&["--set", "robot.max_step_m=0.06"])["plan_found"], true);
     // A bad value names its override.
+    let map_with = |set: &'static str| -> Vec<&str> {
+        vec![
+            "map",
+            graph.to_str().expect("utf8"),
+            "--resolution",
+            "0.05",
+            "--out",
+            "x",
+            "--set",
+            set,
+        ]
+    };
     for (args, expected) in [
         (
-            vec![
-                "map",
-                graph.to_str().expect("utf8"),
-                "--resolution",
-                "0.05",
-                "--out",
-                "x",
-                "--set",
-                "map.model.p_max=2",
-            ],
+            map_with("map.model.p_max=2"),
             "--set map.model.p_max=2: invalid setting `p_max`",
         ),
         (
-            vec![
-                "map",
-                graph.to_str().expect("utf8"),
-                "--resolution",
-                "0.05",
-                "--out",
-                "x",
-                "--set",
-                "input.pcd_frame=sideways",
-            ],
+            map_with("input.pcd_frame=sideways"),
             "--set input.pcd_frame=sideways: unknown variant `sideways`",
         ),
         (

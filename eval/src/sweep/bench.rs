@@ -41,6 +41,34 @@ impl BenchFigures {
         self.num_runs as f64 * 3600.0 / median(&self.shared_s)
     }
 
+    /// The figures as lines of text: each way's median, minimum and maximum, runs per hour, the speed-up.
+    pub fn lines(&self) -> Vec<String> {
+        let spread = |v: &[f64]| {
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            format!("median {:.2} s (min {lo:.2}, max {hi:.2})", median(v))
+        };
+        let mut out = vec![format!(
+            "shared simulations ({}): {}; {:.0} runs per hour",
+            self.num_shared_simulations,
+            spread(&self.shared_s),
+            self.runs_per_hour()
+        )];
+        if !self.each_s.is_empty() {
+            out.push(format!(
+                "one simulation per run ({}): {}; {:.0} runs per hour",
+                self.num_runs,
+                spread(&self.each_s),
+                self.num_runs as f64 * 3600.0 / median(&self.each_s)
+            ));
+            out.push(format!(
+                "speed-up of sharing: {:.2}x (median of the pairwise ratios)",
+                self.speed_up()
+            ));
+        }
+        out
+    }
+
     /// The median of the pairwise ratios one-simulation-per-run over shared.
     pub fn speed_up(&self) -> f64 {
         let ratios: Vec<f64> = self
@@ -94,4 +122,25 @@ pub fn bench(plan: &Plan, jobs: usize, repeat: usize, compare: bool) -> Result<B
         }
     }
     Ok(figures)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figures_are_medians_and_pairwise_ratios() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        let f = BenchFigures {
+            num_runs: 6,
+            num_shared_simulations: 1,
+            shared_s: vec![10.0, 12.0, 11.0],
+            each_s: vec![20.0, 18.0, 33.0],
+        };
+        // Ratios 2.0, 1.5, 3.0: median 2.0 (not 23 / 11).
+        assert!((f.speed_up() - 2.0).abs() < 1e-12);
+        assert!((f.runs_per_hour() - 6.0 * 3600.0 / 11.0).abs() < 1e-9);
+        assert_eq!(f.lines().len(), 3);
+    }
 }

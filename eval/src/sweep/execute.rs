@@ -1,6 +1,6 @@
 //! `oeg sweep run`: the plan's runs in parallel, resumable and shardable.
 //!
-//! Layout of the output folder:
+//! Layout of the output folder (the rows and tables are [`super::rows`]'s):
 //! * `plan.json`: the whole plan (every run's id, axis values and seed);
 //! * `runs/<id>/`: `scenario.toml` (the resolved scenario, a plain scenario file), `metrics.json`,
 //!   `obstacles.csv`, and last `row.json`, written atomically: a run is finished once its `row.json` exists;
@@ -11,13 +11,13 @@
 //! with the same rows. Runs that share a simulation (they differ only in the map's model, rule or resolution,
 //! the planner or the expectations) are simulated once and mapped once per setting.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::{Map as JsonMap, Value as Json};
+use serde_json::Value as Json;
 
-use super::plan::{Plan, Run, to_json};
+use super::plan::{Plan, Run};
+use super::rows::{Outcome, lead_columns, metric_columns, obstacle_rows, round3, row_path, write_tables};
 use crate::error::{EvalError, Result};
 use crate::output::{create_dir, write_bytes, write_json};
 use crate::progress::Progress;
@@ -183,11 +183,6 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
     })
 }
 
-/// The finished-run marker of a run.
-pub fn row_path(out: &Path, id: &str) -> PathBuf {
-    out.join("runs").join(id).join("row.json")
-}
-
 /// Refuses a folder that holds another plan's runs: its rows would be mixed with this plan's.
 fn check_same_plan(plan: &Plan, out: &Path) -> Result<()> {
     let path = out.join("plan.json");
@@ -198,17 +193,7 @@ fn check_same_plan(plan: &Plan, out: &Path) -> Result<()> {
         path: path.clone(),
         message: format!("not a plan written by `oeg sweep run`: {e}"),
     })?;
-    let ids = |v: &Json| -> Vec<String> {
-        v["runs"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|r| r["id"].as_str().map(String::from))
-                    .collect()
-            })
-            .unwrap_or_default()
-    };
-    if ids(&old) != ids(&plan.listing()) {
+    if super::merge::plan_ids(&old) != super::merge::plan_ids(&plan.listing()) {
         return Err(EvalError::Input {
             path,
             message:
@@ -226,7 +211,7 @@ fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
     let loaded: Vec<std::result::Result<sim::LoadedScenario, String>> =
         runs.iter().map(|r| r.load().map_err(|e| e.to_string())).collect();
     let first = loaded.iter().find_map(|l| l.as_ref().ok());
-    let outcome: std::result::Result<Vec<std::result::Result<RunOutcome, String>>, String> = match first {
+    let outcome: std::result::Result<Vec<std::result::Result<Outcome, String>>, String> = match first {
         None => Err(loaded
             .iter()
             .find_map(|l| l.as_ref().err().cloned())
@@ -277,18 +262,11 @@ fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
     Ok(num_errors)
 }
 
-#[derive(Debug, Clone)]
-struct RunOutcome {
-    evaluation: crate::run::Evaluation,
-    max_step_m: f64,
-    height_m: f64,
-}
-
 /// Simulates the group's first valid scenario and judges one map per run.
 fn simulate_group(
     first: &sim::LoadedScenario,
     loaded: &[std::result::Result<sim::LoadedScenario, String>],
-) -> std::result::Result<Vec<std::result::Result<RunOutcome, String>>, String> {
+) -> std::result::Result<Vec<std::result::Result<Outcome, String>>, String> {
     let settings: Vec<&sim::scenario::MapSettings> = loaded
         .iter()
         .map(|l| l.as_ref().map_or(&first.scenario.map, |l| &l.scenario.map))
@@ -313,7 +291,7 @@ fn simulate_group(
             }
             let truth = &truths.iter().find(|(k, _)| *k == key).ok_or("no truth")?.1;
             let evaluation = crate::run::evaluate(s, map, truth).map_err(|e| e.to_string())?;
-            Ok(RunOutcome {
+            Ok(Outcome {
                 evaluation,
                 max_step_m: s.robot.max_step_m,
                 height_m: s.robot.height_m,
@@ -321,244 +299,6 @@ fn simulate_group(
         })
         .collect::<Vec<_>>();
     Ok(outcomes)
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1e3).round() / 1e3
-}
-
-/// `id`, `scenario`, `replicate`, `seed` and the axis values.
-fn lead_columns(run: &Run) -> JsonMap<String, Json> {
-    let mut row = JsonMap::new();
-    row.insert("id".into(), Json::from(run.id.clone()));
-    row.insert("scenario".into(), Json::from(run.scenario.clone()));
-    row.insert("replicate".into(), Json::from(run.replicate));
-    row.insert("seed".into(), Json::from(run.seed));
-    for (k, v) in &run.axis_values {
-        row.insert(k.clone(), to_json(v));
-    }
-    row
-}
-
-/// Every metric of `metrics.json` (but the scenario name and seed, already in the row) and the obstacle
-/// decision counts.
-fn metric_columns(row: &mut JsonMap<String, Json>, o: &RunOutcome) {
-    if let Ok(Json::Object(m)) = serde_json::to_value(&o.evaluation.metrics) {
-        for (k, v) in m {
-            if k != "scenario" && k != "seed" {
-                row.insert(k, v);
-            }
-        }
-    }
-    let (mut right, mut unsafe_, mut cautious, mut unseen) = (0u64, 0u64, 0u64, 0u64);
-    for d in &o.evaluation.obstacles {
-        match decision_class(d) {
-            "right" => right += 1,
-            "unsafe" => unsafe_ += 1,
-            "overcautious" => cautious += 1,
-            _ => unseen += 1,
-        }
-    }
-    row.insert("obstacles_right".into(), Json::from(right));
-    row.insert("obstacles_unsafe".into(), Json::from(unsafe_));
-    row.insert("obstacles_overcautious".into(), Json::from(cautious));
-    row.insert("obstacles_unseen".into(), Json::from(unseen));
-    let seen = right + unsafe_ + cautious;
-    let rate = if seen > 0 {
-        Json::from((unsafe_ + cautious) as f64 / seen as f64)
-    } else {
-        Json::Null
-    };
-    row.insert("obstacle_decision_error_rate".into(), rate);
-}
-
-/// `right`, `unsafe` (truly blocked, mapped passable), `overcautious` (the reverse) or `unseen`.
-pub fn decision_class(d: &crate::obstacles::ObstacleDecision) -> &'static str {
-    match (d.true_decision, d.mapped_decision) {
-        (_, "unseen") => "unseen",
-        (t, m) if t == m => "right",
-        ("blocked", _) => "unsafe",
-        _ => "overcautious",
-    }
-}
-
-/// The run's obstacles with the distance of each to its threshold: height minus the robot's step, or an
-/// overhang's clearance minus the robot's height.
-fn obstacle_rows(run: &Run, o: &RunOutcome) -> Vec<Json> {
-    o.evaluation
-        .obstacles
-        .iter()
-        .map(|d| {
-            let (threshold, decides) = if d.kind == "overhang" {
-                (o.height_m, "clearance")
-            } else {
-                (o.max_step_m, "step")
-            };
-            let mut row = lead_columns(run);
-            row.insert("obstacle".into(), Json::from(d.index));
-            row.insert("name".into(), Json::from(d.name.clone()));
-            row.insert("kind".into(), Json::from(d.kind.clone()));
-            row.insert("decides".into(), Json::from(decides));
-            row.insert("height_m".into(), Json::from(d.height_m));
-            row.insert(
-                "threshold_distance_m".into(),
-                Json::from(((d.height_m - threshold) * 1e6).round() / 1e6),
-            );
-            row.insert("num_observed_cells".into(), Json::from(d.num_observed_cells));
-            row.insert("unsafe_cells".into(), Json::from(d.unsafe_cells));
-            row.insert("overcautious_cells".into(), Json::from(d.overcautious_cells));
-            row.insert("true_decision".into(), Json::from(d.true_decision));
-            row.insert("mapped_decision".into(), Json::from(d.mapped_decision));
-            row.insert("decision".into(), Json::from(decision_class(d)));
-            Json::Object(row)
-        })
-        .collect()
-}
-
-/// The finished rows of `runs`, in their order: `(row, obstacle rows)`.
-///
-/// # Errors
-/// A `row.json` that cannot be read.
-pub fn read_rows(out: &Path, runs: &[&Run]) -> Result<Vec<(Json, Vec<Json>)>> {
-    let mut rows = Vec::new();
-    for r in runs {
-        let path = row_path(out, &r.id);
-        if let Some(record) = read_record(&path)? {
-            rows.push(record);
-        }
-    }
-    Ok(rows)
-}
-
-/// A `row.json`: `None` when it does not exist.
-///
-/// # Errors
-/// A file that is not a row.
-pub fn read_record(path: &Path) -> Result<Option<(Json, Vec<Json>)>> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => {
-            return Err(EvalError::Io {
-                path: path.to_path_buf(),
-                source,
-            });
-        }
-    };
-    let mut record: Json = serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
-        path: path.to_path_buf(),
-        message: format!("not a run's row: {e}"),
-    })?;
-    let obstacles = record["obstacles"].as_array().cloned().unwrap_or_default();
-    let row = record["row"].take();
-    if !row.is_object() {
-        return Err(EvalError::Input {
-            path: path.to_path_buf(),
-            message: "not a run's row: no `row` object".into(),
-        });
-    }
-    Ok(Some((row, obstacles)))
-}
-
-/// Writes `runs.csv`, `runs.jsonl` and `obstacles.csv` of the finished `runs` into `out`.
-///
-/// # Errors
-/// A row that cannot be read, or a failed write.
-pub fn write_tables(plan: &Plan, runs: &[&Run], out: &Path) -> Result<Vec<PathBuf>> {
-    let rows = read_rows(out, runs)?;
-    let axis_keys: Vec<String> = plan.sweep.axes.iter().map(|a| a.key.clone()).collect();
-    write_row_tables(&axis_keys, &rows, out)
-}
-
-/// Writes the tables of `rows` (from [`read_rows`]) into `out`.
-///
-/// # Errors
-/// A failed write.
-pub fn write_row_tables(
-    axis_keys: &[String],
-    rows: &[(Json, Vec<Json>)],
-    out: &Path,
-) -> Result<Vec<PathBuf>> {
-    let lead: Vec<String> = ["id", "scenario", "replicate", "seed"]
-        .iter()
-        .map(|s| (*s).to_string())
-        .chain(axis_keys.iter().cloned())
-        .collect();
-    let mut jsonl = Vec::new();
-    for (row, _) in rows {
-        jsonl.extend(serde_json::to_vec(row).unwrap_or_default());
-        jsonl.push(b'\n');
-    }
-    let runs_csv = out.join("runs.csv");
-    let csv = to_csv(
-        rows.iter().map(|(r, _)| r),
-        &lead,
-        &["status", "error"],
-        &["wall_time_s"],
-    )
-    .map_err(|message| EvalError::Input {
-        path: runs_csv.clone(),
-        message,
-    })?;
-    write_bytes(&runs_csv, &csv)?;
-    let runs_jsonl = out.join("runs.jsonl");
-    write_bytes(&runs_jsonl, &jsonl)?;
-    let obstacles_csv = out.join("obstacles.csv");
-    let mut obstacle_lead = lead.clone();
-    obstacle_lead.extend(
-        ["obstacle", "name", "kind", "decides"]
-            .iter()
-            .map(|s| (*s).to_string()),
-    );
-    let csv =
-        to_csv(rows.iter().flat_map(|(_, o)| o.iter()), &obstacle_lead, &[], &[]).map_err(|message| {
-            EvalError::Input {
-                path: obstacles_csv.clone(),
-                message,
-            }
-        })?;
-    write_bytes(&obstacles_csv, &csv)?;
-    Ok(vec![runs_csv, runs_jsonl, obstacles_csv])
-}
-
-/// CSV of JSON objects: `lead` columns first, then `then`, the rest sorted, `last` at the end. Null is an
-/// empty cell; nested values are written as JSON.
-fn to_csv<'a>(
-    rows: impl Iterator<Item = &'a Json> + Clone,
-    lead: &[String],
-    then: &[&str],
-    last: &[&str],
-) -> std::result::Result<Vec<u8>, String> {
-    let mut rest: BTreeMap<&str, ()> = BTreeMap::new();
-    for r in rows.clone() {
-        if let Json::Object(m) = r {
-            for k in m.keys() {
-                rest.insert(k, ());
-            }
-        }
-    }
-    let mut columns: Vec<&str> = lead.iter().map(String::as_str).collect();
-    columns.extend(then.iter().copied());
-    for k in rest.keys() {
-        if !columns.contains(k) && !last.contains(k) {
-            columns.push(k);
-        }
-    }
-    columns.extend(last.iter().copied());
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(&columns).map_err(|e| e.to_string())?;
-    for r in rows {
-        let cells: Vec<String> = columns
-            .iter()
-            .map(|c| match &r[*c] {
-                Json::Null => String::new(),
-                Json::String(s) => s.clone(),
-                other => other.to_string(),
-            })
-            .collect();
-        w.write_record(&cells).map_err(|e| e.to_string())?;
-    }
-    w.into_inner().map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

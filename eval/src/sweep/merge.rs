@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value as Json;
 
-use super::execute::{read_record, row_path, write_row_tables};
+use super::rows::{read_record, row_path, write_row_tables};
 use crate::error::{EvalError, Result};
 use crate::output::{create_dir, write_bytes};
 

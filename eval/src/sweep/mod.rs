@@ -5,7 +5,7 @@
 //! * [`presets`]: named model presets;
 //! * [`generate`]: randomized scenes;
 //! * [`plan`]: every run resolved, with its id, its shard and the simulation it shares;
-//! * [`execute`]: running, resuming, sharding;
+//! * [`execute`]: running, resuming, sharding; [`rows`]: the rows and tables it writes;
 //! * [`merge`]: shards back into one set of rows;
 //! * [`stats`] and [`report`]: means with confidence intervals, `summary.csv` and plots;
 //! * [`bench`]: what a study costs, and what sharing simulations saves.
@@ -17,6 +17,7 @@ pub mod merge;
 pub mod plan;
 pub mod presets;
 pub mod report;
+pub mod rows;
 pub mod spec;
 pub mod stats;
 

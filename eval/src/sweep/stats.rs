@@ -16,6 +16,19 @@ pub struct Summary {
     pub high: f64,
 }
 
+impl Summary {
+    /// A sample of `n` with a mean (NaN: none) and no spread or interval.
+    fn without_interval(n: usize, mean: f64) -> Self {
+        Self {
+            n,
+            mean,
+            std: f64::NAN,
+            low: f64::NAN,
+            high: f64::NAN,
+        }
+    }
+}
+
 /// The 97.5 % quantile of Student's t with `df` degrees of freedom: the half-width factor of a two-sided
 /// 95 % interval. Exact table values to 6 digits up to 30 degrees of freedom, the Cornish-Fisher expansion
 /// beyond (error below 1e-5 there).
@@ -44,23 +57,11 @@ pub fn mean_interval(xs: &[f64]) -> Summary {
     let v: Vec<f64> = xs.iter().copied().filter(|x| x.is_finite()).collect();
     let n = v.len();
     if n == 0 {
-        return Summary {
-            n,
-            mean: f64::NAN,
-            std: f64::NAN,
-            low: f64::NAN,
-            high: f64::NAN,
-        };
+        return Summary::without_interval(0, f64::NAN);
     }
     let mean = v.iter().sum::<f64>() / n as f64;
     if n < 2 {
-        return Summary {
-            n,
-            mean,
-            std: f64::NAN,
-            low: f64::NAN,
-            high: f64::NAN,
-        };
+        return Summary::without_interval(n, mean);
     }
     let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
     let std = var.sqrt();
@@ -77,13 +78,7 @@ pub fn mean_interval(xs: &[f64]) -> Summary {
 /// A rate `k / n` with Wilson's 95 % score interval (sensible at 0 and 1, unlike the normal interval).
 pub fn rate_interval(k: usize, n: usize) -> Summary {
     if n == 0 {
-        return Summary {
-            n,
-            mean: f64::NAN,
-            std: f64::NAN,
-            low: f64::NAN,
-            high: f64::NAN,
-        };
+        return Summary::without_interval(0, f64::NAN);
     }
     let z: f64 = 1.959_963_984_540_054;
     let (nf, p) = (n as f64, k as f64 / n as f64);
