@@ -107,15 +107,26 @@ impl Plan {
                 .map(|p| (p.clone(), sweep.resolve(p)))
                 .collect(),
         };
-        let combos = combinations(&sweep);
-        let total = bases.len() * combos.len() * spec.seeds as usize;
-        if total > MAX_RUNS {
+        // The size is counted before anything is built: five axes of 10,000 values must be an error, not an
+        // exhausted machine.
+        let num_combos = match spec.combine {
+            Combine::Zip => sweep.axes.first().map_or(1, |a| a.values.len() as u128),
+            Combine::Product => sweep
+                .axes
+                .iter()
+                .fold(1u128, |n, a| n.saturating_mul(a.values.len() as u128)),
+        };
+        let total = (bases.len() as u128)
+            .saturating_mul(num_combos)
+            .saturating_mul(u128::from(spec.seeds));
+        if total > MAX_RUNS as u128 {
             return Err(sweep.error(
                 &[K("axes")],
                 format!("the plan has {total} runs, over the limit of {MAX_RUNS}; use fewer values or seeds"),
             ));
         }
-        // Which axis positions are checked against each base, so that an unknown key names its axis.
+        let total = total as usize;
+        let combos = combinations(&sweep);
         let mut runs = Vec::with_capacity(total);
         for (k, (written, base)) in bases.iter().enumerate() {
             let at_base: Vec<sim::scenario::KeySeg<'_>> = if spec.generate.is_some() {
@@ -478,6 +489,23 @@ mod tests {
             all.sort_unstable();
             assert_eq!(seen, all, "n = {n}");
         }
+    }
+
+    #[test]
+    fn a_huge_plan_is_refused_before_it_is_built() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/scenes");
+        let mut text = "name = \"t\"\nseed = 3\nscenarios = [\"person.toml\"]\n".to_string();
+        for k in 0..5 {
+            text.push_str(&format!(
+                "[[axes]]\nkey = \"a{k}\"\nlinspace = {{ start = 0.0, stop = 1.0, num = 10000 }}\n"
+            ));
+        }
+        let sweep = Sweep::from_str(&dir.join("t.toml"), &text).expect("sweep");
+        let err = Plan::new(sweep).expect_err("too many").to_string();
+        assert!(
+            err.contains("100000000000000000000 runs, over the limit of 100000"),
+            "{err}"
+        );
     }
 
     #[test]
