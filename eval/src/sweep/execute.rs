@@ -124,6 +124,7 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
     use rayon::prelude::*;
     let out = &options.out_dir;
     create_dir(&out.join("runs"))?;
+    let _lock = FolderLock::take(out)?;
     check_same_plan(plan, out)?;
     let plan_path = out.join("plan.json");
     write_json(&plan_path, &plan.listing())?;
@@ -181,6 +182,58 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
         num_errors: errors.iter().sum(),
         files: std::iter::once(plan_path).chain(files).collect(),
     })
+}
+
+/// `DIR/.lock`, holding the process id, while an invocation works in a folder: two at once would clear each
+/// other's unfinished runs. A lock whose process is gone (killed) is taken over.
+struct FolderLock {
+    path: PathBuf,
+}
+
+impl FolderLock {
+    fn take(dir: &Path) -> Result<Self> {
+        use std::io::Write as _;
+        let path = dir.join(".lock");
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    let _ = writeln!(f, "{}", std::process::id());
+                    return Ok(Self { path });
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                    let pid = holder.trim();
+                    let alive = !pid.is_empty() && Path::new("/proc").join(pid).exists();
+                    if alive && pid != std::process::id().to_string() {
+                        return Err(EvalError::Input {
+                            path: dir.to_path_buf(),
+                            message: format!(
+                                "another `oeg sweep run` (process {pid}) works in this folder; give each shard its \
+                                 own --out"
+                            ),
+                        });
+                    }
+                    // Left by a killed invocation.
+                    let _ = std::fs::remove_file(&path);
+                }
+                Err(source) => return Err(EvalError::Io { path, source }),
+            }
+        }
+        Err(EvalError::Input {
+            path: dir.to_path_buf(),
+            message: "cannot take the folder's lock (.lock)".into(),
+        })
+    }
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
 }
 
 /// Refuses a folder that holds another plan's runs: its rows would be mixed with this plan's.
