@@ -79,23 +79,6 @@ pub fn inline_value(v: &Value) -> String {
     v.to_string()
 }
 
-/// Applies `overrides` (`key=value` each) to the scenario text.
-///
-/// # Errors
-/// A message naming the override: no `=`, an empty key, a key whose parent does not exist, an index past an
-/// array's end, a key into something that is not a table or an array.
-pub fn apply(text: &str, overrides: &[String]) -> Result<String, String> {
-    if overrides.is_empty() {
-        return Ok(text.to_string());
-    }
-    let mut doc: Table =
-        toml::from_str(text).map_err(|e| format!("the scenario is not valid TOML: {}", e.message()))?;
-    for o in overrides {
-        Override::parse(o)?.apply_to(&mut doc)?;
-    }
-    toml::to_string(&doc).map_err(|e| format!("cannot write the overridden scenario: {e}"))
-}
-
 /// Removes the value at a dotted key, if there is one (the key falls back to its default).
 pub fn remove(doc: &mut Table, key: &str) {
     let segments: Vec<&str> = key.split('.').collect();
@@ -179,6 +162,24 @@ fn set_in(here: &mut Value, path: &[&str], depth: usize, value: &Value) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Applies `overrides` (`key=value` each) to a scenario text, as `oeg run` does through
+    /// `settings::resolve_with`.
+    ///
+    /// # Errors
+    /// A message naming the override: no `=`, an empty key, a key whose parent does not exist, an index past an
+    /// array's end, a key into something that is not a table or an array.
+    fn apply(text: &str, overrides: &[String]) -> Result<String, String> {
+        if overrides.is_empty() {
+            return Ok(text.to_string());
+        }
+        let mut doc: Table =
+            toml::from_str(text).map_err(|e| format!("the scenario is not valid TOML: {}", e.message()))?;
+        for o in overrides {
+            Override::parse(o)?.apply_to(&mut doc)?;
+        }
+        toml::to_string(&doc).map_err(|e| format!("cannot write the overridden scenario: {e}"))
+    }
 
     const TEXT: &str = "name = \"x\"\n[map]\nresolution_m = 0.05\n[[sensors]]\nname = \"a\"\n[sensors.noise]\nrange_sigma_m = 0.01\n";
 
