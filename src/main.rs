@@ -333,7 +333,7 @@ fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
             inflation_radius_m: settings.planner.inflation_radius_m,
             unknown: settings.planner.unknown,
         },
-        profile: settings.robot.profile().map_err(anyhow::Error::msg)?,
+        profile: settings.robot.profile()?,
         rule: settings.map.traversability,
     };
     let (summary, files) = eval::plan::run_job(&job)?;
@@ -407,7 +407,7 @@ impl MapArgs {
                 sensor: settings.input.pcd_sensor.model(),
             },
             log_pose: settings.input.log_pose,
-            profile: settings.robot.profile().map_err(anyhow::Error::msg)?,
+            profile: settings.robot.profile()?,
             rule: settings.map.traversability,
         })
     }

@@ -133,7 +133,7 @@ pub fn region_of(s: &scenario::Scenario, geometry: &GridGeometry) -> Result<oeg:
 pub struct SimulatedTiming {
     /// Simulating the drive and the sensors, seconds.
     pub simulation_wall_time_s: f64,
-    /// Integrating the scans, seconds, per map.
+    /// Integrating the scans, seconds, summed over the maps.
     pub map_wall_time_s: f64,
     /// Rays simulated.
     pub num_rays: u64,
@@ -149,7 +149,7 @@ pub fn simulate_and_map(
     loaded: &scenario::LoadedScenario,
     maps: &[&scenario::MapSettings],
     progress: &Progress,
-) -> Result<(Simulation, Vec<Map>, Vec<f64>, SimulatedTiming)> {
+) -> Result<(Simulation, Vec<Map>, SimulatedTiming)> {
     let s = &loaded.scenario;
     let mut simulation = Simulation::new(loaded)?;
     let mut built = maps
@@ -212,7 +212,7 @@ pub fn simulate_and_map(
         map_wall_time_s: map_s.iter().sum(),
         num_rays: simulation.num_rays(),
     };
-    Ok((simulation, built, map_s, timing))
+    Ok((simulation, built, timing))
 }
 
 /// The truth over the scenario's map region on `geometry`'s cells, people left out, from the world at the end
@@ -241,12 +241,11 @@ pub fn truth_of(s: &scenario::Scenario, world: &sim::World, geometry: &GridGeome
 /// # Errors
 /// A step or height that makes no sense.
 pub fn profile_of(s: &scenario::Scenario) -> Result<RobotProfile> {
-    let profile = RobotProfile {
-        max_step_m: s.robot.max_step_m as f32,
-        height_m: s.robot.height_m as f32,
+    let decisions = crate::settings::RobotDecisions {
+        max_step_m: s.robot.max_step_m,
+        height_m: s.robot.height_m,
     };
-    profile.validate()?;
-    Ok(profile)
+    Ok(decisions.profile()?)
 }
 
 /// A map judged against the truth: metrics (with the planner check and the expectations), per-obstacle
@@ -294,7 +293,7 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         .out_dir
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&s.name));
-    let (simulation, maps, _, sim_timing) = simulate_and_map(&loaded, &[&s.map], progress)?;
+    let (simulation, maps, sim_timing) = simulate_and_map(&loaded, &[&s.map], progress)?;
     let map = maps.into_iter().next().ok_or_else(|| EvalError::Input {
         path: options.scenario.clone(),
         message: "the simulation built no map".into(),

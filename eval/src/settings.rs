@@ -46,12 +46,12 @@ impl RobotDecisions {
     ///
     /// # Errors
     /// A step or height that makes no sense.
-    pub fn profile(&self) -> Result<oeg::RobotProfile, String> {
+    pub fn profile(&self) -> oeg::Result<oeg::RobotProfile> {
         let p = oeg::RobotProfile {
             max_step_m: self.max_step_m as f32,
             height_m: self.height_m as f32,
         };
-        p.validate().map_err(|e| e.to_string())?;
+        p.validate()?;
         Ok(p)
     }
 }
@@ -192,7 +192,7 @@ impl Checked for MapSettings {
             ));
         }
         self.map.model.validate().map_err(|e| e.to_string())?;
-        self.robot.profile().map(|_| ())
+        self.robot.profile().map(|_| ()).map_err(|e| e.to_string())
     }
 }
 
@@ -204,7 +204,7 @@ impl Checked for PlanSettings {
                 "planner.inflation_radius_m: expected a radius in [0, 100] m, got {r}"
             ));
         }
-        self.robot.profile().map(|_| ())
+        self.robot.profile().map(|_| ()).map_err(|e| e.to_string())
     }
 }
 

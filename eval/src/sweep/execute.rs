@@ -264,23 +264,21 @@ fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
     let loaded: Vec<std::result::Result<sim::LoadedScenario, String>> =
         runs.iter().map(|r| r.load().map_err(|e| e.to_string())).collect();
     let first = loaded.iter().find_map(|l| l.as_ref().ok());
-    let outcome: std::result::Result<Vec<std::result::Result<Outcome, String>>, String> = match first {
-        None => Err(loaded
+    let results: Vec<std::result::Result<Outcome, String>> = match first.ok_or_else(|| {
+        loaded
             .iter()
             .find_map(|l| l.as_ref().err().cloned())
-            .unwrap_or_default()),
-        Some(first) => simulate_group(first, &loaded),
+            .unwrap_or_default()
+    }) {
+        Ok(first) => simulate_group(first, &loaded).unwrap_or_else(|e| vec![Err(e); runs.len()]),
+        Err(e) => vec![Err(e); runs.len()],
     };
     let shared_s = start.elapsed().as_secs_f64();
     let mut num_errors = 0;
-    for (k, run) in runs.iter().enumerate() {
+    for (run, result) in runs.iter().zip(results) {
         let dir = out.join("runs").join(&run.id);
         create_dir(&dir)?;
         write_bytes(&dir.join("scenario.toml"), run.scenario_text().as_bytes())?;
-        let result = match &outcome {
-            Ok(outcomes) => outcomes[k].clone(),
-            Err(e) => Err(e.clone()),
-        };
         let mut row = lead_columns(run);
         let obstacles = match result {
             Ok(o) => {
@@ -324,25 +322,30 @@ fn simulate_group(
         .iter()
         .map(|l| l.as_ref().map_or(&first.scenario.map, |l| &l.scenario.map))
         .collect();
-    let (simulation, maps, _, _) =
+    let (simulation, maps, _) =
         crate::run::simulate_and_map(first, &settings, &Progress::hidden()).map_err(|e| e.to_string())?;
-    let mut truths: Vec<(String, sim::truth::TruthRaster)> = Vec::new();
+    // One truth per grid and region (runs that differ only in the model share it).
+    let mut truths: Vec<(oeg::GridGeometry, sim::truth::TruthRaster)> = Vec::new();
     let outcomes = loaded
         .iter()
         .zip(&maps)
         .map(|(l, map)| {
             let s = &l.as_ref().map_err(Clone::clone)?.scenario;
             let geometry = *map.geometry();
-            let key = format!(
-                "{:?} {:?} {:?}",
-                s.map.resolution_m, s.map.min_xy_m, s.map.max_xy_m
-            );
-            if !truths.iter().any(|(k, _)| *k == key) {
-                let truth =
-                    crate::run::truth_of(s, simulation.world(), &geometry).map_err(|e| e.to_string())?;
-                truths.push((key.clone(), truth));
-            }
-            let truth = &truths.iter().find(|(k, _)| *k == key).ok_or("no truth")?.1;
+            let region = crate::run::region_of(s, &geometry).map_err(|e| e.to_string())?;
+            let k = match truths
+                .iter()
+                .position(|(g, t)| *g == geometry && t.region == region)
+            {
+                Some(k) => k,
+                None => {
+                    let truth =
+                        crate::run::truth_of(s, simulation.world(), &geometry).map_err(|e| e.to_string())?;
+                    truths.push((geometry, truth));
+                    truths.len() - 1
+                }
+            };
+            let truth = &truths[k].1;
             let evaluation = crate::run::evaluate(s, map, truth).map_err(|e| e.to_string())?;
             Ok(Outcome {
                 evaluation,

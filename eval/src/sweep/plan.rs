@@ -64,14 +64,14 @@ pub struct PlannedRun<'a> {
 }
 
 /// Keys that do not change the simulation: runs differing only in these share one.
-const MAP_ONLY_KEYS: [&[&str]; 7] = [
-    &["map", "model"],
-    &["map", "traversability"],
-    &["map", "resolution_m"],
-    &["planner"],
-    &["expectations"],
-    &["name"],
-    &["description"],
+const MAP_ONLY_KEYS: [&str; 7] = [
+    "map.model",
+    "map.traversability",
+    "map.resolution_m",
+    "planner",
+    "expectations",
+    "name",
+    "description",
 ];
 
 /// The scenario seed of replicate `r` of a sweep seeded with `seed` (63 bits: TOML integers are signed).
@@ -156,7 +156,7 @@ impl Plan {
                     let prefix = format!("scenario={}", written.display());
                     let mut sim_doc = doc.clone();
                     for key in MAP_ONLY_KEYS {
-                        crate::overrides::remove(&mut sim_doc, &key.join("."));
+                        crate::overrides::remove(&mut sim_doc, key);
                     }
                     runs.push(Run {
                         id: digest(&prefix, &doc),
