@@ -3,6 +3,7 @@
 pub mod cell;
 pub mod error;
 pub mod geometry;
+pub mod integrate;
 pub mod io;
 pub mod layers;
 pub mod map;

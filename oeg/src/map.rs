@@ -1,20 +1,14 @@
-//! The Occupancy-Elevation Grid and its scan integration (the paper's Algorithm 1).
+//! The Occupancy-Elevation Grid: its configuration, cells and counters. Scan integration (the paper's
+//! Algorithm 1) is in [`crate::integrate`].
 
-use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
-use crate::model::{
-    Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    ScanHitElevation, clamp_probability, elevation_observation, fuse_elevation, inverse_sensor_model,
-    kalman_fuse, log_odds, ray_bound, update_log_odds,
-};
-use crate::scan::{RayKind, Scan};
-use crate::sensor::MIN_RANGE_SIGMA_M;
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex, offset_in_tile};
-use crate::traversal::GroundTraversal;
+use crate::integrate::ScanEvidence;
+use crate::model::{ModelOptions, log_odds};
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
 
 /// Default memory limit of a map, bytes (4 GiB): far above any sensible map, low enough that a corrupt point
 /// a million kilometres away gives an error instead of exhausting the machine.
@@ -71,110 +65,6 @@ impl std::ops::AddAssign for IntegrationStats {
     }
 }
 
-/// What one scan says about one cell, gathered over all its rays before the cell is updated once.
-#[derive(Debug, Clone, Copy)]
-struct ScanEvidence {
-    /// The largest inverse-sensor-model probability of any ray's sample in the cell; 0: untouched (a sample's
-    /// probability is at least `p_min` > 0).
-    p_max: f32,
-    /// The scan's elevation measurement (eq. 12 with `p > l_occ`) from its hits as
-    /// [`ModelOptions::scan_hit_elevation`] says (the paper: the highest); -inf: none.
-    hit_z_m: f32,
-    /// Variance of that measurement.
-    hit_var_m2: f32,
-    /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it),
-    /// from samples more than 3 sigma before their hit (confidently free).
-    free_z_m: f32,
-    /// The smallest measurement variance among the free samples.
-    free_var_m2: f32,
-}
-
-impl ScanEvidence {
-    const NONE: Self = Self {
-        p_max: 0.0,
-        hit_z_m: f32::NEG_INFINITY,
-        hit_var_m2: f32::INFINITY,
-        free_z_m: f32::INFINITY,
-        free_var_m2: f32::INFINITY,
-    };
-
-    fn is_untouched(&self) -> bool {
-        self.p_max == 0.0
-    }
-
-    // The selects below compile to single min / max instructions: no value here is NaN, so the NaN handling
-    // of f32::min and f32::max is not needed in this, the hottest loop.
-    #[inline(always)]
-    fn raise_p(&mut self, p: f32) {
-        self.p_max = if p > self.p_max { p } else { self.p_max };
-    }
-
-    /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12).
-    #[inline(always)]
-    fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation) {
-        self.raise_p(p);
-        (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
-    }
-
-    /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
-    #[inline(always)]
-    fn add_free(&mut self, p: f32, beam_top_m: f32, var_m2: f32) {
-        self.raise_p(p);
-        self.free_z_m = if beam_top_m < self.free_z_m {
-            beam_top_m
-        } else {
-            self.free_z_m
-        };
-        self.free_var_m2 = if var_m2 < self.free_var_m2 {
-            var_m2
-        } else {
-            self.free_var_m2
-        };
-    }
-}
-
-/// Access to the scratch grid along a walk, re-indexing only when the walk enters another tile.
-struct ScratchCursor<'a> {
-    grid: &'a mut TileGrid<ScanEvidence>,
-    limit_bytes: u64,
-    tile: Option<TileIndex>,
-    slot: usize,
-}
-
-impl<'a> ScratchCursor<'a> {
-    fn new(grid: &'a mut TileGrid<ScanEvidence>, limit_bytes: u64) -> Self {
-        Self {
-            grid,
-            limit_bytes,
-            tile: None,
-            slot: 0,
-        }
-    }
-
-    #[inline(always)]
-    fn at(&mut self, cell: CellIndex) -> Result<&mut ScanEvidence> {
-        let tile = TileIndex::of(cell);
-        if self.tile != Some(tile) {
-            self.enter(tile)?;
-        }
-        Ok(self.grid.in_slot_mut(self.slot, offset_in_tile(cell)))
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn enter(&mut self, tile: TileIndex) -> Result<()> {
-        self.slot = self
-            .grid
-            .slot_or_insert(tile, self.limit_bytes)
-            .map_err(|e| Error::MemoryLimit {
-                requested_bytes: e.requested_bytes,
-                limit_bytes: self.limit_bytes,
-            })?;
-        self.tile = Some(tile);
-        Ok(())
-    }
-}
-
 /// An Occupancy-Elevation Grid.
 ///
 /// Each observed cell holds its occupancy log-odds, elevation mean and elevation variance (see [`Cell`]); the
@@ -190,16 +80,16 @@ impl<'a> ScratchCursor<'a> {
 /// the lowest beam height and smallest variance.
 #[derive(Debug, Clone)]
 pub struct Map {
-    config: MapConfig,
-    geometry: GridGeometry,
-    cells: TileGrid<Cell>,
-    scratch: TileGrid<ScanEvidence>,
+    pub(crate) config: MapConfig,
+    pub(crate) geometry: GridGeometry,
+    pub(crate) cells: TileGrid<Cell>,
+    pub(crate) scratch: TileGrid<ScanEvidence>,
     /// `L` above which a cell is occupied (the occupancy threshold in log-odds).
-    occupied_log_odds: f32,
+    pub(crate) occupied_log_odds: f32,
     /// Eq. 6 of `p_min`, the log-odds of a plain free sample.
-    free_log_odds: f32,
-    totals: IntegrationStats,
-    num_scans: u64,
+    pub(crate) free_log_odds: f32,
+    pub(crate) totals: IntegrationStats,
+    pub(crate) num_scans: u64,
 }
 
 impl Map {
@@ -328,234 +218,4 @@ impl Map {
         self.num_scans = num_scans;
         self.totals = totals;
     }
-
-    /// Integrates one scan (the paper's Algorithm 1 for every ray, then one update per touched cell).
-    ///
-    /// # Errors
-    /// [`Error::InvalidScan`] if the scan holds non-finite numbers (nothing is changed), or
-    /// [`Error::MemoryLimit`] if storing the touched cells would exceed the limit (the map is left without
-    /// this scan's updates).
-    pub fn integrate(&mut self, scan: &Scan) -> Result<IntegrationStats> {
-        scan.validate()?;
-        let mut stats = IntegrationStats {
-            num_rays: scan.rays.len() as u64,
-            ..IntegrationStats::default()
-        };
-        let gathered = self
-            .gather(scan, &mut stats)
-            .and_then(|()| self.apply(&mut stats));
-        self.scratch.recycle_all();
-        gathered?;
-        self.num_scans += 1;
-        self.totals += stats;
-        Ok(stats)
-    }
-
-    /// Casts every ray of the scan into the scratch grid.
-    fn gather(&mut self, scan: &Scan, stats: &mut IntegrationStats) -> Result<()> {
-        let opts = self.config.model;
-        let o = scan.origin_in_world.coords;
-        let clear_range_m = f64::from(opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m));
-        let max_range_m = opts.max_range_m.map_or(f64::INFINITY, f64::from);
-        let scratch_limit = self
-            .config
-            .memory_limit_bytes
-            .saturating_sub(self.cells.memory_bytes());
-        for (index, ray) in scan.rays.iter().enumerate() {
-            let v: Vector3<f64> = ray.offset_in_world.cast();
-            let length = v.norm();
-            if length == 0.0 {
-                stats.num_rays_skipped += 1;
-                continue;
-            }
-            let dir = v / length;
-            // The hit range, or None for a ray that only clears; and the end of the traversal.
-            let (hit_range_m, l_end) = match ray.kind {
-                RayKind::Hit if length <= max_range_m => {
-                    let sigma = ray
-                        .range_sigma_m
-                        .unwrap_or_else(|| scan.sensor.sigma_m(length as f32));
-                    let sigma = f64::from(sigma.max(MIN_RANGE_SIGMA_M));
-                    (
-                        Some((length, sigma)),
-                        length + f64::from(GAUSSIAN_CUTOFF_SIGMAS) * sigma,
-                    )
-                }
-                RayKind::Hit => (None, max_range_m),
-                RayKind::NoReturn => (None, clear_range_m.min(max_range_m)),
-            };
-            let sigma_for_free = hit_range_m.map_or_else(
-                || {
-                    f64::from(
-                        ray.range_sigma_m
-                            .unwrap_or_else(|| scan.sensor.sigma_m(l_end as f32)),
-                    )
-                },
-                |(_, s)| s,
-            );
-            // Height thresholding: keep the part of the ray at or below max_height.
-            let (mut l_lo, mut l_hi): (f64, f64) = (0.0, l_end);
-            if let Some(h) = opts.max_height_m {
-                let h = f64::from(h);
-                if dir.z > 0.0 {
-                    l_hi = l_hi.min((h - o.z) / dir.z);
-                } else if dir.z < 0.0 {
-                    l_lo = l_lo.max((h - o.z) / dir.z);
-                } else if o.z > h {
-                    l_hi = -1.0;
-                }
-            }
-            if l_hi < l_lo {
-                stats.num_rays_skipped += 1;
-                continue;
-            }
-            let s2 = (sigma_for_free * sigma_for_free) as f32;
-            // Samples that end before `free_until` are plain free samples (p = p_min, no exponential); only the
-            // few cells within 3 sigma of the hit evaluate eq. 10.
-            let free_until = hit_range_m.map_or(f64::INFINITY, |(l_p, s)| {
-                l_p - f64::from(GAUSSIAN_CUTOFF_SIGMAS) * s
-            });
-            let walk = GroundTraversal::new(&self.geometry, (o.x, o.y), (dir.x, dir.y), l_lo, l_hi)
-                .ok_or_else(|| {
-                    Error::InvalidScan(format!(
-                        "ray {index} reaches {l_hi} m from the sensor, beyond the grid's index range"
-                    ))
-                })?;
-            stats.num_cell_visits += walk.len() as u64;
-            let mut cursor = ScratchCursor::new(&mut self.scratch, scratch_limit);
-            let top_at_exit = dir.z > 0.0;
-            for crossing in walk {
-                let evidence = cursor.at(crossing.cell)?;
-                // The beam's highest point inside the cell.
-                let l_top = if top_at_exit {
-                    crossing.l_exit
-                } else {
-                    crossing.l_enter
-                };
-                let beam_top = (o.z + dir.z * l_top) as f32;
-                if crossing.l_exit < free_until {
-                    if hit_range_m.is_some() {
-                        if let Some(depth) = opts.free_space_max_depth_m
-                            && self
-                                .cells
-                                .get(crossing.cell)
-                                .and_then(Cell::elevation)
-                                .is_some_and(|e| e.mean_m - beam_top > depth)
-                        {
-                            // Far below the cell's surface: perhaps under an overhang, so it says nothing.
-                            continue;
-                        }
-                        evidence.add_free(opts.p_min, beam_top, s2);
-                    } else {
-                        // A ray that returned nothing clears, but bounds no height: it may have left through
-                        // the ground or past anything (a dropout), so its heights prove nothing.
-                        evidence.raise_p(opts.p_min);
-                    }
-                    continue;
-                }
-                let Some((l_p, sigma)) = hit_range_m else {
-                    unreachable!("free_until is infinite without a hit")
-                };
-                let l = l_p.clamp(crossing.l_enter, crossing.l_exit);
-                let p = inverse_sensor_model(
-                    l as f32,
-                    l_p as f32,
-                    sigma as f32,
-                    opts.significance_k_m,
-                    opts.p_min,
-                );
-                let p = clamp_probability(p, opts.p_min, opts.p_max);
-                match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold) {
-                    Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation),
-                    // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
-                    // the occupancy, but its height bounds nothing (a noisy long reading would otherwise
-                    // "prove" free space under the ground).
-                    None => evidence.raise_p(p),
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Updates every cell the scan touched, once.
-    fn apply(&mut self, stats: &mut IntegrationStats) -> Result<()> {
-        let opts = self.config.model;
-        let limit = self
-            .config
-            .memory_limit_bytes
-            .saturating_sub(self.scratch.memory_bytes());
-        for (tile, evidence) in self.scratch.tiles() {
-            let cells = self
-                .cells
-                .tile_or_insert(tile, limit)
-                .map_err(|e| Error::MemoryLimit {
-                    requested_bytes: e.requested_bytes + self.scratch.memory_bytes(),
-                    limit_bytes: self.config.memory_limit_bytes,
-                })?;
-            for (cell, ev) in cells.iter_mut().zip(evidence.iter()) {
-                if ev.is_untouched() {
-                    continue;
-                }
-                stats.num_cells_updated += 1;
-                update_cell(cell, ev, &opts, self.occupied_log_odds, self.free_log_odds);
-            }
-        }
-        Ok(())
-    }
-}
-
-/// One cell's update from one scan's gathered evidence: eq. 5-7 for the occupancy, then eq. 12 with eq. 8-9 (or
-/// the free-space rule) for the elevation.
-fn update_cell(
-    cell: &mut Cell,
-    ev: &ScanEvidence,
-    opts: &ModelOptions,
-    occupied_log_odds: f32,
-    free_log_odds: f32,
-) {
-    if ev.hit_z_m == f32::NEG_INFINITY
-        && !crate::model::free_sample_informs(opts.free_space_occupancy, cell.elevation(), ev.free_z_m)
-    {
-        return;
-    }
-    let prior_log_odds = if cell.is_observed() { cell.log_odds } else { 0.0 };
-    let was_occupied = cell.is_observed() && prior_log_odds > occupied_log_odds;
-    let delta = if ev.p_max == opts.p_min {
-        free_log_odds
-    } else {
-        log_odds(ev.p_max)
-    };
-    cell.log_odds = update_log_odds(prior_log_odds, delta, opts.log_odds_min, opts.log_odds_max);
-    let prior = cell.elevation();
-    let q = opts.process_noise_var_m2;
-    let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
-        Some(fuse_elevation(
-            opts.elevation_fusion,
-            prior,
-            ev.hit_z_m,
-            ev.hit_var_m2,
-            q,
-        ))
-    } else {
-        match opts.free_space_elevation {
-            FreeSpaceElevation::Zero => {
-                let now_free = cell.log_odds <= occupied_log_odds;
-                if !ev.free_var_m2.is_finite() {
-                    // Only no-return evidence: no elevation measurement, but a cell turned free forgets its
-                    // obstacle.
-                    if was_occupied && now_free { None } else { prior }
-                } else if !now_free && opts.free_space_occupancy == FreeSpaceOccupancy::BelowElevation {
-                    // The obstacle keeps its height until the occupancy says it is gone; pulling it down to 0
-                    // first would put it below the beams that are clearing it.
-                    prior
-                } else {
-                    let prior = if was_occupied && now_free { None } else { prior };
-                    Some(kalman_fuse(prior, 0.0, ev.free_var_m2, q))
-                }
-            }
-            FreeSpaceElevation::Skip => prior,
-            FreeSpaceElevation::RayBound => prior.map(|e: Elevation| ray_bound(e, ev.free_z_m)),
-        }
-    };
-    cell.set_elevation(posterior);
 }
