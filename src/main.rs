@@ -332,6 +332,7 @@ fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
         options: oeg::PlannerOptions {
             inflation_radius_m: settings.planner.inflation_radius_m,
             unknown: settings.planner.unknown,
+            uncertain: UncertainCells::Blocked,
         },
         profile: settings.robot.profile()?,
         rule: settings.map.traversability,

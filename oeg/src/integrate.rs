@@ -10,8 +10,8 @@ use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
     Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    ScanHitElevation, clamp_probability, elevation_observation, fuse_elevation, inverse_sensor_model,
-    kalman_fuse, log_odds, ray_bound, update_log_odds,
+    ScanHitElevation, band_contradicts, clamp_probability, correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model,
+    kalman_fuse, log_odds, ray_bound, spread_variance, update_log_odds,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -29,11 +29,16 @@ pub(crate) struct ScanEvidence {
     hit_z_m: f32,
     /// Variance of that measurement.
     hit_var_m2: f32,
+    /// The lowest hit of the scan in the cell; +inf: none.
+    hit_z_min_m: f32,
     /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it),
     /// from samples more than 3 sigma before their hit (confidently free).
     free_z_m: f32,
     /// The smallest measurement variance among the free samples.
     free_var_m2: f32,
+    /// Whether a free sample passed through the cell's surface band
+    /// ([`FreeSpaceOccupancy::SurfaceBand`]).
+    band_contradicted: bool,
 }
 
 impl ScanEvidence {
@@ -41,8 +46,10 @@ impl ScanEvidence {
         p_max: 0.0,
         hit_z_m: f32::NEG_INFINITY,
         hit_var_m2: f32::INFINITY,
+        hit_z_min_m: f32::INFINITY,
         free_z_m: f32::INFINITY,
         free_var_m2: f32::INFINITY,
+        band_contradicted: false,
     };
 
     fn is_untouched(&self) -> bool {
@@ -61,6 +68,11 @@ impl ScanEvidence {
     fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation) {
         self.raise_p(p);
         (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
+        self.hit_z_min_m = if z_m < self.hit_z_min_m {
+            z_m
+        } else {
+            self.hit_z_min_m
+        };
     }
 
     /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
@@ -151,6 +163,7 @@ impl Map {
         let o = scan.origin_in_world.coords;
         let clear_range_m = f64::from(opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m));
         let max_range_m = opts.max_range_m.map_or(f64::INFINITY, f64::from);
+        let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
         let scratch_limit = self
             .config
             .memory_limit_bytes
@@ -239,10 +252,29 @@ impl Map {
                             // Far below the cell's surface: perhaps under an overhang, so it says nothing.
                             continue;
                         }
+                        if band_rule
+                            && let Some(e) = self.cells.get(crossing.cell).and_then(Cell::elevation)
+                        {
+                            let l_bottom = if top_at_exit {
+                                crossing.l_enter
+                            } else {
+                                crossing.l_exit
+                            };
+                            let beam_bottom = (o.z + dir.z * l_bottom) as f32;
+                            if !band_contradicts(e, beam_bottom, beam_top, opts.surface_band_sigmas) {
+                                // Over or under the surface: it says nothing about it.
+                                continue;
+                            }
+                            evidence.band_contradicted = true;
+                        }
                         evidence.add_free(opts.p_min, beam_top, s2);
                     } else {
                         // A ray that returned nothing clears, but bounds no height: it may have left through
-                        // the ground or past anything (a dropout), so its heights prove nothing.
+                        // the ground or past anything (a dropout), so its heights prove nothing. Under the
+                        // surface-band rule it therefore says nothing about a cell with a surface.
+                        if band_rule && self.cells.get(crossing.cell).and_then(Cell::elevation).is_some() {
+                            continue;
+                        }
                         evidence.raise_p(opts.p_min);
                     }
                     continue;
@@ -323,13 +355,22 @@ fn update_cell(
     let prior = cell.elevation();
     let q = opts.process_noise_var_m2;
     let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
-        Some(fuse_elevation(
-            opts.elevation_fusion,
-            prior,
-            ev.hit_z_m,
-            ev.hit_var_m2,
-            q,
-        ))
+        let s2 = match opts.scan_hit_elevation {
+            ScanHitElevation::HighestWithSpread => spread_variance(ev.hit_var_m2, ev.hit_z_m, ev.hit_z_min_m),
+            ScanHitElevation::Highest | ScanHitElevation::WeightedMean => ev.hit_var_m2,
+        };
+        // A surface the scan's beams passed through, and a hit below it: the surface has gone down (a person
+        // who left), so the hit starts the cell afresh.
+        let moved_down = ev.band_contradicted && prior.is_some_and(|e| ev.hit_z_m < e.mean_m);
+        let prior = if moved_down { None } else { prior };
+        let fused = fuse_elevation(opts.elevation_fusion, prior, ev.hit_z_m, s2, q);
+        Some(match prior {
+            Some(e) if opts.measurement_correlation > 0.0 => Elevation {
+                var_m2: correlated_variance(fused.var_m2, e.var_m2 + q, s2, opts.measurement_correlation),
+                ..fused
+            },
+            _ => fused,
+        })
     } else {
         match opts.free_space_elevation {
             FreeSpaceElevation::Zero => {
@@ -338,7 +379,12 @@ fn update_cell(
                     // Only no-return evidence: no elevation measurement, but a cell turned free forgets its
                     // obstacle.
                     if was_occupied && now_free { None } else { prior }
-                } else if !now_free && opts.free_space_occupancy == FreeSpaceOccupancy::BelowElevation {
+                } else if !now_free
+                    && matches!(
+                        opts.free_space_occupancy,
+                        FreeSpaceOccupancy::BelowElevation | FreeSpaceOccupancy::SurfaceBand
+                    )
+                {
                     // The obstacle keeps its height until the occupancy says it is gone; pulling it down to 0
                     // first would put it below the beams that are clearing it.
                     prior
@@ -346,6 +392,10 @@ fn update_cell(
                     let prior = if was_occupied && now_free { None } else { prior };
                     Some(kalman_fuse(prior, 0.0, ev.free_var_m2, q))
                 }
+            }
+            FreeSpaceElevation::Forget => {
+                let now_free = cell.log_odds <= occupied_log_odds;
+                if was_occupied && now_free { None } else { prior }
             }
             FreeSpaceElevation::Skip => prior,
             FreeSpaceElevation::RayBound => prior.map(|e: Elevation| ray_bound(e, ev.free_z_m)),

@@ -132,7 +132,7 @@ impl Map {
             // Occupied, height unknown: assume the worst.
             return Traversability::Blocked;
         };
-        let step_m = match rule {
+        let (step_m, var_m2) = match rule {
             TraversabilityRule::Terrain => {
                 let mut ground = e.mean_m;
                 for dj in -1..=1 {
@@ -143,11 +143,43 @@ impl Map {
                         }
                     }
                 }
-                e.mean_m - ground
+                (e.mean_m - ground, e.var_m2)
             }
-            TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => e.mean_m,
+            TraversabilityRule::Contact { .. } => {
+                let ground = self.lowest_within(cell, profile.contact_distance_m()).unwrap_or(e);
+                let same = ground == e;
+                (
+                    e.mean_m - ground.mean_m,
+                    if same { e.var_m2 } else { e.var_m2 + ground.var_m2 },
+                )
+            }
+            TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => (e.mean_m, e.var_m2),
         };
-        step_decision(step_m, e.var_m2.sqrt(), rule, profile)
+        step_decision(step_m, var_m2.sqrt(), rule, profile)
+    }
+
+    /// The lowest elevation estimate among the cells whose centres lie within `distance_m` of `cell`'s (at
+    /// least its 8 neighbours: at a coarse resolution the nearest points of adjacent cells are closer than
+    /// their centres), the cell itself included.
+    pub fn lowest_within(&self, cell: CellIndex, distance_m: f32) -> Option<crate::model::Elevation> {
+        let res = self.geometry().resolution_m();
+        let reach = (f64::from(distance_m) / res).max(std::f64::consts::SQRT_2) + 1e-9;
+        let r = reach.floor() as i32;
+        let mut lowest: Option<crate::model::Elevation> = None;
+        for dj in -r..=r {
+            for di in -r..=r {
+                if f64::from(di * di + dj * dj) > reach * reach {
+                    continue;
+                }
+                let n = CellIndex::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
+                if let Some(ne) = self.cell(n).elevation()
+                    && lowest.is_none_or(|l| ne.mean_m < l.mean_m)
+                {
+                    lowest = Some(ne);
+                }
+            }
+        }
+        lowest
     }
 
     /// A dense raster of [`Map::traversability`] over `region`.
@@ -183,6 +215,7 @@ impl Map {
                 Traversability::Free => counts.num_free += 1,
                 Traversability::Traversable => counts.num_traversable += 1,
                 Traversability::Blocked => counts.num_blocked += 1,
+                Traversability::Uncertain => counts.num_uncertain += 1,
             }
         }
         counts
@@ -198,11 +231,13 @@ pub struct TraversabilityCounts {
     pub num_traversable: u64,
     /// Occupied, too high.
     pub num_blocked: u64,
+    /// Occupied, too close to a threshold to tell.
+    pub num_uncertain: u64,
 }
 
 impl TraversabilityCounts {
-    /// Occupied cells: traversable plus blocked.
+    /// Occupied cells: traversable, blocked and uncertain.
     pub fn num_occupied(&self) -> u64 {
-        self.num_traversable + self.num_blocked
+        self.num_traversable + self.num_blocked + self.num_uncertain
     }
 }

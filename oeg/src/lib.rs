@@ -21,9 +21,10 @@ pub use geometry::{CellIndex, CellRegion, GridGeometry};
 pub use layers::{Layer, LayerKind, Raster, TraversabilityCounts};
 pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Map, MapConfig};
 pub use model::{
-    Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions, ScanHitElevation,
+    Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, MapPreset, ModelOptions,
+    ScanHitElevation,
 };
-pub use planner::{Plan, PlannerOptions, UnknownCells};
+pub use planner::{Plan, PlannerOptions, UncertainCells, UnknownCells};
 pub use scan::{Ray, RayKind, Scan};
 pub use sensor::{RangeNoiseModel, SensorModel};
 pub use traversability::{RobotProfile, Traversability, TraversabilityRule};

@@ -54,6 +54,18 @@ pub enum UnknownCells {
     Drivable,
 }
 
+/// What the planner makes of cells the map cannot judge ([`Traversability::Uncertain`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UncertainCells {
+    /// Uncertain cells are obstacles, inflated like blocked ones: the robot never relies on a decision the
+    /// map cannot make.
+    #[default]
+    Blocked,
+    /// Uncertain cells are drivable: the robot takes the risk (to measure what it costs).
+    Drivable,
+}
+
 /// How the planner reads the map. Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -63,6 +75,8 @@ pub struct PlannerOptions {
     pub inflation_radius_m: f64,
     /// Unknown cells: default [`UnknownCells::Avoid`].
     pub unknown: UnknownCells,
+    /// Uncertain cells: default [`UncertainCells::Blocked`].
+    pub uncertain: UncertainCells,
 }
 
 impl Default for PlannerOptions {
@@ -70,6 +84,7 @@ impl Default for PlannerOptions {
         Self {
             inflation_radius_m: DEFAULT_INFLATION_RADIUS_M,
             unknown: UnknownCells::default(),
+            uncertain: UncertainCells::default(),
         }
     }
 }
@@ -115,6 +130,7 @@ pub fn forbidden_mask(
     validate_inputs(region, resolution_m, decisions, options)?;
     let is_obstacle = |t: Traversability| match t {
         Traversability::Blocked => true,
+        Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
         Traversability::Unknown => options.unknown == UnknownCells::Inflate,
         Traversability::Free | Traversability::Traversable => false,
     };
@@ -185,7 +201,8 @@ fn clear_footprint(
             let Some(k) = region.offset(c) else { continue };
             let inside = ((di * di + dj * dj) as f64) <= radius_cells * radius_cells;
             let clearable = decisions[k] == Traversability::Unknown
-                || (clear_blocked && decisions[k] == Traversability::Blocked);
+                || (clear_blocked
+                    && matches!(decisions[k], Traversability::Blocked | Traversability::Uncertain));
             if inside && clearable {
                 decisions[k] = Traversability::Free;
             }
@@ -405,6 +422,7 @@ mod tests {
         PlannerOptions {
             inflation_radius_m: 0.0,
             unknown,
+            uncertain: UncertainCells::Blocked,
         }
     }
 
@@ -446,6 +464,7 @@ mod tests {
         let wide = PlannerOptions {
             inflation_radius_m: 0.1,
             unknown: UnknownCells::Avoid,
+            uncertain: UncertainCells::Blocked,
         };
         assert_eq!(
             plan(&r, 0.1, &d, s, g, &wide).expect("valid"),
@@ -506,6 +525,7 @@ mod tests {
         let opts = |unknown| PlannerOptions {
             inflation_radius_m: 2.0,
             unknown,
+            uncertain: UncertainCells::Blocked,
         };
         let corridor = marked(&r, Traversability::Unknown, |c| c.j == 2);
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
@@ -532,6 +552,7 @@ mod tests {
         let footprint = PlannerOptions {
             inflation_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
+            uncertain: UncertainCells::Blocked,
         };
         assert!(plan(&r, 0.1, &d, s, g, &footprint).expect("valid").is_some());
         let point = no_inflation(UnknownCells::Avoid);
@@ -550,6 +571,7 @@ mod tests {
         let options = PlannerOptions {
             inflation_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
+            uncertain: UncertainCells::Blocked,
         };
         let with_hit_at =
             |hit: CellIndex| -> Vec<Traversability> { marked(&r, Traversability::Blocked, |c| c == hit) };
@@ -604,7 +626,7 @@ mod tests {
                 .iter()
                 .map(|v| if *v == 0 { Traversability::Blocked } else { Traversability::Free })
                 .collect();
-            let options = PlannerOptions { inflation_radius_m: radius_cells * 0.1, unknown: UnknownCells::Avoid };
+            let options = PlannerOptions { inflation_radius_m: radius_cells * 0.1, unknown: UnknownCells::Avoid, uncertain: UncertainCells::Blocked };
             let mask = forbidden_mask(&r, 0.1, &d, &options).expect("valid");
             prop_assert_eq!(mask, brute_mask(&r, &d, radius_cells));
         }

@@ -8,6 +8,11 @@ use crate::error::{Error, Result};
 pub const DEFAULT_MAX_STEP_M: f32 = 0.035;
 /// Default robot height, metres: the paper's Pioneer 3-AT with its sensors, 0.46 m.
 pub const DEFAULT_ROBOT_HEIGHT_M: f32 = 0.46;
+/// Default steepest grade the robot climbs (rise over run): the Pioneer 3-AT's data sheet, 35 %.
+pub const DEFAULT_MAX_GRADE: f32 = 0.35;
+/// Default `kappa` of [`TraversabilityRule::Contact`]: a step or clearance within 2 standard deviations of its
+/// threshold is uncertain (a 95 % two-sided band).
+pub const DEFAULT_UNCERTAIN_KAPPA: f32 = 2.0;
 
 /// The robot as the decisions see it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -18,6 +23,8 @@ pub struct RobotProfile {
     /// Height of the robot, metres: it passes under structures higher than this. Set the map's
     /// [`crate::ModelOptions::max_height_m`] a little above it so such structures never enter the map.
     pub height_m: f32,
+    /// Steepest grade the robot climbs, rise over run (0.35 = 35 %, 19.3 degrees).
+    pub max_grade: f32,
 }
 
 impl Default for RobotProfile {
@@ -25,6 +32,7 @@ impl Default for RobotProfile {
         Self {
             max_step_m: DEFAULT_MAX_STEP_M,
             height_m: DEFAULT_ROBOT_HEIGHT_M,
+            max_grade: DEFAULT_MAX_GRADE,
         }
     }
 }
@@ -43,7 +51,24 @@ impl RobotProfile {
                 ));
             }
         }
+        if !(self.max_grade.is_finite() && self.max_grade > 0.0 && self.max_grade <= 10.0) {
+            return Err(Error::setting(
+                "max_grade",
+                format!(
+                    "must be a grade (rise over run) in (0, 10], got {}",
+                    self.max_grade
+                ),
+            ));
+        }
         Ok(())
+    }
+
+    /// The contact distance, metres: `max_step_m / max_grade` (0.10 m for the Pioneer 3-AT, the scale of its
+    /// wheels' contact). A rise of more than `max_step_m` between two points closer than this is a step: it is
+    /// higher than the robot steps over and steeper on average than it climbs. A slope the robot climbs never
+    /// rises that much over this distance, so slopes are not steps and a slope too steep is one.
+    pub fn contact_distance_m(&self) -> f32 {
+        self.max_step_m / self.max_grade
     }
 }
 
@@ -60,12 +85,27 @@ pub enum Traversability {
     Traversable = 2,
     /// Occupied and too high (or occupied with no elevation estimate).
     Blocked = 3,
+    /// Observed, but its step or clearance lies within `kappa` standard deviations of the threshold: the map
+    /// cannot tell ([`TraversabilityRule::Contact`]).
+    Uncertain = 4,
 }
 
 impl Traversability {
-    /// Whether the robot may enter the cell.
+    /// Whether the robot may enter the cell (uncertain cells are not: the planner decides about them, see
+    /// [`crate::planner::UncertainCells`]).
     pub fn is_drivable(self) -> bool {
         matches!(self, Self::Free | Self::Traversable)
+    }
+
+    /// The snake_case name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Unknown => "unknown",
+            Self::Free => "free",
+            Self::Traversable => "traversable",
+            Self::Blocked => "blocked",
+            Self::Uncertain => "uncertain",
+        }
     }
 }
 
@@ -85,6 +125,55 @@ pub enum TraversabilityRule {
     /// the cell and its eight neighbours exceeds `max_step`. Slopes and raised terrain stay drivable; a curb is
     /// blocked by its height above the road beside it.
     Terrain,
+    /// The robot's physical rule, the testbed's truth applied to the map: the step of a cell is its elevation
+    /// above the lowest estimate within the robot's contact distance ([`RobotProfile::contact_distance_m`]),
+    /// so slopes it climbs stay drivable and edges at any angle to the grid are steps. A cell is uncertain when
+    /// its step lies within `kappa` standard deviations of `max_step_m`, or its height above that ground within
+    /// `kappa` standard deviations of the robot's height (an overhang the robot might just pass under); the
+    /// standard deviation is that of the difference, `sqrt(sigma^2 + sigma_ground^2)`.
+    Contact {
+        /// Width of the uncertain band, in standard deviations; default [`DEFAULT_UNCERTAIN_KAPPA`].
+        #[serde(default = "default_kappa")]
+        kappa: f32,
+    },
+}
+
+fn default_kappa() -> f32 {
+    DEFAULT_UNCERTAIN_KAPPA
+}
+
+impl TraversabilityRule {
+    /// Checks the rule's parameters.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for a negative or non-finite `kappa`.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            Self::Conservative { kappa } | Self::Contact { kappa } if !(kappa.is_finite() && kappa >= 0.0) => {
+                Err(Error::setting(
+                    "traversability",
+                    format!("kappa must be a number of standard deviations >= 0, got {kappa}"),
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// [`TraversabilityRule::Contact`]'s decision for an occupied cell whose elevation lies `rise_m` above the
+/// lowest estimate within the contact distance, with standard deviation `sigma_m` (of the difference).
+pub fn contact_decision(rise_m: f32, sigma_m: f32, kappa: f32, profile: &RobotProfile) -> Traversability {
+    let band = kappa * sigma_m;
+    if (rise_m - profile.height_m).abs() <= band {
+        // Could be a structure the robot just passes under, or one it hits.
+        Traversability::Uncertain
+    } else if rise_m > profile.max_step_m + band {
+        Traversability::Blocked
+    } else if rise_m >= profile.max_step_m - band {
+        Traversability::Uncertain
+    } else {
+        Traversability::Traversable
+    }
 }
 
 /// The step decision for one occupied cell: `step_m` is the measured step (for [`TraversabilityRule::Terrain`],
@@ -97,6 +186,7 @@ pub fn step_decision(
 ) -> Traversability {
     let effective = match rule {
         TraversabilityRule::Conservative { kappa } => step_m + kappa * sigma_m,
+        TraversabilityRule::Contact { kappa } => return contact_decision(step_m, sigma_m, kappa, profile),
         TraversabilityRule::Absolute | TraversabilityRule::Terrain => step_m,
     };
     if effective > profile.max_step_m {
@@ -154,5 +244,30 @@ mod tests {
             .validate()
             .is_err()
         );
+    }
+
+    #[test]
+    fn the_contact_distance_folds_the_slope_limit_into_the_step() {
+        let p = RobotProfile::default();
+        assert!((p.contact_distance_m() - 0.1).abs() < 1e-6);
+        // A 35 % grade rises exactly one step over the contact distance.
+        assert!((p.max_grade * p.contact_distance_m() - p.max_step_m).abs() < 1e-6);
+        assert!(RobotProfile { max_grade: 0.0, ..p }.validate().is_err());
+    }
+
+    #[test]
+    fn the_contact_rule_is_uncertain_within_kappa_sigma_of_either_threshold() {
+        let p = RobotProfile::default();
+        let rule = TraversabilityRule::Contact { kappa: 2.0 };
+        // 1 cm known to 5 mm: drivable; 3.9 cm known to 1 mm: blocked.
+        assert_eq!(step_decision(0.010, 0.005, rule, &p), Traversability::Traversable);
+        assert_eq!(step_decision(0.039, 0.001, rule, &p), Traversability::Blocked);
+        // 3.9 cm known to 1 cm (4 mm over the threshold under 1 cm noise): cannot tell.
+        assert_eq!(step_decision(0.039, 0.01, rule, &p), Traversability::Uncertain);
+        assert_eq!(step_decision(0.031, 0.01, rule, &p), Traversability::Uncertain);
+        // A structure 1 cm above the robot's height, known to 1 cm: it may or may not pass under it.
+        assert_eq!(step_decision(0.47, 0.01, rule, &p), Traversability::Uncertain);
+        assert_eq!(step_decision(0.30, 0.01, rule, &p), Traversability::Blocked);
+        assert!(TraversabilityRule::Contact { kappa: -1.0 }.validate().is_err());
     }
 }

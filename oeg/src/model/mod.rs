@@ -10,8 +10,10 @@
 
 pub mod equations;
 pub mod options;
+pub mod preset;
 pub mod rules;
 
 pub use equations::*;
 pub use options::*;
+pub use preset::MapPreset;
 pub use rules::*;

@@ -22,6 +22,9 @@ pub const DEFAULT_P_MIN: f32 = 0.4;
 pub const DEFAULT_P_MAX: f32 = 0.9;
 /// Default `l_occ` of eq. 12: a sample is an elevation measurement when its `p` exceeds this.
 pub const DEFAULT_ELEVATION_THRESHOLD: f32 = 0.5;
+/// Default depth of a cell's surface band below its top, in standard deviations
+/// ([`FreeSpaceOccupancy::SurfaceBand`]): 3, the Gaussian's 99.7 % bound.
+pub const DEFAULT_SURFACE_BAND_SIGMAS: f32 = 3.0;
 /// The inverse sensor model's Gaussian is evaluated within this many range errors of the hit; beyond it the
 /// exponential is below 1.2 % and the sample takes `p_occ(l)`. Cells beyond `l_p + 3 dl` are not touched.
 pub const GAUSSIAN_CUTOFF_SIGMAS: f32 = 3.0;
@@ -42,6 +45,11 @@ pub enum FreeSpaceElevation {
     /// higher. `mu` is lowered to at most `z` (the beam's highest point inside the cell, the conservative choice);
     /// the variance is kept.
     RayBound,
+    /// A free sample leaves the elevation alone, but a cell that free samples turn free forgets its elevation
+    /// (the obstacle is gone; nothing is assumed about the ground, unlike [`Self::Zero`]'s `h = 0`). The
+    /// recommended preset's rule: with [`FreeSpaceOccupancy::SurfaceBand`] only beams through the surface
+    /// turn a cell free.
+    Forget,
 }
 
 /// How an elevation measurement of a hit is fused with the cell's estimate.
@@ -86,6 +94,11 @@ pub enum ScanHitElevation {
     /// (sequential Kalman updates with the same result). Noise no longer biases it upwards; a cell that spans an
     /// obstacle's edge gets a height between its top and the ground.
     WeightedMean,
+    /// The highest hit, as the paper, with a variance that also holds how far the scan's hits in the cell
+    /// spread below it: `s^2 = s_hit^2 + ((z_max - z_min) / 2)^2`. A cell that spans an edge, or a column
+    /// (a person) hit at many heights, is then as uncertain as its surface is spread
+    /// ([`crate::model::spread_variance`]).
+    HighestWithSpread,
 }
 
 /// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
@@ -103,6 +116,13 @@ pub enum FreeSpaceOccupancy {
     /// their top. With [`FreeSpaceElevation::Zero`], an occupied cell keeps its elevation while free samples
     /// lower its occupancy, and restarts from the ground once it turns free.
     BelowElevation,
+    /// A free sample counts only where the beam passes through the band in which the cell's surface is
+    /// believed to be: below its top `mu` by more than one and less than `surface_band_sigmas` standard
+    /// deviations (see [`crate::model::band_contradicts`]). A beam far below the surface (under a board or a
+    /// table) or above it (over a curb or a low wall) says nothing about it. Cells without an estimate are
+    /// updated as in the paper. In the same scan, a hit below a contradicted surface replaces it (the surface
+    /// has gone down: a person who left).
+    SurfaceBand,
 }
 
 /// The parameters of the map's update rules. `Default` gives the documented defaults above.
@@ -140,6 +160,16 @@ pub struct ModelOptions {
     /// eq. 9's ever-shrinking variance; a positive value lets a stubborn cell follow a moving obstacle. It is per
     /// update, not per second, because a cell stores no time stamp (three f32 per cell).
     pub process_noise_var_m2: f32,
+    /// How many standard deviations below a cell's top its surface band reaches
+    /// ([`FreeSpaceOccupancy::SurfaceBand`]).
+    pub surface_band_sigmas: f32,
+    /// Correlation `rho` between the errors of the measurements of one cell, in [0, 1]. Repeated measurements
+    /// of one surface share their errors (the pose, the beam geometry, the surface's texture), so their
+    /// fusion is less certain than eq. 9 says: repeating a measurement of variance `s^2` brings the variance
+    /// down to `rho s^2`, not to 0 ([`crate::model::correlated_variance`]). 0 (the paper): independent, eq. 9's
+    /// variance shrinks with every measurement. 1: fully correlated, a cell is as certain as its best
+    /// measurement.
+    pub measurement_correlation: f32,
     /// Height thresholding (paper section 6.2, Fig. 12): the parts of a beam higher than this, in world z
     /// metres, are ignored entirely, so overhangs the robot passes under never enter the map. `None` (the
     /// paper's base model) keeps everything; set it to the robot's height plus a margin.
@@ -167,6 +197,8 @@ impl Default for ModelOptions {
             scan_hit_elevation: ScanHitElevation::Highest,
             elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,
+            surface_band_sigmas: DEFAULT_SURFACE_BAND_SIGMAS,
+            measurement_correlation: 0.0,
             max_height_m: None,
             max_range_m: None,
             no_return_clear_range_m: None,
@@ -253,6 +285,16 @@ impl ModelOptions {
             o.process_noise_var_m2.is_finite() && o.process_noise_var_m2 >= 0.0,
             "process_noise_var_m2",
             format!("must be a variance >= 0, got {}", o.process_noise_var_m2),
+        )?;
+        check(
+            o.surface_band_sigmas.is_finite() && o.surface_band_sigmas > 1.0,
+            "surface_band_sigmas",
+            format!("must be a number of standard deviations > 1, got {}", o.surface_band_sigmas),
+        )?;
+        check(
+            (0.0..=1.0).contains(&o.measurement_correlation),
+            "measurement_correlation",
+            format!("must be a correlation in [0, 1], got {}", o.measurement_correlation),
         )?;
         if let Some(h) = o.max_height_m {
             check(

@@ -47,7 +47,7 @@ impl ScanHitElevation {
     #[inline(always)]
     pub fn combine(self, (z, var): (f32, f32), z_m: f32, var_m2: f32) -> (f32, f32) {
         match self {
-            Self::Highest => {
+            Self::Highest | Self::HighestWithSpread => {
                 if z_m > z {
                     (z_m, var_m2)
                 } else {
@@ -74,7 +74,40 @@ pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, b
     match (rule, prior) {
         (FreeSpaceOccupancy::Always, _) | (FreeSpaceOccupancy::BelowElevation, None) => true,
         (FreeSpaceOccupancy::BelowElevation, Some(e)) => beam_top_m <= e.mean_m,
+        // Decided beam by beam while gathering (`band_contradicts`): only contradicting samples get here.
+        (FreeSpaceOccupancy::SurfaceBand, _) => true,
     }
+}
+
+/// [`FreeSpaceOccupancy::SurfaceBand`]: whether a beam whose path through a cell spans the heights
+/// `[z_lo_m, z_hi_m]` passes through the band where the cell's surface is believed to be, and so contradicts
+/// it. The band reaches from one to `band_sigmas` standard deviations below the top `mu`:
+/// `[mu - band_sigmas sigma, mu - sigma]`. A beam above it passed over the surface (or within its noise); a
+/// beam below it passed under it (under a board, a table, a branch).
+///
+/// The anchors' visibility clean-up (elevation_mapping, elevation_mapping_cupy) removes a cell whenever a
+/// ray passes below its height, which also removes every overhang a ray passes under; this band keeps them.
+pub fn band_contradicts(prior: Elevation, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
+    let sigma = prior.var_m2.sqrt();
+    let (bottom, top) = (prior.mean_m - band_sigmas * sigma, prior.mean_m - sigma);
+    z_lo_m < top && z_hi_m > bottom
+}
+
+/// [`ScanHitElevation::HighestWithSpread`]: the variance of a scan's highest hit `z_max_m` (its own variance
+/// `var_m2`) when the scan's hits in the cell reach down to `z_min_m`: `var + ((z_max - z_min) / 2)^2`. The
+/// cell's surface may lie anywhere in that spread (an edge, a slope within the cell, a person's front).
+pub fn spread_variance(var_m2: f32, z_max_m: f32, z_min_m: f32) -> f32 {
+    let half = 0.5 * (z_max_m - z_min_m).max(0.0);
+    var_m2 + half * half
+}
+
+/// [`crate::ModelOptions::measurement_correlation`]: the variance of a fused estimate when the measurements'
+/// errors are correlated with coefficient `rho`. The mean of `n` measurements of variance `s^2` with pairwise
+/// correlation `rho` has variance `s^2 (rho + (1 - rho) / n)`, which tends to `rho s^2`, not 0. So eq. 9's
+/// `fused_var_m2` is kept at or above `rho s^2` of this measurement, but never raised above the prior's
+/// variance (a worse measurement does not spoil a good estimate).
+pub fn correlated_variance(fused_var_m2: f32, prior_var_m2: f32, measurement_var_m2: f32, rho: f32) -> f32 {
+    fused_var_m2.max(prior_var_m2.min(rho * measurement_var_m2))
 }
 
 #[cfg(test)]
@@ -171,5 +204,57 @@ mod tests {
             0.03
         ));
         assert!(free_sample_informs(FreeSpaceOccupancy::BelowElevation, None, 0.4));
+    }
+
+    #[test]
+    fn a_beam_through_the_surface_band_contradicts_it_and_one_under_or_over_does_not() {
+        // A board whose top is at 0.46 m, known to 1 cm: its band is [0.43, 0.45].
+        let board = Elevation {
+            mean_m: 0.46,
+            var_m2: 1e-4,
+        };
+        assert!(band_contradicts(board, 0.44, 0.445, 3.0), "through the board");
+        assert!(!band_contradicts(board, 0.30, 0.42, 3.0), "under the board");
+        assert!(!band_contradicts(board, 0.455, 0.60, 3.0), "over it, or within its noise");
+        assert!(band_contradicts(board, 0.10, 0.70, 3.0), "a steep beam crossing the band");
+        // A person's front hit from 0.05 to 0.5 m: the spread makes the band deep, so the beams that hit the
+        // body at mid height contradict it once the person has gone.
+        let person = Elevation {
+            mean_m: 0.5,
+            var_m2: spread_variance(1e-4, 0.5, 0.05),
+        };
+        assert!(band_contradicts(person, 0.20, 0.21, 3.0));
+        // A curb's top at 4 cm known to 1 cm: a beam passing 1 cm over it says nothing.
+        let curb = Elevation {
+            mean_m: 0.04,
+            var_m2: 1e-4,
+        };
+        assert!(!band_contradicts(curb, 0.05, 0.06, 3.0));
+    }
+
+    #[test]
+    fn the_spread_of_a_scans_hits_widens_the_measurement() {
+        assert_eq!(spread_variance(1e-4, 0.3, 0.3), 1e-4);
+        // Hits from 0 to 4 cm: half the range, 2 cm, in quadrature.
+        assert!((spread_variance(1e-4, 0.04, 0.0) - (1e-4 + 4e-4)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn correlated_measurements_stop_the_variance_from_shrinking() {
+        // Independent (the paper): eq. 9 as is.
+        assert_eq!(correlated_variance(0.5e-4, 1e-4, 1e-4, 0.0), 0.5e-4);
+        // Fully correlated: two equal measurements are as certain as one.
+        assert_eq!(correlated_variance(0.5e-4, 1e-4, 1e-4, 1.0), 1e-4);
+        // A better measurement still improves the estimate; a worse one does not spoil it.
+        assert_eq!(correlated_variance(0.2e-4, 1e-4, 0.25e-4, 1.0), 0.25e-4);
+        assert_eq!(correlated_variance(0.9e-4, 1e-4, 9e-4, 1.0), 1e-4);
+        // The n-measurement limit: s^2 (rho + (1 - rho) / n) -> rho s^2.
+        let (s2, rho) = (1e-4_f32, 0.25_f32);
+        let mut var = s2;
+        for _ in 0..1000 {
+            let fused = var * s2 / (var + s2);
+            var = correlated_variance(fused, var, s2, rho);
+        }
+        assert!((var - rho * s2).abs() < 1e-9, "{var}");
     }
 }

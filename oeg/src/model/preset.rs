@@ -1,0 +1,101 @@
+//! Named sets of options: `paper`, the model exactly as published, and `robust`, the recommended model built
+//! from the rules in [`super::rules`]. `oeg/README.md` explains each of `robust`'s rules and its source.
+
+use serde::{Deserialize, Serialize};
+
+use super::options::{ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions, ScanHitElevation};
+use crate::traversability::{DEFAULT_UNCERTAIN_KAPPA, RobotProfile, TraversabilityRule};
+
+/// How far above the robot's height `robust` still maps a structure, metres: its height thresholding
+/// (the paper's section 6.2) cuts beams at `height_m + 0.05`. A structure's underside up to 5 cm above the
+/// robot is kept and judged (blocked, or uncertain within `kappa` sigma of the robot's height); higher ones
+/// never enter the map, so the robot is let under them.
+pub const ROBUST_HEIGHT_MARGIN_M: f32 = 0.05;
+
+/// Mahalanobis distance beyond which `robust` takes a hit as another surface (elevation_mapping's default).
+pub const ROBUST_MAHALANOBIS_THRESHOLD: f32 = 3.0;
+
+/// A named model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MapPreset {
+    /// The paper as published (every option at its documented default, the absolute step rule): the model for
+    /// reproducing the paper.
+    #[default]
+    Paper,
+    /// The recommended model: the paper's equations with the surface-band free-space rule, the highest surface
+    /// with its spread, correlated measurements, height thresholding at the robot's height and the contact
+    /// step rule with an uncertain band.
+    Robust,
+}
+
+impl MapPreset {
+    /// Every preset, in a fixed order.
+    pub const ALL: [MapPreset; 2] = [Self::Paper, Self::Robust];
+
+    /// The preset's name in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Robust => "robust",
+        }
+    }
+
+    /// The model options for a robot described by `profile` (`robust` cuts beams above its height).
+    pub fn model(self, profile: &RobotProfile) -> ModelOptions {
+        match self {
+            Self::Paper => ModelOptions::default(),
+            Self::Robust => ModelOptions {
+                free_space_occupancy: FreeSpaceOccupancy::SurfaceBand,
+                free_space_elevation: FreeSpaceElevation::Forget,
+                scan_hit_elevation: ScanHitElevation::HighestWithSpread,
+                elevation_fusion: ElevationFusion::HighestSurface {
+                    mahalanobis_threshold: ROBUST_MAHALANOBIS_THRESHOLD,
+                    lower_threshold: None,
+                    multi_height_noise_m2: 0.0,
+                },
+                measurement_correlation: 1.0,
+                max_height_m: Some(profile.height_m + ROBUST_HEIGHT_MARGIN_M),
+                ..ModelOptions::default()
+            },
+        }
+    }
+
+    /// The preset's step rule.
+    pub fn traversability(self) -> TraversabilityRule {
+        match self {
+            Self::Paper => TraversabilityRule::Absolute,
+            Self::Robust => TraversabilityRule::Contact {
+                kappa: DEFAULT_UNCERTAIN_KAPPA,
+            },
+        }
+    }
+}
+
+impl std::str::FromStr for MapPreset {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| format!("unknown map preset `{s}`; presets: paper, robust"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_paper_preset_is_the_default_model_and_robust_validates() {
+        let p = RobotProfile::default();
+        assert_eq!(MapPreset::Paper.model(&p), ModelOptions::default());
+        assert_eq!(MapPreset::Paper.traversability(), TraversabilityRule::Absolute);
+        let robust = MapPreset::Robust.model(&p);
+        robust.validate().expect("valid");
+        assert_eq!(robust.max_height_m, Some(0.46 + ROBUST_HEIGHT_MARGIN_M));
+        assert_eq!("robust".parse::<MapPreset>(), Ok(MapPreset::Robust));
+        assert!("fast".parse::<MapPreset>().is_err());
+    }
+}
