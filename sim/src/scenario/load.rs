@@ -67,6 +67,8 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source: &source,
         document: DeTable::parse(text).ok().map(|d| d.into_inner()),
     };
+    let mut scenario = scenario;
+    apply_preset(&mut scenario, text).map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
     checker.validate(&scenario)?;
     let urdf_path = source.resolve(&scenario.robot.urdf);
     let robot = RobotModel::load(&urdf_path, &scenario.robot.base_link)
@@ -94,6 +96,38 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source,
         robot,
     })
+}
+
+/// Starts the map's model and step rule from `[map] preset`, then applies the keys the file gives in
+/// `[map.model]` and `[map] traversability` over them.
+///
+/// # Errors
+/// A message when the merged options do not read (cannot happen for options that read on their own).
+fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), String> {
+    let preset = scenario.map.preset;
+    if preset == oeg::MapPreset::Paper {
+        return Ok(());
+    }
+    let doc: toml::Table = toml::from_str(text).map_err(|e| e.message().to_string())?;
+    let map = doc.get("map").and_then(toml::Value::as_table);
+    let given = map.and_then(|m| m.get("model")).and_then(toml::Value::as_table);
+    let profile = scenario.robot.profile();
+    let mut model = toml::Table::try_from(preset.model(&profile)).map_err(|e| e.to_string())?;
+    if let Some(given) = given {
+        let parsed = toml::Table::try_from(scenario.map.model).map_err(|e| e.to_string())?;
+        for key in given.keys() {
+            if let Some(v) = parsed.get(key) {
+                model.insert(key.clone(), v.clone());
+            }
+        }
+    }
+    scenario.map.model = model
+        .try_into()
+        .map_err(|e: toml::de::Error| format!("map.model after preset `{}`: {}", preset.name(), e.message()))?;
+    if map.is_none_or(|m| !m.contains_key("traversability")) {
+        scenario.map.traversability = preset.traversability();
+    }
+    Ok(())
 }
 
 /// The byte offset of the value at `path` in a parsed TOML document, or of its nearest existing parent.
@@ -244,7 +278,9 @@ impl Checker<'_> {
         if let Err(e) = m.model.validate() {
             return Err(self.error(&[K("map"), K("model")], e.to_string()));
         }
-        if let oeg::TraversabilityRule::Conservative { kappa } = m.traversability {
+        if let oeg::TraversabilityRule::Conservative { kappa } | oeg::TraversabilityRule::Contact { kappa } =
+            m.traversability
+        {
             self.non_negative(
                 f64::from(kappa),
                 &[K("map"), K("traversability"), K("kappa")],
@@ -270,6 +306,9 @@ impl Checker<'_> {
             "step height in metres",
         )?;
         self.positive(r.height_m, &[K("robot"), K("height_m")], "robot height in metres")?;
+        if let Err(e) = r.profile().validate() {
+            return Err(self.error(&[K("robot"), K("max_grade")], e.to_string()));
+        }
         self.positive(
             r.drive.speed_m_s,
             &[K("robot"), K("drive"), K("speed_m_s")],

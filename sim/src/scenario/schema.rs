@@ -66,7 +66,12 @@ pub struct MapSettings {
     pub max_xy_m: [f64; 2],
     /// Cell size, metres.
     pub resolution_m: f64,
-    /// The OEG model options (`oeg::ModelOptions`; every field optional, defaults documented there).
+    /// The named model the options start from (`paper`, the default, or `robust`: `oeg::MapPreset`). The
+    /// keys given in `model` and `traversability` replace the preset's.
+    #[serde(default)]
+    pub preset: oeg::MapPreset,
+    /// The OEG model options (`oeg::ModelOptions`; every field optional, defaults documented there). After
+    /// loading: the preset's options with the file's keys applied over them.
     #[serde(default)]
     pub model: ModelOptions,
     /// How the map's step decision is taken.
@@ -88,6 +93,8 @@ pub struct PlannerSettings {
     pub inflation_radius_m: Option<f64>,
     /// Cells the map never observed; default `avoid`.
     pub unknown: oeg::UnknownCells,
+    /// Cells the map cannot judge (`uncertain`); default `blocked`.
+    pub uncertain: oeg::UncertainCells,
 }
 
 impl PlannerSettings {
@@ -98,6 +105,7 @@ impl PlannerSettings {
                 .inflation_radius_m
                 .unwrap_or(oeg::planner::DEFAULT_INFLATION_RADIUS_M),
             unknown: self.unknown,
+            uncertain: self.uncertain,
         }
     }
 
@@ -125,6 +133,10 @@ pub struct RobotSettings {
     /// Robot height, metres (decisions: it passes under higher structures).
     #[serde(default = "default_height")]
     pub height_m: f64,
+    /// Steepest grade the robot climbs, rise over run (decisions: with `max_step_m` it sets the contact
+    /// distance of a step, `max_step_m / max_grade`).
+    #[serde(default = "default_max_grade")]
+    pub max_grade: f64,
     /// The path it drives.
     pub drive: Drive,
     /// Odometry drift of the estimated pose.
@@ -147,6 +159,21 @@ fn default_max_step() -> f64 {
 
 fn default_height() -> f64 {
     DEFAULT_ROBOT_HEIGHT_M
+}
+
+fn default_max_grade() -> f64 {
+    f64::from(oeg::traversability::DEFAULT_MAX_GRADE)
+}
+
+impl RobotSettings {
+    /// The robot as the decisions see it (the truth's and the map's): one type, `oeg::RobotProfile`.
+    pub fn profile(&self) -> oeg::RobotProfile {
+        oeg::RobotProfile {
+            max_step_m: self.max_step_m as f32,
+            height_m: self.height_m as f32,
+            max_grade: self.max_grade as f32,
+        }
+    }
 }
 
 /// The drive: straight segments between waypoints at a constant speed; the robot turns on the spot at each
