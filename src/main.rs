@@ -283,6 +283,10 @@ struct RunArgs {
     /// --set sensors.0.noise.dropout_probability=0.05 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
+    /// Also map the same sensor log with this model preset (`paper` or `robust`) and write its report into
+    /// OUT/PRESET/ with comparison.csv and decisions_comparison.png side by side.
+    #[arg(long, value_name = "PRESET")]
+    compare: Option<oeg::MapPreset>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -332,9 +336,9 @@ fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
         options: oeg::PlannerOptions {
             inflation_radius_m: settings.planner.inflation_radius_m,
             unknown: settings.planner.unknown,
-            uncertain: UncertainCells::Blocked,
+            uncertain: settings.planner.uncertain,
         },
-        profile: settings.robot.profile()?,
+        profile: settings.robot,
         rule: settings.map.traversability,
     };
     let (summary, files) = eval::plan::run_job(&job)?;
@@ -408,7 +412,7 @@ impl MapArgs {
                 sensor: settings.input.pcd_sensor.model(),
             },
             log_pose: settings.input.log_pose,
-            profile: settings.robot.profile()?,
+            profile: settings.robot,
             rule: settings.map.traversability,
         })
     }
@@ -475,6 +479,7 @@ fn run_scenario(args: &RunArgs) -> anyhow::Result<()> {
         out_dir: args.out.clone(),
         seed: args.seed,
         overrides: args.overrides.clone(),
+        compare: args.compare,
     };
     let progress = Progress::new(0, "scans");
     let report = eval::run::run(&options, &progress)?;
@@ -492,6 +497,20 @@ fn run_scenario(args: &RunArgs) -> anyhow::Result<()> {
         m.unsafe_clearance_cells,
         m.overcautious_clearance_cells
     );
+    if let Some((preset, c)) = &report.compared {
+        say!(
+            "{} model on the same sensor log: step cells {} unsafe, {} over-cautious; clearance cells {} unsafe, \
+             {} over-cautious; {} uncertain cells; plan {} ({} unsafe path cells)",
+            preset.name(),
+            c.unsafe_step_cells,
+            c.overcautious_step_cells,
+            c.unsafe_clearance_cells,
+            c.overcautious_clearance_cells,
+            c.uncertain_cells,
+            if c.plan_found { "found" } else { "not found" },
+            c.plan_unsafe_cells
+        );
+    }
     say!(
         "simulation {:.2} s ({:.2} M rays/s), map {:.2} s ({:.2} M rays/s), truth {:.2} s; report in {}",
         report.timing.simulation_wall_time_s,
@@ -635,11 +654,13 @@ fn main() -> ExitCode {
         }) => run_record(&scenario, &out, format, seed),
         Some(Command::Preview { scenario, out }) => run_preview(&scenario, &out),
         Some(Command::Sweep(command)) => run_sweep(command),
+        // The default run shows the paper's model and the recommended one side by side.
         None => run_scenario(&RunArgs {
             scenario: PathBuf::from(DEFAULT_SCENARIO),
             out: None,
             seed: None,
             overrides: Vec::new(),
+            compare: Some(oeg::MapPreset::Robust),
         }),
     };
     match result {

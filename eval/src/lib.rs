@@ -6,6 +6,7 @@
 
 pub mod demo;
 pub mod error;
+pub mod evaluation;
 pub mod inspect;
 pub mod mapping;
 pub mod metrics;
@@ -24,6 +25,7 @@ pub mod suite;
 pub mod sweep;
 #[cfg(test)]
 mod test_support;
+pub mod verdict;
 pub mod wrong_cells;
 
 pub use error::{EvalError, Result};

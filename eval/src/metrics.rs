@@ -3,9 +3,11 @@
 
 use std::collections::BTreeMap;
 
-use oeg::{Map, RobotProfile, Traversability, TraversabilityRule};
+use oeg::Map;
 use serde::Serialize;
 use sim::truth::TruthRaster;
+
+use crate::verdict::Verdicts;
 
 /// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
 /// scenario and seed.
@@ -33,26 +35,34 @@ pub struct Metrics {
     pub elevation_p95_abs_err_m: f64,
     /// Fraction of cells whose true elevation lies within 2 sigma of `mu` (0.95 for a calibrated map).
     pub elevation_within_2sigma: f64,
-    /// Mean of `(P(occupied) - truly blocked)^2` over observed cells.
+    /// Mean of `(P(occupied) - truly blocked)^2` over the scored cells.
     pub occupancy_brier: f64,
-    /// Observed cells truly step-blocked and mapped blocked.
-    pub step_true_blocked_mapped_blocked: u64,
-    /// Truly blocked, mapped drivable (free or traversable): unsafe.
-    pub step_true_blocked_mapped_traversable: u64,
-    /// Truly drivable, mapped blocked: over-cautious.
-    pub step_true_traversable_mapped_blocked: u64,
-    /// Truly drivable, mapped drivable.
-    pub step_true_traversable_mapped_traversable: u64,
-    /// Same as `step_true_blocked_mapped_traversable`: the number that must be zero.
+    /// Observed cells on the terrain: the decision metrics' cells (`eval::verdict`). The six counts below
+    /// partition them.
+    pub num_scored_cells: u64,
+    /// Truly drivable, mapped drivable (free or traversable).
+    pub right_drivable_cells: u64,
+    /// Truly blocked (a step, or a structure lower than the robot), mapped blocked.
+    pub right_blocked_cells: u64,
+    /// Truly a step, mapped drivable: where the robot would drive into something. Must be zero.
     pub unsafe_step_cells: u64,
-    /// Same as `step_true_traversable_mapped_blocked`.
-    pub overcautious_step_cells: u64,
-    /// Observed cells under a structure (a gap higher than a step within 3 m above the ground).
-    pub num_clearance_cells: u64,
-    /// Under a structure lower than the robot, mapped drivable.
+    /// Under a structure lower than the robot, mapped drivable. Must be zero.
     pub unsafe_clearance_cells: u64,
+    /// Truly drivable, mapped blocked: where the robot would refuse a drivable cell.
+    pub overcautious_step_cells: u64,
     /// Under a structure the robot passes under, mapped blocked.
     pub overcautious_clearance_cells: u64,
+    /// Mapped uncertain: the map says it cannot tell (a step or clearance within `kappa` sigma of its
+    /// threshold). The planner treats them as blocked by default.
+    pub uncertain_cells: u64,
+    /// `unsafe_step_cells + unsafe_clearance_cells`.
+    pub unsafe_cells: u64,
+    /// `overcautious_step_cells + overcautious_clearance_cells`.
+    pub overcautious_cells: u64,
+    /// Of the uncertain cells, those truly blocked.
+    pub uncertain_truly_blocked_cells: u64,
+    /// Scored cells under a structure (a gap higher than a step within 3 m above the ground).
+    pub num_clearance_cells: u64,
     /// Bytes the map holds.
     pub map_bytes: u64,
     /// Scans integrated.
@@ -80,48 +90,12 @@ pub struct Metrics {
     pub num_expectations_failed: u64,
 }
 
-/// The truth's step reference that matches the map's rule: the terrain rule measures steps against the
-/// neighbouring surface, the others against the ground under the cell.
-pub fn step_reference(rule: TraversabilityRule) -> sim::truth::StepReference {
-    match rule {
-        TraversabilityRule::Terrain => sim::truth::StepReference::Neighbours,
-        TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => {
-            sim::truth::StepReference::Ground
-        }
-    }
-}
-
-/// Whether the robot truly cannot enter cell `k` of the truth: its step blocks it, or a structure over it is
-/// lower than the robot. (The metrics keep the step and clearance counts apart.)
-pub fn truly_blocked(truth: &TruthRaster, k: usize, reference: sim::truth::StepReference) -> bool {
-    truth.step_blocked(k, reference) || truth.cells[k].clearance_passable(&truth.profile) == Some(false)
-}
-
-/// Map decisions are `drivable` (free or traversable) or blocked; unknown cells are not scored.
-fn mapped_blocked(t: Traversability) -> Option<bool> {
-    match t {
-        Traversability::Unknown => None,
-        Traversability::Blocked => Some(true),
-        Traversability::Free | Traversability::Traversable => Some(false),
-    }
-}
-
-/// Computes every metric except the expectation fields (set by [`check_expectations`]).
-pub fn compute(
-    scenario: &str,
-    seed: u64,
-    map: &Map,
-    truth: &TruthRaster,
-    profile: &RobotProfile,
-    rule: TraversabilityRule,
-) -> Metrics {
-    let truth_profile = truth.profile;
-    let reference = step_reference(rule);
-    let (mut observed, mut brier_sum) = (0u64, 0.0f64);
+/// Computes every metric except the expectation and plan fields: the elevation against the truth, and the
+/// decisions from the verdict raster.
+pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Metrics {
+    let (mut observed, mut brier_sum, mut num_brier) = (0u64, 0.0f64, 0u64);
     let mut errors: Vec<f64> = Vec::new();
     let mut within = 0u64;
-    let mut step = [[0u64; 2]; 2]; // [truly blocked][mapped blocked]
-    let (mut clearance, mut unsafe_clearance, mut overcautious_clearance) = (0u64, 0u64, 0u64);
     for (k, cell) in truth.region.cells().enumerate() {
         let t = &truth.cells[k];
         let c = map.cell(cell);
@@ -133,9 +107,9 @@ pub fn compute(
             continue;
         }
         let p = f64::from(oeg::model::probability_from_log_odds(c.log_odds));
-        let truly_step_blocked = truth.step_blocked(k, reference);
-        let o = if truly_step_blocked { 1.0 } else { 0.0 };
+        let o = if verdicts.truth[k].is_blocked() { 1.0 } else { 0.0 };
         brier_sum += (p - o) * (p - o);
+        num_brier += 1;
         if let Some(e) = c.elevation() {
             let err = f64::from(e.mean_m) - f64::from(t.elevation_m);
             errors.push(err);
@@ -143,20 +117,8 @@ pub fn compute(
                 within += 1;
             }
         }
-        let Some(blocked) = mapped_blocked(map.traversability(cell, profile, rule)) else {
-            continue;
-        };
-        step[usize::from(truly_step_blocked)][usize::from(blocked)] += 1;
-        if let Some(passable) = t.clearance_passable(&truth_profile) {
-            clearance += 1;
-            if !passable && !blocked {
-                unsafe_clearance += 1;
-            }
-            if passable && blocked {
-                overcautious_clearance += 1;
-            }
-        }
     }
+    let counts = verdicts.counts();
     let n = errors.len() as f64;
     let (rmse, mae, bias, p95, within_2sigma) = if errors.is_empty() {
         (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
@@ -188,20 +150,23 @@ pub fn compute(
         elevation_bias_m: bias,
         elevation_p95_abs_err_m: p95,
         elevation_within_2sigma: within_2sigma,
-        occupancy_brier: if observed > 0 {
-            brier_sum / observed as f64
+        occupancy_brier: if num_brier > 0 {
+            brier_sum / num_brier as f64
         } else {
             f64::NAN
         },
-        step_true_blocked_mapped_blocked: step[1][1],
-        step_true_blocked_mapped_traversable: step[1][0],
-        step_true_traversable_mapped_blocked: step[0][1],
-        step_true_traversable_mapped_traversable: step[0][0],
-        unsafe_step_cells: step[1][0],
-        overcautious_step_cells: step[0][1],
-        num_clearance_cells: clearance,
-        unsafe_clearance_cells: unsafe_clearance,
-        overcautious_clearance_cells: overcautious_clearance,
+        num_scored_cells: counts.num_scored_cells,
+        right_drivable_cells: counts.right_drivable_cells,
+        right_blocked_cells: counts.right_blocked_cells,
+        unsafe_step_cells: counts.unsafe_step_cells,
+        unsafe_clearance_cells: counts.unsafe_clearance_cells,
+        overcautious_step_cells: counts.overcautious_step_cells,
+        overcautious_clearance_cells: counts.overcautious_clearance_cells,
+        uncertain_cells: counts.uncertain_cells,
+        unsafe_cells: counts.unsafe_cells(),
+        overcautious_cells: counts.overcautious_cells(),
+        uncertain_truly_blocked_cells: counts.uncertain_truly_blocked_cells,
+        num_clearance_cells: counts.num_clearance_cells,
         map_bytes: map.memory_bytes(),
         num_scans: map.num_scans(),
         num_rays: map.totals().num_rays,
@@ -214,17 +179,6 @@ pub fn compute(
         expectations_passed: true,
         num_expectations_failed: 0,
     }
-}
-
-/// Records the planner check in the metrics (the `plan_*` keys).
-pub fn record_plan(metrics: &mut Metrics, check: &crate::plan::PlanCheck) {
-    let length = |p: &Option<oeg::Plan>| p.as_ref().map_or(f64::NAN, |p| p.length_m);
-    metrics.plan_found = check.map_plan.is_some();
-    metrics.plan_length_m = length(&check.map_plan);
-    metrics.plan_unsafe_cells = check.unsafe_cells.len() as u64;
-    metrics.truth_plan_found = check.truth_plan.is_some();
-    metrics.truth_plan_length_m = length(&check.truth_plan);
-    metrics.plan_length_ratio = metrics.plan_length_m / metrics.truth_plan_length_m;
 }
 
 /// The value at fraction `q` of sorted values (nearest rank).
@@ -294,15 +248,18 @@ fn compute_empty() -> Metrics {
         elevation_p95_abs_err_m: 0.0,
         elevation_within_2sigma: 0.0,
         occupancy_brier: 0.0,
-        step_true_blocked_mapped_blocked: 0,
-        step_true_blocked_mapped_traversable: 0,
-        step_true_traversable_mapped_blocked: 0,
-        step_true_traversable_mapped_traversable: 0,
+        num_scored_cells: 0,
+        right_drivable_cells: 0,
+        right_blocked_cells: 0,
         unsafe_step_cells: 0,
-        overcautious_step_cells: 0,
-        num_clearance_cells: 0,
         unsafe_clearance_cells: 0,
+        overcautious_step_cells: 0,
         overcautious_clearance_cells: 0,
+        uncertain_cells: 0,
+        unsafe_cells: 0,
+        overcautious_cells: 0,
+        uncertain_truly_blocked_cells: 0,
+        num_clearance_cells: 0,
         map_bytes: 0,
         num_scans: 0,
         num_rays: 0,
@@ -361,7 +318,7 @@ mod tests {
     use super::*;
     use crate::test_support::{truth_cell, truth_raster};
     use nalgebra::Point3;
-    use oeg::{CellIndex, CellRegion, MapConfig, Scan, SensorModel};
+    use oeg::{CellIndex, CellRegion, MapConfig, Scan, SensorModel, TraversabilityRule};
 
     /// Four 1 m cells: ground seen at 0 (truly flat), a 0.2 m block seen at 0.2, a 0.1 m block seen at 0.01
     /// (unsafe), and one cell never observed; the third lies under a 0.3 m structure.
@@ -390,14 +347,8 @@ mod tests {
     #[test]
     fn metrics_match_hand_computed_values() {
         let (map, truth) = tiny();
-        let m = compute(
-            "tiny",
-            3,
-            &map,
-            &truth,
-            &RobotProfile::default(),
-            TraversabilityRule::Absolute,
-        );
+        let verdicts = Verdicts::new(&map, &truth, TraversabilityRule::Absolute).expect("verdicts");
+        let m = compute("tiny", 3, &map, &truth, &verdicts);
         assert_eq!((m.num_cells, m.num_observed_cells), (4, 3));
         assert!((m.coverage - 0.75).abs() < 1e-12);
         // Errors 0, 0, -0.09 (to f32 precision).
@@ -414,11 +365,12 @@ mod tests {
             (m.elevation_within_2sigma - 2.0 / 3.0).abs() < 1e-12,
             "the 9 cm miss is far outside 2 sigma"
         );
-        assert_eq!(m.step_true_traversable_mapped_traversable, 1);
-        assert_eq!(m.step_true_blocked_mapped_blocked, 1);
-        assert_eq!(m.step_true_blocked_mapped_traversable, 1);
-        assert_eq!(m.step_true_traversable_mapped_blocked, 0);
-        assert_eq!((m.unsafe_step_cells, m.overcautious_step_cells), (1, 0));
+        // The ground right and drivable, the 0.2 m block right and blocked, the 0.1 m block under a 0.3 m
+        // structure mapped drivable: unsafe, counted as clearance (the classes partition the cells).
+        assert_eq!(m.num_scored_cells, 3);
+        assert_eq!((m.right_drivable_cells, m.right_blocked_cells), (1, 1));
+        assert_eq!((m.unsafe_step_cells, m.overcautious_step_cells), (0, 0));
+        assert_eq!((m.unsafe_cells, m.overcautious_cells, m.uncertain_cells), (1, 0, 0));
         assert_eq!(
             (
                 m.num_clearance_cells,
@@ -441,14 +393,8 @@ mod tests {
     #[test]
     fn expectations_pass_and_fail_with_the_measured_and_required_values() {
         let (map, truth) = tiny();
-        let mut m = compute(
-            "tiny",
-            3,
-            &map,
-            &truth,
-            &RobotProfile::default(),
-            TraversabilityRule::Absolute,
-        );
+        let verdicts = Verdicts::new(&map, &truth, TraversabilityRule::Absolute).expect("verdicts");
+        let mut m = compute("tiny", 3, &map, &truth, &verdicts);
         let mut e = BTreeMap::new();
         e.insert(
             "coverage".to_string(),

@@ -3,10 +3,12 @@
 //! mapped blocked, which boards the robot was allowed under).
 
 use nalgebra::{Isometry2, Point2, Vector2};
-use oeg::{Map, RobotProfile, Traversability};
+use oeg::{Map, Traversability};
 use serde::Serialize;
 use sim::scenario::{Obstacle, Scenario};
 use sim::truth::TruthRaster;
+
+use crate::verdict::{Verdict, Verdicts};
 
 /// One row of `obstacles.csv`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -28,6 +30,8 @@ pub struct ObstacleDecision {
     pub true_blocked_cells: u64,
     /// Observed cells the map blocks.
     pub mapped_blocked_cells: u64,
+    /// Observed cells the map cannot judge.
+    pub uncertain_cells: u64,
     /// Truly blocked, mapped drivable.
     pub unsafe_cells: u64,
     /// Truly drivable, mapped blocked.
@@ -37,11 +41,14 @@ pub struct ObstacleDecision {
     /// Mean mapped elevation over the observed cells with an estimate, metres: how high the map thinks the
     /// obstacle is (a curb mapped at 3.6 cm is blocked even if it is 3.4 cm high).
     pub mapped_elevation_mean_m: Option<f64>,
-    /// `blocked` when most observed cells are truly blocked, else `passable`.
+    /// `blocked` when any observed cell is truly blocked, else `passable` (see [`decisions`]).
     pub true_decision: &'static str,
-    /// `blocked` when most observed cells are mapped blocked, `passable` otherwise, `unseen` when none was
-    /// observed.
+    /// `blocked`, `uncertain` or `passable` by most of the deciding cells, `unseen` when none was observed
+    /// (see [`decisions`]).
     pub mapped_decision: &'static str,
+    /// `right`, `unsafe` (truly blocked, mapped passable), `overcautious` (truly passable, mapped blocked),
+    /// `uncertain` or `unseen`.
+    pub decision: &'static str,
     /// Whether the two decisions agree.
     pub decision_right: bool,
 }
@@ -129,15 +136,15 @@ fn deciding_height(o: &Obstacle) -> f64 {
     }
 }
 
-/// The decision table of every obstacle.
-pub fn decisions(
-    s: &Scenario,
-    map: &Map,
-    truth: &TruthRaster,
-    profile: &RobotProfile,
-) -> Vec<ObstacleDecision> {
+/// The decision table of every obstacle, read from the run's verdict raster.
+///
+/// An obstacle is truly `blocked` when any observed cell of its footprint is truly blocked (a wheel meets its
+/// step, or the robot its underside, somewhere), `passable` otherwise. The map's decision is taken over the
+/// cells that decide: the truly blocked ones for a blocked obstacle, every observed one for a passable one.
+/// It is `blocked` when most of them are mapped blocked, `uncertain` when most are mapped blocked or
+/// uncertain, `passable` otherwise, and `unseen` when none was observed.
+pub fn decisions(s: &Scenario, map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<ObstacleDecision> {
     let geometry = *map.geometry();
-    let reference = crate::metrics::step_reference(s.map.traversability);
     s.obstacles
         .iter()
         .enumerate()
@@ -152,12 +159,14 @@ pub fn decisions(
                 num_observed_cells: 0,
                 true_blocked_cells: 0,
                 mapped_blocked_cells: 0,
+                uncertain_cells: 0,
                 unsafe_cells: 0,
                 overcautious_cells: 0,
                 true_elevation_mean_m: None,
                 mapped_elevation_mean_m: None,
                 true_decision: "passable",
                 mapped_decision: "unseen",
+                decision: "unseen",
                 decision_right: false,
             };
             // The cells whose centre lies in the footprint, and the cell of the obstacle's centre (a 2 cm pole
@@ -165,25 +174,40 @@ pub fn decisions(
             let [cx, cy] = o.center_xy_m();
             let center_cell = geometry.cell_of(cx, cy);
             let (mut true_sum, mut mapped_sum, mut num_mapped) = (0.0, 0.0, 0u64);
+            // Over the truly blocked cells and over all observed ones: (cells, mapped blocked, mapped uncertain).
+            let (mut over_blocked, mut over_all) = ([0u64; 3], [0u64; 3]);
             for (k, cell) in truth.region.cells().enumerate() {
                 let (x, y) = geometry.cell_center(cell);
                 if !footprint_contains(o, Point2::new(x, y)) && center_cell != Some(cell) {
                     continue;
                 }
                 row.num_cells += 1;
-                let t = &truth.cells[k];
-                let mapped = map.traversability(cell, profile, s.map.traversability);
-                if mapped == Traversability::Unknown || t.elevation_m.is_nan() {
+                let verdict = verdicts.verdict[k];
+                if verdict == Verdict::NotScored {
                     continue;
                 }
                 row.num_observed_cells += 1;
-                let truly = crate::metrics::truly_blocked(truth, k, reference);
-                let blocked = mapped == Traversability::Blocked;
+                let truly = verdicts.truth[k].is_blocked();
+                let mapped = verdicts.mapped[k];
+                let tally = [
+                    1,
+                    u64::from(mapped == Traversability::Blocked),
+                    u64::from(mapped == Traversability::Uncertain),
+                ];
+                for (a, t) in over_all.iter_mut().zip(tally) {
+                    *a += t;
+                }
+                if truly {
+                    for (a, t) in over_blocked.iter_mut().zip(tally) {
+                        *a += t;
+                    }
+                }
                 row.true_blocked_cells += u64::from(truly);
-                row.mapped_blocked_cells += u64::from(blocked);
-                row.unsafe_cells += u64::from(truly && !blocked);
-                row.overcautious_cells += u64::from(!truly && blocked);
-                true_sum += f64::from(t.elevation_m);
+                row.mapped_blocked_cells += tally[1];
+                row.uncertain_cells += tally[2];
+                row.unsafe_cells += u64::from(verdict == Verdict::Unsafe);
+                row.overcautious_cells += u64::from(verdict == Verdict::OverCautious);
+                true_sum += f64::from(truth.cells[k].elevation_m);
                 if let Some(e) = map.cell(cell).elevation() {
                     mapped_sum += f64::from(e.mean_m);
                     num_mapped += 1;
@@ -198,17 +222,23 @@ pub fn decisions(
                 row.mapped_elevation_mean_m = Some(round(mapped_sum / num_mapped as f64));
             }
             if row.num_observed_cells > 0 {
-                row.true_decision = if 2 * row.true_blocked_cells > row.num_observed_cells {
+                let truly_blocked = row.true_blocked_cells > 0;
+                row.true_decision = if truly_blocked { "blocked" } else { "passable" };
+                let [n, blocked, uncertain] = if truly_blocked { over_blocked } else { over_all };
+                row.mapped_decision = if 2 * blocked > n {
                     "blocked"
-                } else {
-                    "passable"
-                };
-                row.mapped_decision = if 2 * row.mapped_blocked_cells > row.num_observed_cells {
-                    "blocked"
+                } else if 2 * (blocked + uncertain) > n {
+                    "uncertain"
                 } else {
                     "passable"
                 };
                 row.decision_right = row.true_decision == row.mapped_decision;
+                row.decision = match (row.true_decision, row.mapped_decision) {
+                    (_, "uncertain") => "uncertain",
+                    (t, m) if t == m => "right",
+                    ("blocked", _) => "unsafe",
+                    _ => "overcautious",
+                };
             }
             row
         })

@@ -6,12 +6,12 @@
 use oeg::planner::{self, Plan, PlannerOptions, UnknownCells};
 use std::path::PathBuf;
 
-use oeg::{CellIndex, CellRegion, Map, RobotProfile, Traversability, TraversabilityRule};
+use oeg::{CellIndex, CellRegion, RobotProfile, Traversability, TraversabilityRule};
 use serde::Serialize;
 use sim::scenario::Scenario;
-use sim::truth::TruthRaster;
 
 use crate::error::{EvalError, Result};
+use crate::verdict::Verdicts;
 
 /// The outcome of the planner check.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,33 +25,14 @@ pub struct PlanCheck {
     pub unsafe_cells: Vec<CellIndex>,
 }
 
-/// The truth's decision for every cell of its region, row-major: blocked when the robot truly cannot enter
-/// (a step, or a structure lower than the robot), free otherwise, unknown where the truth found no surface.
-pub fn truth_decisions(truth: &TruthRaster, rule: TraversabilityRule) -> Vec<Traversability> {
-    let reference = crate::metrics::step_reference(rule);
-    (0..truth.cells.len())
-        .map(|k| {
-            if truth.cells[k].elevation_m.is_nan() {
-                Traversability::Unknown
-            } else if crate::metrics::truly_blocked(truth, k, reference) {
-                Traversability::Blocked
-            } else {
-                Traversability::Free
-            }
-        })
-        .collect()
-}
-
 /// Plans on the map and on the truth from the drive's first waypoint to its last.
 ///
 /// # Errors
 /// A planner input the scenario's validation should have caught (a waypoint outside the region, bad
 /// options), reported against the scenario.
-pub fn check(s: &Scenario, map: &Map, truth: &TruthRaster, profile: &RobotProfile) -> Result<PlanCheck> {
-    let geometry = *map.geometry();
-    let region = truth.region;
+pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) -> Result<PlanCheck> {
+    let region = verdicts.region;
     let res = geometry.resolution_m();
-    let rule = s.map.traversability;
     let missing = || EvalError::Input {
         path: s.name.clone().into(),
         message: "the planner needs a start and a goal inside the map region (the drive's first and last \
@@ -76,9 +57,8 @@ pub fn check(s: &Scenario, map: &Map, truth: &TruthRaster, profile: &RobotProfil
         message: format!("planner: {e}"),
     };
     let options = s.planner.options();
-    let mapped = map.traversability_layer(region, profile, rule)?.values;
-    let map_plan = planner::plan(&region, res, &mapped, start, goal, &options).map_err(planner_error)?;
-    let truly = truth_decisions(truth, rule);
+    let map_plan = planner::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
+    let truly = verdicts.truth_decisions();
     let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
     let unsafe_cells = match &map_plan {
         Some(p) => unsafe_path_cells(p, &region, res, &truly, &options).map_err(planner_error)?,
@@ -291,10 +271,10 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     };
     let mut fig = crate::render::traversability_figure(&classes, &title);
     if let Some(p) = &plan {
-        fig.polyline(&polyline(p, &geometry), crate::report_images::PLAN);
+        fig.polyline(&polyline(p, &geometry), crate::render::PLAN);
     }
-    fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::report_images::DRIVE);
-    fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::report_images::PLAN);
+    fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::render::DRIVE);
+    fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::render::PLAN);
     let png = job.out_dir.join("plan.png");
     crate::output::write_bytes(&png, &fig.to_png())?;
     files.push(png);
@@ -320,7 +300,7 @@ fn path_csv_bytes(plan: Option<&Plan>, geometry: &oeg::GridGeometry) -> std::res
 mod tests {
     use super::*;
     use crate::test_support::{truth_cell, truth_raster};
-    use oeg::MapConfig;
+    use oeg::{Map, MapConfig};
 
     #[test]
     fn a_path_through_a_wall_the_map_missed_is_unsafe_and_the_truth_goes_around() {
@@ -336,7 +316,7 @@ mod tests {
                 })
                 .collect(),
         );
-        let truly = truth_decisions(&truth, TraversabilityRule::Absolute);
+        let truly = Verdicts::from_classes(&truth, vec![Traversability::Unknown; truth.cells.len()]).truth_decisions();
         let options = PlannerOptions {
             inflation_radius_m: 0.0,
             unknown: UnknownCells::Drivable,

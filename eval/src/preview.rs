@@ -4,12 +4,13 @@ use std::path::{Path, PathBuf};
 
 use oeg::GridGeometry;
 use sim::scenario::{self, LoadedScenario};
-use sim::truth::{TruthProfile, TruthRaster};
+use sim::truth::TruthRaster;
 use sim::world::{Actors, World};
 
 use crate::error::Result;
 use crate::output::{create_dir, write_bytes};
 use crate::render::{Figure, Legend, NO_DATA, Rgb};
+use crate::verdict::TruthClass;
 
 /// Sample points per cell side for the preview's truth (the evaluation uses more).
 pub const PREVIEW_SAMPLES_PER_SIDE: u32 = 2;
@@ -47,13 +48,13 @@ pub fn validate(path: &Path) -> Result<LoadedScenario> {
     Ok(loaded)
 }
 
-/// The colours of the truth's decision classes.
-pub const TRUTH_CLASSES: [(&str, Rgb); 5] = [
-    ("off the terrain", NO_DATA),
-    ("drivable", [255, 255, 255]),
-    ("step blocked", [200, 40, 40]),
-    ("under structure: passable", [90, 140, 230]),
-    ("under structure: too low", [120, 30, 120]),
+/// The truth's classes (`eval::verdict::TruthClass`) with their legend text and colour.
+pub const TRUTH_CLASSES: [(TruthClass, &str, Rgb); 5] = [
+    (TruthClass::OffTerrain, "off the terrain", NO_DATA),
+    (TruthClass::Drivable, "drivable", [255, 255, 255]),
+    (TruthClass::Step, "step blocked", [200, 40, 40]),
+    (TruthClass::PassableUnder, "under structure: passable", [90, 140, 230]),
+    (TruthClass::TooLow, "under structure: too low", [120, 30, 120]),
 ];
 
 /// Writes `preview_elevation.png` and `preview_decisions.png` for a scenario: the truth at time 0 with the
@@ -73,10 +74,7 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
             s.map.max_xy_m[1] - s.map.resolution_m * 1e-6,
         ),
     )?;
-    let profile = TruthProfile {
-        max_step_m: s.robot.max_step_m,
-        height_m: s.robot.height_m,
-    };
+    let profile = crate::run::profile_of(s)?;
     let truth = TruthRaster::compute(
         &world,
         &geometry,
@@ -113,7 +111,7 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let legend = Legend::Classes(
         TRUTH_CLASSES
             .iter()
-            .map(|(n, c)| ((*n).to_string(), *c))
+            .map(|(_, n, c)| ((*n).to_string(), *c))
             .collect(),
     );
     let title = format!(
@@ -125,16 +123,12 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
         geometry.resolution_m(),
         &title,
         |c| {
-            let Some(t) = truth.get(c) else { return NO_DATA };
-            if t.elevation_m.is_nan() {
-                return TRUTH_CLASSES[0].1;
-            }
-            match t.clearance_passable(&profile) {
-                Some(true) => TRUTH_CLASSES[3].1,
-                Some(false) => TRUTH_CLASSES[4].1,
-                None if t.step_blocked => TRUTH_CLASSES[2].1,
-                None => TRUTH_CLASSES[1].1,
-            }
+            let Some(k) = truth.region.offset(c) else { return NO_DATA };
+            let class = TruthClass::of(&truth, k);
+            TRUTH_CLASSES
+                .iter()
+                .find(|(t, ..)| *t == class)
+                .map_or(NO_DATA, |(_, _, rgb)| *rgb)
         },
         &legend,
     );

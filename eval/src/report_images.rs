@@ -2,28 +2,34 @@
 
 use std::path::{Path, PathBuf};
 
-use oeg::{Map, RobotProfile};
+use oeg::Map;
 use sim::scenario::Scenario;
 use sim::truth::TruthRaster;
 
 use crate::error::Result;
-use crate::metrics::Metrics;
+use crate::evaluation::Evaluation;
+use crate::verdict::Verdict;
 use crate::output::write_bytes;
-use crate::render::{Colormap, Figure, Legend, NO_DATA, Rgb, finite_range};
+use crate::render::{Colormap, DRIVE, Figure, Legend, NO_DATA, PLAN, Rgb, finite_range};
 
-/// Decision classes of `decisions.png`, in legend order.
-pub const DECISION_CLASSES: [(&str, Rgb); 5] = [
-    ("not observed", NO_DATA),
-    ("right, drivable", [255, 255, 255]),
-    ("right, blocked", [110, 110, 110]),
-    ("UNSAFE (mapped drivable)", [220, 20, 20]),
-    ("over-cautious (mapped blocked)", [255, 160, 30]),
+/// The verdicts of `decisions.png`, in legend order, with their legend text and colour.
+pub const DECISION_CLASSES: [(Verdict, &str, Rgb); 6] = [
+    (Verdict::NotScored, "not observed", NO_DATA),
+    (Verdict::RightDrivable, "right, drivable", [255, 255, 255]),
+    (Verdict::RightBlocked, "right, blocked", [110, 110, 110]),
+    (Verdict::Unsafe, "UNSAFE (mapped drivable)", [220, 20, 20]),
+    (Verdict::OverCautious, "over-cautious (mapped blocked)", [255, 160, 30]),
+    (Verdict::Uncertain, "uncertain (the map cannot tell)", [70, 170, 230]),
 ];
 
-/// The drive on the run's images.
-pub const DRIVE: Rgb = [30, 80, 230];
-/// The path planned on the map, on `decisions.png`.
-pub const PLAN: Rgb = [200, 0, 200];
+/// The colour of a verdict on `decisions.png`.
+pub fn verdict_color(v: Verdict) -> Rgb {
+    DECISION_CLASSES
+        .iter()
+        .find(|(c, ..)| *c == v)
+        .map_or(NO_DATA, |(_, _, rgb)| *rgb)
+}
+
 /// Obstacle footprints and names on `decisions.png`.
 const OUTLINE: Rgb = [0, 0, 0];
 
@@ -68,10 +74,9 @@ pub fn write(
     s: &Scenario,
     map: &Map,
     truth: &TruthRaster,
-    profile: &RobotProfile,
-    metrics: &Metrics,
-    plan: &crate::plan::PlanCheck,
+    evaluation: &Evaluation,
 ) -> Result<Vec<PathBuf>> {
+    let metrics = &evaluation.metrics;
     let region = truth.region;
     let res = truth.resolution_m;
     let drive = drive_polyline(s);
@@ -116,10 +121,20 @@ pub fn write(
     write_bytes(&path, &with_drive(fig).to_png())?;
     files.push(path);
 
-    let reference = crate::metrics::step_reference(s.map.traversability);
+    let fig = decisions_figure(s, map.geometry(), evaluation, &s.name);
+    let path = out_dir.join("decisions.png");
+    write_bytes(&path, &fig.to_png())?;
+    files.push(path);
+    Ok(files)
+}
+
+/// `decisions.png`: every cell's verdict, the drive, the obstacles' footprints and names, and the path planned
+/// on the map; titled `title` with the counts.
+pub fn decisions_figure(s: &Scenario, geometry: &oeg::GridGeometry, evaluation: &Evaluation, title: &str) -> Figure {
+    let (metrics, plan, verdicts) = (&evaluation.metrics, &evaluation.plan, &evaluation.verdicts);
     let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
         .iter()
-        .map(|(n, c)| ((*n).to_string(), *c))
+        .map(|(_, n, c)| ((*n).to_string(), *c))
         .collect();
     classes.push(("drive".into(), DRIVE));
     classes.push(("obstacle footprint".into(), OUTLINE));
@@ -133,31 +148,17 @@ pub fn write(
     ));
     let legend = Legend::Classes(classes);
     let fig = Figure::new(
-        region,
-        res,
+        verdicts.region,
+        verdicts.resolution_m,
         &format!(
-            "{}: decisions ({} unsafe, {} over-cautious)",
-            s.name, metrics.unsafe_step_cells, metrics.overcautious_step_cells
+            "{title}: {} unsafe, {} over-cautious, {} uncertain cells",
+            metrics.unsafe_cells, metrics.overcautious_cells, metrics.uncertain_cells
         ),
-        |c| {
-            let (Some(t), Some(k)) = (truth.get(c), truth.region.offset(c)) else {
-                return NO_DATA;
-            };
-            let mapped = map.traversability(c, profile, s.map.traversability);
-            if mapped == oeg::Traversability::Unknown || t.elevation_m.is_nan() {
-                return DECISION_CLASSES[0].1;
-            }
-            let blocked = mapped == oeg::Traversability::Blocked;
-            match (truth.step_blocked(k, reference), blocked) {
-                (false, false) => DECISION_CLASSES[1].1,
-                (true, true) => DECISION_CLASSES[2].1,
-                (true, false) => DECISION_CLASSES[3].1,
-                (false, true) => DECISION_CLASSES[4].1,
-            }
-        },
+        |c| verdicts.offset(c).map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k])),
         &legend,
     );
-    let mut fig = with_drive(fig);
+    let mut fig = fig;
+    fig.polyline(&drive_polyline(s), DRIVE);
     // The scene under the decisions: every obstacle's footprint, and the names of the named ones.
     for o in &s.obstacles {
         let outline = crate::obstacles::footprint_outline(o);
@@ -172,10 +173,7 @@ pub fn write(
         }
     }
     if let Some(p) = &plan.map_plan {
-        fig.polyline(&crate::plan::polyline(p, map.geometry()), PLAN);
+        fig.polyline(&crate::plan::polyline(p, geometry), PLAN);
     }
-    let path = out_dir.join("decisions.png");
-    write_bytes(&path, &fig.to_png())?;
-    files.push(path);
-    Ok(files)
+    fig
 }

@@ -8,7 +8,7 @@ use std::time::Instant;
 use oeg::{GridGeometry, Map, MapConfig, RobotProfile};
 use serde::Serialize;
 use sim::sensors::PoseSource;
-use sim::truth::{DEFAULT_SAMPLES_PER_SIDE, TruthProfile, TruthRaster};
+use sim::truth::{DEFAULT_SAMPLES_PER_SIDE, TruthRaster};
 use sim::world::Actors;
 use sim::{Simulation, scenario};
 
@@ -17,6 +17,7 @@ use crate::mapping::write_layer_images;
 use crate::metrics::{self, FailedExpectation, Metrics};
 use crate::output::{create_dir, write_bytes, write_json};
 use crate::progress::Progress;
+use crate::evaluation::{Evaluation, evaluate};
 use crate::report_images;
 
 /// What to run.
@@ -30,6 +31,9 @@ pub struct RunOptions {
     pub seed: Option<u64>,
     /// `key=value` overrides (see [`crate::overrides`]).
     pub overrides: Vec<String>,
+    /// Also maps the same sensor log with this preset's model and step rule, and writes its report into
+    /// `<out>/<preset>/` with a side-by-side comparison (`comparison.csv`, `decisions_comparison.png`).
+    pub compare: Option<oeg::MapPreset>,
 }
 
 /// `timing.json`: wall times, kept apart from the metrics because they vary from run to run.
@@ -62,6 +66,8 @@ pub struct RunReport {
     pub failed: Vec<FailedExpectation>,
     /// Per-obstacle decisions (also in `obstacles.csv`).
     pub obstacles: Vec<crate::obstacles::ObstacleDecision>,
+    /// The compared preset's metrics, if [`RunOptions::compare`] asked for one.
+    pub compared: Option<(oeg::MapPreset, Metrics)>,
     /// The output folder.
     pub out_dir: PathBuf,
     /// Every file written.
@@ -222,15 +228,11 @@ pub fn simulate_and_map(
 /// A region that does not fit the grid.
 pub fn truth_of(s: &scenario::Scenario, world: &sim::World, geometry: &GridGeometry) -> Result<TruthRaster> {
     let region = region_of(s, geometry)?;
-    let truth_profile = TruthProfile {
-        max_step_m: s.robot.max_step_m,
-        height_m: s.robot.height_m,
-    };
     Ok(TruthRaster::compute(
         world,
         geometry,
         region,
-        truth_profile,
+        profile_of(s)?,
         Actors::Excluded,
         DEFAULT_SAMPLES_PER_SIDE,
     ))
@@ -241,44 +243,9 @@ pub fn truth_of(s: &scenario::Scenario, world: &sim::World, geometry: &GridGeome
 /// # Errors
 /// A step or height that makes no sense.
 pub fn profile_of(s: &scenario::Scenario) -> Result<RobotProfile> {
-    let decisions = crate::settings::RobotDecisions {
-        max_step_m: s.robot.max_step_m,
-        height_m: s.robot.height_m,
-    };
-    Ok(decisions.profile()?)
-}
-
-/// A map judged against the truth: metrics (with the planner check and the expectations), per-obstacle
-/// decisions.
-#[derive(Debug, Clone)]
-pub struct Evaluation {
-    /// The metrics.
-    pub metrics: Metrics,
-    /// Expectations that failed.
-    pub failed: Vec<FailedExpectation>,
-    /// The planner check.
-    pub plan: crate::plan::PlanCheck,
-    /// Per-obstacle decisions.
-    pub obstacles: Vec<crate::obstacles::ObstacleDecision>,
-}
-
-/// Judges `map` against `truth` under the scenario's decisions.
-///
-/// # Errors
-/// A planner check that cannot run (a start or goal outside the region).
-pub fn evaluate(s: &scenario::Scenario, map: &Map, truth: &TruthRaster) -> Result<Evaluation> {
-    let profile = profile_of(s)?;
-    let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &profile, s.map.traversability);
-    let plan = crate::plan::check(s, map, truth, &profile)?;
-    metrics::record_plan(&mut metrics, &plan);
-    let failed = metrics::check_expectations(&mut metrics, &s.expectations);
-    let obstacles = crate::obstacles::decisions(s, map, truth, &profile);
-    Ok(Evaluation {
-        metrics,
-        failed,
-        plan,
-        obstacles,
-    })
+    let profile = s.robot.profile();
+    profile.validate()?;
+    Ok(profile)
 }
 
 /// Runs a scenario end to end and writes its report.
@@ -293,72 +260,53 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         .out_dir
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&s.name));
-    let (simulation, maps, sim_timing) = simulate_and_map(&loaded, &[&s.map], progress)?;
-    let map = maps.into_iter().next().ok_or_else(|| EvalError::Input {
+    let profile = profile_of(s)?;
+    // The compared model: the scenario with the preset's model and step rule (region and resolution kept).
+    let compared: Option<(oeg::MapPreset, scenario::Scenario)> = options.compare.map(|preset| {
+        let mut c = s.clone();
+        c.map.preset = preset;
+        c.map.model = preset.model(&profile);
+        c.map.traversability = preset.traversability();
+        (preset, c)
+    });
+    let mut settings = vec![&s.map];
+    if let Some((_, c)) = &compared {
+        settings.push(&c.map);
+    }
+    let (simulation, maps, sim_timing) = simulate_and_map(&loaded, &settings, progress)?;
+    let mut maps = maps.into_iter();
+    let map = maps.next().ok_or_else(|| EvalError::Input {
         path: options.scenario.clone(),
         message: "the simulation built no map".into(),
     })?;
-    let profile = profile_of(s)?;
     let truth_start = Instant::now();
     let geometry = *map.geometry();
     let truth = truth_of(s, simulation.world(), &geometry)?;
-    let region = truth.region;
     let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
-    let Evaluation {
-        metrics,
-        failed,
-        plan,
-        obstacles,
-    } = evaluate(s, &map, &truth)?;
+    let evaluation = evaluate(s, &map, &truth)?;
 
     create_dir(&out_dir)?;
-    let mut files = Vec::new();
-    let map_path = out_dir.join("map.oeg");
-    write_bytes(&map_path, &oeg::io::mapfile::to_bytes(&map))?;
-    files.push(map_path);
-    files.extend(write_layer_images(
-        &map,
-        &out_dir,
-        &profile,
-        s.map.traversability,
-        Some(region),
-    )?);
-    files.extend(report_images::write(
-        &out_dir, s, &map, &truth, &profile, &metrics, &plan,
-    )?);
-    let plan_path = out_dir.join("plan.csv");
-    let csv =
-        crate::plan::to_csv(&crate::plan::rows(&plan, &geometry)).map_err(|message| EvalError::Input {
-            path: plan_path.clone(),
-            message,
-        })?;
-    write_bytes(&plan_path, &csv)?;
-    files.push(plan_path);
-    let obstacles_path = out_dir.join("obstacles.csv");
-    let csv = crate::obstacles::to_csv(&obstacles).map_err(|message| EvalError::Input {
-        path: obstacles_path.clone(),
-        message,
-    })?;
-    write_bytes(&obstacles_path, &csv)?;
-    files.push(obstacles_path);
-    let wrong = crate::wrong_cells::wrong_cells(&map, &truth, &profile, s.map.traversability);
-    let wrong_path = out_dir.join("wrong_cells.csv");
-    let csv = crate::wrong_cells::to_csv(&wrong).map_err(|message| EvalError::Input {
-        path: wrong_path.clone(),
-        message,
-    })?;
-    write_bytes(&wrong_path, &csv)?;
-    files.push(wrong_path);
-    let metrics_path = out_dir.join("metrics.json");
-    write_json(&metrics_path, &metrics)?;
-    files.push(metrics_path);
+    let mut files = write_report(&out_dir, s, &map, &truth, &evaluation)?;
+    let mut compared_metrics = None;
+    if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
+        let other_eval = evaluate(c, &other, &truth)?;
+        let dir = out_dir.join(preset.name());
+        create_dir(&dir)?;
+        files.extend(write_report(&dir, c, &other, &truth, &other_eval)?);
+        files.extend(write_comparison(
+            &out_dir,
+            [(s, &evaluation), (c, &other_eval)],
+            &geometry,
+        )?);
+        compared_metrics = Some((*preset, other_eval.metrics));
+    }
     let num_rays = sim_timing.num_rays as f64;
     let (simulation_s, map_s) = (sim_timing.simulation_wall_time_s, sim_timing.map_wall_time_s);
     let timing = RunTiming {
         simulation_wall_time_s: simulation_s,
         simulation_rays_per_s: num_rays / simulation_s.max(1e-9),
         map_wall_time_s: map_s,
-        map_rays_per_s: map.totals().num_rays as f64 / map_s.max(1e-9),
+        map_rays_per_s: map.totals().num_rays as f64 * settings.len() as f64 / map_s.max(1e-9),
         truth_wall_time_s,
         total_wall_time_s: total_start.elapsed().as_secs_f64(),
         threads: rayon::current_num_threads() as u64,
@@ -366,12 +314,144 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     let timing_path = out_dir.join("timing.json");
     write_json(&timing_path, &timing)?;
     files.push(timing_path);
+    let Evaluation {
+        metrics,
+        failed,
+        obstacles,
+        ..
+    } = evaluation;
     Ok(RunReport {
         metrics,
         timing,
         failed,
         obstacles,
+        compared: compared_metrics,
         out_dir,
         files,
     })
+}
+
+/// Writes one map's report into `out_dir`: the map, its layer images, the comparison images, `plan.csv`,
+/// `obstacles.csv`, `wrong_cells.csv` and `metrics.json` (last).
+///
+/// # Errors
+/// A failed write.
+fn write_report(
+    out_dir: &Path,
+    s: &scenario::Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    evaluation: &Evaluation,
+) -> Result<Vec<PathBuf>> {
+    let profile = truth.profile;
+    let geometry = *map.geometry();
+    let mut files = Vec::new();
+    let map_path = out_dir.join("map.oeg");
+    write_bytes(&map_path, &oeg::io::mapfile::to_bytes(map))?;
+    files.push(map_path);
+    files.extend(write_layer_images(
+        map,
+        out_dir,
+        &profile,
+        s.map.traversability,
+        Some(truth.region),
+    )?);
+    files.extend(report_images::write(out_dir, s, map, truth, evaluation)?);
+    let csv_error = |path: &Path| {
+        let path = path.to_path_buf();
+        move |message| EvalError::Input { path, message }
+    };
+    let plan_path = out_dir.join("plan.csv");
+    let csv = crate::plan::to_csv(&crate::plan::rows(&evaluation.plan, &geometry)).map_err(csv_error(&plan_path))?;
+    write_bytes(&plan_path, &csv)?;
+    files.push(plan_path);
+    let obstacles_path = out_dir.join("obstacles.csv");
+    let csv = crate::obstacles::to_csv(&evaluation.obstacles).map_err(csv_error(&obstacles_path))?;
+    write_bytes(&obstacles_path, &csv)?;
+    files.push(obstacles_path);
+    let wrong = crate::wrong_cells::wrong_cells(map, truth, &evaluation.verdicts);
+    let wrong_path = out_dir.join("wrong_cells.csv");
+    let csv = crate::wrong_cells::to_csv(&wrong).map_err(csv_error(&wrong_path))?;
+    write_bytes(&wrong_path, &csv)?;
+    files.push(wrong_path);
+    let metrics_path = out_dir.join("metrics.json");
+    write_json(&metrics_path, &evaluation.metrics)?;
+    files.push(metrics_path);
+    Ok(files)
+}
+
+/// One row of `comparison.csv`: one model's decisions on the same sensor log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ComparisonRow {
+    /// The model: the scenario's preset, with `(scenario)` when the scenario changes its options.
+    pub model: String,
+    /// Unsafe cells (step and clearance).
+    pub unsafe_cells: u64,
+    /// Over-cautious cells.
+    pub overcautious_cells: u64,
+    /// Uncertain cells.
+    pub uncertain_cells: u64,
+    /// Whether the planner found a path on the map.
+    pub plan_found: bool,
+    /// Path cells within the inflation radius of a truly blocked cell.
+    pub plan_unsafe_cells: u64,
+    /// The map's path length over the truth's (null when either is missing).
+    pub plan_length_ratio: Option<f64>,
+    /// Fraction of cells whose true elevation lies within 2 sigma.
+    pub elevation_within_2sigma: f64,
+    /// Elevation RMSE, metres.
+    pub elevation_rmse_m: f64,
+}
+
+/// `comparison.csv` and `decisions_comparison.png`: the two models' decisions side by side.
+fn write_comparison(
+    out_dir: &Path,
+    runs: [(&scenario::Scenario, &Evaluation); 2],
+    geometry: &GridGeometry,
+) -> Result<Vec<PathBuf>> {
+    let rows: Vec<ComparisonRow> = runs
+        .iter()
+        .map(|(s, e)| {
+            let m = &e.metrics;
+            let own = s.map.model == s.map.preset.model(&s.robot.profile())
+                && s.map.traversability == s.map.preset.traversability();
+            ComparisonRow {
+                model: if own {
+                    s.map.preset.name().to_string()
+                } else {
+                    format!("{} (scenario)", s.map.preset.name())
+                },
+                unsafe_cells: m.unsafe_cells,
+                overcautious_cells: m.overcautious_cells,
+                uncertain_cells: m.uncertain_cells,
+                plan_found: m.plan_found,
+                plan_unsafe_cells: m.plan_unsafe_cells,
+                plan_length_ratio: m.plan_length_ratio.is_finite().then_some(m.plan_length_ratio),
+                elevation_within_2sigma: m.elevation_within_2sigma,
+                elevation_rmse_m: m.elevation_rmse_m,
+            }
+        })
+        .collect();
+    let csv_path = out_dir.join("comparison.csv");
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in &rows {
+        w.serialize(r).map_err(|e| EvalError::Input {
+            path: csv_path.clone(),
+            message: e.to_string(),
+        })?;
+    }
+    let bytes = w.into_inner().map_err(|e| EvalError::Input {
+        path: csv_path.clone(),
+        message: e.to_string(),
+    })?;
+    write_bytes(&csv_path, &bytes)?;
+    let figures: Vec<crate::render::Figure> = runs
+        .iter()
+        .zip(&rows)
+        .map(|((s, e), r)| report_images::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model)))
+        .collect();
+    let canvases: Vec<&crate::render::Canvas> = figures.iter().map(|f| f.canvas()).collect();
+    let png_path = out_dir.join("decisions_comparison.png");
+    write_bytes(&png_path, &crate::render::Canvas::side_by_side(&canvases, 24).to_png())?;
+    Ok(vec![csv_path, png_path])
 }

@@ -22,40 +22,6 @@ use toml::Table;
 
 use crate::overrides::Override;
 
-/// The robot's decision limits (`[robot]` of a scenario, the part a map or a plan needs).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct RobotDecisions {
-    /// Largest step the robot climbs, metres.
-    pub max_step_m: f64,
-    /// Robot height, metres.
-    pub height_m: f64,
-}
-
-impl Default for RobotDecisions {
-    fn default() -> Self {
-        Self {
-            max_step_m: sim::scenario::DEFAULT_MAX_STEP_M,
-            height_m: sim::scenario::DEFAULT_ROBOT_HEIGHT_M,
-        }
-    }
-}
-
-impl RobotDecisions {
-    /// The map crate's profile, checked.
-    ///
-    /// # Errors
-    /// A step or height that makes no sense.
-    pub fn profile(&self) -> oeg::Result<oeg::RobotProfile> {
-        let p = oeg::RobotProfile {
-            max_step_m: self.max_step_m as f32,
-            height_m: self.height_m as f32,
-        };
-        p.validate()?;
-        Ok(p)
-    }
-}
-
 /// A range-error model of rays read from files.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -113,6 +79,9 @@ impl Default for InputSettings {
 pub struct MapPart {
     /// Cell size, metres.
     pub resolution_m: f64,
+    /// The named model the options start from (expanded into `model` and `traversability` before reading).
+    #[serde(default)]
+    pub preset: oeg::MapPreset,
     /// The model.
     #[serde(default)]
     pub model: oeg::ModelOptions,
@@ -129,7 +98,7 @@ pub struct MapSettings {
     pub map: MapPart,
     /// Decision limits.
     #[serde(default)]
-    pub robot: RobotDecisions,
+    pub robot: oeg::RobotProfile,
     /// How files become scans.
     #[serde(default)]
     pub input: InputSettings,
@@ -139,6 +108,8 @@ pub struct MapSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanMapPart {
+    /// The named model whose step rule applies unless `traversability` is given.
+    pub preset: oeg::MapPreset,
     /// The step rule.
     pub traversability: oeg::TraversabilityRule,
 }
@@ -151,6 +122,8 @@ pub struct PlannerPart {
     pub inflation_radius_m: f64,
     /// Cells the map never observed.
     pub unknown: oeg::UnknownCells,
+    /// Cells the map cannot judge.
+    pub uncertain: oeg::UncertainCells,
 }
 
 impl Default for PlannerPart {
@@ -158,6 +131,7 @@ impl Default for PlannerPart {
         Self {
             inflation_radius_m: oeg::planner::DEFAULT_INFLATION_RADIUS_M,
             unknown: oeg::UnknownCells::default(),
+            uncertain: oeg::UncertainCells::default(),
         }
     }
 }
@@ -169,7 +143,7 @@ pub struct PlanSettings {
     /// The step rule.
     pub map: PlanMapPart,
     /// Decision limits.
-    pub robot: RobotDecisions,
+    pub robot: oeg::RobotProfile,
     /// The planner.
     pub planner: PlannerPart,
 }
@@ -192,7 +166,8 @@ impl Checked for MapSettings {
             ));
         }
         self.map.model.validate().map_err(|e| e.to_string())?;
-        self.robot.profile().map(|_| ()).map_err(|e| e.to_string())
+        self.map.traversability.validate().map_err(|e| e.to_string())?;
+        self.robot.validate().map_err(|e| e.to_string())
     }
 }
 
@@ -204,12 +179,15 @@ impl Checked for PlanSettings {
                 "planner.inflation_radius_m: expected a radius in [0, 100] m, got {r}"
             ));
         }
-        self.robot.profile().map(|_| ()).map_err(|e| e.to_string())
+        self.map.traversability.validate().map_err(|e| e.to_string())?;
+        self.robot.validate().map_err(|e| e.to_string())
     }
 }
 
 fn read<T: Checked>(doc: &Table) -> Result<T, String> {
-    let text = toml::to_string(doc).map_err(|e| e.to_string())?;
+    let mut doc = doc.clone();
+    sim::scenario::expand_map_preset(&mut doc)?;
+    let text = toml::to_string(&doc).map_err(|e| e.to_string())?;
     let value: T = toml::from_str(&text).map_err(|e| e.message().trim().to_string())?;
     value.check()?;
     Ok(value)

@@ -144,6 +144,7 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
         out_dir: Some(out_dir.join(&stem)),
         seed: None,
         overrides: overrides.to_vec(),
+        compare: None,
     };
     let row = match run(&options, &Progress::hidden()) {
         Ok(r) => SuiteRow {

@@ -1,7 +1,7 @@
 //! Fixtures shared by the unit tests of the metrics and the planner check.
 
-use oeg::CellRegion;
-use sim::truth::{CellTruth, TruthProfile, TruthRaster};
+use oeg::{CellRegion, RobotProfile};
+use sim::truth::{CellTruth, TruthRaster};
 use sim::world::Actors;
 
 /// A truth cell on flat ground at 0 whose highest surface is `elevation_m`, with no structure over it unless
@@ -21,10 +21,7 @@ pub(crate) fn truth_raster(region: CellRegion, cells: Vec<CellTruth>) -> TruthRa
     TruthRaster {
         region,
         resolution_m: 1.0,
-        profile: TruthProfile {
-            max_step_m: 0.035,
-            height_m: 0.46,
-        },
+        profile: RobotProfile::default(),
         time_s: 0.0,
         actors: Actors::Excluded,
         cells,

@@ -2,9 +2,11 @@
 //! says, so a user can see why: a board top never seen, a curb edge averaged with the road, a person not yet
 //! cleared.
 
-use oeg::{Map, RobotProfile, Traversability, TraversabilityRule};
+use oeg::Map;
 use serde::Serialize;
 use sim::truth::TruthRaster;
+
+use crate::verdict::{Verdict, Verdicts};
 
 /// One row of `wrong_cells.csv`. Empty fields are values that do not exist (no elevation estimate, no
 /// structure over the cell).
@@ -28,61 +30,41 @@ pub struct WrongCell {
     pub true_elevation_m: f32,
     /// The truth: mean ground height, metres.
     pub true_ground_m: f32,
-    /// The truth: largest step above the ground beside it, metres.
+    /// The truth: largest rise of the surface within the robot's contact distance, metres.
     pub true_step_m: f32,
-    /// The truth: whether the step blocks the robot (against the reference the map's rule uses).
+    /// The truth: whether that rise is a step the robot cannot climb.
     pub true_step_blocked: bool,
     /// The truth: smallest free gap under a structure over the cell, metres.
     pub true_structure_gap_m: Option<f32>,
 }
 
-fn class_name(t: Traversability) -> &'static str {
-    match t {
-        Traversability::Unknown => "unknown",
-        Traversability::Free => "free",
-        Traversability::Traversable => "traversable",
-        Traversability::Blocked => "blocked",
-    }
-}
-
-/// The observed cells of the truth's region whose decision is wrong, row-major from the region's min corner.
-/// A cell is truly blocked when its step blocks the robot or a structure over it is lower than the robot, as
-/// in `obstacles.csv`.
-pub fn wrong_cells(
-    map: &Map,
-    truth: &TruthRaster,
-    profile: &RobotProfile,
-    rule: TraversabilityRule,
-) -> Vec<WrongCell> {
+/// The observed cells of the truth's region whose decision is wrong (verdict `unsafe` or `over_cautious`),
+/// row-major from the region's min corner, read from the run's verdict raster.
+pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
     let geometry = *map.geometry();
-    let reference = crate::metrics::step_reference(rule);
     let mut rows = Vec::new();
     for (k, cell) in truth.region.cells().enumerate() {
+        let error = match verdicts.verdict[k] {
+            Verdict::Unsafe => "unsafe",
+            Verdict::OverCautious => "over_cautious",
+            _ => continue,
+        };
         let t = &truth.cells[k];
-        let mapped = map.traversability(cell, profile, rule);
-        if mapped == Traversability::Unknown || t.elevation_m.is_nan() {
-            continue;
-        }
-        let truly = crate::metrics::truly_blocked(truth, k, reference);
-        let blocked = mapped == Traversability::Blocked;
-        if truly == blocked {
-            continue;
-        }
         let c = map.cell(cell);
         let e = c.elevation();
         let (x_m, y_m) = geometry.cell_center(cell);
         rows.push(WrongCell {
             x_m: crate::output::round_m(x_m),
             y_m: crate::output::round_m(y_m),
-            error: if truly { "unsafe" } else { "over_cautious" },
-            mapped: class_name(mapped),
+            error,
+            mapped: verdicts.mapped[k].name(),
             occupancy_probability: c.occupancy_probability().unwrap_or(f32::NAN),
             elevation_m: e.map(|e| e.mean_m),
             elevation_std_m: e.map(|e| e.var_m2.sqrt()),
             true_elevation_m: t.elevation_m,
             true_ground_m: t.ground_m,
             true_step_m: t.step_m,
-            true_step_blocked: truth.step_blocked(k, reference),
+            true_step_blocked: t.step_blocked,
             true_structure_gap_m: (!t.structure_gap_m.is_nan()).then_some(t.structure_gap_m),
         });
     }

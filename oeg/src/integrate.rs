@@ -10,7 +10,7 @@ use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
     Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    ScanHitElevation, band_contradicts, clamp_probability, correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model,
+    ScanHitElevation, band_contradicts, vertical_variance, clamp_probability, correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model,
     kalman_fuse, log_odds, ray_bound, spread_variance, update_log_odds,
 };
 use crate::scan::{RayKind, Scan};
@@ -216,7 +216,11 @@ impl Map {
                 stats.num_rays_skipped += 1;
                 continue;
             }
-            let s2 = (sigma_for_free * sigma_for_free) as f32;
+            let s2 = if opts.vertical_variance {
+                vertical_variance(sigma_for_free, dir.z)
+            } else {
+                (sigma_for_free * sigma_for_free) as f32
+            };
             // Samples that end before `free_until` are plain free samples (p = p_min, no exponential); only the
             // few cells within 3 sigma of the hit evaluate eq. 10.
             let free_until = hit_range_m.map_or(f64::INFINITY, |(l_p, s)| {

@@ -152,6 +152,22 @@ impl Canvas {
         }
     }
 
+    /// `images` side by side, left to right, `gap` white pixels apart, top-aligned on a white background.
+    pub fn side_by_side(images: &[&Canvas], gap: usize) -> Canvas {
+        let width = images.iter().map(|c| c.width).sum::<usize>() + gap * images.len().saturating_sub(1);
+        let height = images.iter().map(|c| c.height).max().unwrap_or(0);
+        let mut out = Canvas::new(width, height, WHITE);
+        let mut x0 = 0;
+        for c in images {
+            for y in 0..c.height {
+                let (src, dst) = (y * c.width * 3, (y * width + x0) * 3);
+                out.pixels[dst..dst + c.width * 3].copy_from_slice(&c.pixels[src..src + c.width * 3]);
+            }
+            x0 += c.width + gap;
+        }
+        out
+    }
+
     /// The image as PNG bytes (8-bit RGB). Deterministic: the same pixels give the same bytes.
     pub fn to_png(&self) -> Vec<u8> {
         let mut out = Vec::new();
@@ -192,6 +208,17 @@ mod tests {
             .filter(|&(x, y)| c.pixel(x, y) == Some(BLACK));
         assert!(dark.count() > 5);
         assert_eq!(Canvas::text_width("abc", 2), 48);
+    }
+
+    #[test]
+    fn images_go_side_by_side() {
+        let (a, b) = (Canvas::new(2, 3, BLACK), Canvas::new(4, 1, BLACK));
+        let c = Canvas::side_by_side(&[&a, &b], 1);
+        assert_eq!((c.width(), c.height()), (7, 3));
+        assert_eq!(c.pixel(1, 2), Some(BLACK));
+        assert_eq!(c.pixel(2, 0), Some(WHITE), "the gap");
+        assert_eq!(c.pixel(3, 0), Some(BLACK));
+        assert_eq!(c.pixel(3, 1), Some(WHITE), "below the shorter image");
     }
 
     #[test]

@@ -42,15 +42,17 @@ pub fn traversability_color(t: Traversability) -> Rgb {
         Traversability::Free => [255, 255, 255],
         Traversability::Traversable => [120, 190, 90],
         Traversability::Blocked => [200, 40, 40],
+        Traversability::Uncertain => [240, 200, 40],
     }
 }
 
 /// The traversability classes in legend order.
-pub const TRAVERSABILITY_CLASSES: [(Traversability, &str); 4] = [
+pub const TRAVERSABILITY_CLASSES: [(Traversability, &str); 5] = [
     (Traversability::Unknown, "unknown"),
     (Traversability::Free, "free"),
     (Traversability::Traversable, "traversable (step ok)"),
     (Traversability::Blocked, "blocked"),
+    (Traversability::Uncertain, "uncertain"),
 ];
 
 /// The traversability layer with a class legend.

@@ -13,3 +13,8 @@ pub use canvas::{Canvas, Rgb};
 pub use colormap::Colormap;
 pub use figure::{Figure, Legend, NO_DATA, finite_range};
 pub use layers::{TRAVERSABILITY_CLASSES, scalar_figure, traversability_color, traversability_figure};
+
+/// The robot's drive on the run's images.
+pub const DRIVE: Rgb = [30, 80, 230];
+/// A planned path on the images.
+pub const PLAN: Rgb = [200, 0, 200];

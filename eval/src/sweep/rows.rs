@@ -15,7 +15,7 @@ use crate::output::write_bytes;
 #[derive(Debug, Clone)]
 pub struct Outcome {
     /// The map judged against the truth.
-    pub evaluation: crate::run::Evaluation,
+    pub evaluation: crate::evaluation::Evaluation,
     /// The robot's step, metres.
     pub max_step_m: f64,
     /// The robot's height, metres.
@@ -55,36 +55,29 @@ pub fn metric_columns(row: &mut JsonMap<String, Json>, o: &Outcome) {
             }
         }
     }
-    let (mut right, mut unsafe_, mut cautious, mut unseen) = (0u64, 0u64, 0u64, 0u64);
+    let (mut right, mut unsafe_, mut cautious, mut uncertain, mut unseen) = (0u64, 0u64, 0u64, 0u64, 0u64);
     for d in &o.evaluation.obstacles {
-        match decision_class(d) {
+        match d.decision {
             "right" => right += 1,
             "unsafe" => unsafe_ += 1,
             "overcautious" => cautious += 1,
+            "uncertain" => uncertain += 1,
             _ => unseen += 1,
         }
     }
     row.insert("obstacles_right".into(), Json::from(right));
     row.insert("obstacles_unsafe".into(), Json::from(unsafe_));
     row.insert("obstacles_overcautious".into(), Json::from(cautious));
+    row.insert("obstacles_uncertain".into(), Json::from(uncertain));
     row.insert("obstacles_unseen".into(), Json::from(unseen));
-    let seen = right + unsafe_ + cautious;
-    let rate = if seen > 0 {
-        Json::from((unsafe_ + cautious) as f64 / seen as f64)
+    // Uncertain obstacles are not errors: the map said it could not tell.
+    let judged = right + unsafe_ + cautious;
+    let rate = if judged > 0 {
+        Json::from((unsafe_ + cautious) as f64 / judged as f64)
     } else {
         Json::Null
     };
     row.insert("obstacle_decision_error_rate".into(), rate);
-}
-
-/// `right`, `unsafe` (truly blocked, mapped passable), `overcautious` (the reverse) or `unseen`.
-pub fn decision_class(d: &crate::obstacles::ObstacleDecision) -> &'static str {
-    match (d.true_decision, d.mapped_decision) {
-        (_, "unseen") => "unseen",
-        (t, m) if t == m => "right",
-        ("blocked", _) => "unsafe",
-        _ => "overcautious",
-    }
 }
 
 /// The run's obstacles with the distance of each to its threshold: height minus the robot's step, or an
@@ -114,7 +107,8 @@ pub fn obstacle_rows(run: &Run, o: &Outcome) -> Vec<Json> {
             row.insert("overcautious_cells".into(), Json::from(d.overcautious_cells));
             row.insert("true_decision".into(), Json::from(d.true_decision));
             row.insert("mapped_decision".into(), Json::from(d.mapped_decision));
-            row.insert("decision".into(), Json::from(decision_class(d)));
+            row.insert("uncertain_cells".into(), Json::from(d.uncertain_cells));
+            row.insert("decision".into(), Json::from(d.decision));
             Json::Object(row)
         })
         .collect()

@@ -160,6 +160,9 @@ pub struct ModelOptions {
     /// eq. 9's ever-shrinking variance; a positive value lets a stubborn cell follow a moving obstacle. It is per
     /// update, not per second, because a cell stores no time stamp (three f32 per cell).
     pub process_noise_var_m2: f32,
+    /// Whether a hit's elevation variance is its range variance projected onto the vertical
+    /// ([`crate::model::vertical_variance`]) rather than the range variance itself (the paper, `false`).
+    pub vertical_variance: bool,
     /// How many standard deviations below a cell's top its surface band reaches
     /// ([`FreeSpaceOccupancy::SurfaceBand`]).
     pub surface_band_sigmas: f32,
@@ -197,6 +200,7 @@ impl Default for ModelOptions {
             scan_hit_elevation: ScanHitElevation::Highest,
             elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,
+            vertical_variance: false,
             surface_band_sigmas: DEFAULT_SURFACE_BAND_SIGMAS,
             measurement_correlation: 0.0,
             max_height_m: None,

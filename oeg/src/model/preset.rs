@@ -55,6 +55,7 @@ impl MapPreset {
                     multi_height_noise_m2: 0.0,
                 },
                 measurement_correlation: 1.0,
+                vertical_variance: true,
                 max_height_m: Some(profile.height_m + ROBUST_HEIGHT_MARGIN_M),
                 ..ModelOptions::default()
             },

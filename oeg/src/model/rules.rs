@@ -110,6 +110,19 @@ pub fn correlated_variance(fused_var_m2: f32, prior_var_m2: f32, measurement_var
     fused_var_m2.max(prior_var_m2.min(rho * measurement_var_m2))
 }
 
+/// [`crate::ModelOptions::vertical_variance`]: the variance of a hit's height when its range has standard
+/// deviation `range_sigma_m` along a beam of unit direction with vertical component `dir_z`: the range error
+/// projected onto z, `(sigma dir_z)^2`, with a floor of 1 mm (a beam parallel to the ground still has some
+/// vertical spread). The paper uses the range variance itself, which overstates a height error by
+/// `1 / dir_z^2`: 10 times for a beam 18 degrees below the horizon.
+pub fn vertical_variance(range_sigma_m: f64, dir_z: f64) -> f32 {
+    let s = (range_sigma_m * dir_z).abs().max(VERTICAL_SIGMA_FLOOR_M);
+    (s * s) as f32
+}
+
+/// The floor of [`vertical_variance`]'s standard deviation, metres.
+pub const VERTICAL_SIGMA_FLOOR_M: f64 = 0.001;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -256,5 +269,12 @@ mod tests {
             var = correlated_variance(fused, var, s2, rho);
         }
         assert!((var - rho * s2).abs() < 1e-9, "{var}");
+    }
+
+    #[test]
+    fn a_range_error_is_projected_onto_the_vertical() {
+        assert!((vertical_variance(0.03, -1.0) - 9e-4).abs() < 1e-9, "straight down: all of it");
+        assert!((vertical_variance(0.03, -0.5) - 2.25e-4).abs() < 1e-9);
+        assert!((vertical_variance(0.03, 0.0) - 1e-6).abs() < 1e-12, "level: the floor");
     }
 }

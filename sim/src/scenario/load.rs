@@ -98,35 +98,68 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
     })
 }
 
-/// Starts the map's model and step rule from `[map] preset`, then applies the keys the file gives in
-/// `[map.model]` and `[map] traversability` over them.
+/// Applies the scenario's `[map] preset` to its model and step rule: the keys the file gives in `[map.model]`
+/// and `[map] traversability` over the preset's.
+fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), String> {
+    if scenario.map.preset == oeg::MapPreset::Paper {
+        return Ok(());
+    }
+    let mut doc: toml::Table = toml::from_str(text).map_err(|e| e.message().to_string())?;
+    expand_map_preset(&mut doc)?;
+    let map = doc.get("map").cloned().unwrap_or_else(|| toml::Value::Table(toml::Table::new()));
+    let map: super::MapSettings = map.try_into().map_err(|e: toml::de::Error| e.message().to_string())?;
+    scenario.map.model = map.model;
+    scenario.map.traversability = map.traversability;
+    Ok(())
+}
+
+/// Expands `[map] preset` in a settings document (a scenario, or the settings of `oeg map` and `oeg plan`):
+/// `[map.model]` becomes the preset's options (for the robot of `[robot]`) with the document's own
+/// `[map.model]` keys over them, and `[map] traversability` the preset's rule unless the document gives one.
+/// `paper`, or no preset, changes nothing.
 ///
 /// # Errors
-/// A message when the merged options do not read (cannot happen for options that read on their own).
-fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), String> {
-    let preset = scenario.map.preset;
+/// A preset name or a `[robot]` that does not read.
+pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), String> {
+    let Some(map) = doc.get("map").and_then(toml::Value::as_table) else {
+        return Ok(());
+    };
+    let preset: oeg::MapPreset = match map.get("preset") {
+        None => return Ok(()),
+        Some(v) => v.clone().try_into().map_err(|e: toml::de::Error| format!("map.preset: {}", e.message()))?,
+    };
     if preset == oeg::MapPreset::Paper {
         return Ok(());
     }
-    let doc: toml::Table = toml::from_str(text).map_err(|e| e.message().to_string())?;
-    let map = doc.get("map").and_then(toml::Value::as_table);
-    let given = map.and_then(|m| m.get("model")).and_then(toml::Value::as_table);
-    let profile = scenario.robot.profile();
+    let robot = doc.get("robot").and_then(toml::Value::as_table);
+    let number = |key: &str, default: f32| -> std::result::Result<f32, String> {
+        match robot.and_then(|r| r.get(key)) {
+            None => Ok(default),
+            Some(v) => v
+                .as_float()
+                .or_else(|| v.as_integer().map(|i| i as f64))
+                .map(|x| x as f32)
+                .ok_or_else(|| format!("robot.{key}: expected a number")),
+        }
+    };
+    let profile = oeg::RobotProfile {
+        max_step_m: number("max_step_m", oeg::traversability::DEFAULT_MAX_STEP_M)?,
+        height_m: number("height_m", oeg::traversability::DEFAULT_ROBOT_HEIGHT_M)?,
+        max_grade: number("max_grade", oeg::traversability::DEFAULT_MAX_GRADE)?,
+    };
     let mut model = toml::Table::try_from(preset.model(&profile)).map_err(|e| e.to_string())?;
-    if let Some(given) = given {
-        let parsed = toml::Table::try_from(scenario.map.model).map_err(|e| e.to_string())?;
-        for key in given.keys() {
-            if let Some(v) = parsed.get(key) {
-                model.insert(key.clone(), v.clone());
-            }
+    if let Some(given) = map.get("model").and_then(toml::Value::as_table) {
+        for (k, v) in given {
+            model.insert(k.clone(), v.clone());
         }
     }
-    scenario.map.model = model
-        .try_into()
-        .map_err(|e: toml::de::Error| format!("map.model after preset `{}`: {}", preset.name(), e.message()))?;
-    if map.is_none_or(|m| !m.contains_key("traversability")) {
-        scenario.map.traversability = preset.traversability();
+    let mut map = map.clone();
+    map.insert("model".into(), toml::Value::Table(model));
+    if !map.contains_key("traversability") {
+        let rule = toml::Value::try_from(preset.traversability()).map_err(|e| e.to_string())?;
+        map.insert("traversability".into(), rule);
     }
+    doc.insert("map".into(), toml::Value::Table(map));
     Ok(())
 }
 

@@ -3,5 +3,7 @@
 mod load;
 mod schema;
 
-pub use load::{KeySeg, LoadedScenario, MAX_DURATION_S, MAX_MAP_CELLS, load, load_str, position_of};
+pub use load::{
+    KeySeg, LoadedScenario, MAX_DURATION_S, MAX_MAP_CELLS, expand_map_preset, load, load_str, position_of,
+};
 pub use schema::*;

@@ -1,0 +1,306 @@
+//! The one place where cells are judged: for every cell of a run's region, what the truth says (its class),
+//! what the map says (its [`Traversability`]) and the verdict on the map. Every metric, CSV file, image and the
+//! planner check read this raster; "truly blocked" is defined once, by [`TruthRaster::truly_blocked`].
+
+use oeg::{CellIndex, CellRegion, Map, Traversability, TraversabilityRule};
+use serde::Serialize;
+use sim::truth::TruthRaster;
+
+use crate::error::Result;
+
+/// What the truth says about a cell. A cell both under a too-low structure and a step is [`Self::TooLow`]: the
+/// classes partition the cells, so counts add up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TruthClass {
+    /// No terrain under the cell.
+    OffTerrain,
+    /// The robot drives there.
+    Drivable,
+    /// The robot drives there, under a structure higher than itself.
+    PassableUnder,
+    /// A step the robot cannot climb (a rise of more than its step within its contact distance).
+    Step,
+    /// Under a structure lower than the robot.
+    TooLow,
+}
+
+impl TruthClass {
+    /// Whether the robot truly cannot enter the cell.
+    pub fn is_blocked(self) -> bool {
+        matches!(self, Self::Step | Self::TooLow)
+    }
+
+    /// Whether a structure stands over the cell (passable or not): the clearance decision's cells.
+    pub fn is_under_structure(self) -> bool {
+        matches!(self, Self::PassableUnder | Self::TooLow)
+    }
+
+    /// The class of the truth's cell at raster offset `k`.
+    pub fn of(truth: &TruthRaster, k: usize) -> Self {
+        let t = &truth.cells[k];
+        if t.elevation_m.is_nan() {
+            return Self::OffTerrain;
+        }
+        match t.clearance_passable(&truth.profile) {
+            Some(false) => Self::TooLow,
+            _ if truth.truly_blocked(k) => Self::Step,
+            Some(true) => Self::PassableUnder,
+            None => Self::Drivable,
+        }
+    }
+}
+
+/// The verdict on the map's decision for one cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Not scored: never observed by the map, or off the terrain.
+    NotScored,
+    /// Truly drivable, mapped drivable.
+    RightDrivable,
+    /// Truly blocked, mapped blocked.
+    RightBlocked,
+    /// Truly blocked, mapped drivable: where the robot would drive into something.
+    Unsafe,
+    /// Truly drivable, mapped blocked.
+    OverCautious,
+    /// The map cannot tell (its step or clearance lies within `kappa` sigma of the threshold).
+    Uncertain,
+}
+
+impl Verdict {
+    /// Every verdict, in a fixed order.
+    pub const ALL: [Verdict; 6] = [
+        Self::NotScored,
+        Self::RightDrivable,
+        Self::RightBlocked,
+        Self::Unsafe,
+        Self::OverCautious,
+        Self::Uncertain,
+    ];
+
+    /// The verdict on a map class `mapped` for a cell of truth class `truth`.
+    pub fn of(truth: TruthClass, mapped: Traversability) -> Self {
+        if truth == TruthClass::OffTerrain || mapped == Traversability::Unknown {
+            return Self::NotScored;
+        }
+        if mapped == Traversability::Uncertain {
+            return Self::Uncertain;
+        }
+        match (truth.is_blocked(), mapped == Traversability::Blocked) {
+            (false, false) => Self::RightDrivable,
+            (true, true) => Self::RightBlocked,
+            (true, false) => Self::Unsafe,
+            (false, true) => Self::OverCautious,
+        }
+    }
+
+    /// The snake_case name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::NotScored => "not_scored",
+            Self::RightDrivable => "right_drivable",
+            Self::RightBlocked => "right_blocked",
+            Self::Unsafe => "unsafe",
+            Self::OverCautious => "over_cautious",
+            Self::Uncertain => "uncertain",
+        }
+    }
+}
+
+/// The verdict raster of one map against one truth: row-major over the truth's region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verdicts {
+    /// The cells.
+    pub region: CellRegion,
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// The truth's class of every cell.
+    pub truth: Vec<TruthClass>,
+    /// The map's class of every cell.
+    pub mapped: Vec<Traversability>,
+    /// The verdict on every cell.
+    pub verdict: Vec<Verdict>,
+}
+
+/// How many cells got each verdict, with the unsafe and over-cautious ones split by what decides them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct VerdictCounts {
+    /// Cells scored (observed, on the terrain): the sum of the verdicts below.
+    pub num_scored_cells: u64,
+    /// Truly drivable, mapped drivable.
+    pub right_drivable_cells: u64,
+    /// Truly blocked, mapped blocked.
+    pub right_blocked_cells: u64,
+    /// Truly a step, mapped drivable.
+    pub unsafe_step_cells: u64,
+    /// Under a structure lower than the robot, mapped drivable.
+    pub unsafe_clearance_cells: u64,
+    /// Truly drivable (no structure over it), mapped blocked.
+    pub overcautious_step_cells: u64,
+    /// Under a structure the robot passes under, mapped blocked.
+    pub overcautious_clearance_cells: u64,
+    /// Mapped uncertain.
+    pub uncertain_cells: u64,
+    /// Mapped uncertain and truly blocked: the uncertain cells that kept the robot out of trouble.
+    pub uncertain_truly_blocked_cells: u64,
+    /// Scored cells under a structure.
+    pub num_clearance_cells: u64,
+}
+
+impl VerdictCounts {
+    /// Unsafe cells, step and clearance.
+    pub fn unsafe_cells(&self) -> u64 {
+        self.unsafe_step_cells + self.unsafe_clearance_cells
+    }
+
+    /// Over-cautious cells, step and clearance.
+    pub fn overcautious_cells(&self) -> u64 {
+        self.overcautious_step_cells + self.overcautious_clearance_cells
+    }
+}
+
+impl Verdicts {
+    /// Judges `map` under `rule` against `truth` (whose profile is the robot's) over the truth's region.
+    ///
+    /// # Errors
+    /// A raster too large for the map's memory limit.
+    pub fn new(map: &Map, truth: &TruthRaster, rule: TraversabilityRule) -> Result<Self> {
+        let mapped = map.traversability_layer(truth.region, &truth.profile, rule)?.values;
+        Ok(Self::from_classes(truth, mapped))
+    }
+
+    /// The verdicts on the map classes `mapped` (row-major over the truth's region).
+    pub fn from_classes(truth: &TruthRaster, mapped: Vec<Traversability>) -> Self {
+        let truth_classes: Vec<TruthClass> = (0..truth.cells.len()).map(|k| TruthClass::of(truth, k)).collect();
+        let verdict = truth_classes
+            .iter()
+            .zip(&mapped)
+            .map(|(t, m)| Verdict::of(*t, *m))
+            .collect();
+        Self {
+            region: truth.region,
+            resolution_m: truth.resolution_m,
+            truth: truth_classes,
+            mapped,
+            verdict,
+        }
+    }
+
+    /// The raster offset of `cell`, if inside the region.
+    pub fn offset(&self, cell: CellIndex) -> Option<usize> {
+        self.region.offset(cell)
+    }
+
+    /// The counts of every verdict.
+    pub fn counts(&self) -> VerdictCounts {
+        let mut c = VerdictCounts::default();
+        for (t, v) in self.truth.iter().zip(&self.verdict) {
+            if *v == Verdict::NotScored {
+                continue;
+            }
+            c.num_scored_cells += 1;
+            c.num_clearance_cells += u64::from(t.is_under_structure());
+            let structure = t.is_under_structure();
+            match v {
+                Verdict::NotScored => {}
+                Verdict::RightDrivable => c.right_drivable_cells += 1,
+                Verdict::RightBlocked => c.right_blocked_cells += 1,
+                Verdict::Unsafe if *t == TruthClass::TooLow => c.unsafe_clearance_cells += 1,
+                Verdict::Unsafe => c.unsafe_step_cells += 1,
+                Verdict::OverCautious if structure => c.overcautious_clearance_cells += 1,
+                Verdict::OverCautious => c.overcautious_step_cells += 1,
+                Verdict::Uncertain => {
+                    c.uncertain_cells += 1;
+                    c.uncertain_truly_blocked_cells += u64::from(t.is_blocked());
+                }
+            }
+        }
+        c
+    }
+
+    /// The truth's decisions as map classes, for planning on the truth: blocked where the robot truly cannot
+    /// enter, free elsewhere, unknown off the terrain.
+    pub fn truth_decisions(&self) -> Vec<Traversability> {
+        self.truth
+            .iter()
+            .map(|t| match t {
+                TruthClass::OffTerrain => Traversability::Unknown,
+                t if t.is_blocked() => Traversability::Blocked,
+                _ => Traversability::Free,
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{truth_cell, truth_raster};
+    use proptest::prelude::*;
+
+    const MAPPED: [Traversability; 5] = [
+        Traversability::Unknown,
+        Traversability::Free,
+        Traversability::Traversable,
+        Traversability::Blocked,
+        Traversability::Uncertain,
+    ];
+
+    #[test]
+    fn each_pair_of_classes_gets_its_verdict() {
+        use Traversability as T;
+        assert_eq!(Verdict::of(TruthClass::Step, T::Free), Verdict::Unsafe);
+        assert_eq!(Verdict::of(TruthClass::TooLow, T::Traversable), Verdict::Unsafe);
+        assert_eq!(Verdict::of(TruthClass::Drivable, T::Blocked), Verdict::OverCautious);
+        assert_eq!(Verdict::of(TruthClass::PassableUnder, T::Free), Verdict::RightDrivable);
+        assert_eq!(Verdict::of(TruthClass::Step, T::Uncertain), Verdict::Uncertain);
+        assert_eq!(Verdict::of(TruthClass::Step, T::Unknown), Verdict::NotScored);
+        assert_eq!(Verdict::of(TruthClass::OffTerrain, T::Blocked), Verdict::NotScored);
+    }
+
+    proptest! {
+        /// Every cell gets exactly one verdict, and the counts are the raster's.
+        #[test]
+        fn every_cell_gets_one_verdict_and_the_counts_are_the_rasters(
+            cells in prop::collection::vec((0usize..5, 0.0f32..0.1, prop::option::of(0.2f32..0.8), any::<bool>()), 1..200)
+        ) {
+            let n = cells.len() as i32;
+            let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(n - 1, 0)).expect("region");
+            let truth = truth_raster(
+                region,
+                cells
+                    .iter()
+                    .map(|(_, z, gap, off)| {
+                        let mut c = truth_cell(*z, *z > 0.035, gap.unwrap_or(f32::NAN));
+                        if *off { c.elevation_m = f32::NAN; }
+                        c
+                    })
+                    .collect(),
+            );
+            let mapped: Vec<Traversability> = cells.iter().map(|(m, ..)| MAPPED[*m]).collect();
+            let v = Verdicts::from_classes(&truth, mapped.clone());
+            prop_assert_eq!(v.verdict.len(), cells.len());
+            let c = v.counts();
+            let tally = |want: Verdict| v.verdict.iter().filter(|x| **x == want).count() as u64;
+            prop_assert_eq!(c.right_drivable_cells, tally(Verdict::RightDrivable));
+            prop_assert_eq!(c.right_blocked_cells, tally(Verdict::RightBlocked));
+            prop_assert_eq!(c.unsafe_cells(), tally(Verdict::Unsafe));
+            prop_assert_eq!(c.overcautious_cells(), tally(Verdict::OverCautious));
+            prop_assert_eq!(c.uncertain_cells, tally(Verdict::Uncertain));
+            prop_assert_eq!(
+                c.num_scored_cells,
+                c.right_drivable_cells + c.right_blocked_cells + c.unsafe_cells() + c.overcautious_cells()
+                    + c.uncertain_cells
+            );
+            prop_assert_eq!(c.num_scored_cells + tally(Verdict::NotScored), cells.len() as u64);
+            for k in 0..cells.len() {
+                // The one definition: the raster's truth agrees with the truth raster's.
+                let off = truth.cells[k].elevation_m.is_nan();
+                prop_assert_eq!(v.truth[k].is_blocked(), !off && truth.truly_blocked(k));
+                prop_assert_eq!(v.verdict[k], Verdict::of(v.truth[k], mapped[k]));
+            }
+        }
+    }
+}
