@@ -406,7 +406,7 @@ mod tests {
         assert!(check_expectations(&mut m, &e).is_empty());
         assert!(m.expectations_passed);
         e.insert(
-            "unsafe_step_cells".to_string(),
+            "unsafe_cells".to_string(),
             sim::scenario::Expectation {
                 min: None,
                 max: Some(0.0),
@@ -414,7 +414,7 @@ mod tests {
         );
         let failed = check_expectations(&mut m, &e);
         assert_eq!(failed.len(), 1);
-        assert_eq!(failed[0].to_string(), "unsafe_step_cells = 1 (required <= 0)");
+        assert_eq!(failed[0].to_string(), "unsafe_cells = 1 (required <= 0)");
         assert!(!m.expectations_passed && m.num_expectations_failed == 1);
         assert!(metric_names().contains(&"elevation_rmse_m".to_string()));
     }

@@ -320,7 +320,7 @@ mod tests {
         let options = PlannerOptions {
             inflation_radius_m: 0.0,
             unknown: UnknownCells::Drivable,
-            uncertain: UncertainCells::Blocked,
+            uncertain: oeg::UncertainCells::Blocked,
         };
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
         let truth_plan = planner::plan(&region, 1.0, &truly, s, g, &options)

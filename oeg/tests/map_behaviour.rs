@@ -243,8 +243,9 @@ fn a_map_over_its_memory_limit_is_an_error() {
         ..MapConfig::new(0.05)
     };
     let mut map = Map::new(config).expect("valid");
-    // A 20 m ray at 0.05 m touches ~7 tiles of 48 KiB plus scratch: fine. A 500 m ray is not.
-    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(20.0, 0.0, 0.0)]))
+    // A 10 m ray at 0.05 m touches ~4 tiles of 48 KiB plus their scratch (112 KiB each): fine. A 500 m ray
+    // is not.
+    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(10.0, 0.0, 0.0)]))
         .expect("fits");
     let err = map
         .integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(500.0, 300.0, 0.0)]))
