@@ -31,8 +31,9 @@ pub struct RunOptions {
     pub seed: Option<u64>,
     /// `key=value` overrides (see [`crate::overrides`]).
     pub overrides: Vec<String>,
-    /// Also maps the same sensor log with this preset's model and step rule, and writes its report into
-    /// `<out>/<preset>/` with a side-by-side comparison (`comparison.csv`, `decisions_comparison.png`).
+    /// Also maps the same sensor log as if the scenario's `[map]` said `preset = "<preset>"` (its own
+    /// `[map.model]` keys still apply), and writes that report into `<out>/<preset>/` with a side-by-side
+    /// comparison (`comparison.csv`, `decisions_comparison.png`).
     pub compare: Option<oeg::MapPreset>,
 }
 
@@ -260,15 +261,16 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         .out_dir
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&s.name));
-    let profile = profile_of(s)?;
-    // The compared model: the scenario with the preset's model and step rule (region and resolution kept).
-    let compared: Option<(oeg::MapPreset, scenario::Scenario)> = options.compare.map(|preset| {
-        let mut c = s.clone();
-        c.map.preset = preset;
-        c.map.model = preset.model(&profile);
-        c.map.traversability = preset.traversability();
-        (preset, c)
-    });
+    // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]` keys,
+    // such as height thresholding, still apply), through the same door as `--set map.preset=<preset>`.
+    let compared: Option<(oeg::MapPreset, scenario::Scenario)> = match options.compare {
+        None => None,
+        Some(preset) => {
+            let mut with_preset = options.clone();
+            with_preset.overrides.push(format!("map.preset={}", preset.name()));
+            Some((preset, load(&with_preset)?.scenario))
+        }
+    };
     let mut settings = vec![&s.map];
     if let Some((_, c)) = &compared {
         settings.push(&c.map);
@@ -383,7 +385,7 @@ fn write_report(
 /// One row of `comparison.csv`: one model's decisions on the same sensor log.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ComparisonRow {
-    /// The model: the scenario's preset, with `(scenario)` when the scenario changes its options.
+    /// The model: the preset, with the scenario's own `[map.model]` keys over it.
     pub model: String,
     /// Unsafe cells (step and clearance).
     pub unsafe_cells: u64,
@@ -413,14 +415,8 @@ fn write_comparison(
         .iter()
         .map(|(s, e)| {
             let m = &e.metrics;
-            let own = s.map.model == s.map.preset.model(&s.robot.profile())
-                && s.map.traversability == s.map.preset.traversability();
             ComparisonRow {
-                model: if own {
-                    s.map.preset.name().to_string()
-                } else {
-                    format!("{} (scenario)", s.map.preset.name())
-                },
+                model: s.map.preset.name().to_string(),
                 unsafe_cells: m.unsafe_cells,
                 overcautious_cells: m.overcautious_cells,
                 uncertain_cells: m.uncertain_cells,

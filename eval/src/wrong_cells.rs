@@ -16,7 +16,8 @@ pub struct WrongCell {
     pub x_m: f64,
     /// Cell centre, world y, metres.
     pub y_m: f64,
-    /// `unsafe` (truly blocked, mapped drivable) or `over_cautious` (truly drivable, mapped blocked).
+    /// `unsafe` (truly blocked, mapped drivable), `over_cautious` (truly drivable, mapped blocked) or
+    /// `uncertain` (the map could not tell).
     pub error: &'static str,
     /// The map's class: `free`, `traversable` or `blocked`.
     pub mapped: &'static str,
@@ -38,8 +39,9 @@ pub struct WrongCell {
     pub true_structure_gap_m: Option<f32>,
 }
 
-/// The observed cells of the truth's region whose decision is wrong (verdict `unsafe` or `over_cautious`),
-/// row-major from the region's min corner, read from the run's verdict raster.
+/// The observed cells of the truth's region whose decision is wrong (verdict `unsafe` or `over_cautious`) or
+/// that the map could not judge (`uncertain`), row-major from the region's min corner, read from the run's
+/// verdict raster.
 pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
     let geometry = *map.geometry();
     let mut rows = Vec::new();
@@ -47,6 +49,7 @@ pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<W
         let error = match verdicts.verdict[k] {
             Verdict::Unsafe => "unsafe",
             Verdict::OverCautious => "over_cautious",
+            Verdict::Uncertain => "uncertain",
             _ => continue,
         };
         let t = &truth.cells[k];

@@ -29,8 +29,9 @@ pub(crate) struct ScanEvidence {
     hit_z_m: f32,
     /// Variance of that measurement.
     hit_var_m2: f32,
-    /// The lowest hit of the scan in the cell; +inf: none.
-    hit_z_min_m: f32,
+    /// The scan's hits in the cell as an unweighted sample: their number, mean and sum of squared deviations
+    /// (Welford), and the sum of their variances ([`crate::model::spread_variance`]).
+    hits: HitSample,
     /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it),
     /// from samples more than 3 sigma before their hit (confidently free).
     free_z_m: f32,
@@ -46,7 +47,7 @@ impl ScanEvidence {
         p_max: 0.0,
         hit_z_m: f32::NEG_INFINITY,
         hit_var_m2: f32::INFINITY,
-        hit_z_min_m: f32::INFINITY,
+        hits: HitSample::NONE,
         free_z_m: f32::INFINITY,
         free_var_m2: f32::INFINITY,
         band_contradicted: false,
@@ -68,11 +69,7 @@ impl ScanEvidence {
     fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation) {
         self.raise_p(p);
         (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
-        self.hit_z_min_m = if z_m < self.hit_z_min_m {
-            z_m
-        } else {
-            self.hit_z_min_m
-        };
+        self.hits.add(z_m, var_m2);
     }
 
     /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
@@ -89,6 +86,43 @@ impl ScanEvidence {
         } else {
             self.free_var_m2
         };
+    }
+}
+
+/// A scan's hits in one cell as a sample: enough to tell their spread from their noise.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct HitSample {
+    n: f32,
+    mean_m: f32,
+    m2: f32,
+    sum_var_m2: f32,
+}
+
+impl HitSample {
+    const NONE: Self = Self {
+        n: 0.0,
+        mean_m: 0.0,
+        m2: 0.0,
+        sum_var_m2: 0.0,
+    };
+
+    #[inline(always)]
+    fn add(&mut self, z_m: f32, var_m2: f32) {
+        self.n += 1.0;
+        let d = z_m - self.mean_m;
+        self.mean_m += d / self.n;
+        self.m2 += d * (z_m - self.mean_m);
+        self.sum_var_m2 += var_m2;
+    }
+
+    /// The sample variance of the hits' heights (0 for fewer than two).
+    fn sample_variance(&self) -> f32 {
+        if self.n < 2.0 { 0.0 } else { self.m2 / (self.n - 1.0) }
+    }
+
+    /// The mean of the hits' own variances.
+    fn mean_variance(&self) -> f32 {
+        if self.n < 1.0 { 0.0 } else { self.sum_var_m2 / self.n }
     }
 }
 
@@ -217,7 +251,7 @@ impl Map {
                 continue;
             }
             let s2 = if opts.vertical_variance {
-                vertical_variance(sigma_for_free, dir.z)
+                vertical_variance(sigma_for_free, dir.z, hit_range_m.map_or(l_end, |(l, _)| l))
             } else {
                 (sigma_for_free * sigma_for_free) as f32
             };
@@ -360,7 +394,11 @@ fn update_cell(
     let q = opts.process_noise_var_m2;
     let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
         let s2 = match opts.scan_hit_elevation {
-            ScanHitElevation::HighestWithSpread => spread_variance(ev.hit_var_m2, ev.hit_z_m, ev.hit_z_min_m),
+            ScanHitElevation::MeanWithSpread => spread_variance(
+                ev.hit_var_m2,
+                ev.hits.sample_variance(),
+                ev.hits.mean_variance(),
+            ),
             ScanHitElevation::Highest | ScanHitElevation::WeightedMean => ev.hit_var_m2,
         };
         // A surface the scan's beams passed through, and a hit below it: the surface has gone down (a person

@@ -64,7 +64,8 @@ pub struct PlannedRun<'a> {
 }
 
 /// Keys that do not change the simulation: runs differing only in these share one.
-const MAP_ONLY_KEYS: [&str; 7] = [
+const MAP_ONLY_KEYS: [&str; 8] = [
+    "map.preset",
     "map.model",
     "map.traversability",
     "map.resolution_m",

@@ -5,6 +5,8 @@
 //!   robot and its sensors, not the rules.
 //! * `static`: the README's static settings (a beam passing above or far below a cell's surface says nothing
 //!   about it; a much higher hit replaces the estimate), for scenes without moving people.
+//! * `robust`: the map crate's recommended preset (`[map] preset = "robust"`, `oeg::MapPreset::Robust`): every
+//!   rule option and the step rule from it, the scenario's height threshold and ranges over it.
 
 use toml::Value;
 
@@ -12,8 +14,9 @@ use toml::Value;
 pub const PRESET_KEY: &str = "preset";
 
 /// The built-in presets and what they are.
-pub const BUILT_IN: [(&str, &str); 2] = [
+pub const BUILT_IN: [(&str, &str); 3] = [
     ("paper", "the paper's update rules as published"),
+    ("robust", "oeg's recommended preset (map.preset = robust)"),
     (
         "static",
         "the static settings: free_space_occupancy = below_elevation, free_space_max_depth_m = 0.01, highest_surface fusion",
@@ -21,7 +24,8 @@ pub const BUILT_IN: [(&str, &str); 2] = [
 ];
 
 /// The model options that are update rules; `paper` returns each to its default.
-const RULE_KEYS: [&str; 13] = [
+const RULE_KEYS: [&str; 17] = [
+    "map.preset",
     "map.model.log_odds_min",
     "map.model.log_odds_max",
     "map.model.occupied_threshold",
@@ -35,6 +39,9 @@ const RULE_KEYS: [&str; 13] = [
     "map.model.scan_hit_elevation",
     "map.model.elevation_fusion",
     "map.model.process_noise_var_m2",
+    "map.model.surface_band_sigmas",
+    "map.model.measurement_correlation",
+    "map.model.vertical_variance",
 ];
 
 /// A built-in preset's overrides in order: `(key, Some(value))` sets, `(key, None)` removes (the default).
@@ -47,6 +54,12 @@ pub fn built_in(name: &str) -> Option<Vec<(String, Option<Value>)>> {
     };
     match name {
         "paper" => Some(paper()),
+        "robust" => {
+            let mut o = paper();
+            o.push(("map.traversability".into(), None));
+            o.push(("map.preset".into(), Some(Value::String("robust".into()))));
+            Some(o)
+        }
         "static" => {
             let mut o = paper();
             let fusion: toml::Table = toml::from_str(

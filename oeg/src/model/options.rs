@@ -22,8 +22,8 @@ pub const DEFAULT_P_MIN: f32 = 0.4;
 pub const DEFAULT_P_MAX: f32 = 0.9;
 /// Default `l_occ` of eq. 12: a sample is an elevation measurement when its `p` exceeds this.
 pub const DEFAULT_ELEVATION_THRESHOLD: f32 = 0.5;
-/// Default depth of a cell's surface band below its top, in standard deviations
-/// ([`FreeSpaceOccupancy::SurfaceBand`]): 3, the Gaussian's 99.7 % bound.
+/// Default half width of a cell's surface band, in standard deviations ([`FreeSpaceOccupancy::SurfaceBand`]):
+/// 3, the Gaussian's 99.7 % bound.
 pub const DEFAULT_SURFACE_BAND_SIGMAS: f32 = 3.0;
 /// The inverse sensor model's Gaussian is evaluated within this many range errors of the hit; beyond it the
 /// exponential is below 1.2 % and the sample takes `p_occ(l)`. Cells beyond `l_p + 3 dl` are not touched.
@@ -94,11 +94,11 @@ pub enum ScanHitElevation {
     /// (sequential Kalman updates with the same result). Noise no longer biases it upwards; a cell that spans an
     /// obstacle's edge gets a height between its top and the ground.
     WeightedMean,
-    /// The highest hit, as the paper, with a variance that also holds how far the scan's hits in the cell
-    /// spread below it: `s^2 = s_hit^2 + ((z_max - z_min) / 2)^2`. A cell that spans an edge, or a column
-    /// (a person) hit at many heights, is then as uncertain as its surface is spread
-    /// ([`crate::model::spread_variance`]).
-    HighestWithSpread,
+    /// The inverse-variance weighted mean of the hits (as [`Self::WeightedMean`]), with a variance that also
+    /// holds how far the surface itself spreads within the cell: the excess of the hits' sample variance over
+    /// their noise ([`crate::model::spread_variance`]). A cell that spans an edge, or a column (a person) hit
+    /// at many heights, is then as uncertain as its surface is spread; noise is not taken for spread.
+    MeanWithSpread,
 }
 
 /// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
@@ -117,8 +117,8 @@ pub enum FreeSpaceOccupancy {
     /// lower its occupancy, and restarts from the ground once it turns free.
     BelowElevation,
     /// A free sample counts only where the beam passes through the band in which the cell's surface is
-    /// believed to be: below its top `mu` by more than one and less than `surface_band_sigmas` standard
-    /// deviations (see [`crate::model::band_contradicts`]). A beam far below the surface (under a board or a
+    /// believed to be: within `surface_band_sigmas` standard deviations of `mu` (see
+    /// [`crate::model::band_contradicts`]). A beam far below the surface (under a board or a
     /// table) or above it (over a curb or a low wall) says nothing about it. Cells without an estimate are
     /// updated as in the paper. In the same scan, a hit below a contradicted surface replaces it (the surface
     /// has gone down: a person who left).
@@ -163,7 +163,7 @@ pub struct ModelOptions {
     /// Whether a hit's elevation variance is its range variance projected onto the vertical
     /// ([`crate::model::vertical_variance`]) rather than the range variance itself (the paper, `false`).
     pub vertical_variance: bool,
-    /// How many standard deviations below a cell's top its surface band reaches
+    /// Half the width of a cell's surface band, in standard deviations of its elevation
     /// ([`FreeSpaceOccupancy::SurfaceBand`]).
     pub surface_band_sigmas: f32,
     /// Correlation `rho` between the errors of the measurements of one cell, in [0, 1]. Repeated measurements
@@ -291,9 +291,9 @@ impl ModelOptions {
             format!("must be a variance >= 0, got {}", o.process_noise_var_m2),
         )?;
         check(
-            o.surface_band_sigmas.is_finite() && o.surface_band_sigmas > 1.0,
+            o.surface_band_sigmas.is_finite() && o.surface_band_sigmas > 0.0,
             "surface_band_sigmas",
-            format!("must be a number of standard deviations > 1, got {}", o.surface_band_sigmas),
+            format!("must be a positive number of standard deviations, got {}", o.surface_band_sigmas),
         )?;
         check(
             (0.0..=1.0).contains(&o.measurement_correlation),

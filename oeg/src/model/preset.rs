@@ -23,9 +23,9 @@ pub enum MapPreset {
     /// reproducing the paper.
     #[default]
     Paper,
-    /// The recommended model: the paper's equations with the surface-band free-space rule, the highest surface
-    /// with its spread, correlated measurements, height thresholding at the robot's height and the contact
-    /// step rule with an uncertain band.
+    /// The recommended model: the paper's equations with the surface-band free-space rule, a scan's mean hit
+    /// with the surface's spread, the vertical variance of a hit, correlated measurements, height
+    /// thresholding at the robot's height and the contact step rule with an uncertain band.
     Robust,
 }
 
@@ -48,7 +48,7 @@ impl MapPreset {
             Self::Robust => ModelOptions {
                 free_space_occupancy: FreeSpaceOccupancy::SurfaceBand,
                 free_space_elevation: FreeSpaceElevation::Forget,
-                scan_hit_elevation: ScanHitElevation::HighestWithSpread,
+                scan_hit_elevation: ScanHitElevation::MeanWithSpread,
                 elevation_fusion: ElevationFusion::HighestSurface {
                     mahalanobis_threshold: ROBUST_MAHALANOBIS_THRESHOLD,
                     lower_threshold: None,

@@ -47,14 +47,14 @@ impl ScanHitElevation {
     #[inline(always)]
     pub fn combine(self, (z, var): (f32, f32), z_m: f32, var_m2: f32) -> (f32, f32) {
         match self {
-            Self::Highest | Self::HighestWithSpread => {
+            Self::Highest => {
                 if z_m > z {
                     (z_m, var_m2)
                 } else {
                     (z, var)
                 }
             }
-            Self::WeightedMean => {
+            Self::WeightedMean | Self::MeanWithSpread => {
                 if z == f32::NEG_INFINITY {
                     (z_m, var_m2)
                 } else {
@@ -81,24 +81,25 @@ pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, b
 
 /// [`FreeSpaceOccupancy::SurfaceBand`]: whether a beam whose path through a cell spans the heights
 /// `[z_lo_m, z_hi_m]` passes through the band where the cell's surface is believed to be, and so contradicts
-/// it. The band reaches from one to `band_sigmas` standard deviations below the top `mu`:
-/// `[mu - band_sigmas sigma, mu - sigma]`. A beam above it passed over the surface (or within its noise); a
-/// beam below it passed under it (under a board, a table, a branch).
+/// it: `[mu - k sigma, mu + k sigma]` with `k = band_sigmas`. A beam below the band passed under the surface (a
+/// board, a table, a branch); one above it passed over it (a curb, a low wall). Neither says anything about
+/// it.
 ///
 /// The anchors' visibility clean-up (elevation_mapping, elevation_mapping_cupy) removes a cell whenever a
-/// ray passes below its height, which also removes every overhang a ray passes under; this band keeps them.
+/// ray passes below its height, which also removes every overhang a ray passes under; the band keeps them.
 pub fn band_contradicts(prior: Elevation, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
-    let sigma = prior.var_m2.sqrt();
-    let (bottom, top) = (prior.mean_m - band_sigmas * sigma, prior.mean_m - sigma);
-    z_lo_m < top && z_hi_m > bottom
+    let half = band_sigmas * prior.var_m2.sqrt();
+    z_lo_m <= prior.mean_m + half && z_hi_m >= prior.mean_m - half
 }
 
-/// [`ScanHitElevation::HighestWithSpread`]: the variance of a scan's highest hit `z_max_m` (its own variance
-/// `var_m2`) when the scan's hits in the cell reach down to `z_min_m`: `var + ((z_max - z_min) / 2)^2`. The
-/// cell's surface may lie anywhere in that spread (an edge, a slope within the cell, a person's front).
-pub fn spread_variance(var_m2: f32, z_max_m: f32, z_min_m: f32) -> f32 {
-    let half = 0.5 * (z_max_m - z_min_m).max(0.0);
-    var_m2 + half * half
+/// [`ScanHitElevation::MeanWithSpread`]: the variance of a scan's measurement of a cell, the inverse-variance
+/// weighted mean of its hits (variance `mean_var_m2`), when the hits' heights have sample variance
+/// `sample_var_m2` while their own noise has mean variance `noise_var_m2`: the excess of the sample variance over
+/// the noise is the spread of the surface itself within the cell (an edge, a slope, a person's front), and
+/// it is added, `mean_var + max(0, sample_var - noise_var)`. Noise alone adds nothing: a cell seen by many
+/// noisy pixels is not taken for a rough one.
+pub fn spread_variance(mean_var_m2: f32, sample_var_m2: f32, noise_var_m2: f32) -> f32 {
+    mean_var_m2 + (sample_var_m2 - noise_var_m2).max(0.0)
 }
 
 /// [`crate::ModelOptions::measurement_correlation`]: the variance of a fused estimate when the measurements'
@@ -111,14 +112,22 @@ pub fn correlated_variance(fused_var_m2: f32, prior_var_m2: f32, measurement_var
 }
 
 /// [`crate::ModelOptions::vertical_variance`]: the variance of a hit's height when its range has standard
-/// deviation `range_sigma_m` along a beam of unit direction with vertical component `dir_z`: the range error
-/// projected onto z, `(sigma dir_z)^2`, with a floor of 1 mm (a beam parallel to the ground still has some
-/// vertical spread). The paper uses the range variance itself, which overstates a height error by
-/// `1 / dir_z^2`: 10 times for a beam 18 degrees below the horizon.
-pub fn vertical_variance(range_sigma_m: f64, dir_z: f64) -> f32 {
-    let s = (range_sigma_m * dir_z).abs().max(VERTICAL_SIGMA_FLOOR_M);
-    (s * s) as f32
+/// deviation `range_sigma_m` along a beam of unit direction with vertical component `dir_z`, `range_m` from
+/// the sensor. Two errors add up: the range error projected onto z, `(sigma_r dir_z)^2`, and the beam's
+/// footprint across its direction, `range * BEAM_SIGMA_RAD`, projected onto z (`1 - dir_z^2` of its
+/// variance). A floor of 1 mm remains. The paper uses the range variance itself, which overstates the height
+/// error of a beam that looks down at the ground 10 times at 18 degrees below the horizon, and understates it
+/// for a far, level beam.
+pub fn vertical_variance(range_sigma_m: f64, dir_z: f64, range_m: f64) -> f32 {
+    let along = range_sigma_m * dir_z;
+    let across = range_m * BEAM_SIGMA_RAD;
+    let var = along * along + across * across * (1.0 - dir_z * dir_z).max(0.0);
+    var.max(VERTICAL_SIGMA_FLOOR_M * VERTICAL_SIGMA_FLOOR_M) as f32
 }
+
+/// The standard deviation of where a beam hits across its direction, radians: half the 0.25 degree beam
+/// divergence of the SICK LMS 291 class of scanner the paper used (4.4 mrad full angle).
+pub const BEAM_SIGMA_RAD: f64 = 0.0022;
 
 /// The floor of [`vertical_variance`]'s standard deviation, metres.
 pub const VERTICAL_SIGMA_FLOOR_M: f64 = 0.001;
@@ -221,35 +230,40 @@ mod tests {
 
     #[test]
     fn a_beam_through_the_surface_band_contradicts_it_and_one_under_or_over_does_not() {
-        // A board whose top is at 0.46 m, known to 1 cm: its band is [0.43, 0.45].
+        // A board whose top is at 0.46 m, known to 1 cm: its band is [0.43, 0.49].
         let board = Elevation {
             mean_m: 0.46,
             var_m2: 1e-4,
         };
         assert!(band_contradicts(board, 0.44, 0.445, 3.0), "through the board");
+        assert!(band_contradicts(board, 0.47, 0.48, 3.0), "where its top is believed to be");
         assert!(!band_contradicts(board, 0.30, 0.42, 3.0), "under the board");
-        assert!(!band_contradicts(board, 0.455, 0.60, 3.0), "over it, or within its noise");
+        assert!(!band_contradicts(board, 0.50, 0.60, 3.0), "over it");
         assert!(band_contradicts(board, 0.10, 0.70, 3.0), "a steep beam crossing the band");
         // A person's front hit from 0.05 to 0.5 m: the spread makes the band deep, so the beams that hit the
         // body at mid height contradict it once the person has gone.
+        // Hits spread evenly from 0.05 to 0.5 m: a sample variance of 0.45^2 / 12.
         let person = Elevation {
-            mean_m: 0.5,
-            var_m2: spread_variance(1e-4, 0.5, 0.05),
+            mean_m: 0.3,
+            var_m2: spread_variance(1e-5, 0.45 * 0.45 / 12.0, 1e-4),
         };
         assert!(band_contradicts(person, 0.20, 0.21, 3.0));
-        // A curb's top at 4 cm known to 1 cm: a beam passing 1 cm over it says nothing.
+        // A curb's top at 4 cm known to 3 mm: a beam passing 1 cm over it says nothing.
         let curb = Elevation {
             mean_m: 0.04,
-            var_m2: 1e-4,
+            var_m2: 9e-6,
         };
         assert!(!band_contradicts(curb, 0.05, 0.06, 3.0));
     }
 
     #[test]
-    fn the_spread_of_a_scans_hits_widens_the_measurement() {
-        assert_eq!(spread_variance(1e-4, 0.3, 0.3), 1e-4);
-        // Hits from 0 to 4 cm: half the range, 2 cm, in quadrature.
-        assert!((spread_variance(1e-4, 0.04, 0.0) - (1e-4 + 4e-4)).abs() < 1e-9);
+    fn the_spread_of_a_scans_hits_widens_the_measurement_but_their_noise_does_not() {
+        // Noise alone: the sample variance is the noise's.
+        assert_eq!(spread_variance(1e-6, 1e-4, 1e-4), 1e-6);
+        assert_eq!(spread_variance(1e-6, 0.8e-4, 1e-4), 1e-6);
+        // Hits at 0 and 4 cm, 1 mm noise: the excess, about (2 cm)^2 x 2, is the edge's.
+        let sample = 2.0 * 0.02 * 0.02; // two hits at +-2 cm: sum of squares / (n - 1)
+        assert!((spread_variance(0.5e-6, sample, 1e-6) - (0.5e-6 + sample - 1e-6)).abs() < 1e-9);
     }
 
     #[test]
@@ -273,8 +287,10 @@ mod tests {
 
     #[test]
     fn a_range_error_is_projected_onto_the_vertical() {
-        assert!((vertical_variance(0.03, -1.0) - 9e-4).abs() < 1e-9, "straight down: all of it");
-        assert!((vertical_variance(0.03, -0.5) - 2.25e-4).abs() < 1e-9);
-        assert!((vertical_variance(0.03, 0.0) - 1e-6).abs() < 1e-12, "level: the floor");
+        assert!((vertical_variance(0.03, -1.0, 0.0) - 9e-4).abs() < 1e-9, "straight down: all of it");
+        assert!((vertical_variance(0.03, -0.5, 0.0) - 2.25e-4).abs() < 1e-9);
+        assert!((vertical_variance(0.03, 0.0, 0.0) - 1e-6).abs() < 1e-12, "level and near: the floor");
+        // Level at 10 m: the footprint, 2.2 cm.
+        assert!((vertical_variance(0.03, 0.0, 10.0) - 0.022f32 * 0.022).abs() < 1e-7);
     }
 }
