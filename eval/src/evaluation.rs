@@ -58,4 +58,3 @@ pub fn record_plan(metrics: &mut Metrics, check: &crate::plan::PlanCheck) {
     metrics.truth_plan_length_m = length(&check.truth_plan);
     metrics.plan_length_ratio = metrics.plan_length_m / metrics.truth_plan_length_m;
 }
-

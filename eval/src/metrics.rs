@@ -370,7 +370,10 @@ mod tests {
         assert_eq!(m.num_scored_cells, 3);
         assert_eq!((m.right_drivable_cells, m.right_blocked_cells), (1, 1));
         assert_eq!((m.unsafe_step_cells, m.overcautious_step_cells), (0, 0));
-        assert_eq!((m.unsafe_cells, m.overcautious_cells, m.uncertain_cells), (1, 0, 0));
+        assert_eq!(
+            (m.unsafe_cells, m.overcautious_cells, m.uncertain_cells),
+            (1, 0, 0)
+        );
         assert_eq!(
             (
                 m.num_clearance_cells,

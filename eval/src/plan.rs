@@ -57,7 +57,8 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
         message: format!("planner: {e}"),
     };
     let options = s.planner.options();
-    let map_plan = planner::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
+    let map_plan =
+        planner::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
     let truly = verdicts.truth_decisions();
     let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
     let unsafe_cells = match &map_plan {
@@ -316,7 +317,8 @@ mod tests {
                 })
                 .collect(),
         );
-        let truly = Verdicts::from_classes(&truth, vec![Traversability::Unknown; truth.cells.len()]).truth_decisions();
+        let truly = Verdicts::from_classes(&truth, vec![Traversability::Unknown; truth.cells.len()])
+            .truth_decisions();
         let options = PlannerOptions {
             inflation_radius_m: 0.0,
             unknown: UnknownCells::Drivable,

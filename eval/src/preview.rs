@@ -53,7 +53,11 @@ pub const TRUTH_CLASSES: [(TruthClass, &str, Rgb); 5] = [
     (TruthClass::OffTerrain, "off the terrain", NO_DATA),
     (TruthClass::Drivable, "drivable", [255, 255, 255]),
     (TruthClass::Step, "step blocked", [200, 40, 40]),
-    (TruthClass::PassableUnder, "under structure: passable", [90, 140, 230]),
+    (
+        TruthClass::PassableUnder,
+        "under structure: passable",
+        [90, 140, 230],
+    ),
     (TruthClass::TooLow, "under structure: too low", [120, 30, 120]),
 ];
 
@@ -123,7 +127,9 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
         geometry.resolution_m(),
         &title,
         |c| {
-            let Some(k) = truth.region.offset(c) else { return NO_DATA };
+            let Some(k) = truth.region.offset(c) else {
+                return NO_DATA;
+            };
             let class = TruthClass::of(&truth, k);
             TRUTH_CLASSES
                 .iter()

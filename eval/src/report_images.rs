@@ -8,9 +8,9 @@ use sim::truth::TruthRaster;
 
 use crate::error::Result;
 use crate::evaluation::Evaluation;
-use crate::verdict::Verdict;
 use crate::output::write_bytes;
 use crate::render::{Colormap, DRIVE, Figure, Legend, NO_DATA, PLAN, Rgb, finite_range};
+use crate::verdict::Verdict;
 
 /// The verdicts of `decisions.png`, in legend order, with their legend text and colour.
 pub const DECISION_CLASSES: [(Verdict, &str, Rgb); 6] = [
@@ -18,8 +18,16 @@ pub const DECISION_CLASSES: [(Verdict, &str, Rgb); 6] = [
     (Verdict::RightDrivable, "right, drivable", [255, 255, 255]),
     (Verdict::RightBlocked, "right, blocked", [110, 110, 110]),
     (Verdict::Unsafe, "UNSAFE (mapped drivable)", [220, 20, 20]),
-    (Verdict::OverCautious, "over-cautious (mapped blocked)", [255, 160, 30]),
-    (Verdict::Uncertain, "uncertain (the map cannot tell)", [70, 170, 230]),
+    (
+        Verdict::OverCautious,
+        "over-cautious (mapped blocked)",
+        [255, 160, 30],
+    ),
+    (
+        Verdict::Uncertain,
+        "uncertain (the map cannot tell)",
+        [70, 170, 230],
+    ),
 ];
 
 /// The colour of a verdict on `decisions.png`.
@@ -130,7 +138,12 @@ pub fn write(
 
 /// `decisions.png`: every cell's verdict, the drive, the obstacles' footprints and names, and the path planned
 /// on the map; titled `title` with the counts.
-pub fn decisions_figure(s: &Scenario, geometry: &oeg::GridGeometry, evaluation: &Evaluation, title: &str) -> Figure {
+pub fn decisions_figure(
+    s: &Scenario,
+    geometry: &oeg::GridGeometry,
+    evaluation: &Evaluation,
+    title: &str,
+) -> Figure {
     let (metrics, plan, verdicts) = (&evaluation.metrics, &evaluation.plan, &evaluation.verdicts);
     let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
         .iter()
@@ -154,7 +167,11 @@ pub fn decisions_figure(s: &Scenario, geometry: &oeg::GridGeometry, evaluation: 
             "{title}: {} unsafe, {} over-cautious, {} uncertain cells",
             metrics.unsafe_cells, metrics.overcautious_cells, metrics.uncertain_cells
         ),
-        |c| verdicts.offset(c).map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k])),
+        |c| {
+            verdicts
+                .offset(c)
+                .map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k]))
+        },
         &legend,
     );
     let mut fig = fig;

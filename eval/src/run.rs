@@ -13,11 +13,11 @@ use sim::world::Actors;
 use sim::{Simulation, scenario};
 
 use crate::error::{EvalError, Result};
+use crate::evaluation::{Evaluation, evaluate};
 use crate::mapping::write_layer_images;
 use crate::metrics::{self, FailedExpectation, Metrics};
 use crate::output::{create_dir, write_bytes, write_json};
 use crate::progress::Progress;
-use crate::evaluation::{Evaluation, evaluate};
 use crate::report_images;
 
 /// What to run.
@@ -267,7 +267,9 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         None => None,
         Some(preset) => {
             let mut with_preset = options.clone();
-            with_preset.overrides.push(format!("map.preset={}", preset.name()));
+            with_preset
+                .overrides
+                .push(format!("map.preset={}", preset.name()));
             Some((preset, load(&with_preset)?.scenario))
         }
     };
@@ -364,7 +366,8 @@ fn write_report(
         move |message| EvalError::Input { path, message }
     };
     let plan_path = out_dir.join("plan.csv");
-    let csv = crate::plan::to_csv(&crate::plan::rows(&evaluation.plan, &geometry)).map_err(csv_error(&plan_path))?;
+    let csv = crate::plan::to_csv(&crate::plan::rows(&evaluation.plan, &geometry))
+        .map_err(csv_error(&plan_path))?;
     write_bytes(&plan_path, &csv)?;
     files.push(plan_path);
     let obstacles_path = out_dir.join("obstacles.csv");
@@ -444,10 +447,15 @@ fn write_comparison(
     let figures: Vec<crate::render::Figure> = runs
         .iter()
         .zip(&rows)
-        .map(|((s, e), r)| report_images::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model)))
+        .map(|((s, e), r)| {
+            report_images::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model))
+        })
         .collect();
     let canvases: Vec<&crate::render::Canvas> = figures.iter().map(|f| f.canvas()).collect();
     let png_path = out_dir.join("decisions_comparison.png");
-    write_bytes(&png_path, &crate::render::Canvas::side_by_side(&canvases, 24).to_png())?;
+    write_bytes(
+        &png_path,
+        &crate::render::Canvas::side_by_side(&canvases, 24).to_png(),
+    )?;
     Ok(vec![csv_path, png_path])
 }

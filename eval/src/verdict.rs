@@ -167,13 +167,16 @@ impl Verdicts {
     /// # Errors
     /// A raster too large for the map's memory limit.
     pub fn new(map: &Map, truth: &TruthRaster, rule: TraversabilityRule) -> Result<Self> {
-        let mapped = map.traversability_layer(truth.region, &truth.profile, rule)?.values;
+        let mapped = map
+            .traversability_layer(truth.region, &truth.profile, rule)?
+            .values;
         Ok(Self::from_classes(truth, mapped))
     }
 
     /// The verdicts on the map classes `mapped` (row-major over the truth's region).
     pub fn from_classes(truth: &TruthRaster, mapped: Vec<Traversability>) -> Self {
-        let truth_classes: Vec<TruthClass> = (0..truth.cells.len()).map(|k| TruthClass::of(truth, k)).collect();
+        let truth_classes: Vec<TruthClass> =
+            (0..truth.cells.len()).map(|k| TruthClass::of(truth, k)).collect();
         let verdict = truth_classes
             .iter()
             .zip(&mapped)
@@ -253,11 +256,20 @@ mod tests {
         use Traversability as T;
         assert_eq!(Verdict::of(TruthClass::Step, T::Free), Verdict::Unsafe);
         assert_eq!(Verdict::of(TruthClass::TooLow, T::Traversable), Verdict::Unsafe);
-        assert_eq!(Verdict::of(TruthClass::Drivable, T::Blocked), Verdict::OverCautious);
-        assert_eq!(Verdict::of(TruthClass::PassableUnder, T::Free), Verdict::RightDrivable);
+        assert_eq!(
+            Verdict::of(TruthClass::Drivable, T::Blocked),
+            Verdict::OverCautious
+        );
+        assert_eq!(
+            Verdict::of(TruthClass::PassableUnder, T::Free),
+            Verdict::RightDrivable
+        );
         assert_eq!(Verdict::of(TruthClass::Step, T::Uncertain), Verdict::Uncertain);
         assert_eq!(Verdict::of(TruthClass::Step, T::Unknown), Verdict::NotScored);
-        assert_eq!(Verdict::of(TruthClass::OffTerrain, T::Blocked), Verdict::NotScored);
+        assert_eq!(
+            Verdict::of(TruthClass::OffTerrain, T::Blocked),
+            Verdict::NotScored
+        );
     }
 
     proptest! {

@@ -10,8 +10,9 @@ use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
     Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    ScanHitElevation, band_contradicts, vertical_variance, clamp_probability, correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model,
-    kalman_fuse, log_odds, ray_bound, spread_variance, update_log_odds,
+    ScanHitElevation, band_contradicts, clamp_probability, correlated_variance, elevation_observation,
+    fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound, spread_variance, update_log_odds,
+    vertical_variance,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -117,12 +118,20 @@ impl HitSample {
 
     /// The sample variance of the hits' heights (0 for fewer than two).
     fn sample_variance(&self) -> f32 {
-        if self.n < 2.0 { 0.0 } else { self.m2 / (self.n - 1.0) }
+        if self.n < 2.0 {
+            0.0
+        } else {
+            self.m2 / (self.n - 1.0)
+        }
     }
 
     /// The mean of the hits' own variances.
     fn mean_variance(&self) -> f32 {
-        if self.n < 1.0 { 0.0 } else { self.sum_var_m2 / self.n }
+        if self.n < 1.0 {
+            0.0
+        } else {
+            self.sum_var_m2 / self.n
+        }
     }
 }
 
@@ -290,8 +299,7 @@ impl Map {
                             // Far below the cell's surface: perhaps under an overhang, so it says nothing.
                             continue;
                         }
-                        if band_rule
-                            && let Some(e) = self.cells.get(crossing.cell).and_then(Cell::elevation)
+                        if band_rule && let Some(e) = self.cells.get(crossing.cell).and_then(Cell::elevation)
                         {
                             let l_bottom = if top_at_exit {
                                 crossing.l_enter
@@ -395,7 +403,9 @@ fn update_cell(
     let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
         let s2 = match opts.scan_hit_elevation {
             ScanHitElevation::MeanWithSpread => spread_variance(
-                ev.hit_var_m2,
+                // The hits of one scan share its errors too: their mean is no better than `rho` of one hit.
+                ev.hit_var_m2
+                    .max(opts.measurement_correlation * ev.hits.mean_variance()),
                 ev.hits.sample_variance(),
                 ev.hits.mean_variance(),
             ),

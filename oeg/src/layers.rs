@@ -146,7 +146,10 @@ impl Map {
                 (e.mean_m - ground, e.var_m2)
             }
             TraversabilityRule::Contact { .. } => {
-                let ground = self.lowest_within(cell, profile.contact_distance_m()).unwrap_or(e);
+                let ground = self
+                    .lowest_within(cell, profile.contact_distance_m())
+                    .0
+                    .unwrap_or(e);
                 let same = ground == e;
                 (
                     e.mean_m - ground.mean_m,
@@ -158,28 +161,33 @@ impl Map {
         step_decision(step_m, var_m2.sqrt(), rule, profile)
     }
 
-    /// The lowest elevation estimate among the cells whose centres lie within `distance_m` of `cell`'s (at
-    /// least its 8 neighbours: at a coarse resolution the nearest points of adjacent cells are closer than
-    /// their centres), the cell itself included.
-    pub fn lowest_within(&self, cell: CellIndex, distance_m: f32) -> Option<crate::model::Elevation> {
+    /// The lowest elevation estimate among the cells that hold a point within `distance_m` of a point of
+    /// `cell` (the gap between the two squares, not their centres: the cells a wheel on `cell` can reach within
+    /// that distance), the cell itself included; and whether every one of those cells has an estimate.
+    pub fn lowest_within(&self, cell: CellIndex, distance_m: f32) -> (Option<crate::model::Elevation>, bool) {
         let res = self.geometry().resolution_m();
-        let reach = (f64::from(distance_m) / res).max(std::f64::consts::SQRT_2) + 1e-9;
-        let r = reach.floor() as i32;
+        let reach = f64::from(distance_m) / res + 1e-9;
+        let r = reach.floor() as i32 + 1;
         let mut lowest: Option<crate::model::Elevation> = None;
+        let mut complete = true;
         for dj in -r..=r {
             for di in -r..=r {
-                if f64::from(di * di + dj * dj) > reach * reach {
+                let (gi, gj) = (f64::from((di.abs() - 1).max(0)), f64::from((dj.abs() - 1).max(0)));
+                if gi * gi + gj * gj > reach * reach {
                     continue;
                 }
                 let n = CellIndex::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
-                if let Some(ne) = self.cell(n).elevation()
-                    && lowest.is_none_or(|l| ne.mean_m < l.mean_m)
-                {
-                    lowest = Some(ne);
+                match self.cell(n).elevation() {
+                    Some(ne) => {
+                        if lowest.is_none_or(|l| ne.mean_m < l.mean_m) {
+                            lowest = Some(ne);
+                        }
+                    }
+                    None => complete = false,
                 }
             }
         }
-        lowest
+        (lowest, complete)
     }
 
     /// A dense raster of [`Map::traversability`] over `region`.

@@ -149,7 +149,9 @@ impl TraversabilityRule {
     /// [`Error::InvalidSetting`] for a negative or non-finite `kappa`.
     pub fn validate(&self) -> Result<()> {
         match *self {
-            Self::Conservative { kappa } | Self::Contact { kappa } if !(kappa.is_finite() && kappa >= 0.0) => {
+            Self::Conservative { kappa } | Self::Contact { kappa }
+                if !(kappa.is_finite() && kappa >= 0.0) =>
+            {
                 Err(Error::setting(
                     "traversability",
                     format!("kappa must be a number of standard deviations >= 0, got {kappa}"),

@@ -148,10 +148,22 @@ fn sample(world: &World, x: f64, y: f64, profile: &RobotProfile, actors: Actors)
     };
     let start = Point3::new(x, y, g + height);
     let surface = world
-        .cast_ray(&start, &-Vector3::z(), height + 0.01, actors, RayStart::InsideHits)
+        .cast_ray(
+            &start,
+            &-Vector3::z(),
+            height + 0.01,
+            actors,
+            RayStart::InsideHits,
+        )
         .map_or(g, |h| h.point_in_world.z.max(g));
     let up = Point3::new(x, y, g + 0.001);
-    let gap = match world.cast_ray(&up, &Vector3::z(), STRUCTURE_SEARCH_M, actors, RayStart::InsideHits) {
+    let gap = match world.cast_ray(
+        &up,
+        &Vector3::z(),
+        STRUCTURE_SEARCH_M,
+        actors,
+        RayStart::InsideHits,
+    ) {
         Some(h) if h.distance_m > 0.0 => h.distance_m + 0.001,
         _ => f64::INFINITY,
     };
@@ -245,7 +257,8 @@ impl SampleLattice {
     fn cell_truth(&self, k: usize, samples: &[Sample], rises: &[f64], profile: &RobotProfile) -> CellTruth {
         let num_x = self.region.num_x as usize;
         let (cu, cv) = (k % num_x, k / num_x);
-        let (mut top, mut rise, mut ground_sum, mut num_ground) = (f64::NEG_INFINITY, f64::NEG_INFINITY, 0.0, 0u32);
+        let (mut top, mut rise, mut ground_sum, mut num_ground) =
+            (f64::NEG_INFINITY, f64::NEG_INFINITY, 0.0, 0u32);
         let mut gap = f64::INFINITY;
         for sv in 0..self.n {
             for su in 0..self.n {

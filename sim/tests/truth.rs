@@ -72,7 +72,14 @@ fn a_board_at_0_35_m_blocks_and_one_at_0_60_m_lets_the_robot_pass() {
         (low.elevation_m - 0.37).abs() < 2e-3,
         "the board's top is the surface: {low:?}"
     );
-    assert!(truth.truly_blocked(truth.region.offset(g.cell_of(3.02, -1.02).expect("cell")).expect("inside")));
+    assert!(
+        truth.truly_blocked(
+            truth
+                .region
+                .offset(g.cell_of(3.02, -1.02).expect("cell"))
+                .expect("inside")
+        )
+    );
     assert!(at(2.82, -1.02).step_blocked, "its edge is a step as well");
     let high = at(3.02, 1.02);
     assert_eq!(high.clearance_passable(&PROFILE), Some(true), "{high:?}");
@@ -129,7 +136,10 @@ fn write_png(path: &std::path::Path, w: u32, h: u32, f: impl Fn(u32, u32) -> u8)
     encoder.set_color(png::ColorType::Grayscale);
     encoder.set_depth(png::BitDepth::Eight);
     let mut writer = encoder.write_header().expect("header");
-    let data: Vec<u8> = (0..h).flat_map(|r| (0..w).map(move |c| (c, r))).map(|(c, r)| f(c, r)).collect();
+    let data: Vec<u8> = (0..h)
+        .flat_map(|r| (0..w).map(move |c| (c, r)))
+        .map(|(c, r)| f(c, r))
+        .collect();
     writer.write_image_data(&data).expect("pixels");
 }
 
@@ -170,7 +180,10 @@ fn steps_drawn_into_a_heightmap_are_steps() {
         "the middle of its top, 15 cm from either edge, is flat ground to a wheel: {middle:?}"
     );
     let slope = at(2.0, 0.0);
-    assert!(!slope.step_blocked && slope.step_m < 0.02, "the slope between: {slope:?}");
+    assert!(
+        !slope.step_blocked && slope.step_m < 0.02,
+        "the slope between: {slope:?}"
+    );
 }
 
 #[test]

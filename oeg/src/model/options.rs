@@ -59,6 +59,12 @@ pub enum ElevationFusion {
     /// The paper: every measurement is fused by eq. 8 and 9.
     #[default]
     Kalman,
+    /// Eq. 8's mean, and eq. 9's variance plus the disagreement between the estimate and the measurement that
+    /// their variances do not explain ([`crate::model::fuse_with_disagreement`]). Measurements that agree
+    /// within their noise shrink the variance as eq. 9 does; one that disagrees (a spurious return, a person
+    /// arriving or leaving, the face of a curb) raises it by as much as it disagrees, so the estimate says how
+    /// sure it is.
+    Disagreement,
     /// As elevation_mapping (Fankhauser et al.): a measurement more than `mahalanobis_threshold` standard
     /// deviations above the estimate is a higher surface and replaces it; one as far below is a lower surface
     /// (the ground under a board, the foot of a curb's face) and is ignored, but raises the variance by
@@ -293,12 +299,18 @@ impl ModelOptions {
         check(
             o.surface_band_sigmas.is_finite() && o.surface_band_sigmas > 0.0,
             "surface_band_sigmas",
-            format!("must be a positive number of standard deviations, got {}", o.surface_band_sigmas),
+            format!(
+                "must be a positive number of standard deviations, got {}",
+                o.surface_band_sigmas
+            ),
         )?;
         check(
             (0.0..=1.0).contains(&o.measurement_correlation),
             "measurement_correlation",
-            format!("must be a correlation in [0, 1], got {}", o.measurement_correlation),
+            format!(
+                "must be a correlation in [0, 1], got {}",
+                o.measurement_correlation
+            ),
         )?;
         if let Some(h) = o.max_height_m {
             check(

@@ -3,7 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::options::{ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions, ScanHitElevation};
+use super::options::{
+    ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions, ScanHitElevation,
+};
 use crate::traversability::{DEFAULT_UNCERTAIN_KAPPA, RobotProfile, TraversabilityRule};
 
 /// How far above the robot's height `robust` still maps a structure, metres: its height thresholding
@@ -11,9 +13,6 @@ use crate::traversability::{DEFAULT_UNCERTAIN_KAPPA, RobotProfile, Traversabilit
 /// robot is kept and judged (blocked, or uncertain within `kappa` sigma of the robot's height); higher ones
 /// never enter the map, so the robot is let under them.
 pub const ROBUST_HEIGHT_MARGIN_M: f32 = 0.05;
-
-/// Mahalanobis distance beyond which `robust` takes a hit as another surface (elevation_mapping's default).
-pub const ROBUST_MAHALANOBIS_THRESHOLD: f32 = 3.0;
 
 /// A named model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -49,11 +48,7 @@ impl MapPreset {
                 free_space_occupancy: FreeSpaceOccupancy::SurfaceBand,
                 free_space_elevation: FreeSpaceElevation::Forget,
                 scan_hit_elevation: ScanHitElevation::MeanWithSpread,
-                elevation_fusion: ElevationFusion::HighestSurface {
-                    mahalanobis_threshold: ROBUST_MAHALANOBIS_THRESHOLD,
-                    lower_threshold: None,
-                    multi_height_noise_m2: 0.0,
-                },
+                elevation_fusion: ElevationFusion::Disagreement,
                 measurement_correlation: 1.0,
                 vertical_variance: true,
                 max_height_m: Some(profile.height_m + ROBUST_HEIGHT_MARGIN_M),

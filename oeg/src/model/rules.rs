@@ -37,6 +37,9 @@ pub fn fuse_elevation(
                 kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2)
             }
         }
+        (ElevationFusion::Disagreement, prior) => {
+            fuse_with_disagreement(prior, h_m, s2_m2, process_noise_var_m2)
+        }
         _ => kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2),
     }
 }
@@ -76,6 +79,34 @@ pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, b
         (FreeSpaceOccupancy::BelowElevation, Some(e)) => beam_top_m <= e.mean_m,
         // Decided beam by beam while gathering (`band_contradicts`): only contradicting samples get here.
         (FreeSpaceOccupancy::SurfaceBand, _) => true,
+    }
+}
+
+/// [`ElevationFusion::Disagreement`]: eq. 8's mean and eq. 9's variance, plus the part of the measurement's
+/// disagreement with the prior that their variances do not explain: `w (1 - w) max(0, d^2 - (sigma^2 + s^2))`
+/// with `d = h - mu` and `w = sigma^2 / (sigma^2 + s^2)` (the measurement's weight in eq. 8). `w (1 - w) d^2`
+/// is the spread term of the variance of the two-component mixture weighted as eq. 8 weights them; the
+/// expected innovation `sigma^2 + s^2` is taken off so that measurements that agree within their noise shrink
+/// the variance exactly as eq. 9, while a surface that moved, a spurious return or an edge leaves the
+/// estimate as uncertain as the disagreement says.
+pub fn fuse_with_disagreement(
+    prior: Option<Elevation>,
+    h_m: f32,
+    s2_m2: f32,
+    process_noise_var_m2: f32,
+) -> Elevation {
+    let fused = kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2);
+    let Some(e) = prior else { return fused };
+    let var = e.var_m2 + process_noise_var_m2;
+    let sum = var + s2_m2;
+    if sum <= 0.0 {
+        return fused;
+    }
+    let w = var / sum;
+    let d = h_m - e.mean_m;
+    Elevation {
+        mean_m: fused.mean_m,
+        var_m2: fused.var_m2 + w * (1.0 - w) * (d * d - sum).max(0.0),
     }
 }
 
@@ -236,10 +267,16 @@ mod tests {
             var_m2: 1e-4,
         };
         assert!(band_contradicts(board, 0.44, 0.445, 3.0), "through the board");
-        assert!(band_contradicts(board, 0.47, 0.48, 3.0), "where its top is believed to be");
+        assert!(
+            band_contradicts(board, 0.47, 0.48, 3.0),
+            "where its top is believed to be"
+        );
         assert!(!band_contradicts(board, 0.30, 0.42, 3.0), "under the board");
         assert!(!band_contradicts(board, 0.50, 0.60, 3.0), "over it");
-        assert!(band_contradicts(board, 0.10, 0.70, 3.0), "a steep beam crossing the band");
+        assert!(
+            band_contradicts(board, 0.10, 0.70, 3.0),
+            "a steep beam crossing the band"
+        );
         // A person's front hit from 0.05 to 0.5 m: the spread makes the band deep, so the beams that hit the
         // body at mid height contradict it once the person has gone.
         // Hits spread evenly from 0.05 to 0.5 m: a sample variance of 0.45^2 / 12.
@@ -287,10 +324,50 @@ mod tests {
 
     #[test]
     fn a_range_error_is_projected_onto_the_vertical() {
-        assert!((vertical_variance(0.03, -1.0, 0.0) - 9e-4).abs() < 1e-9, "straight down: all of it");
+        assert!(
+            (vertical_variance(0.03, -1.0, 0.0) - 9e-4).abs() < 1e-9,
+            "straight down: all of it"
+        );
         assert!((vertical_variance(0.03, -0.5, 0.0) - 2.25e-4).abs() < 1e-9);
-        assert!((vertical_variance(0.03, 0.0, 0.0) - 1e-6).abs() < 1e-12, "level and near: the floor");
+        assert!(
+            (vertical_variance(0.03, 0.0, 0.0) - 1e-6).abs() < 1e-12,
+            "level and near: the floor"
+        );
         // Level at 10 m: the footprint, 2.2 cm.
         assert!((vertical_variance(0.03, 0.0, 10.0) - 0.022f32 * 0.022).abs() < 1e-7);
+    }
+
+    #[test]
+    fn disagreement_is_kept_as_variance() {
+        let prior = Some(Elevation {
+            mean_m: 0.0,
+            var_m2: 1e-4,
+        });
+        // Agreement, exact or within the noise (a 1 cm difference with 1.4 cm expected): eq. 8-9.
+        assert_eq!(
+            fuse_with_disagreement(prior, 0.0, 1e-4, 0.0),
+            kalman_fuse(prior, 0.0, 1e-4, 0.0)
+        );
+        assert_eq!(
+            fuse_with_disagreement(prior, 0.01, 1e-4, 0.0),
+            kalman_fuse(prior, 0.01, 1e-4, 0.0)
+        );
+        // A return 0.3 m up with equal weight: the mean halfway, the variance grows by 0.25 (0.09 - 2e-4).
+        let odd = fuse_with_disagreement(prior, 0.3, 1e-4, 0.0);
+        assert!((odd.mean_m - 0.15).abs() < 1e-6);
+        assert!(
+            (odd.var_m2 - (0.5e-4 + 0.25 * (0.09 - 2e-4))).abs() < 1e-6,
+            "{odd:?}"
+        );
+        // Then ground again: the mean comes back, and the variance with it.
+        let mut e = odd;
+        for _ in 0..20 {
+            e = fuse_with_disagreement(Some(e), 0.0, 1e-4, 0.0);
+        }
+        assert!(e.mean_m.abs() < 0.01 && e.var_m2 < 1e-3, "{e:?}");
+        assert_eq!(
+            fuse_with_disagreement(None, 0.2, 1e-4, 0.0),
+            kalman_fuse(None, 0.2, 1e-4, 0.0)
+        );
     }
 }

@@ -106,8 +106,13 @@ fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), 
     }
     let mut doc: toml::Table = toml::from_str(text).map_err(|e| e.message().to_string())?;
     expand_map_preset(&mut doc)?;
-    let map = doc.get("map").cloned().unwrap_or_else(|| toml::Value::Table(toml::Table::new()));
-    let map: super::MapSettings = map.try_into().map_err(|e: toml::de::Error| e.message().to_string())?;
+    let map = doc
+        .get("map")
+        .cloned()
+        .unwrap_or_else(|| toml::Value::Table(toml::Table::new()));
+    let map: super::MapSettings = map
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_string())?;
     scenario.map.model = map.model;
     scenario.map.traversability = map.traversability;
     Ok(())
@@ -126,7 +131,10 @@ pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), Strin
     };
     let preset: oeg::MapPreset = match map.get("preset") {
         None => return Ok(()),
-        Some(v) => v.clone().try_into().map_err(|e: toml::de::Error| format!("map.preset: {}", e.message()))?,
+        Some(v) => v
+            .clone()
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("map.preset: {}", e.message()))?,
     };
     if preset == oeg::MapPreset::Paper {
         return Ok(());
