@@ -1,0 +1,112 @@
+//! The recommended `robust` preset against the paper's model on scenes nobody tuned for (`tests/scenes/`), each
+//! seen only by the default scenario's sensors: a person who stood in front of a robot that did not move, curbs
+//! at 15, 30 and 45 degrees to the grid either side of the 3.5 cm threshold, and a table 2 cm lower than the
+//! robot.
+
+mod common;
+
+use common::{oeg, root, temp_dir};
+use std::path::Path;
+
+/// Runs `tests/scenes/<scene>.toml` with `map.preset = <preset>` into a fresh folder and returns it.
+fn run(scene: &str, preset: &str) -> std::path::PathBuf {
+    let out = temp_dir("robust", &format!("{scene}-{preset}"));
+    let file = root().join(format!("tests/scenes/{scene}.toml"));
+    let set = format!("map.preset={preset}");
+    let o = oeg(&[
+        "run",
+        file.to_str().expect("utf8"),
+        "--out",
+        out.to_str().expect("utf8"),
+        "--set",
+        &set,
+    ]);
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// Rows of a CSV file the project writes, as header name -> value maps.
+fn rows(path: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
+    let mut r = csv::Reader::from_path(path).expect("csv");
+    let header: Vec<String> = r.headers().expect("header").iter().map(str::to_string).collect();
+    r.records()
+        .map(|rec| {
+            let rec = rec.expect("record");
+            header
+                .iter()
+                .cloned()
+                .zip(rec.iter().map(str::to_string))
+                .collect()
+        })
+        .collect()
+}
+
+/// The `wrong_cells.csv` rows of a kind within `radius_m` of `(x, y)`.
+fn cells_near(out: &Path, error: &str, (x, y): (f64, f64), radius_m: f64) -> usize {
+    rows(&out.join("wrong_cells.csv"))
+        .iter()
+        .filter(|r| r["error"] == error)
+        .filter(|r| {
+            let (cx, cy): (f64, f64) = (r["x_m"].parse().expect("x"), r["y_m"].parse().expect("y"));
+            (cx - x).hypot(cy - y) <= radius_m
+        })
+        .count()
+}
+
+#[test]
+fn a_standing_robot_forgets_a_person_who_stood_in_front_of_it() {
+    // The person stood at (1.6, 0) from 0.5 to 3.5 s and was gone by 4.5 s; the run ends at 6 s, 1.5 s (37
+    // scans of each laser, 15 of the camera) later.
+    let robust = run("person_standing", "robust");
+    assert_eq!(
+        cells_near(&robust, "over_cautious", (1.6, 0.0), 0.4),
+        0,
+        "robust keeps no ghost where the person stood"
+    );
+    assert_eq!(cells_near(&robust, "unsafe", (1.6, 0.0), 0.4), 0);
+    // The paper's model keeps one: eq. 8-9 average the person's height with the later ground hits.
+    let paper = run("person_standing", "paper");
+    assert!(
+        cells_near(&paper, "over_cautious", (1.6, 0.0), 0.4) > 20,
+        "the paper's ghost is gone: the scene no longer shows what it is for"
+    );
+}
+
+#[test]
+fn curbs_at_15_30_and_45_degrees_get_no_unsafe_decision_from_robust() {
+    let robust = run("angled_curbs", "robust");
+    let decisions = rows(&robust.join("obstacles.csv"));
+    assert_eq!(decisions.len(), 6);
+    for d in &decisions {
+        let name = &d["name"];
+        assert_ne!(d["decision"], "unsafe", "{name}: {d:?}");
+        // A 4 cm curb is blocked or flagged; a 3 cm one passable or flagged, never blocked outright.
+        let allowed: &[&str] = if name.starts_with("4.0") {
+            &["blocked", "uncertain"]
+        } else {
+            &["passable", "uncertain"]
+        };
+        assert!(allowed.contains(&d["mapped_decision"].as_str()), "{name}: {d:?}");
+    }
+    // The paper's model erases the 4 cm curbs: push-broom beams passing over them count as free space.
+    let paper = run("angled_curbs", "paper");
+    let unsafe_curbs = rows(&paper.join("obstacles.csv"))
+        .iter()
+        .filter(|d| d["decision"] == "unsafe")
+        .count();
+    assert_eq!(unsafe_curbs, 3, "the paper's model lost every 4 cm curb");
+}
+
+#[test]
+#[ignore = "issue 12, open: robust does not yet keep a table 2 cm below the robot's height (it maps the ground under it)"]
+fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
+    let robust = run("low_table", "robust");
+    let decisions = rows(&robust.join("obstacles.csv"));
+    assert_eq!(decisions[0]["true_decision"], "blocked");
+    assert_ne!(decisions[0]["decision"], "unsafe", "{:?}", decisions[0]);
+}
