@@ -190,11 +190,12 @@ fn a_broken_setting_fails_the_suite() {
     );
     assert!(err.contains("1 of 1 scenarios did not pass"), "{err}");
     // The boards scene with the paper's clearing (every free sample counts, however far below the board's top
-    // it passed): beams under the boards erase them, and the zero-unsafe bound catches it.
+    // it passed): beams under the boards erase them, and the zero-unsafe bound catches it (the boards' cells are
+    // under a structure lower than the robot: clearance cells).
     let err = suite_fails(
         "boards_and_branches",
         "map.model.free_space_max_depth_m=10.0",
-        "unsafe_step_cells",
+        "unsafe_clearance_cells",
     );
     assert!(
         err.contains("plan_unsafe_cells"),

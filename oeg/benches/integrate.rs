@@ -124,10 +124,15 @@ fn options(c: &mut Criterion) {
         },
         ..MapConfig::new(0.05)
     };
+    let robust = MapConfig {
+        model: oeg::MapPreset::Robust.model(&oeg::RobotProfile::default()),
+        ..MapConfig::new(0.05)
+    };
     for (name, config) in [
         ("paper", paper),
         ("static_settings", static_settings),
         ("weighted_mean", weighted_mean),
+        ("robust", robust),
     ] {
         group.bench_function(name, |b| b.iter(|| black_box(build_with(&scans, config))));
     }
