@@ -307,11 +307,11 @@ mod tests {
                     + c.uncertain_cells
             );
             prop_assert_eq!(c.num_scored_cells + tally(Verdict::NotScored), cells.len() as u64);
-            for k in 0..cells.len() {
+            for (k, m) in mapped.iter().enumerate() {
                 // The one definition: the raster's truth agrees with the truth raster's.
                 let off = truth.cells[k].elevation_m.is_nan();
                 prop_assert_eq!(v.truth[k].is_blocked(), !off && truth.truly_blocked(k));
-                prop_assert_eq!(v.verdict[k], Verdict::of(v.truth[k], mapped[k]));
+                prop_assert_eq!(v.verdict[k], Verdict::of(v.truth[k], *m));
             }
         }
     }

@@ -55,7 +55,7 @@ pub struct CellTruth {
 impl CellTruth {
     /// `Some(passable)` for a cell under a structure, `None` otherwise.
     pub fn clearance_passable(&self, profile: &RobotProfile) -> Option<bool> {
-        (!self.structure_gap_m.is_nan()).then(|| self.structure_gap_m >= profile.height_m)
+        (!self.structure_gap_m.is_nan()).then_some(self.structure_gap_m >= profile.height_m)
     }
 }
 
