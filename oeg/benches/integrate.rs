@@ -124,6 +124,16 @@ fn options(c: &mut Criterion) {
         },
         ..MapConfig::new(0.05)
     };
+    // The paper's rules with robust's height threshold: robust's cost without the rays it cuts.
+    let paper_cut = MapConfig {
+        model: oeg::ModelOptions {
+            max_height_m: Some(
+                oeg::RobotProfile::default().height_m + oeg::model::preset::ROBUST_HEIGHT_MARGIN_M,
+            ),
+            ..oeg::ModelOptions::default()
+        },
+        ..MapConfig::new(0.05)
+    };
     let robust = MapConfig {
         model: oeg::MapPreset::Robust.model(&oeg::RobotProfile::default()),
         ..MapConfig::new(0.05)
@@ -132,6 +142,7 @@ fn options(c: &mut Criterion) {
         ("paper", paper),
         ("static_settings", static_settings),
         ("weighted_mean", weighted_mean),
+        ("paper_height_threshold", paper_cut),
         ("robust", robust),
     ] {
         group.bench_function(name, |b| b.iter(|| black_box(build_with(&scans, config))));
