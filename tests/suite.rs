@@ -1,7 +1,7 @@
 //! The regression suite: every scenario in `scenarios/` runs through `oeg suite` and meets its expectations,
-//! and a few small runs' `metrics.json` match their golden digests, so an unintended change in map behaviour
-//! fails loudly. After an intended change, refresh the digests with `OEG_BLESS=1 cargo test --test suite` and
-//! commit them with the change that explains them.
+//! and a few small runs' `metrics.json` and `map.oeg` (the paper preset's map, cell by cell) match their golden
+//! digests, so an unintended change in map behaviour fails loudly. After an intended change, refresh the digests
+//! with `OEG_BLESS=1 cargo test --test suite` and commit them with the change that explains them.
 //!
 //! The scenarios run at their full duration: the whole suite takes about 30 s in a release build and under a
 //! minute and a half in the test build on a 2-core machine (two scenarios at once), well inside CI's limit, so
@@ -28,18 +28,23 @@ fn fnv1a64(bytes: &[u8]) -> u64 {
 fn check_golden(out: &Path) {
     let bless = std::env::var_os("OEG_BLESS").is_some();
     let mut stale = Vec::new();
-    for name in GOLDEN {
-        let metrics = std::fs::read(out.join(name).join("metrics.json")).expect("metrics.json");
-        let digest = format!("{:016x}\n", fnv1a64(&metrics));
-        let golden = root().join("tests/golden").join(format!("{name}.digest"));
+    // `metrics.json` pins what the run measured; `map.oeg` pins the paper preset's map itself, cell by cell.
+    for (name, file, suffix) in GOLDEN
+        .iter()
+        .flat_map(|n| [(*n, "metrics.json", "digest"), (*n, "map.oeg", "map.digest")])
+    {
+        let bytes = std::fs::read(out.join(name).join(file)).expect(file);
+        let digest = format!("{:016x}\n", fnv1a64(&bytes));
+        let golden = root().join("tests/golden").join(format!("{name}.{suffix}"));
         if bless {
             std::fs::write(&golden, &digest).expect("write golden digest");
             continue;
         }
         let expected = std::fs::read_to_string(&golden).unwrap_or_default();
         if expected != digest {
+            let metrics = std::fs::read(out.join(name).join("metrics.json")).unwrap_or_default();
             stale.push(format!(
-                "{name}: metrics.json digest {} differs from {} ({}); its metrics:\n{}",
+                "{name}: {file} digest {} differs from {} ({}); its metrics:\n{}",
                 digest.trim(),
                 expected.trim(),
                 golden.display(),
