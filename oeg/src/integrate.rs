@@ -207,6 +207,7 @@ impl Map {
         let clear_range_m = f64::from(opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m));
         let max_range_m = opts.max_range_m.map_or(f64::INFINITY, f64::from);
         let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
+        let needs_surface = band_rule || opts.free_space_max_depth_m.is_some();
         let scratch_limit = self
             .config
             .memory_limit_bytes
@@ -288,19 +289,20 @@ impl Map {
                 };
                 let beam_top = (o.z + dir.z * l_top) as f32;
                 if crossing.l_exit < free_until {
+                    // The cell's surface, looked up once for the rules that judge a free sample against it.
+                    let surface = if needs_surface {
+                        self.cells.get(crossing.cell).and_then(Cell::elevation)
+                    } else {
+                        None
+                    };
                     if hit_range_m.is_some() {
-                        if let Some(depth) = opts.free_space_max_depth_m
-                            && self
-                                .cells
-                                .get(crossing.cell)
-                                .and_then(Cell::elevation)
-                                .is_some_and(|e| e.mean_m - beam_top > depth)
+                        if let (Some(depth), Some(e)) = (opts.free_space_max_depth_m, surface)
+                            && e.mean_m - beam_top > depth
                         {
                             // Far below the cell's surface: perhaps under an overhang, so it says nothing.
                             continue;
                         }
-                        if band_rule && let Some(e) = self.cells.get(crossing.cell).and_then(Cell::elevation)
-                        {
+                        if band_rule && let Some(e) = surface {
                             let l_bottom = if top_at_exit {
                                 crossing.l_enter
                             } else {
@@ -318,7 +320,7 @@ impl Map {
                         // A ray that returned nothing clears, but bounds no height: it may have left through
                         // the ground or past anything (a dropout), so its heights prove nothing. Under the
                         // surface-band rule it therefore says nothing about a cell with a surface.
-                        if band_rule && self.cells.get(crossing.cell).and_then(Cell::elevation).is_some() {
+                        if band_rule && surface.is_some() {
                             continue;
                         }
                         evidence.raise_p(opts.p_min);
