@@ -9,10 +9,10 @@ use crate::error::{Error, Result};
 use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
-    Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, ModelOptions,
-    ScanHitElevation, band_contradicts, clamp_probability, correlated_variance, elevation_observation,
-    fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound, spread_variance, update_log_odds,
-    vertical_variance,
+    Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level,
+    ModelOptions, ScanHitElevation, band_contradicts, clamp_probability, correlated_variance,
+    elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound,
+    spread_variance, surface_level, update_log_odds, vertical_variance,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -65,10 +65,27 @@ impl ScanEvidence {
         self.p_max = if p > self.p_max { p } else { self.p_max };
     }
 
-    /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12).
+    /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12). Under
+    /// [`ScanHitElevation::HighestLevel`] a hit above the band of the hits so far starts them afresh and one
+    /// below it is left out (`band_sigmas` wide).
     #[inline(always)]
-    fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation) {
+    fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation, band_sigmas: f32) {
         self.raise_p(p);
+        if rule == ScanHitElevation::HighestLevel && self.hits.n > 0.0 {
+            let level = Elevation {
+                mean_m: self.hits.mean_m,
+                var_m2: self.hits.mean_variance(),
+            };
+            match surface_level(level, z_m, var_m2, band_sigmas) {
+                Level::Below => return,
+                Level::Above => {
+                    self.hit_z_m = f32::NEG_INFINITY;
+                    self.hit_var_m2 = f32::INFINITY;
+                    self.hits = HitSample::NONE;
+                }
+                Level::Same => {}
+            }
+        }
         (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
         self.hits.add(z_m, var_m2);
     }
@@ -295,6 +312,16 @@ impl Map {
                     } else {
                         None
                     };
+                    // Whether the beam crosses the band of the cell's surface (surface-band rule).
+                    let crosses_band = |e| {
+                        let l_bottom = if top_at_exit {
+                            crossing.l_enter
+                        } else {
+                            crossing.l_exit
+                        };
+                        let beam_bottom = (o.z + dir.z * l_bottom) as f32;
+                        band_contradicts(e, beam_bottom, beam_top, opts.surface_band_sigmas)
+                    };
                     if hit_range_m.is_some() {
                         if let (Some(depth), Some(e)) = (opts.free_space_max_depth_m, surface)
                             && e.mean_m - beam_top > depth
@@ -303,13 +330,7 @@ impl Map {
                             continue;
                         }
                         if band_rule && let Some(e) = surface {
-                            let l_bottom = if top_at_exit {
-                                crossing.l_enter
-                            } else {
-                                crossing.l_exit
-                            };
-                            let beam_bottom = (o.z + dir.z * l_bottom) as f32;
-                            if !band_contradicts(e, beam_bottom, beam_top, opts.surface_band_sigmas) {
+                            if !crosses_band(e) {
                                 // Over or under the surface: it says nothing about it.
                                 continue;
                             }
@@ -339,8 +360,19 @@ impl Map {
                     opts.p_min,
                 );
                 let p = clamp_probability(p, opts.p_min, opts.p_max);
-                match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold) {
-                    Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation),
+                let z_here = (o.z + dir.z * l) as f32;
+                // The sample's height measurement under `HitHeight` (None: occupancy only).
+                let measurement = match opts.hit_height {
+                    HitHeight::BeamSample => Some((z_here, s2)),
+                    // Only the cell holding the end point (where the clamp leaves `l_p` as it is).
+                    HitHeight::Endpoint => (l == l_p).then_some((z_here, s2)),
+                };
+                match measurement.and_then(|(z, var)| {
+                    elevation_observation(p, z, opts.elevation_threshold).map(|z| (z, var))
+                }) {
+                    Some((z, var)) => {
+                        evidence.add_hit(p, z, var, opts.scan_hit_elevation, opts.surface_band_sigmas)
+                    }
                     // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
                     // the occupancy, but its height bounds nothing (a noisy long reading would otherwise
                     // "prove" free space under the ground).
@@ -404,7 +436,7 @@ fn update_cell(
     let q = opts.process_noise_var_m2;
     let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
         let s2 = match opts.scan_hit_elevation {
-            ScanHitElevation::MeanWithSpread => spread_variance(
+            ScanHitElevation::MeanWithSpread | ScanHitElevation::HighestLevel => spread_variance(
                 // The hits of one scan share its errors too: their mean is no better than `rho` of one hit.
                 ev.hit_var_m2
                     .max(opts.measurement_correlation * ev.hits.mean_variance()),
@@ -417,7 +449,14 @@ fn update_cell(
         // who left), so the hit starts the cell afresh.
         let moved_down = ev.band_contradicted && prior.is_some_and(|e| ev.hit_z_m < e.mean_m);
         let prior = if moved_down { None } else { prior };
-        let fused = fuse_elevation(opts.elevation_fusion, prior, ev.hit_z_m, s2, q);
+        let fused = fuse_elevation(
+            opts.elevation_fusion,
+            prior,
+            ev.hit_z_m,
+            s2,
+            q,
+            opts.surface_band_sigmas,
+        );
         Some(match prior {
             Some(e) if opts.measurement_correlation > 0.0 => Elevation {
                 var_m2: correlated_variance(fused.var_m2, e.var_m2 + q, s2, opts.measurement_correlation),

@@ -21,7 +21,7 @@ pub use geometry::{CellIndex, CellRegion, GridGeometry};
 pub use layers::{Layer, LayerKind, Raster, TraversabilityCounts};
 pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Map, MapConfig};
 pub use model::{
-    Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, MapPreset, ModelOptions,
+    Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, MapPreset, ModelOptions,
     ScanHitElevation,
 };
 pub use planner::{Plan, PlannerOptions, UncertainCells, UnknownCells};

@@ -494,3 +494,96 @@ fn many_noisy_hits_in_a_cell_bias_the_highest_upwards_but_not_the_weighted_mean(
     );
     assert_eq!(class, Traversability::Traversable);
 }
+
+#[test]
+fn under_the_endpoint_rule_only_the_hits_own_cell_gets_a_height() {
+    // A laser 0.42 m up looking 25 degrees down at flat ground: its beam passes 1.5 cm over the cells just
+    // before its end point, within 3 sigma of the 12 mm range error.
+    let target = (0.915, 0.025, 0.0);
+    let origin = Point3::new(0.915 - 0.42 / 25f64.to_radians().tan(), 0.025, 0.42);
+    let heights = |hit_height| {
+        let mut map = map_with(
+            0.05,
+            ModelOptions {
+                hit_height,
+                ..ModelOptions::default()
+            },
+        );
+        map.integrate(&scan_of(origin, &[target])).expect("integrated");
+        let end = map
+            .cell(cell(&map, target.0, target.1))
+            .elevation()
+            .expect("end point");
+        let before = map.cell(cell(&map, target.0 - 0.05, target.1)).elevation();
+        (end.mean_m, before.map(|e| e.mean_m))
+    };
+    let (end, before) = heights(oeg::HitHeight::BeamSample);
+    assert!(end.abs() < 1e-3);
+    assert!(before.expect("the paper's beam sample") > 0.004, "{before:?}");
+    let (end, before) = heights(oeg::HitHeight::Endpoint);
+    assert!(end.abs() < 1e-3);
+    assert_eq!(before, None, "the cell before the end point measures no height");
+}
+
+#[test]
+fn the_highest_level_of_a_scan_ignores_the_ground_seen_under_a_table_edge() {
+    let origin = Point3::new(0.0, 0.025, 0.45);
+    // One scan sees both a table's edge at 0.44 m and the ground under it in the same cell.
+    let targets = [
+        (2.02, 0.025, 0.44),
+        (2.03, 0.025, 0.0),
+        (2.04, 0.025, 0.441),
+        (2.01, 0.025, 0.001),
+    ];
+    let measure = |rule| {
+        let mut map = map_with(
+            0.05,
+            ModelOptions {
+                scan_hit_elevation: rule,
+                hit_height: oeg::HitHeight::Endpoint,
+                ..ModelOptions::default()
+            },
+        );
+        map.integrate(&scan_of(origin, &targets)).expect("integrated");
+        map.cell(cell(&map, 2.025, 0.025))
+            .elevation()
+            .expect("elevation")
+            .mean_m
+    };
+    assert!((measure(ScanHitElevation::HighestLevel) - 0.4405).abs() < 0.002);
+    let mean = measure(ScanHitElevation::MeanWithSpread);
+    assert!(mean > 0.05 && mean < 0.4, "the mean mixes the two levels: {mean}");
+}
+
+#[test]
+fn the_contact_rule_measures_a_step_from_the_lowest_level_not_the_lowest_cell() {
+    // Flat ground with 1 cm noise in a fixed pattern, and a 5 cm curb on its right half.
+    let mut map = map_with(0.05, ModelOptions::default());
+    let profile = RobotProfile::default();
+    let noise = [0.0, 0.01, -0.01, 0.005, -0.005, 0.012, -0.012, 0.0];
+    for j in 0..12 {
+        for i in 0..24 {
+            let (x, y) = (0.025 + 0.05 * f64::from(i), 0.025 + 0.05 * f64::from(j));
+            let z = noise[((i * 7 + j * 3) % 8) as usize] + if i >= 12 { 0.05 } else { 0.0 };
+            // A straight-down ray into each cell, its range (and so its height) known to 5 mm.
+            let mut scan = Scan::new(Point3::new(x, y, z + 1.0), SensorModel::laser());
+            scan.rays
+                .push(Ray::hit(Vector3::new(0.0, 0.0, -1.0)).with_range_sigma_m(0.005));
+            map.integrate(&scan).expect("integrated");
+        }
+    }
+    let rule = TraversabilityRule::Contact { kappa: 2.0 };
+    let at = |x: f64| map.traversability(cell(&map, x, 0.3), &profile, rule);
+    // Noisy flat cells 0.3 m from the curb: their lowest neighbour is 1.2 cm low (a 2.4 cm rise for the highest,
+    // within 2 sigma of 3.5 cm), the lowest level is not.
+    for x in [0.075, 0.275, 0.325] {
+        assert_eq!(at(x), Traversability::Traversable, "x = {x}");
+    }
+    // The curb's first cells, and its top more than the contact distance inside: a step, then a plateau.
+    assert_eq!(at(0.625), Traversability::Blocked);
+    assert_eq!(at(1.125), Traversability::Traversable);
+    let ground = map
+        .ground_within(cell(&map, 0.275, 0.3), profile.contact_distance_m(), 2.0)
+        .expect("ground");
+    assert!(ground.mean_m.abs() < 0.006, "{ground:?}");
+}

@@ -65,6 +65,13 @@ pub enum ElevationFusion {
     /// arriving or leaving, the face of a curb) raises it by as much as it disagrees, so the estimate says how
     /// sure it is.
     Disagreement,
+    /// The highest surface within the cell's band: a measurement within `surface_band_sigmas` standard
+    /// deviations of the estimate (of `sqrt(sigma^2 + s^2)`) is fused as [`Self::Disagreement`] fuses it; one
+    /// above the band is a higher surface and replaces the estimate; one below it is a lower level (the ground
+    /// under a table or a board) and leaves it as it is ([`crate::model::fuse_top_surface`]). A surface comes
+    /// down only when beams pass through its band ([`FreeSpaceOccupancy::SurfaceBand`]: a hit below a
+    /// contradicted surface replaces it). The recommended preset's rule.
+    TopSurface,
     /// As elevation_mapping (Fankhauser et al.): a measurement more than `mahalanobis_threshold` standard
     /// deviations above the estimate is a higher surface and replaces it; one as far below is a lower surface
     /// (the ground under a board, the foot of a curb's face) and is ignored, but raises the variance by
@@ -105,6 +112,36 @@ pub enum ScanHitElevation {
     /// their noise ([`crate::model::spread_variance`]). A cell that spans an edge, or a column (a person) hit
     /// at many heights, is then as uncertain as its surface is spread; noise is not taken for spread.
     MeanWithSpread,
+    /// [`Self::MeanWithSpread`] over the hits of the highest level in the cell only: a hit more than
+    /// `surface_band_sigmas` standard deviations (of their noise) above the hits so far starts the level
+    /// afresh, one as far below them is a lower level (the ground seen under a table whose edge the same scan
+    /// hit) and is left out ([`crate::model::surface_level`]). The recommended preset's rule.
+    HighestLevel,
+}
+
+/// Where a hit's elevation measurement is taken (eq. 12's `z`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HitHeight {
+    /// The paper (eq. 12): every sample within 3 sigma of the measured range whose probability (eq. 10) exceeds
+    /// `l_occ` measures the cell's elevation at the beam's own height there. A beam that slopes down onto the
+    /// ground then reports the cells just before its end above the ground, by up to `3 sigma_r |dir_z|` (1.5 cm
+    /// for a 12 mm laser looking 25 degrees down): a bias that no amount of fusion removes.
+    #[default]
+    BeamSample,
+    /// Only the cell that holds the measured end point gets a height, the end point's, as
+    /// elevation_mapping files each point in its own cell; the other samples within 3 sigma count for the
+    /// occupancy only. The range error then moves the height by `sigma_r |dir_z|`, which
+    /// [`ModelOptions::vertical_variance`] accounts for, and no more.
+    Endpoint,
+}
+
+impl HitHeight {
+    /// Whether this is the paper's rule (left out of serialized options, so that files written before the
+    /// option existed, and the paper's, keep their bytes).
+    pub fn is_paper(&self) -> bool {
+        *self == Self::BeamSample
+    }
 }
 
 /// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
@@ -158,6 +195,9 @@ pub struct ModelOptions {
     /// `None` (the paper): no limit. Moving obstacles are then removed by the hits on what is behind or under
     /// them (see [`ElevationFusion::HighestSurface`]'s `multi_height_noise_m2`) and by beams near their top.
     pub free_space_max_depth_m: Option<f32>,
+    /// Where a hit's elevation is measured: the paper's beam samples or the end point.
+    #[serde(skip_serializing_if = "HitHeight::is_paper")]
+    pub hit_height: HitHeight,
     /// Which of a scan's hits in a cell make its elevation measurement.
     pub scan_hit_elevation: ScanHitElevation,
     /// How hit elevations are fused.
@@ -203,6 +243,7 @@ impl Default for ModelOptions {
             free_space_elevation: FreeSpaceElevation::Zero,
             free_space_occupancy: FreeSpaceOccupancy::Always,
             free_space_max_depth_m: None,
+            hit_height: HitHeight::BeamSample,
             scan_hit_elevation: ScanHitElevation::Highest,
             elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::options::{
-    ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, ModelOptions, ScanHitElevation,
+    ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, ModelOptions, ScanHitElevation,
 };
 use crate::traversability::{DEFAULT_UNCERTAIN_KAPPA, RobotProfile, TraversabilityRule};
 
@@ -47,8 +47,9 @@ impl MapPreset {
             Self::Robust => ModelOptions {
                 free_space_occupancy: FreeSpaceOccupancy::SurfaceBand,
                 free_space_elevation: FreeSpaceElevation::Forget,
-                scan_hit_elevation: ScanHitElevation::MeanWithSpread,
-                elevation_fusion: ElevationFusion::Disagreement,
+                hit_height: HitHeight::Endpoint,
+                scan_hit_elevation: ScanHitElevation::HighestLevel,
+                elevation_fusion: ElevationFusion::TopSurface,
                 measurement_correlation: 1.0,
                 vertical_variance: true,
                 max_height_m: Some(profile.height_m + ROBUST_HEIGHT_MARGIN_M),

@@ -5,13 +5,15 @@
 use super::equations::{Elevation, kalman_fuse};
 use super::options::{ElevationFusion, FreeSpaceOccupancy, ScanHitElevation};
 
-/// Fuses the elevation measurement `h` (variance `s2`) into `prior` under `rule` (see [`ElevationFusion`]).
+/// Fuses the elevation measurement `h` (variance `s2`) into `prior` under `rule` (see [`ElevationFusion`]);
+/// `band_sigmas` is the surface band's half width for [`ElevationFusion::TopSurface`].
 pub fn fuse_elevation(
     rule: ElevationFusion,
     prior: Option<Elevation>,
     h_m: f32,
     s2_m2: f32,
     process_noise_var_m2: f32,
+    band_sigmas: f32,
 ) -> Elevation {
     match (rule, prior) {
         (
@@ -40,6 +42,9 @@ pub fn fuse_elevation(
         (ElevationFusion::Disagreement, prior) => {
             fuse_with_disagreement(prior, h_m, s2_m2, process_noise_var_m2)
         }
+        (ElevationFusion::TopSurface, prior) => {
+            fuse_top_surface(prior, h_m, s2_m2, process_noise_var_m2, band_sigmas)
+        }
         _ => kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2),
     }
 }
@@ -57,7 +62,7 @@ impl ScanHitElevation {
                     (z, var)
                 }
             }
-            Self::WeightedMean | Self::MeanWithSpread => {
+            Self::WeightedMean | Self::MeanWithSpread | Self::HighestLevel => {
                 if z == f32::NEG_INFINITY {
                     (z_m, var_m2)
                 } else {
@@ -79,6 +84,55 @@ pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, b
         (FreeSpaceOccupancy::BelowElevation, Some(e)) => beam_top_m <= e.mean_m,
         // Decided beam by beam while gathering (`band_contradicts`): only contradicting samples get here.
         (FreeSpaceOccupancy::SurfaceBand, _) => true,
+    }
+}
+
+/// Where a measurement `h_m` (variance `s2_m2`) lies against a surface estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Level {
+    /// More than the band above the surface: a higher surface.
+    Above,
+    /// Within the band: the same surface.
+    Same,
+    /// More than the band below the surface: a lower level (the ground under a table or a board).
+    Below,
+}
+
+/// Whether `h_m` (variance `s2_m2`) lies above, within or below the band of `surface`: `band_sigmas` standard
+/// deviations of the difference, `sqrt(sigma^2 + s^2)`. The one test behind [`ScanHitElevation::HighestLevel`]
+/// (within a scan) and [`ElevationFusion::TopSurface`] (across scans).
+pub fn surface_level(surface: Elevation, h_m: f32, s2_m2: f32, band_sigmas: f32) -> Level {
+    let half = band_sigmas * (surface.var_m2 + s2_m2).sqrt();
+    if h_m > surface.mean_m + half {
+        Level::Above
+    } else if h_m < surface.mean_m - half {
+        Level::Below
+    } else {
+        Level::Same
+    }
+}
+
+/// [`ElevationFusion::TopSurface`]: a measurement above the band of `prior` replaces it, one within is fused
+/// by [`fuse_with_disagreement`], one below is a lower level and leaves `prior` unchanged. The band is
+/// `band_sigmas` standard deviations of the difference, the prior's variance grown by the process noise.
+pub fn fuse_top_surface(
+    prior: Option<Elevation>,
+    h_m: f32,
+    s2_m2: f32,
+    process_noise_var_m2: f32,
+    band_sigmas: f32,
+) -> Elevation {
+    let Some(e) = prior else {
+        return fuse_with_disagreement(None, h_m, s2_m2, process_noise_var_m2);
+    };
+    let grown = Elevation {
+        var_m2: e.var_m2 + process_noise_var_m2,
+        ..e
+    };
+    match surface_level(grown, h_m, s2_m2, band_sigmas) {
+        Level::Above => fuse_with_disagreement(prior, h_m, s2_m2, process_noise_var_m2),
+        Level::Same => kalman_fuse(prior, h_m, s2_m2, process_noise_var_m2),
+        Level::Below => e,
     }
 }
 
@@ -200,18 +254,18 @@ mod tests {
             var_m2: 1e-6,
         });
         // Much higher: replaces.
-        let higher = fuse_elevation(rule, curb, 0.05, 1e-6, 0.0);
+        let higher = fuse_elevation(rule, curb, 0.05, 1e-6, 0.0, 3.0);
         assert_eq!((higher.mean_m, higher.var_m2), (0.05, 1e-6));
         // Much lower: ignored, but the variance grows (multi-height noise).
         let prior = Some(Elevation {
             mean_m: 0.05,
             var_m2: 1e-6,
         });
-        let kept = fuse_elevation(rule, prior, 0.0, 1e-4, 0.0);
+        let kept = fuse_elevation(rule, prior, 0.0, 1e-4, 0.0, 3.0);
         assert_eq!(kept.mean_m, 0.05);
         assert!((kept.var_m2 - (1e-6 + 1e-4)).abs() < 1e-9, "{kept:?}");
         // Close: fused as eq. 8-9.
-        let near = fuse_elevation(rule, curb, 0.031, 1e-4, 0.0);
+        let near = fuse_elevation(rule, curb, 0.031, 1e-4, 0.0, 3.0);
         assert_eq!(near, kalman_fuse(curb, 0.031, 1e-4, 0.0));
         // A lower threshold of 1 sigma: a face hit 2 sigma under a curb's top no longer pulls it down.
         let strict = ElevationFusion::HighestSurface {
@@ -224,17 +278,17 @@ mod tests {
             var_m2: 0.0,
         });
         assert_eq!(
-            fuse_elevation(rule, top, 0.03, 1e-4, 0.0).mean_m,
+            fuse_elevation(rule, top, 0.03, 1e-4, 0.0, 3.0).mean_m,
             kalman_fuse(top, 0.03, 1e-4, 0.0).mean_m
         );
-        assert_eq!(fuse_elevation(strict, top, 0.03, 1e-4, 0.0).mean_m, 0.05);
+        assert_eq!(fuse_elevation(strict, top, 0.03, 1e-4, 0.0, 3.0).mean_m, 0.05);
         assert_eq!(
-            fuse_elevation(strict, top, 0.045, 1e-4, 0.0),
+            fuse_elevation(strict, top, 0.045, 1e-4, 0.0, 3.0),
             kalman_fuse(top, 0.045, 1e-4, 0.0)
         );
         // The paper's rule always fuses.
         assert_eq!(
-            fuse_elevation(ElevationFusion::Kalman, curb, 0.05, 1e-4, 0.0),
+            fuse_elevation(ElevationFusion::Kalman, curb, 0.05, 1e-4, 0.0, 3.0),
             kalman_fuse(curb, 0.05, 1e-4, 0.0)
         );
     }
@@ -368,6 +422,58 @@ mod tests {
         assert_eq!(
             fuse_with_disagreement(None, 0.2, 1e-4, 0.0),
             kalman_fuse(None, 0.2, 1e-4, 0.0)
+        );
+    }
+
+    #[test]
+    fn a_measurement_is_above_within_or_below_a_surfaces_band() {
+        let ground = Elevation {
+            mean_m: 0.0,
+            var_m2: 1e-4,
+        };
+        // The band is 3 sigma of the difference: sqrt(1e-4 + 1e-4) = 1.41 cm, so +-4.24 cm.
+        assert_eq!(surface_level(ground, 0.04, 1e-4, 3.0), Level::Same);
+        assert_eq!(surface_level(ground, 0.05, 1e-4, 3.0), Level::Above);
+        assert_eq!(surface_level(ground, -0.05, 1e-4, 3.0), Level::Below);
+        // A noisier measurement widens the band.
+        assert_eq!(surface_level(ground, 0.05, 1e-3, 3.0), Level::Same);
+    }
+
+    #[test]
+    fn the_top_surface_is_kept_against_lower_hits_and_follows_higher_ones() {
+        let table = Some(Elevation {
+            mean_m: 0.44,
+            var_m2: 1e-5,
+        });
+        // The ground seen under a table top: a lower level, the estimate is left as it is.
+        assert_eq!(fuse_top_surface(table, 0.0, 1e-4, 0.0, 3.0), table.expect("some"));
+        // Within the band: eq. 8-9.
+        assert_eq!(
+            fuse_top_surface(table, 0.445, 1e-5, 0.0, 3.0),
+            kalman_fuse(table, 0.445, 1e-5, 0.0)
+        );
+        // Above: pulled up with the disagreement kept as variance, so one spurious return does not become the
+        // surface, and a surface seen again and again does.
+        let ground = Some(Elevation {
+            mean_m: 0.0,
+            var_m2: 1e-4,
+        });
+        assert_eq!(
+            fuse_top_surface(ground, 0.3, 1e-4, 0.0, 3.0),
+            fuse_with_disagreement(ground, 0.3, 1e-4, 0.0)
+        );
+        let mut e = ground;
+        for _ in 0..10 {
+            e = Some(fuse_top_surface(e, 0.3, 1e-4, 0.0, 3.0));
+        }
+        assert!((e.expect("some").mean_m - 0.3).abs() < 0.01, "{e:?}");
+        assert_eq!(
+            fuse_top_surface(None, 0.2, 1e-4, 0.0, 3.0),
+            kalman_fuse(None, 0.2, 1e-4, 0.0)
+        );
+        assert_eq!(
+            fuse_elevation(ElevationFusion::TopSurface, table, 0.0, 1e-4, 0.0, 3.0),
+            table.expect("some")
         );
     }
 }
