@@ -109,7 +109,8 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
     assert_eq!(decisions[0]["true_decision"], "blocked");
     assert_ne!(decisions[0]["decision"], "unsafe", "{:?}", decisions[0]);
     let metrics: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(robust.join("metrics.json")).expect("metrics.json")).expect("json");
+        serde_json::from_slice(&std::fs::read(robust.join("metrics.json")).expect("metrics.json"))
+            .expect("json");
     assert_eq!(metrics["plan_unsafe_cells"], 0, "no planned cell near the table");
     // The paper's model maps the ground seen under it: the table is gone.
     let paper = run("low_table", "paper");
@@ -168,7 +169,12 @@ fn the_shipped_scenes_under_robust_stay_within_their_measured_bounds() {
             &std::fs::read(out.join(scenario).join("metrics.json")).expect("metrics.json"),
         )
         .expect("json");
-        let calibration = metrics["elevation_within_2sigma"].as_f64().expect("within 2 sigma");
-        assert!(calibration >= within_2sigma, "{scenario}: within 2 sigma {calibration}");
+        let calibration = metrics["elevation_within_2sigma"]
+            .as_f64()
+            .expect("within 2 sigma");
+        assert!(
+            calibration >= within_2sigma,
+            "{scenario}: within 2 sigma {calibration}"
+        );
     }
 }

@@ -441,12 +441,13 @@ mod tests {
 
     #[test]
     fn the_top_surface_is_kept_against_lower_hits_and_follows_higher_ones() {
-        let table = Some(Elevation {
+        let top = Elevation {
             mean_m: 0.44,
             var_m2: 1e-5,
-        });
+        };
+        let table = Some(top);
         // The ground seen under a table top: a lower level, the estimate is left as it is.
-        assert_eq!(fuse_top_surface(table, 0.0, 1e-4, 0.0, 3.0), table.expect("some"));
+        assert_eq!(fuse_top_surface(table, 0.0, 1e-4, 0.0, 3.0), top);
         // Within the band: eq. 8-9.
         assert_eq!(
             fuse_top_surface(table, 0.445, 1e-5, 0.0, 3.0),
@@ -473,7 +474,7 @@ mod tests {
         );
         assert_eq!(
             fuse_elevation(ElevationFusion::TopSurface, table, 0.0, 1e-4, 0.0, 3.0),
-            table.expect("some")
+            top
         );
     }
 }
