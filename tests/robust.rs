@@ -1,5 +1,6 @@
 //! The recommended `robust` preset against the paper's model on scenes nobody tuned for (`tests/scenes/`), each
-//! seen only by the default scenario's sensors: a person who stood in front of a robot that did not move, curbs
+//! seen only by the default scenario's sensors: a person who stood in front of a robot that did not move (and of
+//! a wall, so that beams cross where the person's top was once they have left), curbs
 //! at 15, 30 and 45 degrees to the grid either side of the 3.5 cm threshold, and a table 2 cm lower than the
 //! robot.
 
@@ -61,7 +62,7 @@ fn cells_near(out: &Path, error: &str, (x, y): (f64, f64), radius_m: f64) -> usi
 #[test]
 fn a_standing_robot_forgets_a_person_who_stood_in_front_of_it() {
     // The person stood at (1.6, 0) from 0.5 to 3.5 s and was gone by 4.5 s; the run ends at 6 s, 1.5 s (37
-    // scans of each laser, 15 of the camera) later.
+    // scans of each laser, 7 of the camera) later: within the documented bound of 9 scans through the band.
     let robust = run("person_standing", "robust");
     assert_eq!(
         cells_near(&robust, "over_cautious", (1.6, 0.0), 0.4),
@@ -69,6 +70,19 @@ fn a_standing_robot_forgets_a_person_who_stood_in_front_of_it() {
         "robust keeps no ghost where the person stood"
     );
     assert_eq!(cells_near(&robust, "unsafe", (1.6, 0.0), 0.4), 0);
+    // Forgotten, not flagged: the cells there that are not right (uncertain ones: the camera's ground is noisy
+    // at 1.6 m) hold the ground's height, not the person's.
+    let ghost = rows(&robust.join("wrong_cells.csv"))
+        .iter()
+        .filter(|r| {
+            let (x, y): (f64, f64) = (r["x_m"].parse().expect("x"), r["y_m"].parse().expect("y"));
+            (x - 1.6).hypot(y) <= 0.4 && r["elevation_m"].parse::<f64>().is_ok_and(|z| z > 0.1)
+        })
+        .count();
+    assert_eq!(
+        ghost, 0,
+        "cells near where the person stood still hold their height"
+    );
     // The paper's model keeps one: eq. 8-9 average the person's height with the later ground hits.
     let paper = run("person_standing", "paper");
     assert!(

@@ -24,7 +24,7 @@ pub const BUILT_IN: [(&str, &str); 3] = [
 ];
 
 /// The model options that are update rules; `paper` returns each to its default.
-const RULE_KEYS: [&str; 17] = [
+const RULE_KEYS: [&str; 18] = [
     "map.preset",
     "map.model.log_odds_min",
     "map.model.log_odds_max",
@@ -36,6 +36,7 @@ const RULE_KEYS: [&str; 17] = [
     "map.model.free_space_elevation",
     "map.model.free_space_occupancy",
     "map.model.free_space_max_depth_m",
+    "map.model.hit_height",
     "map.model.scan_hit_elevation",
     "map.model.elevation_fusion",
     "map.model.process_noise_var_m2",
@@ -79,5 +80,39 @@ pub fn built_in(name: &str) -> Option<Vec<(String, Option<Value>)>> {
             Some(o)
         }
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The model options that describe the robot and its sensors, which `paper` leaves as the scenario sets them.
+    const SCENE_KEYS: [&str; 3] = ["max_height_m", "max_range_m", "no_return_clear_range_m"];
+
+    #[test]
+    fn every_model_option_is_a_rule_or_a_scene_setting() {
+        // Every option serialized, the optional ones and those left out at the paper's value included.
+        let all = oeg::ModelOptions {
+            free_space_max_depth_m: Some(0.01),
+            max_height_m: Some(0.5),
+            max_range_m: Some(10.0),
+            no_return_clear_range_m: Some(5.0),
+            ..oeg::MapPreset::Robust.model(&oeg::RobotProfile::default())
+        };
+        let json = serde_json::to_value(all).expect("serializes");
+        let fields = json.as_object().expect("an object");
+        for key in fields.keys() {
+            let in_rules = RULE_KEYS.contains(&format!("map.model.{key}").as_str());
+            assert!(
+                in_rules != SCENE_KEYS.contains(&key.as_str()),
+                "`{key}` must be in exactly one of RULE_KEYS and SCENE_KEYS"
+            );
+        }
+        assert_eq!(
+            fields.len() + 1,
+            RULE_KEYS.len() + SCENE_KEYS.len(),
+            "RULE_KEYS lists a removed option"
+        );
     }
 }

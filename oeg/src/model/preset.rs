@@ -22,9 +22,10 @@ pub enum MapPreset {
     /// reproducing the paper.
     #[default]
     Paper,
-    /// The recommended model: the paper's equations with the surface-band free-space rule, a scan's mean hit
-    /// with the surface's spread, the vertical variance of a hit, correlated measurements, height
-    /// thresholding at the robot's height and the contact step rule with an uncertain band.
+    /// The recommended model: the paper's equations with the surface-band free-space rule, heights at the
+    /// hits' end points, the highest level of a scan's hits with its spread, the top surface across scans, the
+    /// vertical variance of a hit, correlated measurements, height thresholding at the robot's height and the
+    /// contact step rule with an uncertain band.
     Robust,
 }
 
