@@ -138,14 +138,14 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
 const ROBUST_BOUNDS: [(&str, u64, u64, f64); 15] = [
     // (scenario, unsafe step cells, unsafe clearance cells: measured + about 10 % + 2; elevation within 2 sigma:
     // measured - 0.02).
-    ("boards_and_branches", 2, 6, 0.97),
+    ("boards_and_branches", 2, 2, 0.97),
     ("corridor_lasers", 2, 2, 0.96),
     ("curb_staircase", 51, 2, 0.96),
-    ("curbs_and_boards", 4, 74, 0.96),
-    ("default", 6, 361, 0.91),
-    ("large_outdoor", 6, 529, 0.97),
-    ("long_range_stereo", 12, 2, 0.85),
-    ("outdoor_stereo", 10, 38, 0.88),
+    ("curbs_and_boards", 4, 46, 0.96),
+    ("default", 6, 347, 0.91),
+    ("large_outdoor", 2, 525, 0.97),
+    ("long_range_stereo", 11, 2, 0.85),
+    ("outdoor_stereo", 6, 17, 0.88),
     ("people_walking", 2, 2, 0.94),
     ("pose_drift", 42, 2, 0.96),
     ("ramp_and_slope", 115, 2, 0.97),

@@ -10,7 +10,9 @@ use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion};
 use crate::map::Map;
 use crate::model::{Elevation, Level, probability_from_log_odds, surface_level};
-use crate::traversability::{RobotProfile, Traversability, TraversabilityRule, step_decision};
+use crate::traversability::{
+    RobotProfile, Traversability, TraversabilityRule, footprint_decision, step_decision,
+};
 
 /// A per-cell quantity of the map.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -148,7 +150,17 @@ impl Map {
                 }
                 (e.mean_m - ground, e.var_m2)
             }
-            TraversabilityRule::Contact { kappa } => {
+            TraversabilityRule::Contact { kappa, reach_m } => {
+                let wide = self.ground_within(cell, reach_m, kappa).unwrap_or(e);
+                if let Some(t) = footprint_decision(
+                    e.mean_m - wide.mean_m,
+                    (e.var_m2 + wide.var_m2).sqrt(),
+                    reach_m,
+                    kappa,
+                    profile,
+                ) {
+                    return t;
+                }
                 let ground = self
                     .ground_within(cell, profile.contact_distance_m(), kappa)
                     .unwrap_or(e);

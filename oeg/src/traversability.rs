@@ -131,11 +131,27 @@ pub enum TraversabilityRule {
     /// its step lies within `kappa` standard deviations of `max_step_m`, or its height above that ground within
     /// `kappa` standard deviations of the robot's height (an overhang the robot might just pass under); the
     /// standard deviation is that of the difference, `sqrt(sigma^2 + sigma_ground^2)`.
+    ///
+    /// Over the robot's half width `reach_m` the same holds with the rise a slope allows:
+    /// [`footprint_decision`]. A top that rises more over the robot's own extent than it can climb is a
+    /// structure it cannot pass under (a board, a table top) or a plateau it cannot have climbed; from one height
+    /// per cell the two cannot be told apart, and both are blocked.
     Contact {
         /// Width of the uncertain band, in standard deviations; default [`DEFAULT_UNCERTAIN_KAPPA`].
         #[serde(default = "default_kappa")]
         kappa: f32,
+        /// The robot's half width, metres; default [`DEFAULT_REACH_M`].
+        #[serde(default = "default_reach")]
+        reach_m: f32,
     },
+}
+
+/// [`TraversabilityRule::Contact`]'s default `reach_m`: half the Pioneer 3-AT's 0.50 m width (its data sheet),
+/// the planner's default clearance too.
+pub const DEFAULT_REACH_M: f32 = 0.25;
+
+fn default_reach() -> f32 {
+    DEFAULT_REACH_M
 }
 
 fn default_kappa() -> f32 {
@@ -149,7 +165,11 @@ impl TraversabilityRule {
     /// [`Error::InvalidSetting`] for a negative or non-finite `kappa`.
     pub fn validate(&self) -> Result<()> {
         match *self {
-            Self::Conservative { kappa } | Self::Contact { kappa }
+            Self::Contact { reach_m, .. } if !(reach_m.is_finite() && reach_m >= 0.0) => Err(Error::setting(
+                "traversability",
+                format!("reach_m must be a distance in metres >= 0, got {reach_m}"),
+            )),
+            Self::Conservative { kappa } | Self::Contact { kappa, .. }
                 if !(kappa.is_finite() && kappa >= 0.0) =>
             {
                 Err(Error::setting(
@@ -178,6 +198,28 @@ pub fn contact_decision(rise_m: f32, sigma_m: f32, kappa: f32, profile: &RobotPr
     }
 }
 
+/// [`TraversabilityRule::Contact`]'s second test: a cell whose elevation lies `rise_m` above the lowest level
+/// within `reach_m` (the robot's half width), with standard deviation `sigma_m`. Drivable ground rises at most
+/// `max_step_m + max_grade * reach_m` over that distance (a step, then the steepest grade); more is `Blocked`,
+/// within `kappa` sigma of it `Uncertain`, and less leaves the decision to [`contact_decision`] (`None`).
+pub fn footprint_decision(
+    rise_m: f32,
+    sigma_m: f32,
+    reach_m: f32,
+    kappa: f32,
+    profile: &RobotProfile,
+) -> Option<Traversability> {
+    let allowance = profile.max_step_m + profile.max_grade * reach_m;
+    let band = kappa * sigma_m;
+    if rise_m > allowance + band {
+        Some(Traversability::Blocked)
+    } else if rise_m >= allowance - band {
+        Some(Traversability::Uncertain)
+    } else {
+        None
+    }
+}
+
 /// The step decision for one occupied cell: `step_m` is the measured step (for [`TraversabilityRule::Terrain`],
 /// already relative to the neighbours' ground), `sigma_m` the elevation standard deviation.
 pub fn step_decision(
@@ -188,7 +230,9 @@ pub fn step_decision(
 ) -> Traversability {
     let effective = match rule {
         TraversabilityRule::Conservative { kappa } => step_m + kappa * sigma_m,
-        TraversabilityRule::Contact { kappa } => return contact_decision(step_m, sigma_m, kappa, profile),
+        TraversabilityRule::Contact { kappa, .. } => {
+            return contact_decision(step_m, sigma_m, kappa, profile);
+        }
         TraversabilityRule::Absolute | TraversabilityRule::Terrain => step_m,
     };
     if effective > profile.max_step_m {

@@ -572,7 +572,10 @@ fn the_contact_rule_measures_a_step_from_the_lowest_level_not_the_lowest_cell() 
             map.integrate(&scan).expect("integrated");
         }
     }
-    let rule = TraversabilityRule::Contact { kappa: 2.0 };
+    let rule = TraversabilityRule::Contact {
+        kappa: 2.0,
+        reach_m: 0.25,
+    };
     let at = |x: f64| map.traversability(cell(&map, x, 0.3), &profile, rule);
     // Noisy flat cells 0.3 m from the curb: their lowest neighbour is 1.2 cm low (a 2.4 cm rise for the highest,
     // within 2 sigma of 3.5 cm), the lowest level is not.

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::options::{
     ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, ModelOptions, ScanHitElevation,
 };
-use crate::traversability::{DEFAULT_UNCERTAIN_KAPPA, RobotProfile, TraversabilityRule};
+use crate::traversability::{DEFAULT_REACH_M, DEFAULT_UNCERTAIN_KAPPA, RobotProfile, TraversabilityRule};
 
 /// How far above the robot's height `robust` still maps a structure, metres: its height thresholding
 /// (the paper's section 6.2) cuts beams at `height_m + 0.05`. A structure's underside up to 5 cm above the
@@ -65,6 +65,7 @@ impl MapPreset {
             Self::Paper => TraversabilityRule::Absolute,
             Self::Robust => TraversabilityRule::Contact {
                 kappa: DEFAULT_UNCERTAIN_KAPPA,
+                reach_m: DEFAULT_REACH_M,
             },
         }
     }

@@ -319,8 +319,8 @@ impl Checker<'_> {
         if let Err(e) = m.model.validate() {
             return Err(self.error(&[K("map"), K("model")], e.to_string()));
         }
-        if let oeg::TraversabilityRule::Conservative { kappa } | oeg::TraversabilityRule::Contact { kappa } =
-            m.traversability
+        if let oeg::TraversabilityRule::Conservative { kappa }
+        | oeg::TraversabilityRule::Contact { kappa, .. } = m.traversability
         {
             self.non_negative(
                 f64::from(kappa),
