@@ -264,6 +264,31 @@ mod tests {
     }
 
     #[test]
+    fn a_top_higher_than_the_robot_climbs_over_its_half_width_is_blocked() {
+        let p = RobotProfile::default();
+        // Over 0.25 m the Pioneer 3-AT climbs 3.5 cm + 35 % of 0.25 m = 12.25 cm.
+        assert_eq!(
+            footprint_decision(0.40, 0.005, 0.25, 2.0, &p),
+            Some(Traversability::Blocked)
+        );
+        assert_eq!(
+            footprint_decision(0.12, 0.005, 0.25, 2.0, &p),
+            Some(Traversability::Uncertain)
+        );
+        // A 30 % ramp rises 7.5 cm over 0.25 m, a 5 cm curb's top 5 cm: left to the contact rule.
+        assert_eq!(footprint_decision(0.075, 0.005, 0.25, 2.0, &p), None);
+        assert_eq!(footprint_decision(0.05, 0.005, 0.25, 2.0, &p), None);
+        assert!(
+            TraversabilityRule::Contact {
+                kappa: 2.0,
+                reach_m: f32::NAN
+            }
+            .validate()
+            .is_err()
+        );
+    }
+
+    #[test]
     fn the_conservative_rule_adds_kappa_sigma() {
         let p = RobotProfile::default();
         let rule = TraversabilityRule::Conservative { kappa: 2.0 };
@@ -304,7 +329,10 @@ mod tests {
     #[test]
     fn the_contact_rule_is_uncertain_within_kappa_sigma_of_either_threshold() {
         let p = RobotProfile::default();
-        let rule = TraversabilityRule::Contact { kappa: 2.0 };
+        let rule = TraversabilityRule::Contact {
+            kappa: 2.0,
+            reach_m: DEFAULT_REACH_M,
+        };
         // 1 cm known to 5 mm: drivable; 3.9 cm known to 1 mm: blocked.
         assert_eq!(step_decision(0.010, 0.005, rule, &p), Traversability::Traversable);
         assert_eq!(step_decision(0.039, 0.001, rule, &p), Traversability::Blocked);
@@ -314,6 +342,13 @@ mod tests {
         // A structure 1 cm above the robot's height, known to 1 cm: it may or may not pass under it.
         assert_eq!(step_decision(0.47, 0.01, rule, &p), Traversability::Uncertain);
         assert_eq!(step_decision(0.30, 0.01, rule, &p), Traversability::Blocked);
-        assert!(TraversabilityRule::Contact { kappa: -1.0 }.validate().is_err());
+        assert!(
+            TraversabilityRule::Contact {
+                kappa: -1.0,
+                reach_m: DEFAULT_REACH_M
+            }
+            .validate()
+            .is_err()
+        );
     }
 }
