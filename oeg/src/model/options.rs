@@ -65,12 +65,13 @@ pub enum ElevationFusion {
     /// arriving or leaving, the face of a curb) raises it by as much as it disagrees, so the estimate says how
     /// sure it is.
     Disagreement,
-    /// The highest surface within the cell's band: a measurement within `surface_band_sigmas` standard
-    /// deviations of the estimate (of `sqrt(sigma^2 + s^2)`) is fused as [`Self::Disagreement`] fuses it; one
-    /// above the band is a higher surface and replaces the estimate; one below it is a lower level (the ground
-    /// under a table or a board) and leaves it as it is ([`crate::model::fuse_top_surface`]). A surface comes
-    /// down only when beams pass through its band ([`FreeSpaceOccupancy::SurfaceBand`]: a hit below a
-    /// contradicted surface replaces it). The recommended preset's rule.
+    /// The top surface of the cell: a measurement within `surface_band_sigmas` standard deviations of the
+    /// estimate (of `sqrt(sigma^2 + s^2)`) is the same surface and is fused by eq. 8 and 9; one above the band
+    /// pulls the estimate up as [`Self::Disagreement`] does, keeping the disagreement as variance (a higher
+    /// surface is confirmed by the next hits, a spurious return outvoted by them); one below it is a lower level
+    /// (the ground under a table or a board) and leaves it as it is ([`crate::model::fuse_top_surface`]). A
+    /// surface comes down only when beams pass through its band ([`FreeSpaceOccupancy::SurfaceBand`]: a hit
+    /// below a contradicted surface replaces it). The recommended preset's rule.
     TopSurface,
     /// As elevation_mapping (Fankhauser et al.): a measurement more than `mahalanobis_threshold` standard
     /// deviations above the estimate is a higher surface and replaces it; one as far below is a lower surface

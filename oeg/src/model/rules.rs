@@ -112,9 +112,11 @@ pub fn surface_level(surface: Elevation, h_m: f32, s2_m2: f32, band_sigmas: f32)
     }
 }
 
-/// [`ElevationFusion::TopSurface`]: a measurement above the band of `prior` replaces it, one within is fused
-/// by [`fuse_with_disagreement`], one below is a lower level and leaves `prior` unchanged. The band is
-/// `band_sigmas` standard deviations of the difference, the prior's variance grown by the process noise.
+/// [`ElevationFusion::TopSurface`]: a measurement within the band of `prior` is fused by eq. 8-9 (it is the same
+/// surface, and its disagreement is noise); one above it pulls the estimate up by [`fuse_with_disagreement`], the
+/// disagreement kept as variance (a higher surface, or a spurious return that the next measurements outvote);
+/// one below it is a lower level and leaves `prior` unchanged. The band is `band_sigmas` standard deviations of
+/// the difference, the prior's variance grown by the process noise.
 pub fn fuse_top_surface(
     prior: Option<Elevation>,
     h_m: f32,
