@@ -97,6 +97,12 @@ fn bad_values_are_errors_at_their_place() {
             19,
         ),
         (
+            "reach",
+            common::scenario_text("[map.traversability]\nkind = \"contact\"\nreach_m = -0.1\n"),
+            "map.traversability.reach_m",
+            19,
+        ),
+        (
             "expect",
             common::scenario_text("[expectations]\ncoverage = { min = 0.9, max = 0.5 }\n"),
             "min 0.9 exceeds max 0.5",

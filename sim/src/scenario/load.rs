@@ -328,6 +328,13 @@ impl Checker<'_> {
                 "number of standard deviations",
             )?;
         }
+        if let oeg::TraversabilityRule::Contact { reach_m, .. } = m.traversability {
+            self.non_negative(
+                f64::from(reach_m),
+                &[K("map"), K("traversability"), K("reach_m")],
+                "distance in metres",
+            )?;
+        }
 
         if let Err(e) = s.planner.options().validate() {
             return Err(self.error(&[K("planner"), K("inflation_radius_m")], e.to_string()));
