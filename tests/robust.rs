@@ -134,7 +134,7 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
 /// The shipped scenes under `robust`: regression bounds from the run of 2026-12-02 (`oeg suite scenarios --set
 /// map.preset=robust`), with a margin. They pin what the preset does today, not what it should do: the
 /// scenarios' own `[expectations]` (set for their own settings) fail under it, and the planner finds no path
-/// in 5 of the 15 scenes because of uncertain cells (the closing note of issue 12).
+/// in 6 of the 15 scenes because of uncertain cells (the closing note of issue 12).
 const ROBUST_BOUNDS: [(&str, u64, u64, f64); 15] = [
     // (scenario, unsafe step cells, unsafe clearance cells: measured + about 10 % + 2; elevation within 2 sigma:
     // measured - 0.02).
