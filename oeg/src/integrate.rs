@@ -360,19 +360,13 @@ impl Map {
                     opts.p_min,
                 );
                 let p = clamp_probability(p, opts.p_min, opts.p_max);
-                let z_here = (o.z + dir.z * l) as f32;
-                // The sample's height measurement under `HitHeight` (None: occupancy only).
-                let measurement = match opts.hit_height {
-                    HitHeight::BeamSample => Some((z_here, s2)),
-                    // Only the cell holding the end point (where the clamp leaves `l_p` as it is).
-                    HitHeight::Endpoint => (l == l_p).then_some((z_here, s2)),
-                };
-                match measurement.and_then(|(z, var)| {
-                    elevation_observation(p, z, opts.elevation_threshold).map(|z| (z, var))
-                }) {
-                    Some((z, var)) => {
-                        evidence.add_hit(p, z, var, opts.scan_hit_elevation, opts.surface_band_sigmas)
-                    }
+                // Under `HitHeight::Endpoint` only the cell holding the end point (where the clamp leaves
+                // `l_p` as it is) measures a height.
+                let measures_height = opts.hit_height == HitHeight::BeamSample || l == l_p;
+                match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold)
+                    .filter(|_| measures_height)
+                {
+                    Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
                     // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
                     // the occupancy, but its height bounds nothing (a noisy long reading would otherwise
                     // "prove" free space under the ground).
