@@ -24,13 +24,17 @@ pub fn fuse_elevation(
             },
             Some(e),
         ) => {
-            let spread = (e.var_m2 + process_noise_var_m2 + s2_m2).sqrt();
-            if h_m - e.mean_m > mahalanobis_threshold * spread {
+            let grown = Elevation {
+                var_m2: e.var_m2 + process_noise_var_m2,
+                ..e
+            };
+            let lower = lower_threshold.unwrap_or(mahalanobis_threshold);
+            if surface_level(grown, h_m, s2_m2, mahalanobis_threshold) == Level::Above {
                 Elevation {
                     mean_m: h_m,
                     var_m2: s2_m2,
                 }
-            } else if e.mean_m - h_m > lower_threshold.unwrap_or(mahalanobis_threshold) * spread {
+            } else if surface_level(grown, h_m, s2_m2, lower) == Level::Below {
                 Elevation {
                     mean_m: e.mean_m,
                     var_m2: e.var_m2 + multi_height_noise_m2,
@@ -100,12 +104,13 @@ pub enum Level {
 
 /// Whether `h_m` (variance `s2_m2`) lies above, within or below the band of `surface`: `band_sigmas` standard
 /// deviations of the difference, `sqrt(sigma^2 + s^2)`. The one test behind [`ScanHitElevation::HighestLevel`]
-/// (within a scan) and [`ElevationFusion::TopSurface`] (across scans).
+/// (within a scan), [`ElevationFusion::TopSurface`] (across scans) and, with its own threshold above and
+/// below, [`ElevationFusion::HighestSurface`].
 pub fn surface_level(surface: Elevation, h_m: f32, s2_m2: f32, band_sigmas: f32) -> Level {
     let half = band_sigmas * (surface.var_m2 + s2_m2).sqrt();
-    if h_m > surface.mean_m + half {
+    if h_m - surface.mean_m > half {
         Level::Above
-    } else if h_m < surface.mean_m - half {
+    } else if surface.mean_m - h_m > half {
         Level::Below
     } else {
         Level::Same
