@@ -333,11 +333,7 @@ fn run_plan(args: &PlanArgs) -> anyhow::Result<()> {
         from_xy_m: args.from,
         to_xy_m: args.to,
         out_dir: args.out.clone(),
-        options: oeg::PlannerOptions {
-            inflation_radius_m: settings.planner.inflation_radius_m,
-            unknown: settings.planner.unknown,
-            uncertain: settings.planner.uncertain,
-        },
+        options: settings.planner,
         profile: settings.robot,
         rule: settings.map.traversability,
     };

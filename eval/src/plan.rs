@@ -322,7 +322,7 @@ mod tests {
         let options = PlannerOptions {
             inflation_radius_m: 0.0,
             unknown: UnknownCells::Drivable,
-            uncertain: oeg::UncertainCells::Blocked,
+            ..PlannerOptions::default()
         };
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
         let truth_plan = planner::plan(&region, 1.0, &truly, s, g, &options)

@@ -9,7 +9,7 @@
 //! | `map.resolution_m`, `map.model.*` | yes | yes | no (the map file has them) |
 //! | `map.traversability` | yes | yes | yes |
 //! | `robot.max_step_m`, `robot.height_m` | yes | yes | yes |
-//! | `planner.inflation_radius_m`, `planner.unknown` | yes | no | yes |
+//! | `planner.inflation_radius_m`, `planner.footprint_radius_m`, `planner.unknown`, `planner.uncertain` | yes | no | yes |
 //! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose` | no | yes | no |
 //! | every other scenario key | yes | no | no |
 //!
@@ -114,28 +114,6 @@ pub struct PlanMapPart {
     pub traversability: oeg::TraversabilityRule,
 }
 
-/// `[planner]` of `oeg plan`.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PlannerPart {
-    /// The robot's centre keeps at least this far from blocked cells, metres.
-    pub inflation_radius_m: f64,
-    /// Cells the map never observed.
-    pub unknown: oeg::UnknownCells,
-    /// Cells the map cannot judge.
-    pub uncertain: oeg::UncertainCells,
-}
-
-impl Default for PlannerPart {
-    fn default() -> Self {
-        Self {
-            inflation_radius_m: oeg::planner::DEFAULT_INFLATION_RADIUS_M,
-            unknown: oeg::UnknownCells::default(),
-            uncertain: oeg::UncertainCells::default(),
-        }
-    }
-}
-
 /// Everything `oeg plan` can be told.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -144,8 +122,8 @@ pub struct PlanSettings {
     pub map: PlanMapPart,
     /// Decision limits.
     pub robot: oeg::RobotProfile,
-    /// The planner.
-    pub planner: PlannerPart,
+    /// The planner, with the scenario's `[planner]` keys.
+    pub planner: oeg::PlannerOptions,
 }
 
 /// Settings that can check themselves for sense.
@@ -173,12 +151,10 @@ impl Checked for MapSettings {
 
 impl Checked for PlanSettings {
     fn check(&self) -> Result<(), String> {
-        let r = self.planner.inflation_radius_m;
-        if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
-            return Err(format!(
-                "planner.inflation_radius_m: expected a radius in [0, 100] m, got {r}"
-            ));
-        }
+        self.planner.validate().map_err(|e| match e {
+            oeg::Error::InvalidSetting { name, message } => format!("planner.{name}: {message}"),
+            other => other.to_string(),
+        })?;
         self.map.traversability.validate().map_err(|e| e.to_string())?;
         self.robot.validate().map_err(|e| e.to_string())
     }

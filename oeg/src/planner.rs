@@ -35,6 +35,9 @@ use crate::traversability::Traversability;
 /// Default inflation radius, metres: half the Pioneer 3-AT's 0.50 m width (its inscribed radius).
 pub const DEFAULT_INFLATION_RADIUS_M: f64 = 0.25;
 
+/// Default footprint radius, metres: the Pioneer 3-AT's inscribed radius, as [`DEFAULT_INFLATION_RADIUS_M`].
+pub const DEFAULT_FOOTPRINT_RADIUS_M: f64 = 0.25;
+
 /// Cost of a move to a side neighbour; a diagonal costs [`DIAGONAL_COST`] (1000 sqrt 2, rounded).
 const SIDE_COST: u64 = 1000;
 const DIAGONAL_COST: u64 = 1414;
@@ -73,6 +76,10 @@ pub struct PlannerOptions {
     /// The robot's centre keeps at least this far from every blocked cell (centre to centre), metres. Default
     /// [`DEFAULT_INFLATION_RADIUS_M`].
     pub inflation_radius_m: f64,
+    /// The robot's own radius, metres: at the start, cells this close to the robot's centre lie under it and
+    /// count as drivable (see [`plan`]). Default [`DEFAULT_FOOTPRINT_RADIUS_M`]. It is not the inflation
+    /// radius: a wide safety margin must not clear the obstacles around the start.
+    pub footprint_radius_m: f64,
     /// Unknown cells: default [`UnknownCells::Avoid`].
     pub unknown: UnknownCells,
     /// Uncertain cells: default [`UncertainCells::Blocked`].
@@ -83,6 +90,7 @@ impl Default for PlannerOptions {
     fn default() -> Self {
         Self {
             inflation_radius_m: DEFAULT_INFLATION_RADIUS_M,
+            footprint_radius_m: DEFAULT_FOOTPRINT_RADIUS_M,
             unknown: UnknownCells::default(),
             uncertain: UncertainCells::default(),
         }
@@ -93,14 +101,19 @@ impl PlannerOptions {
     /// Checks the options for sense.
     ///
     /// # Errors
-    /// [`Error::InvalidSetting`] for a negative, non-finite or absurd (over 100 m) inflation radius.
+    /// [`Error::InvalidSetting`] for a negative, non-finite or absurd (over 100 m) inflation or footprint
+    /// radius.
     pub fn validate(&self) -> Result<()> {
-        let r = self.inflation_radius_m;
-        if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
-            return Err(Error::setting(
-                "inflation_radius_m",
-                format!("must be a distance in metres from 0 to 100, got {r}"),
-            ));
+        for (name, r) in [
+            ("inflation_radius_m", self.inflation_radius_m),
+            ("footprint_radius_m", self.footprint_radius_m),
+        ] {
+            if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
+                return Err(Error::setting(
+                    name,
+                    format!("must be a distance in metres from 0 to 100, got {r}"),
+                ));
+            }
         }
         Ok(())
     }
@@ -277,11 +290,12 @@ fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 /// The shortest path from `start` to `goal` through `region` on `decisions` (one per region cell, row-major),
 /// or `None` if there is none.
 ///
-/// The robot stands at the start, so every cell within the inflation radius of the start counts as drivable,
-/// blocked or unknown (costmap_2d's footprint clearing: no sensor sees under the robot, and nothing stands
-/// where the robot is; a spurious hit there would otherwise pin it). Unknown cells within the radius of the
-/// goal count as drivable too, whatever [`UnknownCells`] says (the ground under the robot's final footprint
-/// need not have been seen), but blocked cells near the goal still count.
+/// The robot stands at the start, so every cell under it counts as drivable, blocked or unknown (costmap_2d's
+/// footprint clearing: no sensor sees under the robot, and nothing stands where the robot is; a spurious hit
+/// there would otherwise pin it). "Under it" is within the smaller of [`PlannerOptions::footprint_radius_m`]
+/// and the inflation radius of the start. Unknown cells within that radius of the goal count as drivable too,
+/// whatever [`UnknownCells`] says (the ground under the robot's final footprint need not have been seen), but
+/// blocked cells near the goal still count.
 ///
 /// # Errors
 /// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the region.
@@ -304,7 +318,7 @@ pub fn plan(
     let (s, g) = (offset_of("start", start)?, offset_of("goal", goal)?);
     validate_inputs(region, resolution_m, decisions, options)?;
     let mut decisions = decisions.to_vec();
-    let r = options.inflation_radius_m / resolution_m + 1e-9;
+    let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
     let forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
@@ -421,6 +435,7 @@ mod tests {
     fn no_inflation(unknown: UnknownCells) -> PlannerOptions {
         PlannerOptions {
             inflation_radius_m: 0.0,
+            footprint_radius_m: 0.0,
             unknown,
             uncertain: UncertainCells::Blocked,
         }
@@ -463,6 +478,7 @@ mod tests {
         assert!(open.is_some(), "the gap lets a point robot through");
         let wide = PlannerOptions {
             inflation_radius_m: 0.1,
+            footprint_radius_m: 0.1,
             unknown: UnknownCells::Avoid,
             uncertain: UncertainCells::Blocked,
         };
@@ -524,6 +540,7 @@ mod tests {
         // Inflated unknown cells close a corridor that avoided unknown cells leave open.
         let opts = |unknown| PlannerOptions {
             inflation_radius_m: 2.0,
+            footprint_radius_m: 2.0,
             unknown,
             uncertain: UncertainCells::Blocked,
         };
@@ -551,6 +568,7 @@ mod tests {
         let g = CellIndex::new(11, 2);
         let footprint = PlannerOptions {
             inflation_radius_m: 0.2,
+            footprint_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
             uncertain: UncertainCells::Blocked,
         };
@@ -570,6 +588,7 @@ mod tests {
         let (s, g) = (CellIndex::new(2, 2), CellIndex::new(9, 2));
         let options = PlannerOptions {
             inflation_radius_m: 0.2,
+            footprint_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
             uncertain: UncertainCells::Blocked,
         };
@@ -586,6 +605,24 @@ mod tests {
     }
 
     #[test]
+    fn a_wide_inflation_radius_does_not_clear_the_obstacles_around_the_start() {
+        // 0.1 m cells. A wall 1 m ahead of the start with a 0.3 m gap; the robot (0.25 m footprint) plans with a
+        // 5 m safety margin. Clearing the start's inflation radius would erase the wall and report a path
+        // through it; only the footprint is cleared, so there is no path.
+        let r = region(60, 60);
+        let (s, g) = (CellIndex::new(30, 20), CellIndex::new(30, 50));
+        let wall = marked(&r, Traversability::Blocked, |c| c.j == 30 && (c.i - 30).abs() > 1);
+        let options = PlannerOptions {
+            inflation_radius_m: 5.0,
+            ..PlannerOptions::default()
+        };
+        assert_eq!(plan(&r, 0.1, &wall, s, g, &options).expect("valid"), None);
+        // Without the wall the margin is free to be as wide as it likes around the start.
+        let open = marked(&r, Traversability::Blocked, |_| false);
+        assert!(plan(&r, 0.1, &open, s, g, &options).expect("valid").is_some());
+    }
+
+    #[test]
     fn bad_inputs_are_errors() {
         let r = region(3, 3);
         let d = vec![Traversability::Free; 9];
@@ -595,6 +632,7 @@ mod tests {
         assert!(plan(&r, 0.0, &d, CellIndex::new(0, 0), CellIndex::new(2, 2), &o).is_err());
         let bad = PlannerOptions {
             inflation_radius_m: f64::NAN,
+            footprint_radius_m: f64::NAN,
             ..o
         };
         let err =
@@ -626,7 +664,7 @@ mod tests {
                 .iter()
                 .map(|v| if *v == 0 { Traversability::Blocked } else { Traversability::Free })
                 .collect();
-            let options = PlannerOptions { inflation_radius_m: radius_cells * 0.1, unknown: UnknownCells::Avoid, uncertain: UncertainCells::Blocked };
+            let options = PlannerOptions { inflation_radius_m: radius_cells * 0.1, unknown: UnknownCells::Avoid, ..PlannerOptions::default() };
             let mask = forbidden_mask(&r, 0.1, &d, &options).expect("valid");
             prop_assert_eq!(mask, brute_mask(&r, &d, radius_cells));
         }

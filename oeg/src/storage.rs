@@ -34,6 +34,13 @@ impl TileIndex {
         }
     }
 
+    /// Whether the tile's cells are representable ([`CellIndex`] is `i32`): tiles from `i32::MIN >> 6` to
+    /// `i32::MAX >> 6` on each axis. Every [`TileIndex::of`] a cell is.
+    pub fn is_representable(self) -> bool {
+        let range = (i32::MIN >> TILE_SHIFT)..=(i32::MAX >> TILE_SHIFT);
+        range.contains(&self.ti) && range.contains(&self.tj)
+    }
+
     /// The tile's first cell (min-x, min-y).
     pub fn first_cell(self) -> CellIndex {
         CellIndex::new(self.ti << TILE_SHIFT, self.tj << TILE_SHIFT)
@@ -66,7 +73,8 @@ pub struct TileGrid<T> {
 /// Why a tile could not be allocated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CapacityExceeded {
-    /// Bytes the grid would have held.
+    /// Bytes the grid would have held; `u64::MAX` for a tile that is not representable
+    /// ([`TileIndex::is_representable`]), which no amount of memory could hold.
     pub requested_bytes: u64,
 }
 
@@ -192,6 +200,11 @@ impl<T: Copy> TileGrid<T> {
     }
 
     fn grow_to_cover(&mut self, tile: TileIndex, limit_bytes: u64) -> Result<(), CapacityExceeded> {
+        if !tile.is_representable() {
+            return Err(CapacityExceeded {
+                requested_bytes: u64::MAX,
+            });
+        }
         // Grow with slack (a quarter of the current size, at least 4 tiles per side) so a robot driving in one
         // direction re-indexes O(log n) times.
         let (lo_i, lo_j, hi_i, hi_j) = if self.tiles_x == 0 {
@@ -332,6 +345,26 @@ impl<T: Copy> TileGrid<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tile_outside_the_grid_is_refused_not_a_panic() {
+        let mut g = TileGrid::new(0u32);
+        for tile in [
+            TileIndex { ti: 1 << 25, tj: 0 },
+            TileIndex { ti: 0, tj: i32::MIN },
+        ] {
+            assert!(!tile.is_representable());
+            let boxed = Box::new([0u32; TILE_CELLS]);
+            assert_eq!(
+                g.insert_tile(tile, boxed, u64::MAX),
+                Err(CapacityExceeded {
+                    requested_bytes: u64::MAX
+                })
+            );
+            assert!(g.tile_or_insert(tile, u64::MAX).is_err());
+        }
+        assert_eq!(g.num_tiles(), 0);
+    }
 
     #[test]
     fn cells_read_back_and_unwritten_cells_are_absent() {

@@ -19,9 +19,9 @@
 
 use std::path::Path;
 
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 
-use super::{ByteReader, read_file, write_atomically};
+use super::{ByteReader, read_file, unit_quaternion, write_atomically};
 use crate::error::Result;
 use crate::scan::{Ray, RayKind, Scan};
 use crate::sensor::SensorModel;
@@ -172,14 +172,9 @@ fn read_pose(r: &mut ByteReader<'_>, what: What<'_>) -> Result<Isometry3<f64>> {
         *v = r.f64(what)?;
         finite(r, *v, what)?;
     }
-    let quaternion = Quaternion::new(q[0], q[1], q[2], q[3]);
-    if quaternion.norm() < 1e-9 {
-        return Err(r.error(format!("{what} has a zero rotation quaternion")));
-    }
-    Ok(Isometry3::from_parts(
-        Translation3::from(t),
-        UnitQuaternion::from_quaternion(quaternion),
-    ))
+    let rotation = unit_quaternion(q[0], q[1], q[2], q[3])
+        .ok_or_else(|| r.error(format!("{what} has a zero rotation quaternion")))?;
+    Ok(Isometry3::from_parts(Translation3::from(t), rotation))
 }
 
 /// Writes scans as a scan graph: one node per scan, the identity rotation, the origin as translation and each

@@ -94,21 +94,36 @@ pub fn save_map(map: &Map, path: &Path) -> Result<()> {
 /// As [`load_map`].
 pub fn read_header(path: &Path) -> Result<MapFileHeader> {
     let data = read_file(path)?;
-    parse(path, &data, false).map(|(h, _)| h)
+    parse(path, &data, None).map(|(h, _)| h)
 }
 
-/// Loads a map saved by [`save_map`].
+/// Loads a map saved by [`save_map`], within the default memory limit ([`crate::DEFAULT_MEMORY_LIMIT_BYTES`]).
+///
+/// # Errors
+/// As [`load_map_within`].
+pub fn load_map(path: &Path) -> Result<Map> {
+    load_map_within(path, crate::DEFAULT_MEMORY_LIMIT_BYTES)
+}
+
+/// Loads a map saved by [`save_map`], refusing it before allocating if it would hold more than `limit_bytes`.
+///
+/// The limit is the caller's: the `memory_limit_bytes` a file's header records is ignored, so a file cannot
+/// raise the bound it is read under. The loaded map's [`MapConfig::memory_limit_bytes`] is `limit_bytes`.
 ///
 /// # Errors
 /// [`Error::Io`] if the file cannot be read; [`Error::Parse`] naming the byte offset for a wrong magic number,
-/// an unsupported version, a malformed header, a truncated file or a checksum mismatch;
-/// [`Error::MemoryLimit`] if the tiles exceed the map's memory limit.
-pub fn load_map(path: &Path) -> Result<Map> {
+/// an unsupported version, a malformed header, a truncated file, a checksum mismatch, a tile outside the
+/// representable grid, a cell value no map holds (an infinite log-odds, a NaN or infinite elevation, a
+/// negative or NaN variance), or tiles that would exceed `limit_bytes`.
+pub fn load_map_within(path: &Path, limit_bytes: u64) -> Result<Map> {
     let data = read_file(path)?;
-    parse(path, &data, true).map(|(_, m)| m.unwrap_or_else(|| unreachable!("asked for the map")))
+    parse(path, &data, Some(limit_bytes)).map(|(_, m)| m.unwrap_or_else(|| unreachable!("asked for the map")))
 }
 
-fn parse(path: &Path, data: &[u8], build: bool) -> Result<(MapFileHeader, Option<Map>)> {
+/// The smallest and largest tile coordinate: cells are `i32`, and a tile holds 64 of them per side.
+const TILE_COORD_RANGE: std::ops::RangeInclusive<i32> = (i32::MIN >> 6)..=(i32::MAX >> 6);
+
+fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader, Option<Map>)> {
     let mut r = ByteReader::new(path, data);
     let magic = r.take(8, "the magic number")?;
     if magic != MAGIC {
@@ -151,24 +166,44 @@ fn parse(path: &Path, data: &[u8], build: bool) -> Result<(MapFileHeader, Option
     if fnv1a64(body) != stored {
         return Err(r.error_at(body.len(), "checksum mismatch: the file is corrupt"));
     }
-    if !build {
+    let Some(limit_bytes) = build else {
         return Ok((header, None));
-    }
-    let mut map =
-        Map::new(header.config).map_err(|e| r.error_at(16, format!("invalid map settings: {e}")))?;
+    };
+    let config = MapConfig {
+        memory_limit_bytes: limit_bytes,
+        ..header.config
+    };
+    let mut map = Map::new(config).map_err(|e| r.error_at(16, format!("invalid map settings: {e}")))?;
     for t in 0..header.num_tiles {
         let what = format!("tile {t}");
+        let at = r.pos();
         let tile = TileIndex {
             ti: r.i32(&what)?,
             tj: r.i32(&what)?,
         };
+        if !(TILE_COORD_RANGE.contains(&tile.ti) && TILE_COORD_RANGE.contains(&tile.tj)) {
+            return Err(r.error_at(
+                at,
+                format!(
+                    "{what} has coordinates ({}, {}), outside the grid's tiles {} ..= {}",
+                    tile.ti,
+                    tile.tj,
+                    TILE_COORD_RANGE.start(),
+                    TILE_COORD_RANGE.end()
+                ),
+            ));
+        }
         let mut cells = Box::new([Cell::UNOBSERVED; TILE_CELLS]);
-        for c in cells.iter_mut() {
+        for (k, c) in cells.iter_mut().enumerate() {
+            let at = r.pos();
             *c = Cell {
                 log_odds: r.f32(&what)?,
                 mean_m: r.f32(&what)?,
                 var_m2: r.f32(&what)?,
             };
+            if let Some(problem) = cell_problem(c) {
+                return Err(r.error_at(at, format!("{what}, cell {k}: {problem}")));
+            }
         }
         map.insert_tile(tile, cells).map_err(|e| match e {
             Error::MemoryLimit { .. } => Error::parse(path, format!("loading tile {t}: {e}")),
@@ -177,6 +212,24 @@ fn parse(path: &Path, data: &[u8], build: bool) -> Result<(MapFileHeader, Option
     }
     map.restore_counters(header.num_scans, header.totals);
     Ok((header, Some(map)))
+}
+
+/// What makes a cell's values impossible for a map to hold, if anything: the log-odds is NaN (never observed)
+/// or finite; the elevation is finite; the variance is NaN-free and not negative (infinite: no estimate).
+fn cell_problem(c: &Cell) -> Option<String> {
+    if c.log_odds.is_infinite() {
+        return Some(format!("log-odds {} is infinite (expected NaN or a finite number)", c.log_odds));
+    }
+    if !c.mean_m.is_finite() {
+        return Some(format!("elevation {} m is not a finite number", c.mean_m));
+    }
+    if c.var_m2.is_nan() || c.var_m2 < 0.0 {
+        return Some(format!(
+            "elevation variance {} m^2 is not a variance (expected 0 or more, or infinite for no estimate)",
+            c.var_m2
+        ));
+    }
+    None
 }
 
 #[cfg(test)]
@@ -235,18 +288,18 @@ mod tests {
         let bytes = to_bytes(&small_map());
         let p = Path::new("m.oeg");
         for cut in [0, 7, 12, 20, 100, bytes.len() / 2, bytes.len() - 1] {
-            let err = parse(p, &bytes[..cut], true).expect_err("truncated").to_string();
+            let err = parse(p, &bytes[..cut], Some(1 << 30)).expect_err("truncated").to_string();
             assert!(err.starts_with("m.oeg: at byte"), "cut {cut}: {err}");
         }
         let mut flipped = bytes.clone();
         let k = flipped.len() - 100;
         flipped[k] ^= 0x40;
-        let err = parse(p, &flipped, true).expect_err("corrupt").to_string();
+        let err = parse(p, &flipped, Some(1 << 30)).expect_err("corrupt").to_string();
         assert!(err.contains("checksum mismatch"), "{err}");
         let mut wrong = bytes.clone();
         wrong[0] = b'X';
         assert!(
-            parse(p, &wrong, true)
+            parse(p, &wrong, Some(1 << 30))
                 .expect_err("magic")
                 .to_string()
                 .contains("magic")
@@ -254,10 +307,97 @@ mod tests {
         let mut future = bytes;
         future[8] = 9;
         assert!(
-            parse(p, &future, true)
+            parse(p, &future, Some(1 << 30))
                 .expect_err("version")
                 .to_string()
                 .contains("version 9")
         );
+    }
+
+    /// A map file whose header and tile records are `tiles`, each `(ti, tj, cell)`, with a valid checksum.
+    fn forged(config: MapConfig, tiles: &[(i32, i32, Cell)]) -> Vec<u8> {
+        let header = MapFileHeader {
+            config,
+            tile_size: TILE_SIZE as u32,
+            num_tiles: tiles.len() as u64,
+            num_scans: 1,
+            totals: IntegrationStats::default(),
+            written_by: "a test".into(),
+        };
+        let json = serde_json::to_vec(&header).expect("json");
+        let mut out = Vec::new();
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(&json);
+        for (ti, tj, cell) in tiles {
+            out.extend_from_slice(&ti.to_le_bytes());
+            out.extend_from_slice(&tj.to_le_bytes());
+            for _ in 0..TILE_CELLS {
+                for v in [cell.log_odds, cell.mean_m, cell.var_m2] {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        let checksum = fnv1a64(&out);
+        out.extend_from_slice(&checksum.to_le_bytes());
+        out
+    }
+
+    const GROUND: Cell = Cell {
+        log_odds: -1.0,
+        mean_m: 0.0,
+        var_m2: 1e-4,
+    };
+
+    #[test]
+    fn a_tile_index_beyond_the_grid_is_an_error_not_a_panic() {
+        let p = Path::new("far.oeg");
+        for (ti, tj) in [(1 << 25, 0), (0, -(1 << 25) - 1), (i32::MAX, i32::MIN)] {
+            let bytes = forged(MapConfig::new(0.1), &[(ti, tj, GROUND)]);
+            let err = parse(p, &bytes, Some(1 << 30)).expect_err("out of the grid").to_string();
+            assert!(err.starts_with("far.oeg: at byte") && err.contains("outside the grid"), "{err}");
+        }
+        let edge = forged(MapConfig::new(0.1), &[((1 << 25) - 1, -(1 << 25), GROUND)]);
+        assert!(parse(p, &edge, Some(1 << 30)).is_ok(), "the outermost tiles are fine");
+    }
+
+    #[test]
+    fn a_map_file_cannot_raise_the_memory_limit_it_is_read_under() {
+        // Two tiles 2^24 tiles apart: an index of 2^48 slots. The header asks for an unlimited budget.
+        let config = MapConfig {
+            memory_limit_bytes: u64::MAX,
+            ..MapConfig::new(0.1)
+        };
+        let bytes = forged(config, &[(0, 0, GROUND), (1 << 24, 1 << 24, GROUND)]);
+        let p = Path::new("wide.oeg");
+        let started = std::time::Instant::now();
+        let err = parse(p, &bytes, Some(crate::DEFAULT_MEMORY_LIMIT_BYTES)).expect_err("over the limit");
+        assert!(err.to_string().contains("memory limit"), "{err}");
+        assert!(started.elapsed().as_secs_f64() < 5.0, "refused before allocating");
+        let (_, map) = parse(p, &forged(config, &[(0, 0, GROUND)]), Some(1 << 30)).expect("small map");
+        let map = map.expect("built");
+        assert_eq!(map.config().memory_limit_bytes, 1 << 30, "the caller's limit, not the file's");
+    }
+
+    #[test]
+    fn non_finite_cell_values_are_refused_with_their_place() {
+        let p = Path::new("bad.oeg");
+        let bad = [
+            Cell { mean_m: f32::INFINITY, ..GROUND },
+            Cell { mean_m: f32::NAN, ..GROUND },
+            Cell { var_m2: f32::NAN, ..GROUND },
+            Cell { var_m2: -1.0, ..GROUND },
+            Cell { log_odds: f32::INFINITY, ..GROUND },
+        ];
+        for cell in bad {
+            let bytes = forged(MapConfig::new(0.1), &[(0, 0, GROUND), (1, 0, cell)]);
+            let err = parse(p, &bytes, Some(1 << 30)).expect_err("bad cell").to_string();
+            assert!(err.contains("tile 1, cell 0"), "{cell:?}: {err}");
+        }
+        for fine in [Cell::UNOBSERVED, Cell { var_m2: f32::INFINITY, ..GROUND }] {
+            let bytes = forged(MapConfig::new(0.1), &[(0, 0, fine)]);
+            assert!(parse(p, &bytes, Some(1 << 30)).is_ok(), "{fine:?}");
+        }
     }
 }

@@ -20,15 +20,22 @@ use crate::error::{Error, Result};
 /// Writes `bytes` to `path` atomically: to a temporary file beside it, then renamed over it, so a reader never
 /// sees half a file and a failed write leaves no partial output.
 ///
+/// Only regular files are ever replaced (see [`output_target`]): a device, a FIFO, a socket, a folder or a
+/// symbolic link to one of them at `path` is an error and is left untouched. A symbolic link to a regular file
+/// is followed, so the link stays and its target is replaced. Temporary files that a killed writer left beside
+/// `path` are removed first (see [`remove_stale_temporaries`]).
+///
 /// # Errors
 /// [`Error::Io`] naming the file.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = temporary_path(path);
+    let target = output_target(path)?;
+    remove_stale_temporaries(&target);
+    let tmp = temporary_path(&target);
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
+        let mut f = std::fs::File::options().write(true).create_new(true).open(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)
     })();
     result.map_err(|e| {
         // Best effort: the temporary file is ours and useless now.
@@ -37,10 +44,107 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     })
 }
 
+/// The file an output at `path` replaces: `path` itself when nothing or a regular file is there, or the
+/// regular file a symbolic link at `path` points to.
+///
+/// # Errors
+/// [`Error::Io`] naming `path` when it is a folder, a device, a FIFO, a socket, a symbolic link to one of them
+/// or a dangling symbolic link: outputs are only ever written to regular files.
+pub fn output_target(path: &Path) -> Result<PathBuf> {
+    let refuse = |what: &str| {
+        Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("{what}; outputs are only written to regular files, so it was left untouched"),
+            ),
+        )
+    };
+    let link = std::fs::symlink_metadata(path);
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => match link {
+            Ok(l) if l.file_type().is_symlink() => std::fs::canonicalize(path).map_err(|e| Error::io(path, e)),
+            _ => Ok(path.to_path_buf()),
+        },
+        Ok(m) if m.is_dir() => Err(refuse("is a folder, not a file")),
+        Ok(_) => Err(refuse("is a device, a FIFO or a socket, not a regular file")),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => match link {
+            Ok(_) => Err(refuse("is a dangling symbolic link")),
+            Err(_) => Ok(path.to_path_buf()),
+        },
+        Err(e) => Err(Error::io(path, e)),
+    }
+}
+
+/// Temporary names: `<name>.<pid>.<n>.tmp`, `n` counting up within the process, so two writers of one path,
+/// in one process or in two, never share a temporary file.
 fn temporary_path(path: &Path) -> PathBuf {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(format!(".{}.tmp", std::process::id()));
+    name.push(format!(".{}.{n}.tmp", std::process::id()));
     path.with_file_name(name)
+}
+
+/// Removes the temporary files (`<name>.<pid>.<n>.tmp`) that writers of `path` left behind when they were
+/// killed: those whose process no longer runs. Best effort, and only where the operating system lists its
+/// processes under `/proc` (Linux); elsewhere nothing is removed.
+pub fn remove_stale_temporaries(path: &Path) {
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name().and_then(|n| n.to_str())) else {
+        return;
+    };
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    for pid in stale_owners(dir, &format!("{name}."), ".tmp") {
+        let _ = std::fs::remove_file(dir.join(pid));
+    }
+}
+
+/// Entries of `dir` named `<prefix><pid>.<n><suffix>` whose process `pid` no longer runs (Linux only).
+pub fn stale_owners(dir: &Path, prefix: &str, suffix: &str) -> Vec<std::ffi::OsString> {
+    if !Path::new("/proc/self").exists() {
+        return Vec::new();
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(|e| e.ok().map(|e| e.file_name()))
+        .filter(|file| {
+            let Some(rest) = file
+                .to_str()
+                .and_then(|f| f.strip_prefix(prefix))
+                .and_then(|f| f.strip_suffix(suffix))
+            else {
+                return false;
+            };
+            let mut parts = rest.split('.');
+            match (parts.next(), parts.next(), parts.next()) {
+                (Some(pid), Some(n), None) if n.bytes().all(|b| b.is_ascii_digit()) && !n.is_empty() => {
+                    pid.parse::<u32>().is_ok_and(|pid| {
+                        pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+                    })
+                }
+                _ => false,
+            }
+        })
+        .collect()
+}
+
+/// The rotation of a quaternion `(w, x, y, z)` read from a file, or `None` when it is zero or not finite.
+///
+/// The components are scaled by the largest of them before normalising, so a finite quaternion of any
+/// magnitude (1e200 as well as 1e-200) keeps its rotation: a plain norm overflows to infinity there and the
+/// rotation is silently lost.
+pub(crate) fn unit_quaternion(w: f64, x: f64, y: f64, z: f64) -> Option<nalgebra::UnitQuaternion<f64>> {
+    if ![w, x, y, z].iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let scale = [w, x, y, z].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if scale == 0.0 {
+        return None;
+    }
+    let q = nalgebra::Quaternion::new(w / scale, x / scale, y / scale, z / scale);
+    Some(nalgebra::UnitQuaternion::from_quaternion(q))
 }
 
 /// Reads a whole file, naming it on failure.
@@ -148,6 +252,84 @@ mod tests {
         let err = write_atomically(&dir.join("missing/x.bin"), b"x").expect_err("no such folder");
         assert!(err.to_string().contains("missing"), "{err}");
         std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    fn scratch_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("oeg-io-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[test]
+    fn writing_over_a_fifo_or_a_link_to_one_is_refused_and_leaves_it_a_fifo() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = scratch_dir("fifo");
+        let fifo = dir.join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|s| s.success()) {
+            println!("skipped: `mkfifo` is not available here");
+            return;
+        }
+        let link = dir.join("link");
+        std::os::unix::fs::symlink(&fifo, &link).expect("symlink");
+        for path in [&fifo, &link] {
+            let err = write_atomically(path, b"x").expect_err("a FIFO is not a regular file");
+            assert!(err.to_string().contains("FIFO"), "{err}");
+            assert!(std::fs::metadata(&fifo).expect("still there").file_type().is_fifo());
+        }
+        assert!(std::fs::symlink_metadata(&link).expect("link").file_type().is_symlink());
+        let err = write_atomically(&dir, b"x").expect_err("a folder");
+        assert!(err.to_string().contains("folder"), "{err}");
+        assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 2, "no temporary left");
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn a_link_to_a_regular_file_is_followed_and_kept() {
+        let dir = scratch_dir("link");
+        let target = dir.join("real.txt");
+        std::fs::write(&target, b"old").expect("write");
+        let link = dir.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).expect("symlink");
+        write_atomically(&link, b"new").expect("written through the link");
+        assert_eq!(std::fs::read(&target).expect("read"), b"new");
+        assert!(std::fs::symlink_metadata(&link).expect("link").file_type().is_symlink());
+        let dangling = dir.join("dangling");
+        std::os::unix::fs::symlink(dir.join("nowhere"), &dangling).expect("symlink");
+        assert!(write_atomically(&dangling, b"x").is_err());
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn temporary_files_of_killed_writers_are_removed_and_live_ones_kept() {
+        let dir = scratch_dir("stale");
+        let path = dir.join("map.oeg");
+        // No process has pid 4294967295; this process is alive.
+        let stale = dir.join("map.oeg.4294967295.0.tmp");
+        let live = dir.join(format!("map.oeg.{}.99.tmp", std::process::id()));
+        let other = dir.join("notes.4294967295.0.tmp");
+        for p in [&stale, &live, &other] {
+            std::fs::write(p, b"partial").expect("write");
+        }
+        write_atomically(&path, b"map").expect("written");
+        if Path::new("/proc/self").exists() {
+            assert!(!stale.exists(), "a dead writer's temporary file is removed");
+        }
+        assert!(live.exists() && other.exists(), "only this path's dead temporaries go");
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn huge_and_tiny_quaternions_keep_their_rotation() {
+        let expected = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(0.5, 0.5, 0.5, 0.5));
+        for scale in [1e200, 1e-200, 1.0, f64::MAX / 2.0] {
+            let q = unit_quaternion(0.5 * scale, 0.5 * scale, 0.5 * scale, 0.5 * scale).expect("a rotation");
+            assert!(q.angle_to(&expected) < 1e-12, "scale {scale}: {q:?}");
+        }
+        assert!(unit_quaternion(0.0, 0.0, 0.0, 0.0).is_none());
+        assert!(unit_quaternion(f64::INFINITY, 0.0, 0.0, 0.0).is_none());
+        assert!(unit_quaternion(f64::NAN, 1.0, 0.0, 0.0).is_none());
     }
 
     #[test]

@@ -15,10 +15,10 @@
 
 use std::path::Path;
 
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::{ByteReader, lzf, read_file, write_atomically};
+use super::{ByteReader, lzf, read_file, unit_quaternion, write_atomically};
 use crate::error::{Error, Result};
 use crate::scan::{Ray, Scan};
 use crate::sensor::SensorModel;
@@ -315,14 +315,9 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
                             "VIEWPOINT: expected 7 finite numbers tx ty tz qw qx qy qz".into(),
                         )
                     })?;
-                let q = Quaternion::new(v[3], v[4], v[5], v[6]);
-                if q.norm() < 1e-9 {
-                    return Err(err(line_no, "VIEWPOINT: the rotation quaternion is zero".into()));
-                }
-                viewpoint = Isometry3::from_parts(
-                    Translation3::new(v[0], v[1], v[2]),
-                    UnitQuaternion::from_quaternion(q),
-                );
+                let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
+                    .ok_or_else(|| err(line_no, "VIEWPOINT: the rotation quaternion is zero".into()))?;
+                viewpoint = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation);
             }
             "DATA" => {
                 let encoding = match values.as_slice() {
@@ -682,7 +677,7 @@ mod tests {
         PcdCloud {
             width: 4,
             height: 3,
-            viewpoint: Isometry3::from_parts(Translation3::new(1.0, 2.0, 0.5), UnitQuaternion::identity()),
+            viewpoint: Isometry3::from_parts(Translation3::new(1.0, 2.0, 0.5), nalgebra::UnitQuaternion::identity()),
             points,
         }
     }

@@ -337,7 +337,11 @@ impl Checker<'_> {
         }
 
         if let Err(e) = s.planner.options().validate() {
-            return Err(self.error(&[K("planner"), K("inflation_radius_m")], e.to_string()));
+            let key = match e {
+                oeg::Error::InvalidSetting { name, .. } => name,
+                _ => "inflation_radius_m",
+            };
+            return Err(self.error(&[K("planner"), K(key)], e.to_string()));
         }
         if let Some(xy) = s.planner.start_xy_m {
             self.inside(s, xy, &[K("planner"), K("start_xy_m")])?;

@@ -84,13 +84,16 @@ pub struct MapSettings {
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerSettings {
     /// Where the planner starts, `[x, y]` metres; default the drive's first waypoint. The cells within the
-    /// inflation radius count as the robot's footprint (see `oeg::planner::plan`).
+    /// footprint radius count as drivable (see `oeg::planner::plan`).
     pub start_xy_m: Option<[f64; 2]>,
     /// Where it plans to, `[x, y]` metres; default the drive's last waypoint.
     pub goal_xy_m: Option<[f64; 2]>,
     /// The robot's centre keeps at least this far from blocked cells, metres; default
     /// `oeg::planner::DEFAULT_INFLATION_RADIUS_M` (0.25).
     pub inflation_radius_m: Option<f64>,
+    /// The robot's own radius, metres: the cells under it at the start count as drivable; default
+    /// `oeg::planner::DEFAULT_FOOTPRINT_RADIUS_M` (0.25).
+    pub footprint_radius_m: Option<f64>,
     /// Cells the map never observed; default `avoid`.
     pub unknown: oeg::UnknownCells,
     /// Cells the map cannot judge (`uncertain`); default `blocked`.
@@ -104,6 +107,9 @@ impl PlannerSettings {
             inflation_radius_m: self
                 .inflation_radius_m
                 .unwrap_or(oeg::planner::DEFAULT_INFLATION_RADIUS_M),
+            footprint_radius_m: self
+                .footprint_radius_m
+                .unwrap_or(oeg::planner::DEFAULT_FOOTPRINT_RADIUS_M),
             unknown: self.unknown,
             uncertain: self.uncertain,
         }
