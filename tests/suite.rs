@@ -16,15 +16,6 @@ use std::path::Path;
 /// returns.
 const GOLDEN: [&str; 3] = ["corridor_lasers", "pose_drift", "spurious_returns"];
 
-fn fnv1a64(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
-}
-
 fn check_golden(out: &Path) {
     let bless = std::env::var_os("OEG_BLESS").is_some();
     let mut stale = Vec::new();
@@ -34,7 +25,7 @@ fn check_golden(out: &Path) {
         .flat_map(|n| [(*n, "metrics.json", "digest"), (*n, "map.oeg", "map.digest")])
     {
         let bytes = std::fs::read(out.join(name).join(file)).expect(file);
-        let digest = format!("{:016x}\n", fnv1a64(&bytes));
+        let digest = format!("{:016x}\n", oeg::io::fnv1a64(&bytes));
         let golden = root().join("tests/golden").join(format!("{name}.{suffix}"));
         if bless {
             std::fs::write(&golden, &digest).expect("write golden digest");

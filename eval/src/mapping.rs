@@ -9,7 +9,7 @@ use oeg::{LayerKind, Map, MapConfig, RobotProfile, Scan, SensorModel, Traversabi
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
-use crate::output::{create_dir, write_bytes, write_json};
+use crate::output::{Staged, write_bytes, write_json};
 use crate::progress::Progress;
 use crate::render::{Colormap, scalar_figure, traversability_figure};
 
@@ -192,15 +192,16 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let integrate_wall_time_s = start.elapsed().as_secs_f64();
     progress.finish();
 
-    create_dir(&job.out_dir)?;
+    let staged = Staged::begin(&job.out_dir)?;
+    let stage = staged.dir();
     let mut files = Vec::new();
-    let map_path = job.out_dir.join("map.oeg");
+    let map_path = stage.join("map.oeg");
     let map_bytes = mapfile::to_bytes(&map);
     write_bytes(&map_path, &map_bytes)?;
     files.push(map_path);
     files.extend(write_layer_images(
         &map,
-        &job.out_dir,
+        stage,
         &job.profile,
         job.rule,
         None,
@@ -249,12 +250,14 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         integrate_cell_visits_per_s: per_s(totals.num_cell_visits),
         integrate_threads: 1,
     };
-    let summary_path = job.out_dir.join("summary.json");
+    let summary_path = stage.join("summary.json");
     write_json(&summary_path, &summary)?;
     files.push(summary_path);
-    let timing_path = job.out_dir.join("timing.json");
+    let timing_path = stage.join("timing.json");
     write_json(&timing_path, &timing)?;
     files.push(timing_path);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
     Ok(MapReport {
         summary,
         timing,

@@ -257,9 +257,9 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         unknown: job.options.unknown,
         max_step_m: job.profile.max_step_m,
     };
-    crate::output::create_dir(&job.out_dir)?;
+    let staged = crate::output::Staged::begin(&job.out_dir)?;
     let mut files = Vec::new();
-    let path_csv = job.out_dir.join("path.csv");
+    let path_csv = staged.dir().join("path.csv");
     let csv = path_csv_bytes(plan.as_ref(), &geometry).map_err(|message| EvalError::Input {
         path: path_csv.clone(),
         message,
@@ -276,12 +276,14 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     }
     fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::render::DRIVE);
     fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::render::PLAN);
-    let png = job.out_dir.join("plan.png");
+    let png = staged.dir().join("plan.png");
     crate::output::write_bytes(&png, &fig.to_png())?;
     files.push(png);
-    let json = job.out_dir.join("plan.json");
+    let json = staged.dir().join("plan.json");
     crate::output::write_json(&json, &summary)?;
     files.push(json);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
     Ok((summary, files))
 }
 

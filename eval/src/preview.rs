@@ -8,7 +8,7 @@ use sim::truth::TruthRaster;
 use sim::world::{Actors, World};
 
 use crate::error::Result;
-use crate::output::{create_dir, write_bytes};
+use crate::output::{Staged, write_bytes};
 use crate::render::{Figure, Legend, NO_DATA, Rgb};
 use crate::verdict::TruthClass;
 
@@ -108,8 +108,8 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let title = format!("{}: true elevation (drive red, sensors yellow)", s.name);
     let mut fig = crate::report_images::truth_elevation_figure(&truth, &title);
     overlay(&mut fig);
-    create_dir(out_dir)?;
-    let elevation_path = out_dir.join("preview_elevation.png");
+    let staged = Staged::begin(out_dir)?;
+    let elevation_path = staged.dir().join("preview_elevation.png");
     write_bytes(&elevation_path, &fig.to_png())?;
 
     let legend = Legend::Classes(
@@ -139,7 +139,9 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
         &legend,
     );
     overlay(&mut fig);
-    let decisions_path = out_dir.join("preview_decisions.png");
+    let decisions_path = staged.dir().join("preview_decisions.png");
     write_bytes(&decisions_path, &fig.to_png())?;
-    Ok(vec![elevation_path, decisions_path])
+    let files = vec![staged.final_path(&elevation_path), staged.final_path(&decisions_path)];
+    staged.commit()?;
+    Ok(files)
 }

@@ -67,6 +67,8 @@ pub fn record(
     seed: Option<u64>,
     progress: &Progress,
 ) -> Result<RecordReport> {
+    // Refuse an output that is not a regular file before simulating anything.
+    oeg::io::output_target(out)?;
     let mut loaded = scenario::load(path)?;
     if let Some(seed) = seed {
         loaded.scenario.seed = seed;

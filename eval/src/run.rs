@@ -16,7 +16,7 @@ use crate::error::{EvalError, Result};
 use crate::evaluation::{Evaluation, evaluate};
 use crate::mapping::write_layer_images;
 use crate::metrics::{self, FailedExpectation, Metrics};
-use crate::output::{create_dir, write_bytes, write_json};
+use crate::output::{Staged, create_dir, write_bytes, write_json};
 use crate::progress::Progress;
 use crate::report_images;
 
@@ -289,16 +289,17 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
     let evaluation = evaluate(s, &map, &truth)?;
 
-    create_dir(&out_dir)?;
-    let mut files = write_report(&out_dir, s, &map, &truth, &evaluation)?;
+    let staged = Staged::begin(&out_dir)?;
+    let stage = staged.dir();
+    let mut files = write_report(stage, s, &map, &truth, &evaluation)?;
     let mut compared_metrics = None;
     if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
         let other_eval = evaluate(c, &other, &truth)?;
-        let dir = out_dir.join(preset.name());
+        let dir = stage.join(preset.name());
         create_dir(&dir)?;
         files.extend(write_report(&dir, c, &other, &truth, &other_eval)?);
         files.extend(write_comparison(
-            &out_dir,
+            stage,
             [(s, &evaluation), (c, &other_eval)],
             &geometry,
         )?);
@@ -315,9 +316,11 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         total_wall_time_s: total_start.elapsed().as_secs_f64(),
         threads: rayon::current_num_threads() as u64,
     };
-    let timing_path = out_dir.join("timing.json");
+    let timing_path = stage.join("timing.json");
     write_json(&timing_path, &timing)?;
     files.push(timing_path);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
     let Evaluation {
         metrics,
         failed,

@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
-use crate::output::{create_dir, write_bytes, write_json};
+use crate::output::{Staged, write_bytes, write_json};
 use crate::progress::Progress;
 use crate::run::{RunOptions, run};
 
@@ -22,33 +22,36 @@ pub struct SuiteRow {
     pub file: String,
     /// `pass`, `fail` (expectations) or `error` (the run could not complete).
     pub status: String,
-    /// Coverage of the map region.
-    pub coverage: f64,
+    /// Coverage of the map region. The metrics are empty for a row with status `error`: the run measured
+    /// nothing (an empty CSV field, `null` in JSON).
+    pub coverage: Option<f64>,
     /// Elevation RMSE, metres.
-    pub elevation_rmse_m: f64,
+    pub elevation_rmse_m: Option<f64>,
     /// Unsafe step cells.
-    pub unsafe_step_cells: u64,
+    pub unsafe_step_cells: Option<u64>,
     /// Over-cautious step cells.
-    pub overcautious_step_cells: u64,
+    pub overcautious_step_cells: Option<u64>,
     /// Unsafe clearance cells.
-    pub unsafe_clearance_cells: u64,
+    pub unsafe_clearance_cells: Option<u64>,
     /// Over-cautious clearance cells.
-    pub overcautious_clearance_cells: u64,
+    pub overcautious_clearance_cells: Option<u64>,
     /// The planner check: the map's path length over the truth's (1 = no detour; empty when the map or the
-    /// truth has no path).
+    /// truth has no path, or the run failed).
     pub plan_length_ratio: Option<f64>,
     /// Cells of the map's path near a true obstacle.
-    pub plan_unsafe_cells: u64,
+    pub plan_unsafe_cells: Option<u64>,
     /// Wall time of the run, seconds.
     pub wall_time_s: f64,
     /// Failed expectations, or the error, `; `-separated.
     pub problems: String,
 }
 
-/// The scenario files named by `paths`: files as given, folders' `*.toml` files sorted by name.
+/// The scenario files named by `paths`: files as given, folders' `*.toml` files sorted by name. A file named
+/// twice (by the same path or another, or through a folder) runs once, where it was first named.
 ///
 /// # Errors
-/// A path that does not exist or a folder that cannot be read.
+/// A path that does not exist or a folder that cannot be read, and two different files with the same name
+/// (their outputs would share `<out>/<name>/`).
 pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for p in paths {
@@ -78,7 +81,31 @@ pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
             message: "no scenario files found".into(),
         });
     }
-    Ok(out)
+    let mut seen: Vec<(PathBuf, std::ffi::OsString, PathBuf)> = Vec::new();
+    let mut unique = Vec::new();
+    for file in out {
+        let real = std::fs::canonicalize(&file).map_err(|source| EvalError::Io {
+            path: file.clone(),
+            source,
+        })?;
+        let stem = file.file_stem().unwrap_or_default().to_os_string();
+        if seen.iter().any(|(r, ..)| *r == real) {
+            continue;
+        }
+        if let Some((_, _, first)) = seen.iter().find(|(_, s, _)| *s == stem) {
+            return Err(EvalError::Input {
+                path: file.clone(),
+                message: format!(
+                    "has the same name as {}, and each scenario's results go to <out>/{}/: rename one",
+                    first.display(),
+                    stem.to_string_lossy()
+                ),
+            });
+        }
+        seen.push((real, stem, file.clone()));
+        unique.push(file);
+    }
+    Ok(unique)
 }
 
 /// Runs every scenario into `out_dir/<name>/`, up to `jobs` at once on a pool of `jobs` threads (1: one
@@ -91,9 +118,10 @@ pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
 pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usize) -> Result<Vec<SuiteRow>> {
     use rayon::prelude::*;
     let files = expand(paths)?;
-    create_dir(out_dir)?;
+    let staged = Staged::begin(out_dir)?;
+    let stage = staged.dir();
     let rows: Vec<SuiteRow> = if jobs <= 1 {
-        files.iter().map(|f| run_one(f, out_dir, overrides)).collect()
+        files.iter().map(|f| run_one(f, stage, overrides)).collect()
     } else {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
@@ -106,7 +134,7 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
             files
                 .par_iter()
                 .with_max_len(1)
-                .map(|f| run_one(f, out_dir, overrides))
+                .map(|f| run_one(f, stage, overrides))
                 .collect()
         })
     };
@@ -121,8 +149,9 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
         path: out_dir.join("suite.csv"),
         message: e.to_string(),
     })?;
-    write_bytes(&out_dir.join("suite.csv"), &bytes)?;
-    write_json(&out_dir.join("suite.json"), &rows)?;
+    write_bytes(&stage.join("suite.csv"), &bytes)?;
+    write_json(&stage.join("suite.json"), &rows)?;
+    staged.commit()?;
     Ok(rows)
 }
 
@@ -151,14 +180,14 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
             scenario: r.metrics.scenario.clone(),
             file: file.display().to_string(),
             status: if r.failed.is_empty() { "pass" } else { "fail" }.into(),
-            coverage: r.metrics.coverage,
-            elevation_rmse_m: r.metrics.elevation_rmse_m,
-            unsafe_step_cells: r.metrics.unsafe_step_cells,
-            overcautious_step_cells: r.metrics.overcautious_step_cells,
-            unsafe_clearance_cells: r.metrics.unsafe_clearance_cells,
-            overcautious_clearance_cells: r.metrics.overcautious_clearance_cells,
+            coverage: Some(r.metrics.coverage),
+            elevation_rmse_m: Some(r.metrics.elevation_rmse_m),
+            unsafe_step_cells: Some(r.metrics.unsafe_step_cells),
+            overcautious_step_cells: Some(r.metrics.overcautious_step_cells),
+            unsafe_clearance_cells: Some(r.metrics.unsafe_clearance_cells),
+            overcautious_clearance_cells: Some(r.metrics.overcautious_clearance_cells),
             plan_length_ratio: Some(r.metrics.plan_length_ratio).filter(|v| v.is_finite()),
-            plan_unsafe_cells: r.metrics.plan_unsafe_cells,
+            plan_unsafe_cells: Some(r.metrics.plan_unsafe_cells),
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: r
                 .failed
@@ -171,14 +200,14 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
             scenario: stem,
             file: file.display().to_string(),
             status: "error".into(),
-            coverage: f64::NAN,
-            elevation_rmse_m: f64::NAN,
-            unsafe_step_cells: 0,
-            overcautious_step_cells: 0,
-            unsafe_clearance_cells: 0,
-            overcautious_clearance_cells: 0,
+            coverage: None,
+            elevation_rmse_m: None,
+            unsafe_step_cells: None,
+            overcautious_step_cells: None,
+            unsafe_clearance_cells: None,
+            overcautious_clearance_cells: None,
             plan_length_ratio: None,
-            plan_unsafe_cells: 0,
+            plan_unsafe_cells: None,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: e.to_string(),
         },
@@ -204,20 +233,27 @@ pub fn table_header() -> String {
     )
 }
 
-/// One row of the table.
+/// One row of the table; `-` where a failed run measured nothing.
 pub fn table_line(r: &SuiteRow) -> String {
+    let real = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v:.3}"));
+    let count = |v: Option<u64>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+    let path = if r.status == "error" {
+        "-".to_string()
+    } else {
+        r.plan_length_ratio
+            .map_or_else(|| "none".to_string(), |v| format!("{v:.2}"))
+    };
     format!(
-        "{:<26} {:>6} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8.1}",
+        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8.1}",
         r.scenario,
         r.status,
-        r.coverage,
-        r.elevation_rmse_m,
-        r.unsafe_step_cells,
-        r.overcautious_step_cells,
-        r.unsafe_clearance_cells,
-        r.overcautious_clearance_cells,
-        r.plan_length_ratio
-            .map_or_else(|| "none".to_string(), |v| format!("{v:.2}")),
+        real(r.coverage),
+        real(r.elevation_rmse_m),
+        count(r.unsafe_step_cells),
+        count(r.overcautious_step_cells),
+        count(r.unsafe_clearance_cells),
+        count(r.overcautious_clearance_cells),
+        path,
         r.wall_time_s
     )
 }

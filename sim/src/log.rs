@@ -1,5 +1,5 @@
 //! Recorded sensor logs (`.oeglog`), version 1: every scan of a run, so the same data can be replayed through
-//! different map settings. Little-endian throughout:
+//! different map settings. The framing is the map file's ([`oeg::io::container`]). Little-endian throughout:
 //!
 //! ```text
 //! 8    magic "OEGLOG\r\n"
@@ -14,11 +14,12 @@
 //!   0 = end:   u64 scan count, u64 FNV-1a-64 checksum of every byte before the checksum
 //! ```
 
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, Vector3};
 use oeg::RayKind;
+use oeg::io::container::{self, FramedWriter};
+use oeg::io::unit_quaternion;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
@@ -70,24 +71,11 @@ pub struct SensorLog {
     pub scans: Vec<SensorScan>,
 }
 
-struct Fnv(u64);
-
-impl Fnv {
-    fn update(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= u64::from(b);
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-}
-
-/// Writes a log scan by scan, to a temporary file renamed into place by [`LogWriter::finish`] (an abandoned
-/// writer leaves no partial log behind... only its temporary file, removed on drop).
+/// Writes a log scan by scan, atomically ([`FramedWriter`]): an abandoned writer leaves no partial log and no
+/// temporary file behind, and only a regular file is ever replaced.
 pub struct LogWriter {
     path: PathBuf,
-    tmp: PathBuf,
-    out: Option<BufWriter<std::fs::File>>,
-    hash: Fnv,
+    out: FramedWriter,
     num_scans: u64,
 }
 
@@ -106,38 +94,12 @@ impl LogWriter {
     /// # Errors
     /// [`SimError::Io`] naming the file.
     pub fn create(path: &Path, header: &LogHeader) -> Result<Self> {
-        let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-        name.push(format!(".{}.tmp", std::process::id()));
-        let tmp = path.with_file_name(name);
-        let file = std::fs::File::create(&tmp).map_err(|source| SimError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mut w = Self {
-            path: path.to_path_buf(),
-            tmp,
-            out: Some(BufWriter::new(file)),
-            hash: Fnv(0xcbf2_9ce4_8422_2325),
-            num_scans: 0,
-        };
         let json = serde_json_bytes(header);
-        w.put(MAGIC)?;
-        w.put(&FORMAT_VERSION.to_le_bytes())?;
-        w.put(&(json.len() as u32).to_le_bytes())?;
-        w.put(&json)?;
-        Ok(w)
-    }
-
-    fn put(&mut self, bytes: &[u8]) -> Result<()> {
-        self.hash.update(bytes);
-        let path = &self.path;
-        match self.out.as_mut() {
-            Some(out) => out.write_all(bytes).map_err(|source| SimError::Io {
-                path: path.clone(),
-                source,
-            }),
-            None => Ok(()),
-        }
+        Ok(Self {
+            path: path.to_path_buf(),
+            out: FramedWriter::create(path, MAGIC, FORMAT_VERSION, &json)?,
+            num_scans: 0,
+        })
     }
 
     /// Appends one scan.
@@ -169,7 +131,7 @@ impl LogWriter {
                 buf.extend_from_slice(&v.to_le_bytes());
             }
         }
-        self.put(&buf)?;
+        self.out.write(&buf)?;
         self.num_scans += 1;
         Ok(())
     }
@@ -179,31 +141,10 @@ impl LogWriter {
     /// # Errors
     /// [`SimError::Io`] naming the file.
     pub fn finish(mut self) -> Result<u64> {
-        self.put(&[0u8])?;
-        self.put(&self.num_scans.to_le_bytes())?;
-        let checksum = self.hash.0.to_le_bytes();
-        let io = |source| SimError::Io {
-            path: self.path.clone(),
-            source,
-        };
-        let mut out = self
-            .out
-            .take()
-            .ok_or_else(|| io(std::io::Error::other("log already finished")))?;
-        out.write_all(&checksum).map_err(io)?;
-        let file = out.into_inner().map_err(|e| io(e.into_error()))?;
-        file.sync_all().map_err(io)?;
-        std::fs::rename(&self.tmp, &self.path).map_err(io)?;
+        self.out.write(&[0u8])?;
+        self.out.write(&self.num_scans.to_le_bytes())?;
+        self.out.finish()?;
         Ok(self.num_scans)
-    }
-}
-
-impl Drop for LogWriter {
-    fn drop(&mut self) {
-        if self.out.take().is_some() {
-            // Abandoned before finish(): remove the partial file. Nothing to report to.
-            let _ = std::fs::remove_file(&self.tmp);
-        }
     }
 }
 
@@ -227,7 +168,6 @@ pub fn read_log(path: &Path) -> Result<SensorLog> {
 }
 
 fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
-    let mut pos = 0usize;
     let fail = |at: usize, message: String| SimError::Log {
         path: path.to_path_buf(),
         message: format!("at byte {at}: {message}"),
@@ -251,19 +191,10 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
     let f64_at = |b: &[u8]| f64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
     let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
 
-    if take(&mut pos, 8, "the magic number")? != MAGIC {
-        return Err(fail(0, "not an OEG sensor log (wrong magic number)".into()));
-    }
-    let version = u32_at(take(&mut pos, 4, "the version")?);
-    if version != FORMAT_VERSION {
-        return Err(fail(
-            8,
-            format!("format version {version} is not supported (this build reads {FORMAT_VERSION})"),
-        ));
-    }
-    let header_len = u32_at(take(&mut pos, 4, "the header length")?) as usize;
-    let header: LogHeader = serde_json::from_slice(take(&mut pos, header_len, "the header")?)
-        .map_err(|e| fail(16, format!("malformed header: {e}")))?;
+    let prefix = container::read_prefix(path, data, MAGIC, FORMAT_VERSION, "an OEG sensor log")?;
+    let header: LogHeader =
+        serde_json::from_slice(prefix.header).map_err(|e| fail(16, format!("malformed header: {e}")))?;
+    let mut pos = prefix.body_start;
     let mut scans = Vec::new();
     loop {
         let at = pos;
@@ -279,16 +210,7 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
                         ),
                     ));
                 }
-                let body_end = pos;
-                let stored = u64_at(take(&mut pos, 8, "the checksum")?);
-                let mut h = Fnv(0xcbf2_9ce4_8422_2325);
-                h.update(&data[..body_end]);
-                if h.0 != stored {
-                    return Err(fail(body_end, "checksum mismatch: the log is corrupt".into()));
-                }
-                if pos != data.len() {
-                    return Err(fail(pos, "unexpected bytes after the end record".into()));
-                }
+                container::check_checksum(path, data, pos)?;
                 return Ok(SensorLog { header, scans });
             }
             1 => {
@@ -308,17 +230,10 @@ fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
                 let mut poses = [Isometry3::identity(); 2];
                 for (k, pose) in poses.iter_mut().enumerate() {
                     let v: Vec<f64> = (0..7).map(|n| f64_at(&fixed[20 + (k * 7 + n) * 8..])).collect();
-                    let q = Quaternion::new(v[3], v[4], v[5], v[6]);
-                    if !v.iter().all(|x| x.is_finite()) || q.norm() < 1e-9 {
-                        return Err(fail(
-                            at,
-                            "a scan pose is not finite or has a zero rotation".into(),
-                        ));
-                    }
-                    *pose = Isometry3::from_parts(
-                        Translation3::new(v[0], v[1], v[2]),
-                        UnitQuaternion::from_quaternion(q),
-                    );
+                    let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
+                        .filter(|_| v.iter().all(|x| x.is_finite()))
+                        .ok_or_else(|| fail(at, "a scan pose is not finite or has a zero rotation".into()))?;
+                    *pose = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation);
                 }
                 let num_rays = u32_at(&fixed[SCAN_FIXED_BYTES - 4..]) as usize;
                 if num_rays.saturating_mul(RAY_BYTES) > data.len() - pos {

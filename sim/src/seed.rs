@@ -11,11 +11,7 @@ pub type Stream = Xoshiro256PlusPlus;
 /// The sub-stream `name` of `seed` (for example `"odometry"`, `"bush/3"`, `"sensor/laser_left"`).
 pub fn stream(seed: u64, name: &str) -> Stream {
     // FNV-1a of the name, mixed with the seed by SplitMix64 so nearby seeds give unrelated streams.
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in name.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
+    let h = oeg::io::fnv1a64(name.as_bytes());
     let mut z = seed.wrapping_add(h).wrapping_add(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);

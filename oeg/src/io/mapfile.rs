@@ -1,4 +1,5 @@
-//! The map file format (`.oeg`), version 1. Little-endian throughout:
+//! The map file format (`.oeg`), version 1, in the framed container of [`super::container`]. Little-endian
+//! throughout:
 //!
 //! ```text
 //! offset  size  what
@@ -18,7 +19,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ByteReader, fnv1a64, read_file, write_atomically};
+use super::{ByteReader, container, read_file, write_atomically};
 use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::map::{IntegrationStats, Map, MapConfig};
@@ -61,11 +62,8 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
     };
     // A plain struct of numbers and strings always serialises.
     let json = serde_json::to_vec(&header).unwrap_or_default();
-    let mut out = Vec::with_capacity(16 + json.len() + tiles.len() * TILE_RECORD_BYTES + 8);
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(&json);
+    let mut out = container::prefix_bytes(MAGIC, FORMAT_VERSION, &json);
+    out.reserve(tiles.len() * TILE_RECORD_BYTES + 8);
     for (tile, cells) in tiles {
         out.extend_from_slice(&tile.ti.to_le_bytes());
         out.extend_from_slice(&tile.tj.to_le_bytes());
@@ -75,8 +73,7 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
             }
         }
     }
-    let checksum = fnv1a64(&out);
-    out.extend_from_slice(&checksum.to_le_bytes());
+    container::seal(&mut out);
     out
 }
 
@@ -124,27 +121,11 @@ pub fn load_map_within(path: &Path, limit_bytes: u64) -> Result<Map> {
 const TILE_COORD_RANGE: std::ops::RangeInclusive<i32> = (i32::MIN >> 6)..=(i32::MAX >> 6);
 
 fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader, Option<Map>)> {
+    let prefix = container::read_prefix(path, data, MAGIC, FORMAT_VERSION, "an OEG map file")?;
     let mut r = ByteReader::new(path, data);
-    let magic = r.take(8, "the magic number")?;
-    if magic != MAGIC {
-        return Err(r.error_at(0, "not an OEG map file (wrong magic number)"));
-    }
-    let version = r.u32("the format version")?;
-    if version != FORMAT_VERSION {
-        return Err(r.error_at(
-            8,
-            format!("format version {version} is not supported (this build reads {FORMAT_VERSION})"),
-        ));
-    }
-    if data.len() < 8 + 16 {
-        return Err(r.error("file is truncated: no room for the checksum"));
-    }
-    let (body, tail) = data.split_at(data.len() - 8);
-    let stored = u64::from_le_bytes(tail.try_into().unwrap_or([0; 8]));
-    let header_len = r.u32("the header length")? as usize;
-    let json = r.take(header_len, "the header")?;
-    let header: MapFileHeader =
-        serde_json::from_slice(json).map_err(|e| r.error_at(16, format!("malformed header: {e}")))?;
+    r.take(prefix.body_start, "the header")?;
+    let header: MapFileHeader = serde_json::from_slice(prefix.header)
+        .map_err(|e| r.error_at(16, format!("malformed header: {e}")))?;
     if header.tile_size as usize != TILE_SIZE {
         return Err(r.error_at(
             16,
@@ -155,7 +136,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         ));
     }
     let expected_len =
-        (16 + header_len) as u64 + header.num_tiles.saturating_mul(TILE_RECORD_BYTES as u64) + 8;
+        prefix.body_start as u64 + header.num_tiles.saturating_mul(TILE_RECORD_BYTES as u64) + 8;
     if expected_len != data.len() as u64 {
         return Err(r.error(format!(
             "the header declares {} tiles, so the file should be {expected_len} bytes, but it is {}: truncated or corrupt",
@@ -163,9 +144,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
             data.len()
         )));
     }
-    if fnv1a64(body) != stored {
-        return Err(r.error_at(body.len(), "checksum mismatch: the file is corrupt"));
-    }
+    container::check_checksum(path, data, data.len() - 8)?;
     let Some(limit_bytes) = build else {
         return Ok((header, None));
     };
@@ -325,11 +304,7 @@ mod tests {
             written_by: "a test".into(),
         };
         let json = serde_json::to_vec(&header).expect("json");
-        let mut out = Vec::new();
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(&json);
+        let mut out = container::prefix_bytes(MAGIC, FORMAT_VERSION, &json);
         for (ti, tj, cell) in tiles {
             out.extend_from_slice(&ti.to_le_bytes());
             out.extend_from_slice(&tj.to_le_bytes());
@@ -339,8 +314,7 @@ mod tests {
                 }
             }
         }
-        let checksum = fnv1a64(&out);
-        out.extend_from_slice(&checksum.to_le_bytes());
+        container::seal(&mut out);
         out
     }
 

@@ -7,6 +7,7 @@
 //! Every reader checks sizes against the file before allocating, rejects non-finite numbers, and names the
 //! file and the byte or line of the problem.
 
+pub mod container;
 pub mod graph;
 mod lzf;
 pub mod mapfile;
@@ -17,31 +18,94 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
-/// Writes `bytes` to `path` atomically: to a temporary file beside it, then renamed over it, so a reader never
-/// sees half a file and a failed write leaves no partial output.
-///
-/// Only regular files are ever replaced (see [`output_target`]): a device, a FIFO, a socket, a folder or a
-/// symbolic link to one of them at `path` is an error and is left untouched. A symbolic link to a regular file
-/// is followed, so the link stays and its target is replaced. Temporary files that a killed writer left beside
-/// `path` are removed first (see [`remove_stale_temporaries`]).
+/// Writes `bytes` to `path` atomically (an [`AtomicFile`] written at once), so a reader never sees half a
+/// file and a failed write leaves no partial output.
 ///
 /// # Errors
-/// [`Error::Io`] naming the file.
+/// As [`AtomicFile::create`] and [`AtomicFile::commit`].
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let target = output_target(path)?;
-    remove_stale_temporaries(&target);
-    let tmp = temporary_path(&target);
-    let result = (|| {
-        let mut f = std::fs::File::options().write(true).create_new(true).open(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, &target)
-    })();
-    result.map_err(|e| {
-        // Best effort: the temporary file is ours and useless now.
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
+    let mut file = AtomicFile::create(path)?;
+    file.write_all(bytes)?;
+    file.commit()
+}
+
+/// A file written atomically: into a temporary file beside it, renamed over it by [`AtomicFile::commit`].
+/// Dropped without a commit (an error, a panic), it removes its temporary file and leaves `path` as it was.
+///
+/// Only regular files are ever replaced (see [`output_target`]): a device, a FIFO, a socket, a folder or a
+/// symbolic link to one of them is an error and is left untouched. A symbolic link to a regular file is
+/// followed, so the link stays and its target is replaced. Temporary files that killed writers left beside
+/// `path` are removed first (see [`remove_stale_temporaries`]).
+#[derive(Debug)]
+pub struct AtomicFile {
+    path: PathBuf,
+    target: PathBuf,
+    tmp: PathBuf,
+    out: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl AtomicFile {
+    /// Starts writing `path`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming `path` when it is not a regular file (or absent), or the temporary file cannot be
+    /// created.
+    pub fn create(path: &Path) -> Result<Self> {
+        let target = output_target(path)?;
+        remove_stale_temporaries(&target);
+        let tmp = temporary_path(&target);
+        let file = std::fs::File::options()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .map_err(|e| Error::io(path, e))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            target,
+            tmp,
+            out: Some(std::io::BufWriter::new(file)),
+        })
+    }
+
+    /// Appends `bytes`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn write_all(&mut self, bytes: &[u8]) -> Result<()> {
+        match self.out.as_mut() {
+            Some(out) => out.write_all(bytes).map_err(|e| Error::io(&self.path, e)),
+            None => Err(Error::io(&self.path, std::io::Error::other("the file was already committed"))),
+        }
+    }
+
+    /// Flushes the file to disk and renames it over `path`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file; the temporary file is removed and `path` is left as it was.
+    pub fn commit(mut self) -> Result<()> {
+        let out = self
+            .out
+            .take()
+            .ok_or_else(|| Error::io(&self.path, std::io::Error::other("the file was already committed")))?;
+        let result = out
+            .into_inner()
+            .map_err(std::io::IntoInnerError::into_error)
+            .and_then(|f| f.sync_all())
+            .and_then(|()| std::fs::rename(&self.tmp, &self.target));
+        result.map_err(|e| {
+            let _ = std::fs::remove_file(&self.tmp);
+            Error::io(&self.path, e)
+        })
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.out.take().is_some() {
+            // Abandoned before commit: the temporary file is ours and useless now.
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 /// The file an output at `path` replaces: `path` itself when nothing or a regular file is there, or the
@@ -135,7 +199,7 @@ pub fn stale_owners(dir: &Path, prefix: &str, suffix: &str) -> Vec<std::ffi::OsS
 /// The components are scaled by the largest of them before normalising, so a finite quaternion of any
 /// magnitude (1e200 as well as 1e-200) keeps its rotation: a plain norm overflows to infinity there and the
 /// rotation is silently lost.
-pub(crate) fn unit_quaternion(w: f64, x: f64, y: f64, z: f64) -> Option<nalgebra::UnitQuaternion<f64>> {
+pub fn unit_quaternion(w: f64, x: f64, y: f64, z: f64) -> Option<nalgebra::UnitQuaternion<f64>> {
     if ![w, x, y, z].iter().all(|v| v.is_finite()) {
         return None;
     }
@@ -192,7 +256,7 @@ impl<'a> ByteReader<'a> {
         Ok(s)
     }
 
-    fn array<const N: usize>(&mut self, what: impl std::fmt::Display) -> Result<[u8; N]> {
+    pub(crate) fn array<const N: usize>(&mut self, what: impl std::fmt::Display) -> Result<[u8; N]> {
         let s = self.take(N, what)?;
         let mut a = [0u8; N];
         a.copy_from_slice(s);
@@ -216,14 +280,42 @@ impl<'a> ByteReader<'a> {
     }
 }
 
-/// FNV-1a, 64 bit: the map file's checksum. Not cryptographic; it catches truncation and bit rot.
+/// FNV-1a, 64 bit, of `bytes`: the checksum of the map file and the sensor log, and the project's one hash of
+/// bytes. Not cryptographic; it catches truncation and bit rot.
 pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
+    let mut h = Fnv1a64::new();
+    h.update(bytes);
+    h.value()
+}
+
+/// [`fnv1a64`] computed piece by piece, for a file written as a stream.
+#[derive(Debug, Clone, Copy)]
+pub struct Fnv1a64(u64);
+
+impl Fnv1a64 {
+    /// The hash of no bytes.
+    pub const fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
     }
-    h
+
+    /// Adds `bytes`.
+    pub fn update(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    /// The hash of every byte added so far.
+    pub const fn value(self) -> u64 {
+        self.0
+    }
+}
+
+impl Default for Fnv1a64 {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,136 @@
+//! The framed binary container of the map file (`.oeg`) and the sensor log (`.oeglog`). Little-endian:
+//!
+//! ```text
+//! offset  size  what
+//! 0       8     magic (the format's; ends in "\r\n", which catches text-mode transfers)
+//! 8       4     u32 format version
+//! 12      4     u32 length H of the header
+//! 16      H     header, UTF-8 JSON (the format's own)
+//! 16+H    ...   body (the format's own records)
+//! end-8   8     u64 FNV-1a-64 checksum of every byte before it ([`super::fnv1a64`])
+//! ```
+//!
+//! Both formats were version 1 with exactly this framing before it was shared, so their bytes are unchanged.
+//! A change to either format's header or body is a new version, never a silent change: readers refuse a
+//! version they do not know, naming it.
+
+use std::path::Path;
+
+use super::{AtomicFile, ByteReader, Fnv1a64};
+use crate::error::Result;
+
+/// A container's prefix as read: the header's JSON and where the body starts.
+#[derive(Debug)]
+pub struct Prefix<'a> {
+    /// The header's bytes (JSON).
+    pub header: &'a [u8],
+    /// Byte offset of the body.
+    pub body_start: usize,
+}
+
+/// Reads the prefix of a container of `format` (its name for messages) with `magic` and `version`.
+///
+/// # Errors
+/// [`crate::Error::Parse`] naming the file and byte: a wrong magic number, another version, or a header
+/// that runs past the end of the file.
+pub fn read_prefix<'a>(
+    path: &'a Path,
+    data: &'a [u8],
+    magic: &[u8; 8],
+    version: u32,
+    format: &str,
+) -> Result<Prefix<'a>> {
+    let mut r = ByteReader::new(path, data);
+    if r.take(8, "the magic number")? != magic {
+        return Err(r.error_at(0, format!("not {format} (wrong magic number)")));
+    }
+    let found = r.u32("the format version")?;
+    if found != version {
+        return Err(r.error_at(
+            8,
+            format!("format version {found} is not supported (this build reads {version})"),
+        ));
+    }
+    let header_len = r.u32("the header length")? as usize;
+    let header = r.take(header_len, "the header")?;
+    Ok(Prefix {
+        header,
+        body_start: r.pos(),
+    })
+}
+
+/// Checks that `data` ends, right after `body_end`, in the checksum of every byte before it.
+///
+/// # Errors
+/// [`crate::Error::Parse`] naming the file and byte: a missing or short checksum, bytes after it, or a
+/// mismatch.
+pub fn check_checksum(path: &Path, data: &[u8], body_end: usize) -> Result<()> {
+    let mut r = ByteReader::new(path, data);
+    r.take(body_end, "the body")?;
+    let stored = u64::from_le_bytes(r.array("the checksum")?);
+    if r.remaining() != 0 {
+        return Err(r.error("unexpected bytes after the checksum"));
+    }
+    if super::fnv1a64(&data[..body_end]) != stored {
+        return Err(r.error_at(body_end, "checksum mismatch: the file is corrupt"));
+    }
+    Ok(())
+}
+
+/// The prefix of a container: magic, version, header length and header.
+pub fn prefix_bytes(magic: &[u8; 8], version: u32, header_json: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(16 + header_json.len());
+    out.extend_from_slice(magic);
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&(header_json.len() as u32).to_le_bytes());
+    out.extend_from_slice(header_json);
+    out
+}
+
+/// Appends the checksum of everything in `bytes` to it: the container is complete.
+pub fn seal(bytes: &mut Vec<u8>) {
+    let checksum = super::fnv1a64(bytes);
+    bytes.extend_from_slice(&checksum.to_le_bytes());
+}
+
+/// A container written as a stream, atomically ([`AtomicFile`]): the prefix at creation, the body piece by
+/// piece, the checksum at [`FramedWriter::finish`].
+#[derive(Debug)]
+pub struct FramedWriter {
+    file: AtomicFile,
+    hash: Fnv1a64,
+}
+
+impl FramedWriter {
+    /// Starts a container at `path`.
+    ///
+    /// # Errors
+    /// As [`AtomicFile::create`].
+    pub fn create(path: &Path, magic: &[u8; 8], version: u32, header_json: &[u8]) -> Result<Self> {
+        let mut w = Self {
+            file: AtomicFile::create(path)?,
+            hash: Fnv1a64::new(),
+        };
+        w.write(&prefix_bytes(magic, version, header_json))?;
+        Ok(w)
+    }
+
+    /// Appends body bytes.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] naming the file.
+    pub fn write(&mut self, bytes: &[u8]) -> Result<()> {
+        self.hash.update(bytes);
+        self.file.write_all(bytes)
+    }
+
+    /// Writes the checksum and moves the file into place.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] naming the file.
+    pub fn finish(mut self) -> Result<()> {
+        let checksum = self.hash.value().to_le_bytes();
+        self.file.write_all(&checksum)?;
+        self.file.commit()
+    }
+}
