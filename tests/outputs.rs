@@ -13,7 +13,8 @@ fn scene(name: &str) -> PathBuf {
     root().join(format!("tests/scenes/{name}.toml"))
 }
 
-/// A short run of the decision scene (1 s of driving), for tests about files rather than maps.
+/// A short run of the decision scene (1 s of driving), for tests about files rather than maps. Its scene's
+/// expectations are for the whole drive, so the run exits non-zero with its report written.
 fn short_run_args<'a>(scenario: &'a str, out: &'a str, seed: &'a str) -> Vec<&'a str> {
     vec!["run", scenario, "--out", out, "--seed", seed, "--set", "duration_s=1.0"]
 }
@@ -108,10 +109,10 @@ fn a_killed_run_leaves_the_previous_results_or_none_never_a_mix() {
     // The two complete result sets: the previous run (seed 1) and the one that gets killed (seed 2).
     let (ref_old, ref_new) = (dir.join("ref_old"), dir.join("ref_new"));
     let o = oeg(&short_run_args(scenario, ref_old.to_str().expect("utf8"), "1"));
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(ref_old.join("metrics.json").exists(), "{}", String::from_utf8_lossy(&o.stderr));
     let started = Instant::now();
     let o = oeg(&short_run_args(scenario, ref_new.to_str().expect("utf8"), "2"));
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(ref_new.join("metrics.json").exists(), "{}", String::from_utf8_lossy(&o.stderr));
     let full = started.elapsed();
     let (old, new) = (contents(&ref_old), contents(&ref_new));
     assert_ne!(old, new, "the two seeds give different results");
@@ -154,8 +155,7 @@ fn a_killed_run_leaves_the_previous_results_or_none_never_a_mix() {
     assert!(outcomes.iter().any(|(_, o)| *o == "previous"), "{outcomes:?}");
     // The next run removes what the killed ones left beside the output and completes.
     let o = oeg(&short_run_args(scenario, out.to_str().expect("utf8"), "2"));
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(contents(&out), new);
+    assert_eq!(contents(&out), new, "{}", String::from_utf8_lossy(&o.stderr));
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
         .expect("dir")
         .map(|e| e.expect("entry").file_name())
@@ -231,7 +231,8 @@ fn staged_outputs_wait_for_no_one_and_two_suites_on_one_folder_both_finish_whole
         (a.join().expect("a"), b.join().expect("b"))
     });
     for o in [a.expect("ran"), b.expect("ran")] {
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("error: ") || stderr.contains("did not pass"), "{stderr}");
     }
     // Whichever finished last wins, whole: its table and its run folder agree.
     let rows: serde_json::Value =

@@ -203,3 +203,49 @@ fn bad_sensor_settings_are_errors_at_their_place() {
         assert_eq!(position.map(|p| p.line), Some(line), "{name}: {message}");
     }
 }
+
+#[test]
+fn every_size_and_rate_is_bounded_so_a_valid_scenario_always_finishes() {
+    let sensor = |kind: &str, body: &str| {
+        common::scenario_text(&format!(
+            "[[sensors]]\nname = \"s\"\nkind = \"{kind}\"\nmount_link = \"laser_front_mount\"\n{body}"
+        ))
+    };
+    let cases = [
+        ("rate", sensor("laser2d", "rate_hz = 1e9\n"), "sensors[0].rate_hz", 21),
+        (
+            "camera",
+            sensor("stereo", "image_size_px = [20000, 20000]\npixel_stride = 1\n"),
+            "rays per frame",
+            22,
+        ),
+        (
+            "rays",
+            sensor("lidar3d", "rate_hz = 1000.0\nazimuth_step_deg = 0.01\n")
+                .replace("duration_s = 4.0", "duration_s = 86400.0"),
+            "rays per run",
+            17,
+        ),
+        (
+            "box",
+            common::scenario_text(
+                "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [3.0, 0.0]\nsize_m = [1e9, 1.0, 0.1]\n",
+            ),
+            "obstacles[0].size_m",
+            19,
+        ),
+        (
+            "person",
+            common::scenario_text(
+                "[[actors]]\nkind = \"person\"\nradius_m = 1e12\nheight_m = 1.7\nwaypoints = [[0.0, 1.0, 1.0]]\n",
+            ),
+            "actors[0].radius_m",
+            19,
+        ),
+    ];
+    for (name, text, expected, line) in cases {
+        let (message, position) = error_of(name, &text);
+        assert!(message.contains(expected), "{name}: {message}");
+        assert_eq!(position.map(|p| p.line), Some(line), "{name}: {message}");
+    }
+}

@@ -81,13 +81,48 @@ impl Canvas {
         self.stroke(x0, y0, x1, y1, color, |_| true);
     }
 
+    /// The part of the segment within one pixel of the canvas (Liang-Barsky), and the Bresenham steps cut
+    /// from its start; `None` when none of it is. A segment inside the canvas is returned unchanged.
+    fn clip(&self, x0: i64, y0: i64, x1: i64, y1: i64) -> Option<(i64, i64, i64, i64, i64)> {
+        let (fx, fy) = (x0 as f64, y0 as f64);
+        let (dx, dy) = ((x1 as f64) - fx, (y1 as f64) - fy);
+        let (w, h) = (self.width as f64, self.height as f64);
+        let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+        for (p, q) in [(-dx, fx + 1.0), (dx, w - fx), (-dy, fy + 1.0), (dy, h - fy)] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return None;
+                }
+                continue;
+            }
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+            if t0 > t1 {
+                return None;
+            }
+        }
+        let at = |t: f64| ((fx + t * dx).round() as i64, (fy + t * dy).round() as i64);
+        let (a, b) = (if t0 > 0.0 { at(t0) } else { (x0, y0) }, if t1 < 1.0 { at(t1) } else { (x1, y1) });
+        let steps = (x1 - x0).abs().max((y1 - y0).abs()) as f64;
+        Some((a.0, a.1, b.0, b.1, (t0 * steps).round() as i64))
+    }
+
     /// A dashed one-pixel line: 4 pixels drawn, 4 left out.
     pub fn dashed_line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb) {
         self.stroke(x0, y0, x1, y1, color, |k| (k / 4) % 2 == 0);
     }
 
-    /// Bresenham from `(x0, y0)` to `(x1, y1)`, drawing the `k`-th pixel when `draw(k)`.
+    /// Bresenham from `(x0, y0)` to `(x1, y1)`, drawing the `k`-th pixel when `draw(k)`. The segment is first
+    /// clipped to the canvas, so a line from a kilometre-sized obstacle costs its visible pixels only.
     fn stroke(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb, draw: impl Fn(i64) -> bool) {
+        let Some((x0, y0, x1, y1, skipped)) = self.clip(x0, y0, x1, y1) else {
+            return;
+        };
+        let draw = |k| draw(k + skipped);
         let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
         let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
         let (mut x, mut y, mut err) = (x0, y0, dx + dy);
@@ -197,6 +232,25 @@ mod tests {
         c.line(-50, 2, 50, 2, WHITE);
         assert_eq!(c.pixel(0, 2), Some(WHITE));
         assert_eq!(c.pixel(10, 0), None);
+    }
+
+    #[test]
+    fn a_line_a_billion_pixels_long_draws_its_visible_part_at_once() {
+        let mut c = Canvas::new(100, 50, WHITE);
+        let started = std::time::Instant::now();
+        c.line(-1_000_000_000_000, 25, 1_000_000_000_000, 25, BLACK);
+        c.dashed_line(50, -1_000_000_000_000, 50, 1_000_000_000_000, BLACK);
+        c.line(-5_000_000_000, -5_000_000_000, -4_000_000_000, -4_000_000_000, BLACK);
+        assert!(started.elapsed().as_secs_f64() < 1.0, "{:?}", started.elapsed());
+        assert!((0..100).all(|x| c.pixel(x, 25) == Some(BLACK)));
+        let dashes = (0..50).filter(|&y| c.pixel(50, y) == Some(BLACK)).count();
+        assert!((20..=30).contains(&dashes), "{dashes} dashed pixels");
+        // A segment inside the canvas draws exactly as before clipping.
+        let (mut a, mut b) = (Canvas::new(30, 30, WHITE), Canvas::new(30, 30, WHITE));
+        a.line(2, 3, 27, 19, BLACK);
+        b.line(2, 3, 27, 19, BLACK);
+        b.line(-40, -40, -30, -30, BLACK);
+        assert!(a == b);
     }
 
     #[test]

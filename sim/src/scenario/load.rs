@@ -14,6 +14,15 @@ use crate::robot::RobotModel;
 pub const MAX_MAP_CELLS: u64 = 25_000_000;
 /// The longest simulated duration, seconds (one day).
 pub const MAX_DURATION_S: f64 = 86_400.0;
+/// The longest length of an obstacle, an actor or the terrain, metres (100 km): more than any scene, and a
+/// typed `1e9` is caught.
+pub const MAX_LENGTH_M: f64 = 100_000.0;
+/// The most obstacles and actors a scenario may list, each.
+pub const MAX_OBJECTS: usize = 10_000;
+/// The most rays a run may cast, all sensors together (rate x duration x rays per scan): 2 billion. The
+/// simulation and the map each process a few million rays a second on one core of the reference machine, so
+/// the worst valid scenario finishes, in hours rather than never (README, "Bounds").
+pub const MAX_RAYS_PER_RUN: f64 = 2e9;
 
 /// One step of a path to a value in the file: a key or an array index.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -244,6 +253,13 @@ impl Checker<'_> {
         })
     }
 
+    /// A positive length of at most [`MAX_LENGTH_M`].
+    fn length(&self, v: f64, path: &[KeySeg<'_>], what: &str) -> Result<()> {
+        self.check(v.is_finite() && v > 0.0 && v <= MAX_LENGTH_M, path, || {
+            format!("expected a {what} in (0, {MAX_LENGTH_M}], got {v}")
+        })
+    }
+
     fn non_negative(&self, v: f64, path: &[KeySeg<'_>], what: &str) -> Result<()> {
         self.check(v.is_finite() && v >= 0.0, path, || {
             format!("expected a {what} >= 0, got {v}")
@@ -393,6 +409,11 @@ impl Checker<'_> {
         )?;
 
         self.validate_terrain(s)?;
+        for (key, n) in [("obstacles", s.obstacles.len()), ("actors", s.actors.len())] {
+            self.check(n <= MAX_OBJECTS, &[K(key)], || {
+                format!("{n} {key}, over the limit of {MAX_OBJECTS}")
+            })?;
+        }
         for (k, o) in s.obstacles.iter().enumerate() {
             self.validate_obstacle(s, k, o)?;
         }
@@ -404,8 +425,8 @@ impl Checker<'_> {
                 ..
             } = a;
             let at = |key| [K("actors"), I(k), K(key)];
-            self.positive(*radius_m, &at("radius_m"), "radius in metres")?;
-            self.positive(*height_m, &at("height_m"), "height in metres")?;
+            self.length(*radius_m, &at("radius_m"), "radius in metres")?;
+            self.length(*height_m, &at("height_m"), "height in metres")?;
             self.check(!waypoints.is_empty(), &at("waypoints"), || {
                 "expected at least one [t_s, x_m, y_m]".into()
             })?;
@@ -427,6 +448,7 @@ impl Checker<'_> {
             }
         }
         let mut names = std::collections::BTreeSet::new();
+        let mut total_rays = 0.0_f64;
         for (k, sensor) in s.sensors.iter().enumerate() {
             self.check(
                 names.insert(sensor.name.as_str()),
@@ -442,12 +464,25 @@ impl Checker<'_> {
             self.check(finite, &[K("sensors"), I(k), K("xyz_m")], || {
                 "expected finite offsets".into()
             })?;
-            if let Err(e) = sensor.resolve() {
-                let mut path = vec![K("sensors"), I(k)];
-                path.extend(e.key.iter().map(|key| K(key)));
-                return Err(self.error(&path, e.message));
+            match sensor.resolve() {
+                Err(e) => {
+                    let mut path = vec![K("sensors"), I(k)];
+                    path.extend(e.key.iter().map(|key| K(key)));
+                    return Err(self.error(&path, e.message));
+                }
+                Ok(spec) => {
+                    let scans = (s.duration_s * spec.rate_hz + 1e-9).floor() + 1.0;
+                    total_rays += scans * spec.beams.rays_per_scan() as f64;
+                }
             }
         }
+        self.check(total_rays <= MAX_RAYS_PER_RUN, &[K("sensors")], || {
+            format!(
+                "the sensors would cast {total_rays:.3e} rays in {} s, over the limit of {MAX_RAYS_PER_RUN:.0e} \
+                 rays per run; lower a rate, a resolution or the duration",
+                s.duration_s
+            )
+        })?;
         for (name, e) in &s.expectations {
             let path = [K("expectations"), K(name.as_str())];
             self.check(e.min.is_some() || e.max.is_some(), &path, || {
@@ -539,7 +574,7 @@ impl Checker<'_> {
                 ..
             } => {
                 for v in size_m {
-                    self.positive(*v, &at("size_m"), "size in metres")?;
+                    self.length(*v, &at("size_m"), "size in metres")?;
                 }
                 self.check(yaw_deg.is_finite(), &at("yaw_deg"), || {
                     "expected a finite angle".into()
@@ -552,8 +587,8 @@ impl Checker<'_> {
                 base_m,
                 ..
             } => {
-                self.positive(*radius_m, &at("radius_m"), "radius in metres")?;
-                self.positive(*height_m, &at("height_m"), "height in metres")?;
+                self.length(*radius_m, &at("radius_m"), "radius in metres")?;
+                self.length(*height_m, &at("height_m"), "height in metres")?;
                 self.non_negative(*base_m, &at("base_m"), "height above the ground in metres")
             }
             Obstacle::Ramp {
@@ -563,9 +598,9 @@ impl Checker<'_> {
                 yaw_deg,
                 ..
             } => {
-                self.positive(*length_m, &at("length_m"), "length in metres")?;
-                self.positive(*width_m, &at("width_m"), "width in metres")?;
-                self.positive(*height_m, &at("height_m"), "height in metres")?;
+                self.length(*length_m, &at("length_m"), "length in metres")?;
+                self.length(*width_m, &at("width_m"), "width in metres")?;
+                self.length(*height_m, &at("height_m"), "height in metres")?;
                 self.check(yaw_deg.is_finite(), &at("yaw_deg"), || {
                     "expected a finite angle".into()
                 })
@@ -576,8 +611,8 @@ impl Checker<'_> {
                 num_parts,
                 ..
             } => {
-                self.positive(*radius_m, &at("radius_m"), "radius in metres")?;
-                self.positive(*height_m, &at("height_m"), "height in metres")?;
+                self.length(*radius_m, &at("radius_m"), "radius in metres")?;
+                self.length(*height_m, &at("height_m"), "height in metres")?;
                 self.check((1..=1000).contains(num_parts), &at("num_parts"), || {
                     format!("expected 1 to 1000 parts, got {num_parts}")
                 })
@@ -589,9 +624,9 @@ impl Checker<'_> {
                 ..
             } => {
                 for v in size_m {
-                    self.positive(*v, &at("size_m"), "size in metres")?;
+                    self.length(*v, &at("size_m"), "size in metres")?;
                 }
-                self.positive(
+                self.length(
                     *clearance_m,
                     &at("clearance_m"),
                     "gap under the overhang in metres",

@@ -151,6 +151,32 @@ pub enum BeamPattern {
     },
 }
 
+impl BeamPattern {
+    /// Rays cast per scan.
+    pub fn rays_per_scan(&self) -> u64 {
+        match self {
+            Self::Fan { fov_rad, step_rad } => (fov_rad / step_rad + 1e-9).floor() as u64 + 1,
+            Self::Sweep {
+                elevations_rad,
+                fov_rad,
+                step_rad,
+            } => ((fov_rad / step_rad + 1e-9).floor() as u64 + 1) * elevations_rad.len() as u64,
+            Self::Pinhole {
+                width_px,
+                height_px,
+                stride,
+                ..
+            } => u64::from(width_px.div_ceil(*stride)) * u64::from(height_px.div_ceil(*stride)),
+        }
+    }
+}
+
+/// The most rays one scan of any sensor may cast: 10 million (a camera frame of 10 million rays holds about
+/// 400 MB while it is cast).
+pub const MAX_RAYS_PER_SCAN: u64 = 10_000_000;
+/// The highest scan rate, Hz.
+pub const MAX_RATE_HZ: f64 = 1_000.0;
+
 /// How the range error grows.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RangeNoise {
@@ -473,6 +499,12 @@ impl SensorMount {
             }
         };
         let rate_hz = positive(self.rate_hz.unwrap_or(preset.rate_hz), "rate_hz", "rate in Hz")?;
+        if rate_hz > MAX_RATE_HZ {
+            return Err(err(
+                &["rate_hz"],
+                format!("expected a rate up to {MAX_RATE_HZ} Hz, got {rate_hz}"),
+            ));
+        }
         let max_range_m = positive(
             self.max_range_m.unwrap_or(preset.max_range_m),
             "max_range_m",
@@ -576,12 +608,23 @@ impl SensorMount {
                         format!("expected 1 to {} pixels, got {stride}", w.max(h)),
                     ));
                 }
-                BeamPattern::Pinhole {
+                let pattern = BeamPattern::Pinhole {
                     width_px: w,
                     height_px: h,
                     focal_px,
                     stride,
+                };
+                if pattern.rays_per_scan() > MAX_RAYS_PER_SCAN {
+                    return Err(err(
+                        &["pixel_stride"],
+                        format!(
+                            "a {w} x {h} image at stride {stride} casts {} rays per frame, over the limit of \
+                             {MAX_RAYS_PER_SCAN}; use a larger stride or a smaller image",
+                            pattern.rays_per_scan()
+                        ),
+                    ));
                 }
+                pattern
             }
         };
         let probability = |v: Option<f64>, key: &'static str| {
