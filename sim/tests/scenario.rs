@@ -232,7 +232,7 @@ fn every_size_and_rate_is_bounded_so_a_valid_scenario_always_finishes() {
                 "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [3.0, 0.0]\nsize_m = [1e9, 1.0, 0.1]\n",
             ),
             "obstacles[0].size_m",
-            19,
+            20,
         ),
         (
             "person",
