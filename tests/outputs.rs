@@ -16,7 +16,16 @@ fn scene(name: &str) -> PathBuf {
 /// A short run of the decision scene (1 s of driving), for tests about files rather than maps. Its scene's
 /// expectations are for the whole drive, so the run exits non-zero with its report written.
 fn short_run_args<'a>(scenario: &'a str, out: &'a str, seed: &'a str) -> Vec<&'a str> {
-    vec!["run", scenario, "--out", out, "--seed", seed, "--set", "duration_s=1.0"]
+    vec![
+        "run",
+        scenario,
+        "--out",
+        out,
+        "--seed",
+        seed,
+        "--set",
+        "duration_s=1.0",
+    ]
 }
 
 /// Every file under `dir` but `timing.json` (wall times differ run to run), by relative path.
@@ -73,7 +82,11 @@ fn record_refuses_a_fifo_as_its_output_and_leaves_it_a_fifo() {
         assert!(stderr.contains("FIFO") && !stderr.contains("wrote"), "{stderr}");
         assert!(std::fs::metadata(&fifo).expect("there").file_type().is_fifo());
     }
-    assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 2, "nothing else written");
+    assert_eq!(
+        std::fs::read_dir(&dir).expect("dir").count(),
+        2,
+        "nothing else written"
+    );
 }
 
 #[test]
@@ -93,12 +106,22 @@ fn an_out_folder_of_someone_elses_files_or_a_file_is_refused_untouched() {
         ));
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && stderr.contains(expected), "{stderr}");
-        assert!(stderr.contains(out.to_str().expect("utf8")), "names the path: {stderr}");
+        assert!(
+            stderr.contains(out.to_str().expect("utf8")),
+            "names the path: {stderr}"
+        );
     }
-    assert_eq!(std::fs::read(theirs.join("thesis.tex")).expect("kept"), b"precious");
+    assert_eq!(
+        std::fs::read(theirs.join("thesis.tex")).expect("kept"),
+        b"precious"
+    );
     assert_eq!(std::fs::read(&file).expect("kept"), b"also precious");
     assert_eq!(std::fs::read_dir(&theirs).expect("dir").count(), 1);
-    assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 2, "no staging left");
+    assert_eq!(
+        std::fs::read_dir(&dir).expect("dir").count(),
+        2,
+        "no staging left"
+    );
 }
 
 #[test]
@@ -109,10 +132,18 @@ fn a_killed_run_leaves_the_previous_results_or_none_never_a_mix() {
     // The two complete result sets: the previous run (seed 1) and the one that gets killed (seed 2).
     let (ref_old, ref_new) = (dir.join("ref_old"), dir.join("ref_new"));
     let o = oeg(&short_run_args(scenario, ref_old.to_str().expect("utf8"), "1"));
-    assert!(ref_old.join("metrics.json").exists(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        ref_old.join("metrics.json").exists(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let started = Instant::now();
     let o = oeg(&short_run_args(scenario, ref_new.to_str().expect("utf8"), "2"));
-    assert!(ref_new.join("metrics.json").exists(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        ref_new.join("metrics.json").exists(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let full = started.elapsed();
     let (old, new) = (contents(&ref_old), contents(&ref_new));
     assert_ne!(old, new, "the two seeds give different results");
@@ -142,10 +173,7 @@ fn a_killed_run_leaves_the_previous_results_or_none_never_a_mix() {
             } else if now == new {
                 "new"
             } else {
-                let mixed: Vec<_> = now
-                    .keys()
-                    .filter(|k| old.get(*k) != now.get(*k))
-                    .collect();
+                let mixed: Vec<_> = now.keys().filter(|k| old.get(*k) != now.get(*k)).collect();
                 panic!("killed at {fraction} of the run: a mix of old and new files, {mixed:?} changed");
             }
         };
@@ -183,18 +211,32 @@ fn a_suite_runs_a_scenario_named_twice_once_and_failed_rows_measure_nothing() {
         "duration_s=1.0",
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "the broken scenario fails the suite: {stderr}");
+    assert!(
+        !o.status.success(),
+        "the broken scenario fails the suite: {stderr}"
+    );
     let rows: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("suite.json")).expect("suite.json")).expect("json");
     let rows = rows.as_array().expect("rows");
     assert_eq!(rows.len(), 2, "the scenario named twice ran once: {rows:?}");
-    let error = rows.iter().find(|r| r["status"] == "error").expect("an error row");
-    for key in ["coverage", "unsafe_step_cells", "plan_unsafe_cells", "elevation_rmse_m"] {
+    let error = rows
+        .iter()
+        .find(|r| r["status"] == "error")
+        .expect("an error row");
+    for key in [
+        "coverage",
+        "unsafe_step_cells",
+        "plan_unsafe_cells",
+        "elevation_rmse_m",
+    ] {
         assert!(error[key].is_null(), "{key}: {error}");
     }
     let csv = std::fs::read_to_string(out.join("suite.csv")).expect("suite.csv");
     let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
-    let line = csv.lines().find(|l| l.starts_with("broken,")).expect("broken row");
+    let line = csv
+        .lines()
+        .find(|l| l.starts_with("broken,"))
+        .expect("broken row");
     let column = header
         .iter()
         .position(|h| *h == "unsafe_step_cells")
@@ -232,13 +274,17 @@ fn staged_outputs_wait_for_no_one_and_two_suites_on_one_folder_both_finish_whole
     });
     for o in [a.expect("ran"), b.expect("ran")] {
         let stderr = String::from_utf8_lossy(&o.stderr);
-        assert!(!stderr.contains("error: ") || stderr.contains("did not pass"), "{stderr}");
+        assert!(
+            !stderr.contains("error: ") || stderr.contains("did not pass"),
+            "{stderr}"
+        );
     }
     // Whichever finished last wins, whole: its table and its run folder agree.
     let rows: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("suite.json")).expect("suite.json")).expect("json");
     let metrics: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("decisions/metrics.json")).expect("metrics")).expect("json");
+        serde_json::from_slice(&std::fs::read(out.join("decisions/metrics.json")).expect("metrics"))
+            .expect("json");
     assert_eq!(rows[0]["unsafe_step_cells"], metrics["unsafe_step_cells"]);
     assert_eq!(rows[0]["coverage"], metrics["coverage"]);
     assert_eq!(rows[0]["elevation_rmse_m"], metrics["elevation_rmse_m"]);

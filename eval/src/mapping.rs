@@ -199,13 +199,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let map_bytes = mapfile::to_bytes(&map);
     write_bytes(&map_path, &map_bytes)?;
     files.push(map_path);
-    files.extend(write_layer_images(
-        &map,
-        stage,
-        &job.profile,
-        job.rule,
-        None,
-    )?);
+    files.extend(write_layer_images(&map, stage, &job.profile, job.rule, None)?);
 
     let totals = map.totals();
     let counts = map.traversability_counts(&job.profile, job.rule);

@@ -141,7 +141,10 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     overlay(&mut fig);
     let decisions_path = staged.dir().join("preview_decisions.png");
     write_bytes(&decisions_path, &fig.to_png())?;
-    let files = vec![staged.final_path(&elevation_path), staged.final_path(&decisions_path)];
+    let files = vec![
+        staged.final_path(&elevation_path),
+        staged.final_path(&decisions_path),
+    ];
     staged.commit()?;
     Ok(files)
 }

@@ -22,8 +22,9 @@ pub enum Error {
     InvalidScan(String),
     /// Storing the map would exceed the configured memory limit.
     #[error(
-        "the map would need {requested_bytes} bytes, over its memory limit of {limit_bytes} bytes \
-         (raise `memory_limit_bytes` or use a coarser resolution; is a point very far away?)"
+        "the map would need at least {requested_bytes} bytes, over its memory limit of {limit_bytes} bytes \
+         (is a point or a pose very far away? otherwise use a coarser resolution, or raise the limit: \
+         `--memory-limit-mib` of `oeg map`, `MapConfig::memory_limit_bytes` in the library)"
     )]
     MemoryLimit {
         /// Bytes the map would hold after the operation.

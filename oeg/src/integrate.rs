@@ -287,12 +287,38 @@ impl Map {
             let free_until = hit_range_m.map_or(f64::INFINITY, |(l_p, s)| {
                 l_p - f64::from(GAUSSIAN_CUTOFF_SIGMAS) * s
             });
+            let (start, end) = (o + dir * l_lo, o + dir * l_hi);
             let walk = GroundTraversal::new(&self.geometry, (o.x, o.y), (dir.x, dir.y), l_lo, l_hi)
                 .ok_or_else(|| {
                     Error::InvalidScan(format!(
-                        "ray {index} reaches {l_hi} m from the sensor, beyond the grid's index range"
+                        "ray {index} runs from ({:.3}, {:.3}) m to ({:.3}, {:.3}) m, beyond the grid's index \
+                         range (2^31 cells of {} m from the origin): is the sensor's pose or this point corrupt?",
+                        start.x,
+                        start.y,
+                        end.x,
+                        end.y,
+                        self.geometry.resolution_m()
                     ))
                 })?;
+            // Fail fast: the walk touches at least one tile per tile edge it spans, so a ray that must exceed
+            // the memory limit is refused before a single tile of it is allocated.
+            let tiles_spanned = match (
+                self.geometry.cell_of(start.x, start.y),
+                self.geometry.cell_of(end.x, end.y),
+            ) {
+                (Some(a), Some(b)) => {
+                    let (ta, tb) = (TileIndex::of(a), TileIndex::of(b));
+                    u64::from(ta.ti.abs_diff(tb.ti).max(ta.tj.abs_diff(tb.tj))) + 1
+                }
+                _ => 1,
+            };
+            let least_bytes = tiles_spanned.saturating_mul(TileGrid::<ScanEvidence>::tile_bytes() as u64);
+            if least_bytes > scratch_limit {
+                return Err(Error::MemoryLimit {
+                    requested_bytes: least_bytes.saturating_add(self.cells.memory_bytes()),
+                    limit_bytes: self.config.memory_limit_bytes,
+                });
+            }
             stats.num_cell_visits += walk.len() as u64;
             let mut cursor = ScratchCursor::new(&mut self.scratch, scratch_limit);
             let top_at_exit = dir.z > 0.0;

@@ -590,3 +590,26 @@ fn the_contact_rule_measures_a_step_from_the_lowest_level_not_the_lowest_cell() 
         .expect("ground");
     assert!(ground.mean_m.abs() < 0.006, "{ground:?}");
 }
+
+#[test]
+fn a_corrupt_far_point_is_refused_at_once_without_allocating_gigabytes() {
+    // 10,000 km away at 0.05 m: the ray spans 3 million tiles. It is refused before any tile is allocated.
+    let mut map = map_with(0.05, ModelOptions::default());
+    let started = std::time::Instant::now();
+    let far = scan_of(Point3::new(0.0, 0.0, 0.5), &[(1.0e7, 0.0, 0.0)]);
+    let err = map.integrate(&far).expect_err("over the memory limit");
+    assert!(matches!(err, oeg::Error::MemoryLimit { .. }), "{err}");
+    assert!(err.to_string().contains("far away"), "{err}");
+    assert!(started.elapsed().as_secs_f64() < 1.0, "{:?}", started.elapsed());
+    assert!(map.memory_bytes() < 1 << 20, "{} bytes held", map.memory_bytes());
+    // A point beyond the grid's index range names where the ray runs, not just its length.
+    let beyond = scan_of(Point3::new(1.0e9, 0.0, 0.5), &[(1.0e9 + 1.0, 0.0, 0.0)]);
+    let err = map
+        .integrate(&beyond)
+        .expect_err("beyond the index range")
+        .to_string();
+    assert!(err.contains("1000000000.000, 0.000"), "{err}");
+    // The map still takes ordinary scans.
+    let near = scan_of(Point3::new(0.0, 0.0, 0.5), &[(2.0, 0.0, 0.0)]);
+    map.integrate(&near).expect("an ordinary scan");
+}

@@ -164,10 +164,14 @@ pub fn read_log(path: &Path) -> Result<SensorLog> {
         path: path.to_path_buf(),
         source,
     })?;
-    parse(path, &data)
+    parse_log(path, &data)
 }
 
-fn parse(path: &Path, data: &[u8]) -> Result<SensorLog> {
+/// Reads a log from its bytes (`path` names it in errors).
+///
+/// # Errors
+/// As [`read_log`], but for reading the file.
+pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
     let fail = |at: usize, message: String| SimError::Log {
         path: path.to_path_buf(),
         message: format!("at byte {at}: {message}"),

@@ -121,7 +121,15 @@ impl RobotModel {
             path: path.to_path_buf(),
             source,
         })?;
-        let urdf = urdf_rs::read_from_string(&text).map_err(|e| SimError::Urdf {
+        Self::from_urdf_text(path, &text, base_link)
+    }
+
+    /// The robot of a URDF document already read (`path` names it in errors).
+    ///
+    /// # Errors
+    /// As [`RobotModel::load`], but for reading the file.
+    pub fn from_urdf_text(path: &Path, text: &str, base_link: &str) -> Result<Self> {
+        let urdf = urdf_rs::read_from_string(text).map_err(|e| SimError::Urdf {
             path: path.to_path_buf(),
             message: format!("not a valid URDF: {e}"),
         })?;

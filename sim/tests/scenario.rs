@@ -212,7 +212,12 @@ fn every_size_and_rate_is_bounded_so_a_valid_scenario_always_finishes() {
         ))
     };
     let cases = [
-        ("rate", sensor("laser2d", "rate_hz = 1e9\n"), "sensors[0].rate_hz", 21),
+        (
+            "rate",
+            sensor("laser2d", "rate_hz = 1e9\n"),
+            "sensors[0].rate_hz",
+            21,
+        ),
         (
             "camera",
             sensor("stereo", "image_size_px = [20000, 20000]\npixel_stride = 1\n"),

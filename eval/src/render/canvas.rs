@@ -106,7 +106,10 @@ impl Canvas {
             }
         }
         let at = |t: f64| ((fx + t * dx).round() as i64, (fy + t * dy).round() as i64);
-        let (a, b) = (if t0 > 0.0 { at(t0) } else { (x0, y0) }, if t1 < 1.0 { at(t1) } else { (x1, y1) });
+        let (a, b) = (
+            if t0 > 0.0 { at(t0) } else { (x0, y0) },
+            if t1 < 1.0 { at(t1) } else { (x1, y1) },
+        );
         let steps = (x1 - x0).abs().max((y1 - y0).abs()) as f64;
         Some((a.0, a.1, b.0, b.1, (t0 * steps).round() as i64))
     }
@@ -240,7 +243,13 @@ mod tests {
         let started = std::time::Instant::now();
         c.line(-1_000_000_000_000, 25, 1_000_000_000_000, 25, BLACK);
         c.dashed_line(50, -1_000_000_000_000, 50, 1_000_000_000_000, BLACK);
-        c.line(-5_000_000_000, -5_000_000_000, -4_000_000_000, -4_000_000_000, BLACK);
+        c.line(
+            -5_000_000_000,
+            -5_000_000_000,
+            -4_000_000_000,
+            -4_000_000_000,
+            BLACK,
+        );
         assert!(started.elapsed().as_secs_f64() < 1.0, "{:?}", started.elapsed());
         assert!((0..100).all(|x| c.pixel(x, 25) == Some(BLACK)));
         let dashes = (0..50).filter(|&y| c.pixel(50, y) == Some(BLACK)).count();

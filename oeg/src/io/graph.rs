@@ -72,7 +72,11 @@ pub fn read_graph_scans(path: &Path, sensor: SensorModel) -> Result<Vec<Scan>> {
     Ok(read_graph(path)?.iter().map(|n| n.to_scan(sensor)).collect())
 }
 
-fn parse_graph(path: &Path, data: &[u8]) -> Result<Vec<GraphNode>> {
+/// Reads a scan graph from its bytes (`path` names it in errors).
+///
+/// # Errors
+/// As [`read_graph`], but for reading the file.
+pub fn parse_graph(path: &Path, data: &[u8]) -> Result<Vec<GraphNode>> {
     let mut r = ByteReader::new(path, data);
     let num_nodes = r.u32("the node count")? as usize;
     // Each node holds at least its point count, pose and id.

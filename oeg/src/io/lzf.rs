@@ -3,8 +3,19 @@
 //! A control byte `c` either starts a literal run (`c < 32`: copy the next `c + 1` bytes) or a back-reference
 //! of length `(c >> 5) + 2` (7 means "add the next byte") at distance `((c & 31) << 8) + next byte + 1`.
 
-/// Decompresses `input`, which must expand to exactly `expected_len` bytes.
+/// The most bytes one input byte can expand to: a three-byte back-reference copies at most 264 bytes.
+pub(crate) const MAX_EXPANSION: usize = 88;
+
+/// Decompresses `input`, which must expand to exactly `expected_len` bytes. A length that no input of this size
+/// can expand to ([`MAX_EXPANSION`] times) is refused before anything is allocated.
 pub(crate) fn decompress(input: &[u8], expected_len: usize) -> Result<Vec<u8>, String> {
+    if expected_len > input.len().saturating_mul(MAX_EXPANSION) {
+        return Err(format!(
+            "{} compressed bytes cannot expand to the declared {expected_len} (at most {MAX_EXPANSION} times \
+             as many)",
+            input.len()
+        ));
+    }
     let mut out = Vec::with_capacity(expected_len);
     let mut i = 0;
     while i < input.len() {
@@ -112,6 +123,21 @@ mod tests {
     use proptest::prelude::*;
 
     use super::*;
+
+    #[test]
+    fn a_declared_size_no_input_can_expand_to_is_refused_before_allocating() {
+        // The 4 GiB of a 268 M-point cloud from 300 bytes.
+        let err = decompress(&[0u8; 300], 4 << 30).expect_err("impossible expansion");
+        assert!(err.contains("cannot expand"), "{err}");
+        // The most compressible input there is: one literal, then maximal back-references of 264 bytes.
+        let mut input = vec![0u8, 7];
+        for _ in 0..100 {
+            input.extend_from_slice(&[0xe0, 255, 0]);
+        }
+        let out = decompress(&input, 1 + 100 * 264).expect("exactly the maximal expansion");
+        assert!(out.iter().all(|&b| b == 7));
+        assert!(out.len() <= input.len() * MAX_EXPANSION);
+    }
 
     #[test]
     fn a_hand_made_stream_with_a_back_reference_decodes() {

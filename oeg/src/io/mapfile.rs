@@ -114,7 +114,15 @@ pub fn load_map(path: &Path) -> Result<Map> {
 /// negative or NaN variance), or tiles that would exceed `limit_bytes`.
 pub fn load_map_within(path: &Path, limit_bytes: u64) -> Result<Map> {
     let data = read_file(path)?;
-    parse(path, &data, Some(limit_bytes)).map(|(_, m)| m.unwrap_or_else(|| unreachable!("asked for the map")))
+    map_from_bytes(path, &data, limit_bytes)
+}
+
+/// A map from the bytes of a map file (`path` names it in errors), within `limit_bytes`.
+///
+/// # Errors
+/// As [`load_map_within`], but for reading the file.
+pub fn map_from_bytes(path: &Path, data: &[u8], limit_bytes: u64) -> Result<Map> {
+    parse(path, data, Some(limit_bytes)).map(|(_, m)| m.unwrap_or_else(|| unreachable!("asked for the map")))
 }
 
 /// The smallest and largest tile coordinate: cells are `i32`, and a tile holds 64 of them per side.
@@ -197,7 +205,10 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
 /// or finite; the elevation is finite; the variance is NaN-free and not negative (infinite: no estimate).
 fn cell_problem(c: &Cell) -> Option<String> {
     if c.log_odds.is_infinite() {
-        return Some(format!("log-odds {} is infinite (expected NaN or a finite number)", c.log_odds));
+        return Some(format!(
+            "log-odds {} is infinite (expected NaN or a finite number)",
+            c.log_odds
+        ));
     }
     if !c.mean_m.is_finite() {
         return Some(format!("elevation {} m is not a finite number", c.mean_m));
@@ -267,13 +278,17 @@ mod tests {
         let bytes = to_bytes(&small_map());
         let p = Path::new("m.oeg");
         for cut in [0, 7, 12, 20, 100, bytes.len() / 2, bytes.len() - 1] {
-            let err = parse(p, &bytes[..cut], Some(1 << 30)).expect_err("truncated").to_string();
+            let err = parse(p, &bytes[..cut], Some(1 << 30))
+                .expect_err("truncated")
+                .to_string();
             assert!(err.starts_with("m.oeg: at byte"), "cut {cut}: {err}");
         }
         let mut flipped = bytes.clone();
         let k = flipped.len() - 100;
         flipped[k] ^= 0x40;
-        let err = parse(p, &flipped, Some(1 << 30)).expect_err("corrupt").to_string();
+        let err = parse(p, &flipped, Some(1 << 30))
+            .expect_err("corrupt")
+            .to_string();
         assert!(err.contains("checksum mismatch"), "{err}");
         let mut wrong = bytes.clone();
         wrong[0] = b'X';
@@ -329,11 +344,19 @@ mod tests {
         let p = Path::new("far.oeg");
         for (ti, tj) in [(1 << 25, 0), (0, -(1 << 25) - 1), (i32::MAX, i32::MIN)] {
             let bytes = forged(MapConfig::new(0.1), &[(ti, tj, GROUND)]);
-            let err = parse(p, &bytes, Some(1 << 30)).expect_err("out of the grid").to_string();
-            assert!(err.starts_with("far.oeg: at byte") && err.contains("outside the grid"), "{err}");
+            let err = parse(p, &bytes, Some(1 << 30))
+                .expect_err("out of the grid")
+                .to_string();
+            assert!(
+                err.starts_with("far.oeg: at byte") && err.contains("outside the grid"),
+                "{err}"
+            );
         }
         let edge = forged(MapConfig::new(0.1), &[((1 << 25) - 1, -(1 << 25), GROUND)]);
-        assert!(parse(p, &edge, Some(1 << 30)).is_ok(), "the outermost tiles are fine");
+        assert!(
+            parse(p, &edge, Some(1 << 30)).is_ok(),
+            "the outermost tiles are fine"
+        );
     }
 
     #[test]
@@ -351,25 +374,50 @@ mod tests {
         assert!(started.elapsed().as_secs_f64() < 5.0, "refused before allocating");
         let (_, map) = parse(p, &forged(config, &[(0, 0, GROUND)]), Some(1 << 30)).expect("small map");
         let map = map.expect("built");
-        assert_eq!(map.config().memory_limit_bytes, 1 << 30, "the caller's limit, not the file's");
+        assert_eq!(
+            map.config().memory_limit_bytes,
+            1 << 30,
+            "the caller's limit, not the file's"
+        );
     }
 
     #[test]
     fn non_finite_cell_values_are_refused_with_their_place() {
         let p = Path::new("bad.oeg");
         let bad = [
-            Cell { mean_m: f32::INFINITY, ..GROUND },
-            Cell { mean_m: f32::NAN, ..GROUND },
-            Cell { var_m2: f32::NAN, ..GROUND },
-            Cell { var_m2: -1.0, ..GROUND },
-            Cell { log_odds: f32::INFINITY, ..GROUND },
+            Cell {
+                mean_m: f32::INFINITY,
+                ..GROUND
+            },
+            Cell {
+                mean_m: f32::NAN,
+                ..GROUND
+            },
+            Cell {
+                var_m2: f32::NAN,
+                ..GROUND
+            },
+            Cell {
+                var_m2: -1.0,
+                ..GROUND
+            },
+            Cell {
+                log_odds: f32::INFINITY,
+                ..GROUND
+            },
         ];
         for cell in bad {
             let bytes = forged(MapConfig::new(0.1), &[(0, 0, GROUND), (1, 0, cell)]);
             let err = parse(p, &bytes, Some(1 << 30)).expect_err("bad cell").to_string();
             assert!(err.contains("tile 1, cell 0"), "{cell:?}: {err}");
         }
-        for fine in [Cell::UNOBSERVED, Cell { var_m2: f32::INFINITY, ..GROUND }] {
+        for fine in [
+            Cell::UNOBSERVED,
+            Cell {
+                var_m2: f32::INFINITY,
+                ..GROUND
+            },
+        ] {
             let bytes = forged(MapConfig::new(0.1), &[(0, 0, fine)]);
             assert!(parse(p, &bytes, Some(1 << 30)).is_ok(), "{fine:?}");
         }

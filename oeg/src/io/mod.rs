@@ -74,7 +74,10 @@ impl AtomicFile {
     pub fn write_all(&mut self, bytes: &[u8]) -> Result<()> {
         match self.out.as_mut() {
             Some(out) => out.write_all(bytes).map_err(|e| Error::io(&self.path, e)),
-            None => Err(Error::io(&self.path, std::io::Error::other("the file was already committed"))),
+            None => Err(Error::io(
+                &self.path,
+                std::io::Error::other("the file was already committed"),
+            )),
         }
     }
 
@@ -83,10 +86,12 @@ impl AtomicFile {
     /// # Errors
     /// [`Error::Io`] naming the file; the temporary file is removed and `path` is left as it was.
     pub fn commit(mut self) -> Result<()> {
-        let out = self
-            .out
-            .take()
-            .ok_or_else(|| Error::io(&self.path, std::io::Error::other("the file was already committed")))?;
+        let out = self.out.take().ok_or_else(|| {
+            Error::io(
+                &self.path,
+                std::io::Error::other("the file was already committed"),
+            )
+        })?;
         let result = out
             .into_inner()
             .map_err(std::io::IntoInnerError::into_error)
@@ -127,7 +132,9 @@ pub fn output_target(path: &Path) -> Result<PathBuf> {
     let link = std::fs::symlink_metadata(path);
     match std::fs::metadata(path) {
         Ok(m) if m.is_file() => match link {
-            Ok(l) if l.file_type().is_symlink() => std::fs::canonicalize(path).map_err(|e| Error::io(path, e)),
+            Ok(l) if l.file_type().is_symlink() => {
+                std::fs::canonicalize(path).map_err(|e| Error::io(path, e))
+            }
             _ => Ok(path.to_path_buf()),
         },
         Ok(m) if m.is_dir() => Err(refuse("is a folder, not a file")),
@@ -157,7 +164,11 @@ pub fn remove_stale_temporaries(path: &Path) {
     let (Some(dir), Some(name)) = (path.parent(), path.file_name().and_then(|n| n.to_str())) else {
         return;
     };
-    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
     for pid in stale_owners(dir, &format!("{name}."), ".tmp") {
         let _ = std::fs::remove_file(dir.join(pid));
     }
@@ -368,12 +379,26 @@ mod tests {
         for path in [&fifo, &link] {
             let err = write_atomically(path, b"x").expect_err("a FIFO is not a regular file");
             assert!(err.to_string().contains("FIFO"), "{err}");
-            assert!(std::fs::metadata(&fifo).expect("still there").file_type().is_fifo());
+            assert!(
+                std::fs::metadata(&fifo)
+                    .expect("still there")
+                    .file_type()
+                    .is_fifo()
+            );
         }
-        assert!(std::fs::symlink_metadata(&link).expect("link").file_type().is_symlink());
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .expect("link")
+                .file_type()
+                .is_symlink()
+        );
         let err = write_atomically(&dir, b"x").expect_err("a folder");
         assert!(err.to_string().contains("folder"), "{err}");
-        assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 2, "no temporary left");
+        assert_eq!(
+            std::fs::read_dir(&dir).expect("dir").count(),
+            2,
+            "no temporary left"
+        );
         std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 
@@ -386,7 +411,12 @@ mod tests {
         std::os::unix::fs::symlink(&target, &link).expect("symlink");
         write_atomically(&link, b"new").expect("written through the link");
         assert_eq!(std::fs::read(&target).expect("read"), b"new");
-        assert!(std::fs::symlink_metadata(&link).expect("link").file_type().is_symlink());
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .expect("link")
+                .file_type()
+                .is_symlink()
+        );
         let dangling = dir.join("dangling");
         std::os::unix::fs::symlink(dir.join("nowhere"), &dangling).expect("symlink");
         assert!(write_atomically(&dangling, b"x").is_err());
@@ -408,13 +438,17 @@ mod tests {
         if Path::new("/proc/self").exists() {
             assert!(!stale.exists(), "a dead writer's temporary file is removed");
         }
-        assert!(live.exists() && other.exists(), "only this path's dead temporaries go");
+        assert!(
+            live.exists() && other.exists(),
+            "only this path's dead temporaries go"
+        );
         std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 
     #[test]
     fn huge_and_tiny_quaternions_keep_their_rotation() {
-        let expected = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(0.5, 0.5, 0.5, 0.5));
+        let expected =
+            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(0.5, 0.5, 0.5, 0.5));
         for scale in [1e200, 1e-200, 1.0, f64::MAX / 2.0] {
             let q = unit_quaternion(0.5 * scale, 0.5 * scale, 0.5 * scale, 0.5 * scale).expect("a rotation");
             assert!(q.angle_to(&expected) < 1e-12, "scale {scale}: {q:?}");

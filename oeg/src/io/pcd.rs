@@ -402,7 +402,11 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
     ))
 }
 
-fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
+/// Reads a point cloud from its bytes (`path` names it in errors).
+///
+/// # Errors
+/// As [`read_pcd`], but for reading the file.
+pub fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
     let header = parse_header(path, data)?;
     let xyz: Vec<usize> = ["x", "y", "z"]
         .iter()
@@ -677,7 +681,10 @@ mod tests {
         PcdCloud {
             width: 4,
             height: 3,
-            viewpoint: Isometry3::from_parts(Translation3::new(1.0, 2.0, 0.5), nalgebra::UnitQuaternion::identity()),
+            viewpoint: Isometry3::from_parts(
+                Translation3::new(1.0, 2.0, 0.5),
+                nalgebra::UnitQuaternion::identity(),
+            ),
             points,
         }
     }
