@@ -1,5 +1,10 @@
 //! `oeg record` and the replay of its logs through `oeg map`.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use common::{oeg_with_threads, temp_dir};

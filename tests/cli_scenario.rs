@@ -1,5 +1,10 @@
 //! `oeg validate` and `oeg preview` through the built binary.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use common::{oeg, temp_dir};

@@ -1,6 +1,11 @@
 //! `oeg sweep` end to end: plan, run, resume after SIGKILL, shards and merge, report, generated scenes that
 //! `oeg run` reproduces, and bad input.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use std::path::{Path, PathBuf};

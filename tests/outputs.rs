@@ -2,6 +2,11 @@
 //! given as `--out` is refused and left untouched; a run killed at any moment leaves the previous results or
 //! none, never a mix; `oeg suite` runs a scenario named twice once, and its failed rows measure nothing.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use common::{oeg, root, temp_dir};

@@ -7,6 +7,11 @@
 //! minute and a half in the test build on a 2-core machine (two scenarios at once), well inside CI's limit, so
 //! no reduced mode is needed.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use common::{oeg, root, temp_dir};

@@ -88,6 +88,10 @@ impl Staged {
     /// # Errors
     /// [`EvalError::Io`] naming the folder when the output folder changed into something that may not be
     /// replaced while the job ran, or a rename fails (the staging folder is then removed).
+    #[expect(
+        clippy::disallowed_methods,
+        reason = "this is the one place a finished folder is moved into place"
+    )]
     pub fn commit(self) -> Result<PathBuf> {
         check_replaceable(&self.target)?;
         let aside = self.target.exists().then(|| {

@@ -5,6 +5,11 @@
 //! with noise on. Each iteration takes one scan of each sensor. Run it twice to get the per-core figure:
 //! `RAYON_NUM_THREADS=1 cargo bench -p sim --bench raycast` and with 2.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::path::PathBuf;

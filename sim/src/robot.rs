@@ -297,6 +297,7 @@ impl RobotModel {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests write their inputs directly")]
 mod tests {
     use super::*;
 

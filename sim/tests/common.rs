@@ -1,5 +1,9 @@
 //! Helpers shared by the simulation tests: scenarios written to a temporary folder.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};

@@ -1,5 +1,10 @@
 //! Simulated sensors: geometry, noise statistics, determinism.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use nalgebra::Vector3;

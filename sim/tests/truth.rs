@@ -1,5 +1,10 @@
 //! The truth raster against hand-built scenes.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use oeg::{CellRegion, GridGeometry, RobotProfile};

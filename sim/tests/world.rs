@@ -1,5 +1,10 @@
 //! The Rapier world against analytic answers.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
 mod common;
 
 use nalgebra::{Point3, Vector3};

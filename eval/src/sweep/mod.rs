@@ -8,7 +8,7 @@
 //! * [`execute`]: running, resuming, sharding; [`rows`]: the rows and tables it writes;
 //! * [`merge`]: shards back into one set of rows;
 //! * [`stats`] and [`report`]: means with confidence intervals, `summary.csv` and plots;
-//! * [`bench`]: what a study costs, and what sharing simulations saves.
+//! * [`bench`](mod@bench): what a study costs, and what sharing simulations saves.
 
 pub mod bench;
 pub mod execute;

@@ -57,7 +57,7 @@ impl GraphNode {
 /// Reads every node of a scan graph. Edges are checked for truncation and otherwise ignored.
 ///
 /// # Errors
-/// [`Error::Io`] if the file cannot be read; [`Error::Parse`] naming the byte offset, node and point for a
+/// [`Error::Io`](crate::Error::Io) if the file cannot be read; [`Error::Parse`](crate::Error::Parse) naming the byte offset, node and point for a
 /// truncated file, a wrong record tag, a count larger than the file, a non-finite number or a zero quaternion.
 pub fn read_graph(path: &Path) -> Result<Vec<GraphNode>> {
     let data = read_file(path)?;
@@ -186,7 +186,7 @@ fn read_pose(r: &mut ByteReader<'_>, what: What<'_>) -> Result<Isometry3<f64>> {
 /// returned. No edges are written.
 ///
 /// # Errors
-/// [`Error::Io`] naming the file.
+/// [`Error::Io`](crate::Error::Io) naming the file.
 pub fn write_graph(path: &Path, scans: &[Scan]) -> Result<u64> {
     let mut out = Vec::new();
     let mut num_left_out = 0u64;

@@ -656,6 +656,7 @@ pub fn write_pcd(path: &Path, cloud: &PcdCloud, encoding: PcdEncoding) -> Result
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests write their inputs directly")]
 mod tests {
     use super::*;
     use crate::scan::RayKind;

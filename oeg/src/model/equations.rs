@@ -44,7 +44,7 @@ pub fn clamp_probability(p: f32, p_min: f32, p_max: f32) -> f32 {
 
 /// Eq. 12: the elevation measurement of a sample at height `z_m` with occupancy probability `p`: `z` when
 /// `p > l_occ`, otherwise the paper's `0` (returned as `None` here; what a free sample does is
-/// [`FreeSpaceElevation`]'s choice).
+/// [`FreeSpaceElevation`](crate::FreeSpaceElevation)'s choice).
 pub fn elevation_observation(p: f32, z_m: f32, l_occ: f32) -> Option<f32> {
     (p > l_occ).then_some(z_m)
 }
@@ -91,7 +91,7 @@ pub fn kalman_fuse(prior: Option<Elevation>, h_m: f32, s2_m2: f32, process_noise
     }
 }
 
-/// The ray-bound rule of [`FreeSpaceElevation::RayBound`]: a beam that passed through the cell at height
+/// The ray-bound rule of [`FreeSpaceElevation::RayBound`](crate::FreeSpaceElevation::RayBound): a beam that passed through the cell at height
 /// `beam_z_m` caps the elevation mean there.
 pub fn ray_bound(prior: Elevation, beam_z_m: f32) -> Elevation {
     Elevation {

@@ -81,7 +81,7 @@ impl ScanHitElevation {
 
 /// Whether a free sample passing at `beam_top_m` (its highest point in the cell) may update a cell whose
 /// elevation estimate is `prior` under `rule`. (Samples deeper than `free_space_max_depth_m` below the
-/// estimate were dropped before this: see [`ModelOptions::free_space_max_depth_m`].)
+/// estimate were dropped before this: see [`ModelOptions::free_space_max_depth_m`](crate::ModelOptions::free_space_max_depth_m).)
 pub fn free_sample_informs(rule: FreeSpaceOccupancy, prior: Option<Elevation>, beam_top_m: f32) -> bool {
     match (rule, prior) {
         (FreeSpaceOccupancy::Always, _) | (FreeSpaceOccupancy::BelowElevation, None) => true,

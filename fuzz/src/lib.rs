@@ -1,0 +1,99 @@
+//! One entry point per reader, for the fuzzer and for the corpus test: each takes any bytes, and must return
+//! (an error is fine) without panicking, hanging or allocating past its bound.
+//!
+//! The targets read from memory through the same code as the files: the scan graph, the PCD cloud (ascii,
+//! binary and binary_compressed), the sensor log, the map file, the scenario TOML, the terrain PNG and the
+//! robot's URDF.
+
+use std::path::{Path, PathBuf};
+
+/// A reader under test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    /// OctoMap scan graphs (`.graph`).
+    Graph,
+    /// PCL point clouds (`.pcd`), every encoding.
+    Pcd,
+    /// The testbed's sensor logs (`.oeglog`).
+    Log,
+    /// Map files (`.oeg`), then the map's layers.
+    Map,
+    /// Scenario files (`.toml`).
+    Scenario,
+    /// Terrain heightmaps (`.png`).
+    Png,
+    /// Robot descriptions (`.urdf`).
+    Urdf,
+}
+
+/// Every target, in the order of the corpus folders.
+pub const TARGETS: [Target; 7] = [
+    Target::Graph,
+    Target::Pcd,
+    Target::Log,
+    Target::Map,
+    Target::Scenario,
+    Target::Png,
+    Target::Urdf,
+];
+
+/// The memory bound the map target loads under: small, so the fuzzer finds allocations that ignore it.
+pub const MAP_LIMIT_BYTES: u64 = 256 << 20;
+
+impl Target {
+    /// The target's name: its corpus folder and its argument to the fuzz binary.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Graph => "graph",
+            Self::Pcd => "pcd",
+            Self::Log => "log",
+            Self::Map => "map",
+            Self::Scenario => "scenario",
+            Self::Png => "png",
+            Self::Urdf => "urdf",
+        }
+    }
+
+    /// The target named `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        TARGETS.into_iter().find(|t| t.name() == name)
+    }
+}
+
+/// The folder of the committed corpus.
+pub fn corpus_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus")
+}
+
+/// Feeds `data` to `target`'s reader. Returns whether the reader accepted it (for the corpus statistics).
+pub fn run(target: Target, data: &[u8]) -> bool {
+    let path = Path::new("fuzz-input");
+    match target {
+        Target::Graph => oeg::io::graph::parse_graph(path, data).is_ok(),
+        Target::Pcd => oeg::io::pcd::parse_pcd(path, data).is_ok(),
+        Target::Log => sim::log::parse_log(path, data).is_ok(),
+        Target::Map => match oeg::io::mapfile::map_from_bytes(path, data, MAP_LIMIT_BYTES) {
+            Ok(map) => {
+                // A loaded map must be usable: its layers and decisions over what it observed.
+                if let Some(region) = map.observed_region() {
+                    let _ = map.layer(oeg::LayerKind::ElevationM, region);
+                    let _ = map.traversability_layer(
+                        region,
+                        &oeg::RobotProfile::default(),
+                        oeg::TraversabilityRule::default(),
+                    );
+                }
+                true
+            }
+            Err(_) => false,
+        },
+        Target::Scenario => std::str::from_utf8(data).is_ok_and(|text| {
+            // Beside the shipped scenarios, so `robots/pioneer3at.urdf` resolves as it does for them.
+            let at = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/fuzz-input.toml");
+            sim::scenario::load_str(&at, text).is_ok()
+        }),
+        Target::Png => sim::terrain::decode_greyscale_png(path, data).is_ok(),
+        Target::Urdf => std::str::from_utf8(data)
+            .is_ok_and(|text| sim::robot::RobotModel::from_urdf_text(path, text, "base_link").is_ok()),
+    }
+}

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The architecture's layering (ARCHITECTURE.md), checked: the map crate `oeg` knows nothing of the simulation or
+# the evaluation, and Rapier's types (rapier3d, parry3d) appear in `sim` only.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+status=0
+deps=$(cargo tree -p oeg -e normal --prefix none --format '{p}' | awk '{print $1}' | sort -u)
+for forbidden in sim oeg-eval rapier3d parry3d; do
+    if grep -qx "$forbidden" <<<"$deps"; then
+        echo "layering: oeg depends on $forbidden" >&2
+        status=1
+    fi
+done
+if hits=$(grep -rnE '\b(rapier3d|parry3d)::' --include='*.rs' oeg eval src tests fuzz); then
+    echo "layering: Rapier types outside sim:" >&2
+    echo "$hits" >&2
+    status=1
+fi
+for package in oeg-eval oeg-testbed oeg-fuzz; do
+    direct=$(cargo tree -p "$package" -e normal --depth 1 --prefix none --format '{p}' | awk '{print $1}')
+    if grep -qxE 'rapier3d|parry3d' <<<"$direct"; then
+        echo "layering: $package depends on Rapier directly" >&2
+        status=1
+    fi
+done
+[ "$status" -eq 0 ] && echo "layering: oeg stands alone; Rapier stays in sim"
+exit "$status"
