@@ -213,6 +213,50 @@ fn bad_inputs_fail_with_the_file_named_and_write_nothing() {
 }
 
 #[test]
+fn a_far_point_or_pose_is_refused_at_once_naming_the_file_and_the_node() {
+    let dir = temp_dir("map", "far");
+    let mut near = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+    near.push_hit(Point3::new(1.0, 0.0, 0.0));
+    // A point 10,000 km from its pose: the ray would span 3 million tiles.
+    let mut far_point = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+    far_point.push_hit(Point3::new(1.0e7, 0.0, 0.0));
+    // A pose 200,000 km away whose point lies 1.15 m from it: beyond the grid's index range.
+    let mut far_pose = Scan::new(Point3::new(2.0e8, 0.0, 0.5), SensorModel::laser());
+    far_pose.push_hit(Point3::new(2.0e8 + 1.15, 0.0, 0.0));
+    for (name, scan, expected) in [
+        ("far_point", far_point, "memory limit"),
+        ("far_pose", far_pose, "(200000000.000, 0.000) m"),
+    ] {
+        let input = dir.join(format!("{name}.graph"));
+        write_graph(&input, &[near.clone(), scan, near.clone()]).expect("graph");
+        let out = dir.join(format!("out_{name}"));
+        let started = std::time::Instant::now();
+        let o = oeg(&[
+            "map",
+            input.to_str().expect("utf8"),
+            "--resolution",
+            "0.05",
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{name}: {err}");
+        let file = format!("{name}.graph");
+        assert!(
+            err.contains(&file) && err.contains("node 1 (id 1)"),
+            "{name}: {err}"
+        );
+        assert!(err.contains(expected), "{name}: {err}");
+        assert!(
+            started.elapsed().as_secs_f64() < 20.0,
+            "{name}: {:?}",
+            started.elapsed()
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
 fn inspect_rejects_a_corrupt_map() {
     let dir = temp_dir("map", "inspect");
     let input = dir.join("scans.graph");

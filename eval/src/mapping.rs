@@ -69,6 +69,8 @@ pub struct MapJob {
     pub profile: RobotProfile,
     /// The traversability rule.
     pub rule: TraversabilityRule,
+    /// Copy the input files into the output folder beside the map (the demo keeps its scans there).
+    pub keep_inputs: bool,
 }
 
 /// `summary.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
@@ -146,18 +148,58 @@ pub struct MapReport {
 /// # Errors
 /// The first unreadable or malformed input, named.
 pub fn read_inputs(job: &MapJob) -> Result<Vec<Scan>> {
+    Ok(read_sourced_inputs(job)?
+        .into_iter()
+        .map(|(_, scan)| scan)
+        .collect())
+}
+
+/// Where a scan came from: its file and its place in it, for errors while it is integrated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanSource {
+    /// The input file.
+    pub file: PathBuf,
+    /// The scan's place in the file: `node 3 (id 17)`, `the cloud`, `scan 5 of sensor lidar at 1.20 s`.
+    pub place: String,
+}
+
+/// As [`read_inputs`], with each scan's [`ScanSource`].
+///
+/// # Errors
+/// As [`read_inputs`].
+pub fn read_sourced_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
     let mut scans = Vec::new();
+    let source = |path: &Path, place: String| ScanSource {
+        file: path.to_path_buf(),
+        place,
+    };
     for path in &job.inputs {
         match InputFormat::of(path)? {
-            InputFormat::Graph => scans.extend(graph::read_graph_scans(path, job.graph_sensor)?),
-            InputFormat::Pcd => scans.push(pcd::read_pcd_scan(path, &job.pcd)?),
+            InputFormat::Graph => scans.extend(graph::read_graph(path)?.iter().enumerate().map(|(k, n)| {
+                (
+                    source(path, format!("node {k} (id {})", n.id)),
+                    n.to_scan(job.graph_sensor),
+                )
+            })),
+            InputFormat::Pcd => scans.push((
+                source(path, "the cloud".into()),
+                pcd::read_pcd_scan(path, &job.pcd)?,
+            )),
             InputFormat::Log => {
                 let log = sim::log::read_log(path)?;
-                scans.extend(
-                    log.scans
-                        .iter()
-                        .map(|s| s.to_scan(job.log_pose, log.header.sensors[s.sensor_index].map_model)),
-                );
+                scans.extend(log.scans.iter().map(|s| {
+                    let sensor = &log.header.sensors[s.sensor_index];
+                    (
+                        source(
+                            path,
+                            format!(
+                                "scan {} of sensor {} at {:.3} s",
+                                s.scan_index, sensor.name, s.stamp_s
+                            ),
+                        ),
+                        s.to_scan(job.log_pose, sensor.map_model),
+                    )
+                }));
             }
         }
     }
@@ -178,14 +220,14 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     job.profile.validate()?;
     let mut map = Map::new(job.config)?;
     let read_start = Instant::now();
-    let scans = read_inputs(job)?;
+    let scans = read_sourced_inputs(job)?;
     let read_wall_time_s = read_start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    for (k, scan) in scans.iter().enumerate() {
+    for (source, scan) in &scans {
         map.integrate(scan).map_err(|e| EvalError::Input {
-            path: PathBuf::from(format!("scan {k}")),
-            message: e.to_string(),
+            path: source.file.clone(),
+            message: format!("{}: {e}", source.place),
         })?;
         progress.inc(1);
     }
@@ -195,6 +237,18 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let staged = Staged::begin(&job.out_dir)?;
     let stage = staged.dir();
     let mut files = Vec::new();
+    if job.keep_inputs {
+        for input in &job.inputs {
+            let name = input.file_name().unwrap_or_default();
+            let bytes = std::fs::read(input).map_err(|source| EvalError::Io {
+                path: input.clone(),
+                source,
+            })?;
+            let kept = stage.join(name);
+            write_bytes(&kept, &bytes)?;
+            files.push(kept);
+        }
+    }
     let map_path = stage.join("map.oeg");
     let map_bytes = mapfile::to_bytes(&map);
     write_bytes(&map_path, &map_bytes)?;
