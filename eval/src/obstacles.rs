@@ -250,11 +250,29 @@ pub fn decisions(s: &Scenario, map: &Map, truth: &TruthRaster, verdicts: &Verdic
 /// # Errors
 /// Never in practice (writing CSV into memory); a message otherwise.
 pub fn to_csv(rows: &[ObstacleDecision]) -> Result<Vec<u8>, String> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(|e| e.to_string())?;
-    }
-    w.into_inner().map_err(|e| e.to_string())
+    crate::output::csv_table(rows)
+}
+
+impl crate::output::CsvRow for ObstacleDecision {
+    const COLUMNS: &'static [&'static str] = &[
+        "index",
+        "name",
+        "kind",
+        "height_m",
+        "num_cells",
+        "num_observed_cells",
+        "true_blocked_cells",
+        "mapped_blocked_cells",
+        "uncertain_cells",
+        "unsafe_cells",
+        "overcautious_cells",
+        "true_elevation_mean_m",
+        "mapped_elevation_mean_m",
+        "true_decision",
+        "mapped_decision",
+        "decision",
+        "decision_right",
+    ];
 }
 
 #[cfg(test)]

@@ -101,6 +101,10 @@ pub fn unsafe_path_cells(
         .collect())
 }
 
+impl crate::output::CsvRow for PlanRow {
+    const COLUMNS: &'static [&'static str] = &["path", "step", "x_m", "y_m", "unsafe_cell"];
+}
+
 /// One row of `plan.csv`: a cell of a planned path.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PlanRow {
@@ -140,15 +144,7 @@ pub fn rows(check: &PlanCheck, geometry: &oeg::GridGeometry) -> Vec<PlanRow> {
 /// # Errors
 /// A CSV writer failure, as text.
 pub fn to_csv(rows: &[PlanRow]) -> std::result::Result<Vec<u8>, String> {
-    let mut w = csv::WriterBuilder::new()
-        .has_headers(false)
-        .from_writer(Vec::new());
-    w.write_record(["path", "step", "x_m", "y_m", "unsafe_cell"])
-        .map_err(|e| e.to_string())?;
-    for r in rows {
-        w.serialize(r).map_err(|e| e.to_string())?;
-    }
-    w.into_inner().map_err(|e| e.to_string())
+    crate::output::csv_table(rows)
 }
 
 /// The path's cell centres as world points, rounded to the micrometre (`crate::output::round_m`): the
@@ -290,13 +286,13 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
 /// `path.csv` of `oeg plan`: a header and one `step,x_m,y_m` row per path cell (the header alone without a
 /// path).
 fn path_csv_bytes(plan: Option<&Plan>, geometry: &oeg::GridGeometry) -> std::result::Result<Vec<u8>, String> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(["step", "x_m", "y_m"])
-        .map_err(|e| e.to_string())?;
-    for (step, (x, y)) in plan.iter().flat_map(|p| polyline(p, geometry)).enumerate() {
-        w.serialize((step, x, y)).map_err(|e| e.to_string())?;
-    }
-    w.into_inner().map_err(|e| e.to_string())
+    crate::output::csv_bytes(
+        &["step", "x_m", "y_m"],
+        plan.iter()
+            .flat_map(|p| polyline(p, geometry))
+            .enumerate()
+            .map(|(step, (x, y))| (step, x, y)),
+    )
 }
 
 #[cfg(test)]

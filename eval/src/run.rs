@@ -388,6 +388,20 @@ fn write_report(
     Ok(files)
 }
 
+impl crate::output::CsvRow for ComparisonRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "model",
+        "unsafe_cells",
+        "overcautious_cells",
+        "uncertain_cells",
+        "plan_found",
+        "plan_unsafe_cells",
+        "plan_length_ratio",
+        "elevation_within_2sigma",
+        "elevation_rmse_m",
+    ];
+}
+
 /// One row of `comparison.csv`: one model's decisions on the same sensor log.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ComparisonRow {
@@ -435,16 +449,9 @@ fn write_comparison(
         })
         .collect();
     let csv_path = out_dir.join("comparison.csv");
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in &rows {
-        w.serialize(r).map_err(|e| EvalError::Input {
-            path: csv_path.clone(),
-            message: e.to_string(),
-        })?;
-    }
-    let bytes = w.into_inner().map_err(|e| EvalError::Input {
+    let bytes = crate::output::csv_table(&rows).map_err(|message| EvalError::Input {
         path: csv_path.clone(),
-        message: e.to_string(),
+        message,
     })?;
     write_bytes(&csv_path, &bytes)?;
     let figures: Vec<crate::render::Figure> = runs

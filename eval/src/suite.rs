@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
-use crate::output::{Staged, write_bytes, write_json};
+use crate::output::{CsvRow, Staged, csv_table, write_bytes, write_json};
 use crate::progress::Progress;
 use crate::run::{RunOptions, run};
 
@@ -44,6 +44,24 @@ pub struct SuiteRow {
     pub wall_time_s: f64,
     /// Failed expectations, or the error, `; `-separated.
     pub problems: String,
+}
+
+impl CsvRow for SuiteRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "scenario",
+        "file",
+        "status",
+        "coverage",
+        "elevation_rmse_m",
+        "unsafe_step_cells",
+        "overcautious_step_cells",
+        "unsafe_clearance_cells",
+        "overcautious_clearance_cells",
+        "plan_length_ratio",
+        "plan_unsafe_cells",
+        "wall_time_s",
+        "problems",
+    ];
 }
 
 /// The scenario files named by `paths`: files as given, folders' `*.toml` files sorted by name. A file named
@@ -138,16 +156,9 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
                 .collect()
         })
     };
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in &rows {
-        w.serialize(r).map_err(|e| EvalError::Input {
-            path: out_dir.join("suite.csv"),
-            message: e.to_string(),
-        })?;
-    }
-    let bytes = w.into_inner().map_err(|e| EvalError::Input {
+    let bytes = csv_table(&rows).map_err(|message| EvalError::Input {
         path: out_dir.join("suite.csv"),
-        message: e.to_string(),
+        message,
     })?;
     write_bytes(&stage.join("suite.csv"), &bytes)?;
     write_json(&stage.join("suite.json"), &rows)?;

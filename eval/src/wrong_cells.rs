@@ -79,10 +79,11 @@ pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<W
 /// # Errors
 /// Never in practice (writing CSV into memory); a message otherwise.
 pub fn to_csv(rows: &[WrongCell]) -> Result<Vec<u8>, String> {
-    let mut w = csv::WriterBuilder::new()
-        .has_headers(false)
-        .from_writer(Vec::new());
-    w.write_record([
+    crate::output::csv_table(rows)
+}
+
+impl crate::output::CsvRow for WrongCell {
+    const COLUMNS: &'static [&'static str] = &[
         "x_m",
         "y_m",
         "error",
@@ -95,12 +96,7 @@ pub fn to_csv(rows: &[WrongCell]) -> Result<Vec<u8>, String> {
         "true_step_m",
         "true_step_blocked",
         "true_structure_gap_m",
-    ])
-    .map_err(|e| e.to_string())?;
-    for r in rows {
-        w.serialize(r).map_err(|e| e.to_string())?;
-    }
-    w.into_inner().map_err(|e| e.to_string())
+    ];
 }
 
 #[cfg(test)]

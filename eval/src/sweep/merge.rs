@@ -6,7 +6,7 @@ use serde_json::Value as Json;
 
 use super::rows::{read_record, row_path, write_row_tables};
 use crate::error::{EvalError, Result};
-use crate::output::{create_dir, write_bytes};
+use crate::output::{Staged, write_bytes};
 
 /// What a merge found.
 #[derive(Debug, Clone, PartialEq)]
@@ -123,13 +123,15 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
             ),
         });
     }
-    create_dir(out)?;
-    let plan_path = out.join("plan.json");
+    let staged = Staged::begin(out)?;
+    let plan_path = staged.dir().join("plan.json");
     let mut bytes = serde_json::to_vec_pretty(&plan).unwrap_or_default();
     bytes.push(b'\n');
     write_bytes(&plan_path, &bytes)?;
     let mut files = vec![plan_path];
-    files.extend(write_row_tables(&plan_axes(&plan), &rows, out)?);
+    files.extend(write_row_tables(&plan_axes(&plan), &rows, staged.dir())?);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
     Ok(MergeSummary {
         num_runs: ids.len(),
         files,

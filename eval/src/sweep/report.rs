@@ -67,6 +67,21 @@ pub struct SummaryRow {
     pub ci95_high: Option<f64>,
 }
 
+impl crate::output::CsvRow for SummaryRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "axis",
+        "value",
+        "line",
+        "metric",
+        "interval",
+        "n",
+        "mean",
+        "std",
+        "ci95_low",
+        "ci95_high",
+    ];
+}
+
 struct Axis {
     key: String,
     numeric: bool,
@@ -323,16 +338,9 @@ pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
         write_bytes(&path, &chart.to_png())?;
         files.push(path);
     }
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in &summary {
-        w.serialize(r).map_err(|e| EvalError::Input {
-            path: dir.join("summary.csv"),
-            message: e.to_string(),
-        })?;
-    }
-    let bytes = w.into_inner().map_err(|e| EvalError::Input {
+    let bytes = crate::output::csv_table(&summary).map_err(|message| EvalError::Input {
         path: dir.join("summary.csv"),
-        message: e.to_string(),
+        message,
     })?;
     let path = dir.join("summary.csv");
     write_bytes(&path, &bytes)?;

@@ -244,18 +244,15 @@ fn to_csv<'a>(
         }
     }
     columns.extend(last.iter().copied());
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(&columns).map_err(|e| e.to_string())?;
-    for r in rows {
-        let cells: Vec<String> = columns
+    let records = rows.map(|r| {
+        columns
             .iter()
             .map(|c| match &r[*c] {
                 Json::Null => String::new(),
                 Json::String(s) => s.clone(),
                 other => other.to_string(),
             })
-            .collect();
-        w.write_record(&cells).map_err(|e| e.to_string())?;
-    }
-    w.into_inner().map_err(|e| e.to_string())
+            .collect::<Vec<String>>()
+    });
+    crate::output::csv_bytes(&columns, records)
 }
