@@ -115,3 +115,50 @@ fn the_documented_example_validates() {
     let o = oeg(&["validate", path.to_str().expect("utf8")]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn validate_refuses_expectations_that_name_no_metric_or_can_never_be_met() {
+    let dir = temp_dir("scn", "expectations");
+    let text = std::fs::read_to_string(scenarios_dir().join("thin_pole.toml"))
+        .expect("scenario")
+        .replace(
+            "robots/pioneer3at.urdf",
+            scenarios_dir()
+                .join("robots/pioneer3at.urdf")
+                .to_str()
+                .expect("utf8"),
+        );
+    let cases = [
+        (
+            "unknown",
+            "unsafe_cellz = { max = 0 }",
+            "`unsafe_cellz` is not a metric",
+        ),
+        ("absurd", "occupancy_brier = { min = 1.5 }", "can never be met"),
+        ("negative", "num_scans = { max = -1 }", "can never be met"),
+    ];
+    for (name, line, expected) in cases {
+        let path = dir.join(format!("{name}.toml"));
+        let edited = text.replace("[expectations]\n", &format!("[expectations]\n{line}\n"));
+        assert_ne!(edited, text, "the scenario has expectations");
+        std::fs::write(&path, &edited).expect("write");
+        let line_no = edited.lines().position(|l| l == line).expect("the line") + 1;
+        let (path, out) = (path.to_str().expect("utf8"), dir.join("out"));
+        let out = out.to_str().expect("utf8");
+        for (command, args) in [
+            ("validate", vec!["validate", path]),
+            ("run", vec!["run", path, "--out", out]),
+        ] {
+            let o = oeg(&args);
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{name} {command}: {stderr}");
+            assert!(stderr.contains(expected), "{name} {command}: {stderr}");
+            let place = format!("{name}.toml:{line_no}:");
+            assert!(
+                stderr.contains(&place),
+                "{name} {command}: expected {place} in {stderr}"
+            );
+        }
+    }
+    assert!(!dir.join("out").exists(), "nothing written");
+}

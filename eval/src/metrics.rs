@@ -229,6 +229,51 @@ impl std::fmt::Display for FailedExpectation {
     }
 }
 
+/// The values a metric can take: fractions and flags lie in [0, 1], the elevation bias is any number, every
+/// other metric (counts, errors, lengths, ratios) is at least 0.
+pub fn metric_domain(name: &str) -> (f64, f64) {
+    match name {
+        "coverage"
+        | "elevation_within_2sigma"
+        | "occupancy_brier"
+        | "plan_found"
+        | "truth_plan_found"
+        | "expectations_passed" => (0.0, 1.0),
+        "elevation_bias_m" => (f64::NEG_INFINITY, f64::INFINITY),
+        _ => (0.0, f64::INFINITY),
+    }
+}
+
+/// What is wrong with a scenario's `[expectations]`, as `(metric, message)`: a name that is no metric, or a
+/// range the metric can never meet (outside [`metric_domain`]). `oeg validate` and `oeg run` both ask.
+pub fn expectation_problem(
+    expectations: &BTreeMap<String, sim::scenario::Expectation>,
+) -> Option<(String, String)> {
+    let known = metric_names();
+    for (name, e) in expectations {
+        if !known.contains(name) {
+            return Some((
+                name.clone(),
+                format!("`{name}` is not a metric; metrics: {}", known.join(", ")),
+            ));
+        }
+        let (lo, hi) = metric_domain(name);
+        let impossible = e.min.is_some_and(|m| m > hi) || e.max.is_some_and(|m| m < lo);
+        if impossible {
+            let range = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+            return Some((
+                name.clone(),
+                format!(
+                    "`{name}` takes values in [{lo}, {hi}], so [{}, {}] can never be met",
+                    range(e.min),
+                    range(e.max)
+                ),
+            ));
+        }
+    }
+    None
+}
+
 /// The names of every metric an expectation may name.
 pub fn metric_names() -> Vec<String> {
     numeric(&compute_empty()).into_keys().collect()

@@ -44,6 +44,7 @@ pub fn describe(loaded: &LoadedScenario) -> String {
 /// The scenario's error (file, line, column, what was expected).
 pub fn validate(path: &Path) -> Result<LoadedScenario> {
     let loaded = scenario::load(path)?;
+    crate::run::check_expectations(&loaded, &loaded.source.text)?;
     World::new(&loaded)?;
     Ok(loaded)
 }

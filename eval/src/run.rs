@@ -105,17 +105,29 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
     if let Some(seed) = options.seed {
         loaded.scenario.seed = seed;
     }
-    let known = metrics::metric_names();
-    if let Some(unknown) = loaded.scenario.expectations.keys().find(|k| !known.contains(k)) {
-        return Err(EvalError::Input {
-            path: path.clone(),
-            message: format!(
-                "[expectations] names an unknown metric `{unknown}`; metrics: {}",
-                known.join(", ")
-            ),
-        });
-    }
+    check_expectations(&loaded, &text)?;
     Ok(loaded)
+}
+
+/// Refuses `[expectations]` that name no metric or can never be met, at their place in the file's `text`.
+///
+/// # Errors
+/// [`EvalError::At`] naming the file, line and column.
+pub fn check_expectations(loaded: &scenario::LoadedScenario, text: &str) -> Result<()> {
+    match metrics::expectation_problem(&loaded.scenario.expectations) {
+        None => Ok(()),
+        Some((name, message)) => Err(EvalError::At {
+            path: loaded.source.path.clone(),
+            position: scenario::position_of(
+                text,
+                &[
+                    scenario::KeySeg::Key("expectations"),
+                    scenario::KeySeg::Key(&name),
+                ],
+            ),
+            message: format!("expectations.{name}: {message}"),
+        }),
+    }
 }
 
 /// A scenario error's message without its `file:line:column` (which would point into a rewritten text).
