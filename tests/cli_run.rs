@@ -248,7 +248,7 @@ fn bad_overrides_and_unknown_metrics_are_clear_errors() {
         (vec!["--set", "map.resolution_m=-1"], "resolution_m"),
         (
             vec!["--set", "expectations.speed={ max = 1 }"],
-            "unknown metric `speed`",
+            "`speed` is not a metric",
         ),
         (vec!["--set", "name.first=1"], "is a value, not a table"),
         (

@@ -116,17 +116,22 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
 pub fn check_expectations(loaded: &scenario::LoadedScenario, text: &str) -> Result<()> {
     match metrics::expectation_problem(&loaded.scenario.expectations) {
         None => Ok(()),
-        Some((name, message)) => Err(EvalError::At {
-            path: loaded.source.path.clone(),
-            position: scenario::position_of(
-                text,
-                &[
-                    scenario::KeySeg::Key("expectations"),
-                    scenario::KeySeg::Key(&name),
-                ],
-            ),
-            message: format!("expectations.{name}: {message}"),
-        }),
+        Some((name, message)) => {
+            // The place in the file, when the file (not a `--set`) holds the expectation.
+            let in_file = toml::from_str::<toml::Table>(text)
+                .ok()
+                .and_then(|doc| doc.get("expectations")?.get(&name).cloned())
+                .is_some();
+            let at = [
+                scenario::KeySeg::Key("expectations"),
+                scenario::KeySeg::Key(&name),
+            ];
+            Err(EvalError::At {
+                path: loaded.source.path.clone(),
+                position: in_file.then(|| scenario::position_of(text, &at)).flatten(),
+                message: format!("expectations.{name}: {message}"),
+            })
+        }
     }
 }
 
