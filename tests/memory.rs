@@ -1,0 +1,120 @@
+//! The memory bound is real: under an address-space limit (`ulimit -v`) 10 % above the default map bound
+//! (plus what the program needs before it maps anything), `oeg map` on an input that needs more than the bound
+//! fails with the memory-limit error and never aborts.
+
+mod common;
+
+use common::temp_dir;
+use std::process::Command;
+
+use nalgebra::Point3;
+use oeg::{Scan, SensorModel};
+
+/// The address space the program takes before it maps anything (the binary, thread stacks, allocator
+/// arenas), measured as the smallest `ulimit -v` under which it maps a tiny input, in KiB.
+fn baseline_kib(input: &std::path::Path, out: &std::path::Path) -> Option<u64> {
+    let exe = env!("CARGO_BIN_EXE_oeg");
+    let ok = |kib: u64| {
+        let _ = std::fs::remove_dir_all(out);
+        Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v {kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\"",
+            ))
+            .args([exe, input.to_str()?, out.to_str()?])
+            .output()
+            .ok()
+            .map(|o| o.status.success())
+    };
+    let (mut lo, mut hi) = (16 * 1024, 4 * 1024 * 1024);
+    if ok(hi) != Some(true) {
+        return None;
+    }
+    while hi - lo > 8 * 1024 {
+        let mid = (lo + hi) / 2;
+        if ok(mid) == Some(true) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(hi)
+}
+
+#[test]
+fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
+    let dir = temp_dir("memory", "ulimit");
+    // A tiny input, for the baseline.
+    let tiny = dir.join("tiny.graph");
+    let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+    scan.push_hit(Point3::new(2.0, 0.0, 0.0));
+    oeg::io::graph::write_graph(&tiny, &[scan]).expect("graph");
+    let Some(base) = baseline_kib(&tiny, &dir.join("tiny_out")) else {
+        println!("skipped: `sh -c ulimit -v` is not available here");
+        return;
+    };
+    // 60 rays of 12 km in a fan: together they need more than the 4 GiB bound, each alone far less.
+    let spread = dir.join("spread.graph");
+    let scans: Vec<Scan> = (0..60)
+        .map(|k| {
+            let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+            let a = f64::from(k) * 0.1;
+            scan.push_hit(Point3::new(12_000.0 * a.cos(), 12_000.0 * a.sin(), 0.0));
+            scan
+        })
+        .collect();
+    oeg::io::graph::write_graph(&spread, &scans).expect("graph");
+    let bound_kib = oeg::DEFAULT_MEMORY_LIMIT_BYTES / 1024;
+    let limit_kib = base + bound_kib + bound_kib / 10;
+    let out = dir.join("out");
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\""
+        ))
+        .args([
+            env!("CARGO_BIN_EXE_oeg"),
+            spread.to_str().expect("utf8"),
+            out.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("sh runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("baseline {base} KiB, limit {limit_kib} KiB: {stderr}");
+    assert_eq!(o.status.code(), Some(1), "an error, not an abort: {stderr}");
+    assert!(
+        stderr.contains("memory limit") && stderr.contains("spread.graph"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("memory allocation") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+
+    // One corrupt far point: refused before anything is allocated, in well under a second of work.
+    let far = dir.join("far.graph");
+    let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+    scan.push_hit(Point3::new(100_000.0, 0.0, 0.0));
+    oeg::io::graph::write_graph(&far, &[scan]).expect("graph");
+    let started = std::time::Instant::now();
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\""
+        ))
+        .args([
+            env!("CARGO_BIN_EXE_oeg"),
+            far.to_str().expect("utf8"),
+            out.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("sh runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("far.graph: node 0 (id 0)") && stderr.contains("memory limit"),
+        "{stderr}"
+    );
+    assert!(started.elapsed().as_secs_f64() < 5.0, "{:?}", started.elapsed());
+}
