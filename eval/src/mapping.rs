@@ -183,7 +183,7 @@ pub fn read_sourced_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
             })),
             InputFormat::Pcd => scans.push((
                 source(path, "the cloud".into()),
-                pcd::read_pcd_scan(path, &job.pcd)?,
+                pcd::read_pcd_scan_within(path, &job.pcd, job.config.memory_limit_bytes)?,
             )),
             InputFormat::Log => {
                 let log = sim::log::read_log(path)?;

@@ -192,8 +192,17 @@ impl LineFit {
 /// body) for a malformed header, missing x/y/z fields, a count larger than the data, a corrupt compressed
 /// block or an infinite coordinate.
 pub fn read_pcd(path: &Path) -> Result<PcdCloud> {
+    read_pcd_within(path, crate::DEFAULT_MEMORY_LIMIT_BYTES)
+}
+
+/// Reads a PCD file, refusing it before decoding if the cloud would take more than `limit_bytes` (its body,
+/// decompressed and reordered, and its points).
+///
+/// # Errors
+/// As [`read_pcd`], and [`Error::Parse`] naming the header's DATA line for a cloud over the limit.
+pub fn read_pcd_within(path: &Path, limit_bytes: u64) -> Result<PcdCloud> {
     let data = read_file(path)?;
-    parse_pcd(path, &data)
+    parse_pcd_within(path, &data, limit_bytes)
 }
 
 /// Reads a PCD file and converts it with [`PcdCloud::to_scan`].
@@ -201,7 +210,15 @@ pub fn read_pcd(path: &Path) -> Result<PcdCloud> {
 /// # Errors
 /// As [`read_pcd`] and [`PcdCloud::to_scan`]; the latter's error is given the file's name.
 pub fn read_pcd_scan(path: &Path, options: &PcdOptions) -> Result<Scan> {
-    read_pcd(path)?
+    read_pcd_scan_within(path, options, crate::DEFAULT_MEMORY_LIMIT_BYTES)
+}
+
+/// As [`read_pcd_scan`], within `limit_bytes` (see [`read_pcd_within`]).
+///
+/// # Errors
+/// As [`read_pcd_within`] and [`PcdCloud::to_scan`].
+pub fn read_pcd_scan_within(path: &Path, options: &PcdOptions, limit_bytes: u64) -> Result<Scan> {
+    read_pcd_within(path, limit_bytes)?
         .to_scan(options)
         .map_err(|e| Error::parse(path, e.to_string()))
 }
@@ -410,6 +427,14 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
 /// # Errors
 /// As [`read_pcd`], but for reading the file.
 pub fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
+    parse_pcd_within(path, data, crate::DEFAULT_MEMORY_LIMIT_BYTES)
+}
+
+/// As [`parse_pcd`], within `limit_bytes` (see [`read_pcd_within`]).
+///
+/// # Errors
+/// As [`read_pcd_within`].
+pub fn parse_pcd_within(path: &Path, data: &[u8], limit_bytes: u64) -> Result<PcdCloud> {
     let header = parse_header(path, data)?;
     let xyz: Vec<usize> = ["x", "y", "z"]
         .iter()
@@ -448,6 +473,20 @@ pub fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
                 ),
             )
         })?;
+    // The decompressed body, its reordered copy and the points (12 bytes each) live at once.
+    let needed = (body_bytes as u64)
+        .saturating_mul(2)
+        .saturating_add((header.num_points as u64).saturating_mul(12));
+    if needed > limit_bytes {
+        return Err(Error::parse(
+            path,
+            format!(
+                "line {} (the header's DATA line): {} points would need {needed} bytes, over the memory limit \
+                 of {limit_bytes} bytes",
+                header.data_line, header.num_points
+            ),
+        ));
+    }
     let body = &data[header.body_start..];
     let raw = match header.encoding {
         PcdEncoding::Ascii => return parse_ascii(path, &header, body, &xyz),
@@ -688,6 +727,19 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("oeg-pcd-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         dir.join(name)
+    }
+
+    #[test]
+    fn a_cloud_over_the_callers_memory_limit_is_refused_before_decoding() {
+        let path = temp("limit.pcd");
+        write_pcd(&path, &depth_image(), PcdEncoding::Binary).expect("written");
+        // 12 points of 12 bytes: 12 * 12 * 2 + 12 * 12 = 432 bytes at once.
+        assert!(read_pcd_within(&path, 432).is_ok());
+        let err = read_pcd_within(&path, 431).expect_err("over").to_string();
+        assert!(
+            err.contains("memory limit of 431 bytes") && err.contains("line "),
+            "{err}"
+        );
     }
 
     #[test]
