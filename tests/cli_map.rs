@@ -257,6 +257,41 @@ fn a_far_point_or_pose_is_refused_at_once_naming_the_file_and_the_node() {
 }
 
 #[test]
+fn a_failure_after_the_map_is_built_writes_nothing_not_even_the_map() {
+    // Two small scans 2.8 km apart: the sparse map is small, but the dense images over its extent (1.6 billion
+    // cells at 0.05 m) are over the memory limit. The map is built; the job fails at the images.
+    let dir = temp_dir("map", "images");
+    let input = dir.join("apart.graph");
+    let scans: Vec<Scan> = [(0.0, 0.0), (2000.0, 2000.0)]
+        .iter()
+        .map(|&(x, y)| {
+            let mut scan = Scan::new(Point3::new(x, y, 0.5), SensorModel::laser());
+            scan.push_hit(Point3::new(x + 1.0, y, 0.0));
+            scan
+        })
+        .collect();
+    write_graph(&input, &scans).expect("graph");
+    let out = dir.join("out");
+    let o = oeg(&[
+        "map",
+        input.to_str().expect("utf8"),
+        "--resolution",
+        "0.05",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("memory limit"), "{err}");
+    assert!(!out.exists(), "no map.oeg without its images");
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(left.len(), 1, "no staging left: {left:?}");
+}
+
+#[test]
 fn inspect_rejects_a_corrupt_map() {
     let dir = temp_dir("map", "inspect");
     let input = dir.join("scans.graph");

@@ -225,14 +225,14 @@ fn a_failed_expectation_exits_non_zero_and_names_it() {
             "--set",
             "duration_s=3.0",
             "--set",
-            "expectations.coverage={ min = 1.5 }",
+            "expectations.num_scans={ max = 1 }",
         ],
         None,
     );
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("expectation failed: coverage = ") && err.contains("(required >= 1.5)"),
+        err.contains("expectation failed: num_scans = ") && err.contains("(required <= 1)"),
         "{err}"
     );
     assert_eq!(metrics(&out)["expectations_passed"], false);

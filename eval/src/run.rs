@@ -117,11 +117,12 @@ pub fn check_expectations(loaded: &scenario::LoadedScenario, text: &str) -> Resu
     match metrics::expectation_problem(&loaded.scenario.expectations) {
         None => Ok(()),
         Some((name, message)) => {
-            // The place in the file, when the file (not a `--set`) holds the expectation.
+            // The place in the file, when the file (not a `--set`) holds the expectation as it was checked.
             let in_file = toml::from_str::<toml::Table>(text)
                 .ok()
                 .and_then(|doc| doc.get("expectations")?.get(&name).cloned())
-                .is_some();
+                .and_then(|v| v.try_into::<scenario::Expectation>().ok())
+                .is_some_and(|e| Some(&e) == loaded.scenario.expectations.get(&name));
             let at = [
                 scenario::KeySeg::Key("expectations"),
                 scenario::KeySeg::Key(&name),
