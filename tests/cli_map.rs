@@ -15,6 +15,18 @@ use nalgebra::Point3;
 use oeg::io::graph::write_graph;
 use oeg::{Scan, SensorModel};
 
+/// `oeg map INPUT --resolution 0.05 --out OUT`.
+fn map_at(input: &Path, out: &Path) -> Output {
+    oeg(&[
+        "map",
+        input.to_str().expect("utf8"),
+        "--resolution",
+        "0.05",
+        "--out",
+        out.to_str().expect("utf8"),
+    ])
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
@@ -231,14 +243,7 @@ fn a_far_point_or_pose_is_refused_at_once_naming_the_file_and_the_node() {
         write_graph(&input, &[near.clone(), scan, near.clone()]).expect("graph");
         let out = dir.join(format!("out_{name}"));
         let started = std::time::Instant::now();
-        let o = oeg(&[
-            "map",
-            input.to_str().expect("utf8"),
-            "--resolution",
-            "0.05",
-            "--out",
-            out.to_str().expect("utf8"),
-        ]);
+        let o = map_at(&input, &out);
         let err = stderr(&o);
         assert!(!o.status.success(), "{name}: {err}");
         let file = format!("{name}.graph");
@@ -272,14 +277,7 @@ fn a_failure_after_the_map_is_built_writes_nothing_not_even_the_map() {
         .collect();
     write_graph(&input, &scans).expect("graph");
     let out = dir.join("out");
-    let o = oeg(&[
-        "map",
-        input.to_str().expect("utf8"),
-        "--resolution",
-        "0.05",
-        "--out",
-        out.to_str().expect("utf8"),
-    ]);
+    let o = map_at(&input, &out);
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("memory limit"), "{err}");

@@ -12,33 +12,41 @@ use oeg::{Scan, SensorModel};
 
 /// The address space the program takes before it maps anything (the binary, thread stacks, allocator
 /// arenas), measured as the smallest `ulimit -v` under which it maps a tiny input, in KiB.
+/// `None` when even 4 GiB is not enough (a shell without `ulimit -v`).
 fn baseline_kib(input: &std::path::Path, out: &std::path::Path) -> Option<u64> {
-    let exe = env!("CARGO_BIN_EXE_oeg");
     let ok = |kib: u64| {
         let _ = std::fs::remove_dir_all(out);
-        Command::new("sh")
-            .arg("-c")
-            .arg(format!(
-                "ulimit -v {kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\"",
-            ))
-            .args([exe, input.to_str()?, out.to_str()?])
-            .output()
-            .ok()
-            .map(|o| o.status.success())
+        map_under_ulimit(kib, input, out).status.success()
     };
     let (mut lo, mut hi) = (16 * 1024, 4 * 1024 * 1024);
-    if ok(hi) != Some(true) {
+    if !ok(hi) {
         return None;
     }
     while hi - lo > 8 * 1024 {
         let mid = (lo + hi) / 2;
-        if ok(mid) == Some(true) {
+        if ok(mid) {
             hi = mid;
         } else {
             lo = mid;
         }
     }
     Some(hi)
+}
+
+/// `oeg map INPUT --resolution 0.05 --out OUT` under `ulimit -v LIMIT_KIB`.
+fn map_under_ulimit(limit_kib: u64, input: &std::path::Path, out: &std::path::Path) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\""
+        ))
+        .args([
+            env!("CARGO_BIN_EXE_oeg"),
+            input.to_str().expect("utf8"),
+            out.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("sh runs")
 }
 
 #[test]
@@ -50,7 +58,7 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
     scan.push_hit(Point3::new(2.0, 0.0, 0.0));
     oeg::io::graph::write_graph(&tiny, &[scan]).expect("graph");
     let Some(base) = baseline_kib(&tiny, &dir.join("tiny_out")) else {
-        println!("skipped: `sh -c ulimit -v` is not available here");
+        println!("skipped: `oeg map` does not run under `sh -c 'ulimit -v 4194304'` here");
         return;
     };
     // 60 rays of 12 km in a fan: together they need more than the 4 GiB bound, each alone far less.
@@ -67,18 +75,7 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
     let bound_kib = oeg::DEFAULT_MEMORY_LIMIT_BYTES / 1024;
     let limit_kib = base + bound_kib + bound_kib / 10;
     let out = dir.join("out");
-    let o = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "ulimit -v {limit_kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\""
-        ))
-        .args([
-            env!("CARGO_BIN_EXE_oeg"),
-            spread.to_str().expect("utf8"),
-            out.to_str().expect("utf8"),
-        ])
-        .output()
-        .expect("sh runs");
+    let o = map_under_ulimit(limit_kib, &spread, &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     println!("baseline {base} KiB, limit {limit_kib} KiB: {stderr}");
     assert_eq!(o.status.code(), Some(1), "an error, not an abort: {stderr}");
@@ -98,18 +95,7 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
     scan.push_hit(Point3::new(100_000.0, 0.0, 0.0));
     oeg::io::graph::write_graph(&far, &[scan]).expect("graph");
     let started = std::time::Instant::now();
-    let o = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "ulimit -v {limit_kib} && exec \"$0\" map \"$1\" --resolution 0.05 --out \"$2\""
-        ))
-        .args([
-            env!("CARGO_BIN_EXE_oeg"),
-            far.to_str().expect("utf8"),
-            out.to_str().expect("utf8"),
-        ])
-        .output()
-        .expect("sh runs");
+    let o = map_under_ulimit(limit_kib, &far, &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert!(

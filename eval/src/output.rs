@@ -343,19 +343,6 @@ mod tests {
             y_m: 0.0,
             unsafe_cell: false,
         });
-        check(&crate::wrong_cells::WrongCell {
-            x_m: 1.0,
-            y_m: 2.0,
-            error: "unsafe",
-            mapped: "free",
-            occupancy_probability: 0.2,
-            elevation_m: None,
-            elevation_std_m: Some(0.01),
-            true_elevation_m: 0.3,
-            true_ground_m: 0.0,
-            true_step_m: 0.3,
-            true_step_blocked: true,
-            true_structure_gap_m: None,
-        });
+        check(&crate::test_support::wrong_cell());
     }
 }

@@ -1,4 +1,4 @@
-//! Fixtures shared by the unit tests of the metrics and the planner check.
+//! Fixtures shared by the unit tests of the metrics, the planner check and the CSV tables.
 
 use oeg::{CellRegion, RobotProfile};
 use sim::truth::{CellTruth, TruthRaster};
@@ -25,5 +25,23 @@ pub(crate) fn truth_raster(region: CellRegion, cells: Vec<CellTruth>) -> TruthRa
         time_s: 0.0,
         actors: Actors::Excluded,
         cells,
+    }
+}
+
+/// A row of `wrong_cells.csv` with a missing elevation and structure gap.
+pub(crate) fn wrong_cell() -> crate::wrong_cells::WrongCell {
+    crate::wrong_cells::WrongCell {
+        x_m: 1.0,
+        y_m: 2.0,
+        error: "unsafe",
+        mapped: "free",
+        occupancy_probability: 0.2,
+        elevation_m: None,
+        elevation_std_m: Some(0.01),
+        true_elevation_m: 0.3,
+        true_ground_m: 0.0,
+        true_step_m: 0.3,
+        true_step_blocked: true,
+        true_structure_gap_m: None,
     }
 }

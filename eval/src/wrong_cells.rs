@@ -104,32 +104,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_header_names_every_field_in_order() {
-        let row = WrongCell {
-            x_m: 1.0,
-            y_m: 2.0,
-            error: "unsafe",
-            mapped: "free",
-            occupancy_probability: 0.2,
-            elevation_m: None,
-            elevation_std_m: Some(0.01),
-            true_elevation_m: 0.3,
-            true_ground_m: 0.0,
-            true_step_m: 0.3,
-            true_step_blocked: true,
-            true_structure_gap_m: None,
-        };
-        let mut w = csv::Writer::from_writer(Vec::new());
-        w.serialize(&row).expect("serialize");
-        let derived = String::from_utf8(w.into_inner().expect("flush")).expect("utf8");
-        let ours = String::from_utf8(to_csv(std::slice::from_ref(&row)).expect("csv")).expect("utf8");
-        assert_eq!(ours, derived);
+    fn a_missing_value_is_an_empty_field() {
+        let ours =
+            String::from_utf8(to_csv(&[crate::test_support::wrong_cell()]).expect("csv")).expect("utf8");
         assert_eq!(
             ours.lines().nth(1),
             Some("1.0,2.0,unsafe,free,0.2,,0.01,0.3,0.0,0.3,true,")
         );
-        let empty = String::from_utf8(to_csv(&[]).expect("csv")).expect("utf8");
-        assert_eq!(empty.lines().count(), 1);
-        assert_eq!(empty.lines().next(), derived.lines().next());
     }
 }
