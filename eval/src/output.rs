@@ -137,6 +137,16 @@ fn io_error(path: &Path, message: &str) -> EvalError {
     }
 }
 
+/// Pairs of files that mark a folder written by a job of an earlier version, before [`OUTPUT_MARKER`]: `oeg
+/// run`, `map`, `suite`, `plan` and `preview`.
+const LEGACY_OUTPUTS: [[&str; 2]; 5] = [
+    ["metrics.json", "timing.json"],
+    ["map.oeg", "summary.json"],
+    ["suite.csv", "suite.json"],
+    ["plan.json", "path.csv"],
+    ["preview_elevation.png", "preview_decisions.png"],
+];
+
 /// Whether a job may replace `target`: absent, an empty folder, or a folder a job wrote.
 fn check_replaceable(target: &Path) -> Result<()> {
     let Ok(meta) = std::fs::symlink_metadata(target) else {
@@ -155,6 +165,13 @@ fn check_replaceable(target: &Path) -> Result<()> {
         ));
     }
     if target.join(OUTPUT_MARKER).is_file() {
+        return Ok(());
+    }
+    // Folders written before the marker existed are recognised by the pair of files each job wrote.
+    if LEGACY_OUTPUTS
+        .iter()
+        .any(|pair| pair.iter().all(|f| target.join(f).is_file()))
+    {
         return Ok(());
     }
     let empty = std::fs::read_dir(target)
@@ -275,6 +292,42 @@ mod tests {
             String::from_utf8(empty).expect("utf8"),
             format!("{}\n", T::COLUMNS.join(","))
         );
+    }
+
+    #[test]
+    fn only_empty_folders_and_folders_a_job_wrote_are_replaced() {
+        let dir = std::env::temp_dir().join(format!("oeg-output-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let folder = |name: &str, files: &[&str]| {
+            let d = dir.join(name);
+            std::fs::create_dir_all(&d).expect("dir");
+            for f in files {
+                write_bytes(&d.join(f), b"x").expect("file");
+            }
+            d
+        };
+        for ok in [
+            folder("empty", &[]),
+            folder("marked", &[OUTPUT_MARKER, "notes.txt"]),
+            folder("old_run", &["metrics.json", "timing.json", "map.oeg"]),
+        ] {
+            assert!(check_replaceable(&ok).is_ok(), "{}", ok.display());
+        }
+        for refused in [
+            folder("theirs", &["thesis.tex"]),
+            folder("half", &["metrics.json"]),
+        ] {
+            let err = check_replaceable(&refused)
+                .expect_err("someone else's")
+                .to_string();
+            assert!(err.contains("no oeg job wrote"), "{err}");
+        }
+        let staged = Staged::begin(&dir.join("old_run")).expect("begins");
+        write_bytes(&staged.dir().join("metrics.json"), b"new").expect("file");
+        let target = staged.commit().expect("committed");
+        assert_eq!(std::fs::read(target.join("metrics.json")).expect("read"), b"new");
+        assert!(!target.join("map.oeg").exists(), "the folder was replaced whole");
+        std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 
     #[test]
