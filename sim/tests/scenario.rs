@@ -232,6 +232,12 @@ fn every_size_and_rate_is_bounded_so_a_valid_scenario_always_finishes() {
             17,
         ),
         (
+            "cells",
+            sensor("laser2d", "rate_hz = 1000.0\nmax_range_m = 100000.0\n"),
+            "cells of 0.05 m",
+            17,
+        ),
+        (
             "box",
             common::scenario_text(
                 "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [3.0, 0.0]\nsize_m = [1e9, 1.0, 0.1]\n",

@@ -23,6 +23,10 @@ pub const MAX_OBJECTS: usize = 10_000;
 /// simulation and the map each process a few million rays a second on one core of the reference machine, so
 /// the worst valid scenario finishes, in hours rather than never (README, "Bounds").
 pub const MAX_RAYS_PER_RUN: f64 = 2e9;
+/// The most cells a run's rays may cross, all sensors together (rays x their longest range / the cell size):
+/// 10^12. The map walks a few hundred million cells a second on one core of the reference machine
+/// (README, "Speed and memory"), so this too keeps the worst valid scenario to hours.
+pub const MAX_CELL_VISITS_PER_RUN: f64 = 1e12;
 
 /// One step of a path to a value in the file: a key or an array index.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -448,7 +452,7 @@ impl Checker<'_> {
             }
         }
         let mut names = std::collections::BTreeSet::new();
-        let mut total_rays = 0.0_f64;
+        let (mut total_rays, mut total_cells) = (0.0_f64, 0.0_f64);
         for (k, sensor) in s.sensors.iter().enumerate() {
             self.check(
                 names.insert(sensor.name.as_str()),
@@ -472,7 +476,9 @@ impl Checker<'_> {
                 }
                 Ok(spec) => {
                     let scans = (s.duration_s * spec.rate_hz + 1e-9).floor() + 1.0;
-                    total_rays += scans * spec.beams.rays_per_scan() as f64;
+                    let rays = scans * spec.beams.rays_per_scan() as f64;
+                    total_rays += rays;
+                    total_cells += rays * (spec.max_range_m / s.map.resolution_m).ceil();
                 }
             }
         }
@@ -481,6 +487,13 @@ impl Checker<'_> {
                 "the sensors would cast {total_rays:.3e} rays in {} s, over the limit of {MAX_RAYS_PER_RUN:.0e} \
                  rays per run; lower a rate, a resolution or the duration",
                 s.duration_s
+            )
+        })?;
+        self.check(total_cells <= MAX_CELL_VISITS_PER_RUN, &[K("sensors")], || {
+            format!(
+                "the sensors' rays would cross up to {total_cells:.3e} cells of {} m in {} s, over the limit of \
+                 {MAX_CELL_VISITS_PER_RUN:.0e} per run; lower a rate, a range, the duration, or use larger cells",
+                s.map.resolution_m, s.duration_s
             )
         })?;
         for (name, e) in &s.expectations {
