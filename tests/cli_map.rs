@@ -158,6 +158,16 @@ fn bad_inputs_fail_with_the_file_named_and_write_nothing() {
         b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 3\nDATA binary\n\x01\x02",
     )
     .expect("write");
+    let big = dir.join("big.graph");
+    let mut dense = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+    for k in 0..20_000 {
+        dense.push_hit(Point3::new(
+            1.0 + f64::from(k % 100) * 0.01,
+            f64::from(k / 100) * 0.01,
+            0.0,
+        ));
+    }
+    write_graph(&big, &[dense]).expect("graph");
     let unknown = dir.join("scan.xyz");
     std::fs::write(&unknown, b"1 2 3\n").expect("write");
     let input_s = input.to_str().expect("utf8");
@@ -204,6 +214,17 @@ fn bad_inputs_fail_with_the_file_named_and_write_nothing() {
                 "1".into(),
             ],
             "memory limit",
+        ),
+        // 1 MiB for a graph that needs about three times its size in memory.
+        (
+            vec![
+                big.display().to_string(),
+                "--resolution".into(),
+                "0.1".into(),
+                "--memory-limit-mib".into(),
+                "1".into(),
+            ],
+            "would take about",
         ),
     ];
     for (k, (args, expected)) in cases.into_iter().enumerate() {
