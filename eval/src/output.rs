@@ -20,8 +20,10 @@ pub const OUTPUT_MARKER: &str = ".oeg-output";
 /// staging and set-aside folders of killed jobs (whose process no longer runs) are removed by the next job
 /// that writes beside them.
 ///
-/// Only folders that a job wrote (they hold [`OUTPUT_MARKER`]) or empty folders are replaced: a folder of
-/// someone else's files is an error, before any work is done.
+/// Only folders that a job wrote (they hold [`OUTPUT_MARKER`], or, written by an earlier version, the pair of
+/// files their job always writes) or empty folders are replaced: a folder of someone else's files is an error,
+/// before any work is done. Two jobs committing the same folder at once each leave it whole: the last rename
+/// wins, and a job whose rename finds the folder changed under it fails without touching it.
 #[derive(Debug)]
 pub struct Staged {
     target: PathBuf,
