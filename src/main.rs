@@ -12,7 +12,6 @@ macro_rules! say {
     }};
 }
 
-use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use eval::mapping::{MapJob, MapReport};
 use eval::progress::Progress;
@@ -437,36 +436,21 @@ fn print_report(report: &MapReport) {
 }
 
 fn run_map(args: &MapArgs) -> anyhow::Result<()> {
-    map_job(&args.job()?)
-}
-
-fn map_job(job: &MapJob) -> anyhow::Result<()> {
-    let progress = Progress::new(0, "scans");
-    let report = eval::mapping::run(job, &progress)?;
+    let report = eval::mapping::run(&args.job()?, &Progress::new(0, "scans"))?;
     print_report(&report);
     Ok(())
 }
 
 fn run_demo(out: PathBuf) -> anyhow::Result<()> {
-    // The scans are written to a scratch folder and kept beside the map by the (all-or-nothing) map job.
-    let scratch = std::env::temp_dir().join(format!("oeg-demo-{}", std::process::id()));
-    eval::output::create_dir(&scratch)?;
-    let input = scratch.join("demo.graph");
-    eval::demo::write_demo_graph(&input).with_context(|| "writing the demonstration scans")?;
     let args = MapArgs {
-        inputs: vec![input],
+        inputs: Vec::new(),
         resolution: 0.05,
         out: out.clone(),
         overrides: vec!["map.model.max_height_m=0.5".into()],
         memory_limit_mib: oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20,
     };
-    let job = MapJob {
-        keep_inputs: true,
-        ..args.job()?
-    };
-    let result = map_job(&job);
-    let _ = std::fs::remove_dir_all(&scratch);
-    result?;
+    let report = eval::demo::run(args.job()?, &Progress::new(0, "scans"))?;
+    print_report(&report);
     say!(
         "kept the scans as {} (synthetic scans of a scene with a 3 cm and a 5 cm curb and a board at 0.35 m)",
         out.join("demo.graph").display()

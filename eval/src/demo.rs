@@ -129,6 +129,32 @@ pub fn write_demo_graph(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Maps the demo's scans with `job`'s settings into `job.out_dir`, keeping the scans there as `demo.graph`
+/// (`job.inputs` and `job.keep_inputs` are set here). The scans go through a scratch folder, removed after.
+///
+/// # Errors
+/// As [`crate::mapping::run`], and a scratch folder that cannot be written.
+pub fn run(
+    job: crate::mapping::MapJob,
+    progress: &crate::progress::Progress,
+) -> Result<crate::mapping::MapReport> {
+    let scratch = std::env::temp_dir().join(format!("oeg-demo-{}", std::process::id()));
+    crate::output::create_dir(&scratch)?;
+    let input = scratch.join("demo.graph");
+    let result = write_demo_graph(&input).and_then(|()| {
+        crate::mapping::run(
+            &crate::mapping::MapJob {
+                inputs: vec![input.clone()],
+                keep_inputs: true,
+                ..job
+            },
+            progress,
+        )
+    });
+    let _ = std::fs::remove_dir_all(&scratch);
+    result
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
