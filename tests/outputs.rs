@@ -251,7 +251,7 @@ fn a_suite_runs_a_scenario_named_twice_once_and_failed_rows_measure_nothing() {
 }
 
 #[test]
-fn staged_outputs_wait_for_no_one_and_two_suites_on_one_folder_both_finish_whole() {
+fn two_suites_on_one_folder_take_turns_and_each_leaves_it_whole() {
     let dir = temp_dir("outputs", "race");
     let out = dir.join("suite");
     let good = scene("decisions");

@@ -22,8 +22,8 @@ pub const OUTPUT_MARKER: &str = ".oeg-output";
 ///
 /// Only folders that a job wrote (they hold [`OUTPUT_MARKER`], or, written by an earlier version, the pair of
 /// files their job always writes) or empty folders are replaced: a folder of someone else's files is an error,
-/// before any work is done. Two jobs committing the same folder at once each leave it whole: the last rename
-/// wins, and a job whose rename finds the folder changed under it fails without touching it.
+/// before any work is done. Two jobs committing the same folder take turns (a lock file beside it, taken over
+/// from a killed job), so each leaves it whole and the last one's results stay.
 #[derive(Debug)]
 pub struct Staged {
     target: PathBuf,
@@ -95,6 +95,7 @@ impl Staged {
         reason = "this is the one place a finished folder is moved into place"
     )]
     pub fn commit(self) -> Result<PathBuf> {
+        let _lock = CommitLock::acquire(&self.target)?;
         check_replaceable(&self.target)?;
         let aside = self.target.exists().then(|| {
             let name = self.target.file_name().unwrap_or_default().to_string_lossy();
@@ -115,6 +116,56 @@ impl Staged {
             let _ = std::fs::remove_dir_all(aside);
         }
         Ok(self.target.clone())
+    }
+}
+
+/// Holds `.<name>.lock` beside an output folder while a job swaps it in, so two jobs never interleave their
+/// renames. The file holds the owner's process id; a lock whose process no longer runs is taken over.
+struct CommitLock {
+    path: PathBuf,
+}
+
+impl CommitLock {
+    /// How long a job waits for another job's swap (two renames) before it gives up.
+    const PATIENCE: std::time::Duration = std::time::Duration::from_secs(60);
+
+    fn acquire(target: &Path) -> Result<Self> {
+        let name = target.file_name().unwrap_or_default().to_string_lossy();
+        let path = target.with_file_name(format!(".{name}.lock"));
+        let started = std::time::Instant::now();
+        loop {
+            match std::fs::File::options().write(true).create_new(true).open(&path) {
+                Ok(mut f) => {
+                    use std::io::Write;
+                    let _ = write!(f, "{}", std::process::id());
+                    return Ok(Self { path });
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let owner = std::fs::read_to_string(&path).unwrap_or_default();
+                    let dead = owner.trim().parse::<u32>().is_ok_and(|pid| {
+                        Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{pid}")).exists()
+                    });
+                    if dead {
+                        let _ = std::fs::remove_file(&path);
+                    } else if started.elapsed() > Self::PATIENCE {
+                        return Err(io_error(
+                            &path,
+                            "another job has been putting its results in place for a minute; remove this lock \
+                             if no job is running",
+                        ));
+                    } else {
+                        std::thread::sleep(std::time::Duration::from_millis(10));
+                    }
+                }
+                Err(source) => return Err(EvalError::Io { path, source }),
+            }
+        }
+    }
+}
+
+impl Drop for CommitLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
     }
 }
 
@@ -324,11 +375,14 @@ mod tests {
                 .to_string();
             assert!(err.contains("no oeg job wrote"), "{err}");
         }
+        // A killed job's lock (no process has this id) is taken over.
+        write_bytes(&dir.join(".old_run.lock"), b"4294967295").expect("lock");
         let staged = Staged::begin(&dir.join("old_run")).expect("begins");
         write_bytes(&staged.dir().join("metrics.json"), b"new").expect("file");
         let target = staged.commit().expect("committed");
         assert_eq!(std::fs::read(target.join("metrics.json")).expect("read"), b"new");
         assert!(!target.join("map.oeg").exists(), "the folder was replaced whole");
+        assert!(!dir.join(".old_run.lock").exists(), "the lock is released");
         std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 
