@@ -246,6 +246,14 @@ fn every_size_and_rate_is_bounded_so_a_valid_scenario_always_finishes() {
             20,
         ),
         (
+            "parts",
+            common::scenario_text(&(0..101).fold(String::new(), |t, _| {
+                t + "[[obstacles]]\nkind = \"bush\"\ncenter_xy_m = [3.0, 0.0]\nradius_m = 0.5\nheight_m = 0.5\nnum_parts = 1000\n"
+            })),
+            "solid parts",
+            17,
+        ),
+        (
             "person",
             common::scenario_text(
                 "[[actors]]\nkind = \"person\"\nradius_m = 1e12\nheight_m = 1.7\nwaypoints = [[0.0, 1.0, 1.0]]\n",

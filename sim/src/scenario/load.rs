@@ -19,6 +19,9 @@ pub const MAX_DURATION_S: f64 = 86_400.0;
 pub const MAX_LENGTH_M: f64 = 100_000.0;
 /// The most obstacles and actors a scenario may list, each.
 pub const MAX_OBJECTS: usize = 10_000;
+/// The most solid parts the world may hold: an obstacle is one, a bush `num_parts` (Rapier holds each as a
+/// collider, about a kilobyte).
+pub const MAX_PARTS: usize = 100_000;
 /// The most rays a run may cast, all sensors together (rate x duration x rays per scan): 2 billion. The
 /// simulation and the map each process a few million rays a second on one core of the reference machine, so
 /// the worst valid scenario finishes, in hours rather than never (README, "Bounds").
@@ -421,6 +424,17 @@ impl Checker<'_> {
         for (k, o) in s.obstacles.iter().enumerate() {
             self.validate_obstacle(s, k, o)?;
         }
+        let parts: usize = s
+            .obstacles
+            .iter()
+            .map(|o| match o {
+                Obstacle::Bush { num_parts, .. } => *num_parts as usize,
+                _ => 1,
+            })
+            .sum();
+        self.check(parts <= MAX_PARTS, &[K("obstacles")], || {
+            format!("the obstacles hold {parts} solid parts (a bush counts its num_parts), over the limit of {MAX_PARTS}")
+        })?;
         for (k, a) in s.actors.iter().enumerate() {
             let Actor::Person {
                 waypoints,
