@@ -1,4 +1,4 @@
-//! Outputs are all or nothing and only ever replace what a job wrote: a FIFO, a file or someone else's folder
+//! Outputs are all or nothing and only ever replace what a job wrote: a FIFO, a device, a file or someone else's folder
 //! given as `--out` is refused and left untouched; a run killed at any moment leaves the previous results or
 //! none, never a mix; `oeg suite` runs a scenario named twice once, and its failed rows measure nothing.
 
@@ -60,7 +60,7 @@ fn copy_dir(from: &Path, to: &Path) {
 }
 
 #[test]
-fn record_refuses_a_fifo_as_its_output_and_leaves_it_a_fifo() {
+fn record_refuses_a_fifo_a_device_or_a_link_to_one_and_leaves_them_alone() {
     use std::os::unix::fs::FileTypeExt;
     let dir = temp_dir("outputs", "fifo");
     let fifo = dir.join("pipe");
@@ -74,8 +74,11 @@ fn record_refuses_a_fifo_as_its_output_and_leaves_it_a_fifo() {
     }
     let link = dir.join("link");
     std::os::unix::fs::symlink(&fifo, &link).expect("symlink");
+    // A link to a device: refusing it never touches the device (a rename would only replace the link).
+    let device = dir.join("device");
+    std::os::unix::fs::symlink("/dev/null", &device).expect("symlink");
     let scenario = scene("decisions");
-    for out in [&fifo, &link] {
+    for out in [&fifo, &link, &device] {
         let o = oeg(&[
             "record",
             scenario.to_str().expect("utf8"),
@@ -84,12 +87,21 @@ fn record_refuses_a_fifo_as_its_output_and_leaves_it_a_fifo() {
         ]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{stderr}");
-        assert!(stderr.contains("FIFO") && !stderr.contains("wrote"), "{stderr}");
+        assert!(
+            stderr.contains("a device, a FIFO or a socket") && !stderr.contains("wrote"),
+            "{stderr}"
+        );
         assert!(std::fs::metadata(&fifo).expect("there").file_type().is_fifo());
     }
+    assert!(
+        std::fs::symlink_metadata(&device)
+            .expect("link")
+            .file_type()
+            .is_symlink()
+    );
     assert_eq!(
         std::fs::read_dir(&dir).expect("dir").count(),
-        2,
+        3,
         "nothing else written"
     );
 }
