@@ -1,6 +1,7 @@
-//! Outputs are all or nothing and only ever replace what a job wrote: a FIFO, a device, a file or someone else's folder
-//! given as `--out` is refused and left untouched; a run killed at any moment leaves the previous results or
-//! none, never a mix; `oeg suite` runs a scenario named twice once, and its failed rows measure nothing.
+//! Outputs are all or nothing and only ever replace what a job wrote: a FIFO, a device, a file or someone
+//! else's folder given as `--out` is refused and left untouched; a run killed at any moment leaves the previous
+//! results or none, never a mix; `oeg suite` runs a scenario named twice once, and its failed rows measure
+//! nothing.
 
 #![allow(
     clippy::disallowed_methods,
