@@ -16,9 +16,9 @@ pub const OUTPUT_MARKER: &str = ".oeg-output";
 /// moves it into place with two renames (the previous output aside, the new one in), then deletes the
 /// previous output. So a reader of the output folder sees the complete previous results or the complete new
 /// ones, and a job killed at any point leaves the previous results intact and consistent, or (killed between
-/// the two renames) no output folder at all. A job that fails or is dropped removes its staging folder; the
-/// staging and set-aside folders of killed jobs (whose process no longer runs) are removed by the next job
-/// that writes beside them.
+/// the two renames) no output folder, with the previous one set aside; the next job writing there puts it back
+/// before it starts. A job that fails or is dropped removes its staging folder; the staging of killed jobs
+/// (whose process no longer runs) is removed by the next job that writes beside them.
 ///
 /// Only folders that a job wrote (they hold [`OUTPUT_MARKER`], or, written by an earlier version, the pair of
 /// files their job always writes) or empty folders are replaced: a folder of someone else's files is an error,
@@ -49,10 +49,21 @@ impl Staged {
             _ => PathBuf::from("."),
         };
         create_dir(&parent)?;
-        for kind in ["staging", "old"] {
-            for stale in oeg::io::stale_owners(&parent, &format!(".{name}.{kind}."), "") {
-                let _ = std::fs::remove_dir_all(parent.join(stale));
-            }
+        // A job killed between the two renames of its swap left no output folder and the previous one aside:
+        // put it back, so the previous results stay whatever this job does.
+        let mut set_aside = oeg::io::stale_owners(&parent, &format!(".{name}.old."), "");
+        set_aside.sort();
+        if !target.exists()
+            && let Some(previous) = set_aside.pop()
+        {
+            let _ = restore(&parent.join(previous), target);
+        }
+        for stale in
+            set_aside
+                .into_iter()
+                .chain(oeg::io::stale_owners(&parent, &format!(".{name}.staging."), ""))
+        {
+            let _ = std::fs::remove_dir_all(parent.join(stale));
         }
         let staging = parent.join(format!(".{name}.staging.{}", unique_suffix()));
         create_dir(&staging)?;
@@ -174,6 +185,15 @@ impl Drop for Staged {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.staging);
     }
+}
+
+/// Moves a set-aside output folder back into place.
+#[expect(
+    clippy::disallowed_methods,
+    reason = "putting a job's own previous output back"
+)]
+fn restore(aside: &Path, target: &Path) -> std::io::Result<()> {
+    std::fs::rename(aside, target)
 }
 
 /// `<pid>.<n>`, `n` counting up within the process: unique among the jobs of every running process.
@@ -383,6 +403,16 @@ mod tests {
         assert_eq!(std::fs::read(target.join("metrics.json")).expect("read"), b"new");
         assert!(!target.join("map.oeg").exists(), "the folder was replaced whole");
         assert!(!dir.join(".old_run.lock").exists(), "the lock is released");
+        // Killed between its two renames: no output folder, the previous one aside. The next job puts it back
+        // first, so its own failure leaves the previous results.
+        let aside = folder(".killed.old.4294967295.0", &[OUTPUT_MARKER, "metrics.json"]);
+        let failed = Staged::begin(&dir.join("killed")).expect("begins");
+        drop(failed);
+        assert!(
+            dir.join("killed/metrics.json").is_file(),
+            "the previous results are back"
+        );
+        assert!(!aside.exists());
         std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 
