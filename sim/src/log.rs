@@ -92,7 +92,7 @@ impl LogWriter {
     /// Starts a log at `path`.
     ///
     /// # Errors
-    /// [`SimError::Io`] naming the file.
+    /// [`SimError::Map`] naming the file: it cannot be created, or it is not a regular file (a device, a FIFO).
     pub fn create(path: &Path, header: &LogHeader) -> Result<Self> {
         let json = serde_json_bytes(header);
         Ok(Self {
@@ -105,7 +105,7 @@ impl LogWriter {
     /// Appends one scan.
     ///
     /// # Errors
-    /// [`SimError::Io`] naming the file.
+    /// [`SimError::Map`] naming the file.
     pub fn push(&mut self, scan: &SensorScan) -> Result<()> {
         let mut buf = Vec::with_capacity(1 + SCAN_FIXED_BYTES + scan.rays.len() * RAY_BYTES);
         buf.push(1u8);
@@ -139,7 +139,7 @@ impl LogWriter {
     /// Writes the end record and moves the log into place.
     ///
     /// # Errors
-    /// [`SimError::Io`] naming the file.
+    /// [`SimError::Map`] naming the file.
     pub fn finish(mut self) -> Result<u64> {
         self.out.write(&[0u8])?;
         self.out.write(&self.num_scans.to_le_bytes())?;
