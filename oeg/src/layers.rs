@@ -89,8 +89,13 @@ impl<T: Copy> Raster<T> {
 pub type Layer = Raster<f32>;
 
 impl Map {
+    /// Checks a raster of `region` against the memory limit, counted with the map itself (one budget), and
+    /// returns its number of cells.
     fn check_raster_size(&self, region: &CellRegion, bytes_per_cell: u64) -> Result<usize> {
-        let bytes = region.num_cells().saturating_mul(bytes_per_cell);
+        let bytes = region
+            .num_cells()
+            .saturating_mul(bytes_per_cell)
+            .saturating_add(self.memory_bytes());
         if bytes > self.config().memory_limit_bytes {
             return Err(Error::MemoryLimit {
                 requested_bytes: bytes,

@@ -2,8 +2,8 @@
 
 use nalgebra::{Point3, Vector3};
 use oeg::{
-    CellIndex, FreeSpaceElevation, Map, MapConfig, ModelOptions, Ray, RobotProfile, Scan, ScanHitElevation,
-    SensorModel, Traversability, TraversabilityRule,
+    CellIndex, CellRegion, FreeSpaceElevation, Map, MapConfig, ModelOptions, Ray, RobotProfile, Scan,
+    ScanHitElevation, SensorModel, Traversability, TraversabilityRule,
 };
 use proptest::prelude::*;
 
@@ -252,6 +252,30 @@ fn a_map_over_its_memory_limit_is_an_error() {
         .expect_err("too big");
     assert!(matches!(err, oeg::Error::MemoryLimit { .. }), "{err}");
     assert!(map.memory_bytes() <= 1 << 20);
+}
+
+#[test]
+fn a_raster_counts_against_the_same_budget_as_the_map() {
+    let config = MapConfig {
+        memory_limit_bytes: 1 << 20,
+        ..MapConfig::new(0.05)
+    };
+    let mut map = Map::new(config).expect("valid");
+    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(10.0, 0.0, 0.0)]))
+        .expect("fits");
+    let held = map.memory_bytes();
+    assert!(held > 0 && held < 1 << 20);
+    // A square raster of f32 whose own bytes fit the limit but not beside the map: refused.
+    let side = (((1u64 << 20) - held / 2) as f64 / 4.0).sqrt() as i32;
+    let region =
+        CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(side - 1, side - 1)).expect("region");
+    assert!(region.num_cells() * 4 <= 1 << 20);
+    let err = map
+        .layer(oeg::LayerKind::ElevationM, region)
+        .expect_err("over the budget");
+    assert!(matches!(err, oeg::Error::MemoryLimit { .. }), "{err}");
+    let small = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(99, 99)).expect("region");
+    assert!(map.layer(oeg::LayerKind::ElevationM, small).is_ok());
 }
 
 #[test]
