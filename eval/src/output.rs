@@ -65,7 +65,7 @@ impl Staged {
         {
             let _ = std::fs::remove_dir_all(parent.join(stale));
         }
-        let staging = parent.join(format!(".{name}.staging.{}", unique_suffix()));
+        let staging = parent.join(format!(".{name}.staging.{}", oeg::io::unique_suffix()));
         create_dir(&staging)?;
         let marker = format!(
             "written by oeg {}; the next job writing this folder replaces it as a whole\n",
@@ -106,12 +106,12 @@ impl Staged {
         reason = "this is the one place a finished folder is moved into place"
     )]
     pub fn commit(self) -> Result<PathBuf> {
-        let _lock = CommitLock::acquire(&self.target)?;
+        let _lock = commit_lock(&self.target)?;
         check_replaceable(&self.target)?;
         let aside = self.target.exists().then(|| {
             let name = self.target.file_name().unwrap_or_default().to_string_lossy();
             self.target
-                .with_file_name(format!(".{name}.old.{}", unique_suffix()))
+                .with_file_name(format!(".{name}.old.{}", oeg::io::unique_suffix()))
         });
         if let Some(aside) = &aside {
             std::fs::rename(&self.target, aside).map_err(|source| EvalError::Io {
@@ -130,53 +130,75 @@ impl Staged {
     }
 }
 
-/// Holds `.<name>.lock` beside an output folder while a job swaps it in, so two jobs never interleave their
-/// renames. The file holds the owner's process id; a lock whose process no longer runs is taken over.
-struct CommitLock {
+/// A lock file holding its owner's process id, removed when dropped: `.<name>.lock` beside an output folder
+/// while a job swaps it in ([`Staged::commit`]), and a sweep folder's `.lock` while a sweep works in it.
+pub(crate) struct PidLock {
     path: PathBuf,
 }
 
-impl CommitLock {
-    /// How long a job waits for another job's swap (two renames) before it gives up.
-    const PATIENCE: std::time::Duration = std::time::Duration::from_secs(60);
-
-    fn acquire(target: &Path) -> Result<Self> {
-        let name = target.file_name().unwrap_or_default().to_string_lossy();
-        let path = target.with_file_name(format!(".{name}.lock"));
-        let started = std::time::Instant::now();
-        loop {
-            match std::fs::File::options().write(true).create_new(true).open(&path) {
+impl PidLock {
+    /// Tries once to take the lock at `path`. `Ok(Err(Some(pid)))`: the process `pid` holds it and runs (it may
+    /// be this one); `Ok(Err(None))`: the file names no process (being written, or corrupt). A lock whose
+    /// process is gone ([`oeg::io::process_is_gone`]) is taken over.
+    pub(crate) fn try_take(path: &Path) -> Result<std::result::Result<Self, Option<u32>>> {
+        use std::io::Write as _;
+        for _ in 0..2 {
+            match std::fs::File::options().write(true).create_new(true).open(path) {
                 Ok(mut f) => {
-                    use std::io::Write;
-                    let _ = write!(f, "{}", std::process::id());
-                    return Ok(Self { path });
+                    let _ = writeln!(f, "{}", std::process::id());
+                    return Ok(Ok(Self {
+                        path: path.to_path_buf(),
+                    }));
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let owner = std::fs::read_to_string(&path).unwrap_or_default();
-                    let dead = owner.trim().parse::<u32>().is_ok_and(|pid| {
-                        Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{pid}")).exists()
-                    });
-                    if dead {
-                        let _ = std::fs::remove_file(&path);
-                    } else if started.elapsed() > Self::PATIENCE {
-                        return Err(io_error(
-                            &path,
-                            "another job has been putting its results in place for a minute; remove this lock \
-                             if no job is running",
-                        ));
-                    } else {
-                        std::thread::sleep(std::time::Duration::from_millis(10));
+                    let holder = std::fs::read_to_string(path).unwrap_or_default();
+                    match holder.trim().parse::<u32>() {
+                        Ok(pid) if pid != std::process::id() && oeg::io::process_is_gone(pid) => {
+                            let _ = std::fs::remove_file(path);
+                        }
+                        Ok(pid) => return Ok(Err(Some(pid))),
+                        Err(_) => return Ok(Err(None)),
                     }
                 }
-                Err(source) => return Err(EvalError::Io { path, source }),
+                Err(source) => {
+                    return Err(EvalError::Io {
+                        path: path.to_path_buf(),
+                        source,
+                    });
+                }
             }
         }
+        Ok(Err(None))
     }
 }
 
-impl Drop for CommitLock {
+impl Drop for PidLock {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// How long a job waits for another job's swap of the same folder (two renames) before it gives up.
+const COMMIT_PATIENCE: std::time::Duration = std::time::Duration::from_secs(60);
+
+/// Takes `.<name>.lock` beside `target`, waiting while another job swaps the same folder, so two jobs never
+/// interleave their renames.
+fn commit_lock(target: &Path) -> Result<PidLock> {
+    let name = target.file_name().unwrap_or_default().to_string_lossy();
+    let path = target.with_file_name(format!(".{name}.lock"));
+    let started = std::time::Instant::now();
+    loop {
+        match PidLock::try_take(&path)? {
+            Ok(lock) => return Ok(lock),
+            Err(_) if started.elapsed() > COMMIT_PATIENCE => {
+                return Err(io_error(
+                    &path,
+                    "another job has been putting its results in place for a minute; remove this lock if no \
+                     job is running",
+                ));
+            }
+            Err(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
+        }
     }
 }
 
@@ -194,13 +216,6 @@ impl Drop for Staged {
 )]
 fn restore(aside: &Path, target: &Path) -> std::io::Result<()> {
     std::fs::rename(aside, target)
-}
-
-/// `<pid>.<n>`, `n` counting up within the process: unique among the jobs of every running process.
-fn unique_suffix() -> String {
-    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    format!("{}.{n}", std::process::id())
 }
 
 fn io_error(path: &Path, message: &str) -> EvalError {

@@ -19,7 +19,7 @@ use serde_json::Value as Json;
 use super::plan::{Plan, Run};
 use super::rows::{Outcome, lead_columns, metric_columns, obstacle_rows, round3, row_path, write_tables};
 use crate::error::{EvalError, Result};
-use crate::output::{create_dir, write_bytes, write_json};
+use crate::output::{PidLock, create_dir, write_bytes, write_json};
 use crate::progress::Progress;
 
 /// How to run a plan.
@@ -187,52 +187,34 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
 /// `DIR/.lock`, holding the process id, while an invocation works in a folder: two at once would clear each
 /// other's unfinished runs. A lock whose process is gone (killed) is taken over.
 struct FolderLock {
-    path: PathBuf,
+    _held: PidLock,
 }
 
 impl FolderLock {
     fn take(dir: &Path) -> Result<Self> {
-        use std::io::Write as _;
         let path = dir.join(".lock");
         for _ in 0..2 {
-            match std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&path)
-            {
-                Ok(mut f) => {
-                    let _ = writeln!(f, "{}", std::process::id());
-                    return Ok(Self { path });
+            match PidLock::try_take(&path)? {
+                Ok(lock) => return Ok(Self { _held: lock }),
+                Err(Some(pid)) if pid != std::process::id() => {
+                    return Err(EvalError::Input {
+                        path: dir.to_path_buf(),
+                        message: format!(
+                            "another `oeg sweep run` (process {pid}) works in this folder; give each shard its \
+                             own --out"
+                        ),
+                    });
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = std::fs::read_to_string(&path).unwrap_or_default();
-                    let pid = holder.trim();
-                    let alive = !pid.is_empty() && Path::new("/proc").join(pid).exists();
-                    if alive && pid != std::process::id().to_string() {
-                        return Err(EvalError::Input {
-                            path: dir.to_path_buf(),
-                            message: format!(
-                                "another `oeg sweep run` (process {pid}) works in this folder; give each shard its \
-                                 own --out"
-                            ),
-                        });
-                    }
-                    // Left by a killed invocation.
+                // Left by this process, or a lock that names no process: left by a killed invocation.
+                Err(_) => {
                     let _ = std::fs::remove_file(&path);
                 }
-                Err(source) => return Err(EvalError::Io { path, source }),
             }
         }
         Err(EvalError::Input {
             path: dir.to_path_buf(),
             message: "cannot take the folder's lock (.lock)".into(),
         })
-    }
-}
-
-impl Drop for FolderLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
     }
 }
 

@@ -151,14 +151,26 @@ pub fn output_target(path: &Path) -> Result<PathBuf> {
     }
 }
 
-/// Temporary names: `<name>.<pid>.<n>.tmp`, `n` counting up within the process, so two writers of one path,
-/// in one process or in two, never share a temporary file.
+/// Temporary names: `<name>.<pid>.<n>.tmp` ([`unique_suffix`]), so two writers of one path, in one process or
+/// in two, never share a temporary file.
 fn temporary_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(format!(".{}.tmp", unique_suffix()));
+    path.with_file_name(name)
+}
+
+/// `<pid>.<n>`, `n` counting up within the process: unique among the calls of every running process. The
+/// suffix of temporary files and staging folders, which [`stale_owners`] recognises.
+pub fn unique_suffix() -> String {
     static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(format!(".{}.{n}.tmp", std::process::id()));
-    path.with_file_name(name)
+    format!("{}.{n}", std::process::id())
+}
+
+/// Whether the process `pid` is known to have ended: Linux lists running processes under `/proc`; where it
+/// does not, no process is known to have ended.
+pub fn process_is_gone(pid: u32) -> bool {
+    Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{pid}")).exists()
 }
 
 /// Removes the temporary files (`<name>.<pid>.<n>.tmp`) that writers of `path` left behind when they were
@@ -178,11 +190,9 @@ pub fn remove_stale_temporaries(path: &Path) {
     }
 }
 
-/// Entries of `dir` named `<prefix><pid>.<n><suffix>` whose process `pid` no longer runs (Linux only).
+/// Entries of `dir` named `<prefix><pid>.<n><suffix>` (see [`unique_suffix`]) whose process `pid` is gone
+/// ([`process_is_gone`]).
 pub fn stale_owners(dir: &Path, prefix: &str, suffix: &str) -> Vec<std::ffi::OsString> {
-    if !Path::new("/proc/self").exists() {
-        return Vec::new();
-    }
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Vec::new();
     };
@@ -198,11 +208,9 @@ pub fn stale_owners(dir: &Path, prefix: &str, suffix: &str) -> Vec<std::ffi::OsS
             };
             let mut parts = rest.split('.');
             match (parts.next(), parts.next(), parts.next()) {
-                (Some(pid), Some(n), None) if n.bytes().all(|b| b.is_ascii_digit()) && !n.is_empty() => {
-                    pid.parse::<u32>().is_ok_and(|pid| {
-                        pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
-                    })
-                }
+                (Some(pid), Some(n), None) if n.bytes().all(|b| b.is_ascii_digit()) && !n.is_empty() => pid
+                    .parse::<u32>()
+                    .is_ok_and(|pid| pid != std::process::id() && process_is_gone(pid)),
                 _ => false,
             }
         })
