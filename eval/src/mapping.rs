@@ -154,17 +154,6 @@ pub struct MapReport {
     pub files: Vec<PathBuf>,
 }
 
-/// Reads every input into scans, before anything is written, so a bad input leaves no partial output.
-///
-/// # Errors
-/// The first unreadable or malformed input, named.
-pub fn read_inputs(job: &MapJob) -> Result<Vec<Scan>> {
-    Ok(read_sourced_inputs(job)?
-        .into_iter()
-        .map(|(_, scan)| scan)
-        .collect())
-}
-
 /// Where a scan came from: its file and its place in it, for errors while it is integrated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScanSource {
@@ -174,11 +163,12 @@ pub struct ScanSource {
     pub place: String,
 }
 
-/// As [`read_inputs`], with each scan's [`ScanSource`].
+/// Reads every input into scans, each with its [`ScanSource`], before anything is written, so a bad input
+/// leaves no partial output.
 ///
 /// # Errors
-/// As [`read_inputs`].
-pub fn read_sourced_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
+/// The first unreadable or malformed input, named, and inputs that would not fit the memory limit.
+pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
     let mut scans = Vec::new();
     let source = |path: &Path, place: String| ScanSource {
         file: path.to_path_buf(),
@@ -187,15 +177,20 @@ pub fn read_sourced_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
     // Every scan is held until the map is built: a few times the inputs' bytes (`InputFormat::memory_factor`).
     // Refused before anything is read when that is over the memory limit.
     let limit = job.config.memory_limit_bytes;
+    let formats = job
+        .inputs
+        .iter()
+        .map(|path| InputFormat::of(path))
+        .collect::<Result<Vec<_>>>()?;
     let mut held = 0_u64;
-    for path in &job.inputs {
+    for (path, format) in job.inputs.iter().zip(&formats) {
         let bytes = std::fs::metadata(path)
             .map_err(|source| EvalError::Io {
                 path: path.clone(),
                 source,
             })?
             .len();
-        let factor = InputFormat::of(path)?.memory_factor();
+        let factor = format.memory_factor();
         held = held.saturating_add(bytes.saturating_mul(factor));
         if held > limit {
             return Err(EvalError::Input {
@@ -208,8 +203,8 @@ pub fn read_sourced_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
             });
         }
     }
-    for path in &job.inputs {
-        match InputFormat::of(path)? {
+    for (path, format) in job.inputs.iter().zip(formats) {
+        match format {
             InputFormat::Graph => scans.extend(graph::read_graph(path)?.iter().enumerate().map(|(k, n)| {
                 (
                     source(path, format!("node {k} (id {})", n.id)),
@@ -255,7 +250,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     job.profile.validate()?;
     let mut map = Map::new(job.config)?;
     let read_start = Instant::now();
-    let scans = read_sourced_inputs(job)?;
+    let scans = read_inputs(job)?;
     let read_wall_time_s = read_start.elapsed().as_secs_f64();
 
     let start = Instant::now();

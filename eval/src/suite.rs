@@ -99,31 +99,29 @@ pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
             message: "no scenario files found".into(),
         });
     }
-    let mut seen: Vec<(PathBuf, std::ffi::OsString, PathBuf)> = Vec::new();
-    let mut unique = Vec::new();
+    // Each file once, as first named, with its canonical path.
+    let mut unique: Vec<(PathBuf, PathBuf)> = Vec::new();
     for file in out {
         let real = std::fs::canonicalize(&file).map_err(|source| EvalError::Io {
             path: file.clone(),
             source,
         })?;
-        let stem = file.file_stem().unwrap_or_default().to_os_string();
-        if seen.iter().any(|(r, ..)| *r == real) {
+        if unique.iter().any(|(r, _)| *r == real) {
             continue;
         }
-        if let Some((_, _, first)) = seen.iter().find(|(_, s, _)| *s == stem) {
+        if let Some((_, first)) = unique.iter().find(|(_, f)| f.file_stem() == file.file_stem()) {
             return Err(EvalError::Input {
                 path: file.clone(),
                 message: format!(
                     "has the same name as {}, and each scenario's results go to <out>/{}/: rename one",
                     first.display(),
-                    stem.to_string_lossy()
+                    file.file_stem().unwrap_or_default().to_string_lossy()
                 ),
             });
         }
-        seen.push((real, stem, file.clone()));
-        unique.push(file);
+        unique.push((real, file));
     }
-    Ok(unique)
+    Ok(unique.into_iter().map(|(_, file)| file).collect())
 }
 
 /// Runs every scenario into `out_dir/<name>/`, up to `jobs` at once on a pool of `jobs` threads (1: one
