@@ -73,7 +73,7 @@ impl Simulation {
     pub fn num_scans_total(&self) -> u64 {
         self.sensors
             .iter()
-            .map(|s| (self.duration_s * s.spec.rate_hz + 1e-9).floor() as u64 + 1)
+            .map(|s| s.spec.num_scans(self.duration_s))
             .sum()
     }
 

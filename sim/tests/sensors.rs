@@ -63,6 +63,39 @@ fn lidar_channels_sit_at_their_elevations() {
 }
 
 #[test]
+fn the_counted_rays_per_scan_are_the_rays_cast() {
+    let patterns = [
+        BeamPattern::Fan {
+            fov_rad: 90f64.to_radians(),
+            step_rad: 1f64.to_radians(),
+        },
+        BeamPattern::Fan {
+            fov_rad: std::f64::consts::TAU,
+            step_rad: 0.5f64.to_radians(),
+        },
+        BeamPattern::Sweep {
+            elevations_rad: vec![-0.2, 0.0, 0.2],
+            fov_rad: std::f64::consts::TAU,
+            step_rad: 0.2f64.to_radians(),
+        },
+        BeamPattern::Sweep {
+            elevations_rad: vec![0.1],
+            fov_rad: 100f64.to_radians(),
+            step_rad: 3f64.to_radians(),
+        },
+        BeamPattern::Pinhole {
+            width_px: 641,
+            height_px: 479,
+            focal_px: 500.0,
+            stride: 4,
+        },
+    ];
+    for p in &patterns {
+        assert_eq!(p.rays_per_scan(), beam_directions(p).len() as u64, "{p:?}");
+    }
+}
+
+#[test]
 fn stereo_rays_pass_through_pixel_centres() {
     let (w, h, f) = (4u32, 2u32, 2.0);
     let dirs = beam_directions(&BeamPattern::Pinhole {

@@ -489,8 +489,7 @@ impl Checker<'_> {
                     return Err(self.error(&path, e.message));
                 }
                 Ok(spec) => {
-                    let scans = (s.duration_s * spec.rate_hz + 1e-9).floor() + 1.0;
-                    let rays = scans * spec.beams.rays_per_scan() as f64;
+                    let rays = spec.num_scans(s.duration_s) as f64 * spec.beams.rays_per_scan() as f64;
                     total_rays += rays;
                     total_cells += rays * (spec.max_range_m / s.map.resolution_m).ceil();
                 }

@@ -152,15 +152,28 @@ pub enum BeamPattern {
 }
 
 impl BeamPattern {
-    /// Rays cast per scan.
+    /// Whether a sweep covers the full circle (then it does not repeat its first azimuth).
+    pub fn is_full_circle(&self) -> bool {
+        matches!(self, Self::Sweep { fov_rad, .. } if (fov_rad - std::f64::consts::TAU).abs() < 1e-9)
+    }
+
+    /// Azimuths of a fan or a sweep, from `-fov / 2` (from 0 for a full-circle sweep) every step; 0 for a
+    /// camera.
+    pub fn num_azimuths(&self) -> usize {
+        match self {
+            Self::Fan { fov_rad, step_rad }
+            | Self::Sweep {
+                fov_rad, step_rad, ..
+            } => (fov_rad / step_rad + 1e-9).floor() as usize + usize::from(!self.is_full_circle()),
+            Self::Pinhole { .. } => 0,
+        }
+    }
+
+    /// Rays cast per scan ([`crate::sensors::beam_directions`] casts exactly these).
     pub fn rays_per_scan(&self) -> u64 {
         match self {
-            Self::Fan { fov_rad, step_rad } => (fov_rad / step_rad + 1e-9).floor() as u64 + 1,
-            Self::Sweep {
-                elevations_rad,
-                fov_rad,
-                step_rad,
-            } => ((fov_rad / step_rad + 1e-9).floor() as u64 + 1) * elevations_rad.len() as u64,
+            Self::Fan { .. } => self.num_azimuths() as u64,
+            Self::Sweep { elevations_rad, .. } => (self.num_azimuths() * elevations_rad.len()) as u64,
             Self::Pinhole {
                 width_px,
                 height_px,
@@ -168,6 +181,13 @@ impl BeamPattern {
                 ..
             } => u64::from(width_px.div_ceil(*stride)) * u64::from(height_px.div_ceil(*stride)),
         }
+    }
+}
+
+impl SensorSpec {
+    /// Scans in a run of `duration_s` seconds: one at time 0, then one every `1 / rate_hz`.
+    pub fn num_scans(&self, duration_s: f64) -> u64 {
+        (duration_s * self.rate_hz + 1e-9).floor() as u64 + 1
     }
 }
 

@@ -307,7 +307,7 @@ impl SimSensor {
 pub fn beam_directions(pattern: &BeamPattern) -> Vec<Vector3<f64>> {
     match pattern {
         BeamPattern::Fan { fov_rad, step_rad } => {
-            let n = (fov_rad / step_rad + 1e-9).floor() as usize + 1;
+            let n = pattern.num_azimuths();
             (0..n)
                 .map(|k| {
                     let a = -fov_rad / 2.0 + k as f64 * step_rad;
@@ -320,10 +320,12 @@ pub fn beam_directions(pattern: &BeamPattern) -> Vec<Vector3<f64>> {
             fov_rad,
             step_rad,
         } => {
-            // A full circle does not repeat its first azimuth.
-            let full = (fov_rad - std::f64::consts::TAU).abs() < 1e-9;
-            let n = (fov_rad / step_rad + 1e-9).floor() as usize + usize::from(!full);
-            let start = if full { 0.0 } else { -fov_rad / 2.0 };
+            let n = pattern.num_azimuths();
+            let start = if pattern.is_full_circle() {
+                0.0
+            } else {
+                -fov_rad / 2.0
+            };
             let mut out = Vec::with_capacity(n * elevations_rad.len());
             for k in 0..n {
                 let a = start + k as f64 * step_rad;
