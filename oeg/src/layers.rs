@@ -156,7 +156,10 @@ impl Map {
                 (e.mean_m - ground, e.var_m2)
             }
             TraversabilityRule::Contact { kappa, reach_m } => {
-                let wide = self.ground_within(cell, reach_m, kappa).unwrap_or(e);
+                // One walk over the wider of the two windows gives both grounds.
+                let [wide, ground] = self
+                    .grounds_within(cell, [reach_m, profile.contact_distance_m()], kappa)
+                    .map(|g| g.unwrap_or(e));
                 if let Some(t) = footprint_decision(
                     e.mean_m - wide.mean_m,
                     (e.var_m2 + wide.var_m2).sqrt(),
@@ -166,9 +169,6 @@ impl Map {
                 ) {
                     return t;
                 }
-                let ground = self
-                    .ground_within(cell, profile.contact_distance_m(), kappa)
-                    .unwrap_or(e);
                 (e.mean_m - ground.mean_m, e.var_m2 + ground.var_m2)
             }
             TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => (e.mean_m, e.var_m2),
@@ -184,40 +184,66 @@ impl Map {
     /// deviations below the ground, and every flat cell would seem to rise by that much. `None` if no cell in
     /// reach has an estimate.
     pub fn ground_within(&self, cell: CellIndex, distance_m: f32, kappa: f32) -> Option<Elevation> {
+        let [ground] = self.grounds_within(cell, [distance_m], kappa);
+        ground
+    }
+
+    /// [`Map::ground_within`] for several distances at once, in one walk over the widest window: each
+    /// distance's cells are visited in the same order as alone, so each ground is the same to the bit.
+    pub fn grounds_within<const N: usize>(
+        &self,
+        cell: CellIndex,
+        distances_m: [f32; N],
+        kappa: f32,
+    ) -> [Option<Elevation>; N] {
         let res = self.geometry().resolution_m();
-        let reach = f64::from(distance_m) / res + 1e-9;
-        let r = reach.floor() as i32 + 1;
-        let in_reach = move || {
+        let reach = distances_m.map(|d| f64::from(d) / res + 1e-9);
+        let r = reach.iter().fold(0.0_f64, |a, b| a.max(*b)).floor() as i32 + 1;
+        // Every estimate in the widest window, with the square of its gap to `cell` in cells.
+        let window = move || {
             (-r..=r)
                 .flat_map(move |dj| (-r..=r).map(move |di| (di, dj)))
-                .filter(move |&(di, dj)| {
+                .filter_map(move |(di, dj)| {
                     let (gi, gj) = (f64::from((di.abs() - 1).max(0)), f64::from((dj.abs() - 1).max(0)));
-                    gi * gi + gj * gj <= reach * reach
+                    let e = self
+                        .cell(CellIndex::new(
+                            cell.i.saturating_add(di),
+                            cell.j.saturating_add(dj),
+                        ))
+                        .elevation()?;
+                    Some((gi * gi + gj * gj, e))
                 })
         };
-        let estimate = |(di, dj): (i32, i32)| {
-            self.cell(CellIndex::new(
-                cell.i.saturating_add(di),
-                cell.j.saturating_add(dj),
-            ))
-            .elevation()
-        };
-        let lowest = in_reach()
-            .filter_map(estimate)
-            .min_by(|a, b| a.mean_m.total_cmp(&b.mean_m))?;
-        let (mut sum_w, mut sum_wz) = (0.0_f64, 0.0_f64);
-        for e in in_reach().filter_map(estimate) {
-            if surface_level(lowest, e.mean_m, e.var_m2, kappa) == Level::Above {
-                continue;
+        let mut lowest: [Option<Elevation>; N] = [None; N];
+        for (gap2, e) in window() {
+            for (l, reach) in lowest.iter_mut().zip(&reach) {
+                if gap2 <= reach * reach && l.is_none_or(|l| e.mean_m.total_cmp(&l.mean_m).is_lt()) {
+                    *l = Some(e);
+                }
             }
-            let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
-            sum_w += w;
-            sum_wz += w * f64::from(e.mean_m);
         }
-        Some(Elevation {
-            mean_m: (sum_wz / sum_w) as f32,
-            var_m2: (1.0 / sum_w) as f32,
-        })
+        let mut sums = [(0.0_f64, 0.0_f64); N];
+        for (gap2, e) in window() {
+            for ((sum, reach), l) in sums.iter_mut().zip(&reach).zip(&lowest) {
+                let Some(l) = *l else { continue };
+                if gap2 > reach * reach || surface_level(l, e.mean_m, e.var_m2, kappa) == Level::Above {
+                    continue;
+                }
+                let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
+                sum.0 += w;
+                sum.1 += w * f64::from(e.mean_m);
+            }
+        }
+        let mut out = [None; N];
+        for ((o, l), (sum_w, sum_wz)) in out.iter_mut().zip(&lowest).zip(sums) {
+            if l.is_some() {
+                *o = Some(Elevation {
+                    mean_m: (sum_wz / sum_w) as f32,
+                    var_m2: (1.0 / sum_w) as f32,
+                });
+            }
+        }
+        out
     }
 
     /// A dense raster of [`Map::traversability`] over `region`.
