@@ -245,14 +245,6 @@ pub fn decisions(s: &Scenario, map: &Map, truth: &TruthRaster, verdicts: &Verdic
         .collect()
 }
 
-/// `obstacles.csv` as bytes.
-///
-/// # Errors
-/// Never in practice (writing CSV into memory); a message otherwise.
-pub fn to_csv(rows: &[ObstacleDecision]) -> Result<Vec<u8>, String> {
-    crate::output::csv_table(rows)
-}
-
 impl crate::output::CsvRow for ObstacleDecision {
     const COLUMNS: &'static [&'static str] = &[
         "index",

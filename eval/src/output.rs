@@ -348,6 +348,30 @@ pub fn csv_table<'a, T: CsvRow + 'a>(
     csv_bytes(T::COLUMNS, rows)
 }
 
+/// Writes a table to `path` atomically: [`csv_bytes`], an error naming the file.
+///
+/// # Errors
+/// [`EvalError::Input`] naming the file for a row that is not one flat record, and a failed write.
+pub fn write_csv<T: Serialize>(
+    path: &Path,
+    columns: &[&str],
+    rows: impl IntoIterator<Item = T>,
+) -> Result<()> {
+    let bytes = csv_bytes(columns, rows).map_err(|message| EvalError::Input {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    write_bytes(path, &bytes)
+}
+
+/// [`write_csv`] of [`CsvRow`]s, with their [`CsvRow::COLUMNS`].
+///
+/// # Errors
+/// As [`write_csv`].
+pub fn write_table<'a, T: CsvRow + 'a>(path: &Path, rows: impl IntoIterator<Item = &'a T>) -> Result<()> {
+    write_csv(path, T::COLUMNS, rows)
+}
+
 /// The header `csv` derives from a struct row's field names (for the tests of [`CsvRow::COLUMNS`]).
 pub fn derived_header<T: Serialize>(row: &T) -> Vec<String> {
     let mut w = csv::Writer::from_writer(Vec::new());

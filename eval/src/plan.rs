@@ -139,14 +139,6 @@ pub fn rows(check: &PlanCheck, geometry: &oeg::GridGeometry) -> Vec<PlanRow> {
     rows
 }
 
-/// `plan.csv`: a header and one row per path cell.
-///
-/// # Errors
-/// A CSV writer failure, as text.
-pub fn to_csv(rows: &[PlanRow]) -> std::result::Result<Vec<u8>, String> {
-    crate::output::csv_table(rows)
-}
-
 /// The path's cell centres as world points, rounded to the micrometre (`crate::output::round_m`): the
 /// images' polyline and the CSV files' rows.
 pub fn polyline(plan: &Plan, geometry: &oeg::GridGeometry) -> Vec<(f64, f64)> {
@@ -256,11 +248,14 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     let staged = crate::output::Staged::begin(&job.out_dir)?;
     let mut files = Vec::new();
     let path_csv = staged.dir().join("path.csv");
-    let csv = path_csv_bytes(plan.as_ref(), &geometry).map_err(|message| EvalError::Input {
-        path: path_csv.clone(),
-        message,
-    })?;
-    crate::output::write_bytes(&path_csv, &csv)?;
+    crate::output::write_csv(
+        &path_csv,
+        &["step", "x_m", "y_m"],
+        plan.iter()
+            .flat_map(|p| polyline(p, &geometry))
+            .enumerate()
+            .map(|(step, (x, y))| (step, x, y)),
+    )?;
     files.push(path_csv);
     let title = match &plan {
         Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
@@ -281,18 +276,6 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok((summary, files))
-}
-
-/// `path.csv` of `oeg plan`: a header and one `step,x_m,y_m` row per path cell (the header alone without a
-/// path).
-fn path_csv_bytes(plan: Option<&Plan>, geometry: &oeg::GridGeometry) -> std::result::Result<Vec<u8>, String> {
-    crate::output::csv_bytes(
-        &["step", "x_m", "y_m"],
-        plan.iter()
-            .flat_map(|p| polyline(p, geometry))
-            .enumerate()
-            .map(|(step, (x, y))| (step, x, y)),
-    )
 }
 
 #[cfg(test)]
@@ -354,7 +337,8 @@ mod tests {
             unsafe_cells,
         };
         let geometry = oeg::GridGeometry::new(1.0).expect("geometry");
-        let csv = String::from_utf8(to_csv(&rows(&check, &geometry)).expect("csv")).expect("utf8");
+        let csv = String::from_utf8(crate::output::csv_table(&rows(&check, &geometry)).expect("csv"))
+            .expect("utf8");
         let mut lines = csv.lines();
         assert_eq!(lines.next(), Some("path,step,x_m,y_m,unsafe_cell"));
         assert_eq!(lines.next(), Some("map,0,0.5,0.5,false"));

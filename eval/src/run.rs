@@ -16,7 +16,7 @@ use crate::error::{EvalError, Result};
 use crate::evaluation::{Evaluation, evaluate};
 use crate::mapping::write_layer_images;
 use crate::metrics::{self, FailedExpectation, Metrics};
-use crate::output::{Staged, create_dir, write_bytes, write_json};
+use crate::output::{Staged, create_dir, write_bytes, write_json, write_table};
 use crate::progress::Progress;
 use crate::report_images;
 
@@ -382,23 +382,15 @@ fn write_report(
         Some(truth.region),
     )?);
     files.extend(report_images::write(out_dir, s, map, truth, evaluation)?);
-    let csv_error = |path: &Path| {
-        let path = path.to_path_buf();
-        move |message| EvalError::Input { path, message }
-    };
     let plan_path = out_dir.join("plan.csv");
-    let csv = crate::plan::to_csv(&crate::plan::rows(&evaluation.plan, &geometry))
-        .map_err(csv_error(&plan_path))?;
-    write_bytes(&plan_path, &csv)?;
+    write_table(&plan_path, &crate::plan::rows(&evaluation.plan, &geometry))?;
     files.push(plan_path);
     let obstacles_path = out_dir.join("obstacles.csv");
-    let csv = crate::obstacles::to_csv(&evaluation.obstacles).map_err(csv_error(&obstacles_path))?;
-    write_bytes(&obstacles_path, &csv)?;
+    write_table(&obstacles_path, &evaluation.obstacles)?;
     files.push(obstacles_path);
     let wrong = crate::wrong_cells::wrong_cells(map, truth, &evaluation.verdicts);
     let wrong_path = out_dir.join("wrong_cells.csv");
-    let csv = crate::wrong_cells::to_csv(&wrong).map_err(csv_error(&wrong_path))?;
-    write_bytes(&wrong_path, &csv)?;
+    write_table(&wrong_path, &wrong)?;
     files.push(wrong_path);
     let metrics_path = out_dir.join("metrics.json");
     write_json(&metrics_path, &evaluation.metrics)?;
@@ -467,11 +459,7 @@ fn write_comparison(
         })
         .collect();
     let csv_path = out_dir.join("comparison.csv");
-    let bytes = crate::output::csv_table(&rows).map_err(|message| EvalError::Input {
-        path: csv_path.clone(),
-        message,
-    })?;
-    write_bytes(&csv_path, &bytes)?;
+    write_table(&csv_path, &rows)?;
     let figures: Vec<crate::render::Figure> = runs
         .iter()
         .zip(&rows)

@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
-use crate::output::{CsvRow, Staged, csv_table, write_bytes, write_json};
+use crate::output::{CsvRow, Staged, write_json, write_table};
 use crate::progress::Progress;
 use crate::run::{RunOptions, run};
 
@@ -154,11 +154,7 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
                 .collect()
         })
     };
-    let bytes = csv_table(&rows).map_err(|message| EvalError::Input {
-        path: out_dir.join("suite.csv"),
-        message,
-    })?;
-    write_bytes(&stage.join("suite.csv"), &bytes)?;
+    write_table(&stage.join("suite.csv"), &rows)?;
     write_json(&stage.join("suite.json"), &rows)?;
     staged.commit()?;
     Ok(rows)

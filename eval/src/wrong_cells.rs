@@ -74,14 +74,6 @@ pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<W
     rows
 }
 
-/// `wrong_cells.csv` as bytes (a header line even when no cell is wrong).
-///
-/// # Errors
-/// Never in practice (writing CSV into memory); a message otherwise.
-pub fn to_csv(rows: &[WrongCell]) -> Result<Vec<u8>, String> {
-    crate::output::csv_table(rows)
-}
-
 impl crate::output::CsvRow for WrongCell {
     const COLUMNS: &'static [&'static str] = &[
         "x_m",
@@ -101,12 +93,11 @@ impl crate::output::CsvRow for WrongCell {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
     #[test]
     fn a_missing_value_is_an_empty_field() {
         let ours =
-            String::from_utf8(to_csv(&[crate::test_support::wrong_cell()]).expect("csv")).expect("utf8");
+            String::from_utf8(crate::output::csv_table(&[crate::test_support::wrong_cell()]).expect("csv"))
+                .expect("utf8");
         assert_eq!(
             ours.lines().nth(1),
             Some("1.0,2.0,unsafe,free,0.2,,0.01,0.3,0.0,0.3,true,")

@@ -265,13 +265,7 @@ fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
         let obstacles = match result {
             Ok(o) => {
                 write_json(&dir.join("metrics.json"), &o.evaluation.metrics)?;
-                let csv = crate::obstacles::to_csv(&o.evaluation.obstacles).map_err(|message| {
-                    EvalError::Input {
-                        path: dir.join("obstacles.csv"),
-                        message,
-                    }
-                })?;
-                write_bytes(&dir.join("obstacles.csv"), &csv)?;
+                crate::output::write_table(&dir.join("obstacles.csv"), &o.evaluation.obstacles)?;
                 row.insert("status".into(), Json::from("ok"));
                 row.insert("error".into(), Json::from(""));
                 metric_columns(&mut row, &o);

@@ -338,12 +338,8 @@ pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
         write_bytes(&path, &chart.to_png())?;
         files.push(path);
     }
-    let bytes = crate::output::csv_table(&summary).map_err(|message| EvalError::Input {
-        path: dir.join("summary.csv"),
-        message,
-    })?;
     let path = dir.join("summary.csv");
-    write_bytes(&path, &bytes)?;
+    crate::output::write_table(&path, &summary)?;
     files.insert(0, path);
     Ok(files)
 }

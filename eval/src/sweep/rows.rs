@@ -189,17 +189,13 @@ pub fn write_row_tables(
         jsonl.push(b'\n');
     }
     let runs_csv = out.join("runs.csv");
-    let csv = to_csv(
+    write_json_rows(
+        &runs_csv,
         rows.iter().map(|(r, _)| r),
         &lead,
         &["status", "error"],
         &["wall_time_s"],
-    )
-    .map_err(|message| EvalError::Input {
-        path: runs_csv.clone(),
-        message,
-    })?;
-    write_bytes(&runs_csv, &csv)?;
+    )?;
     let runs_jsonl = out.join("runs.jsonl");
     write_bytes(&runs_jsonl, &jsonl)?;
     let obstacles_csv = out.join("obstacles.csv");
@@ -209,25 +205,25 @@ pub fn write_row_tables(
             .iter()
             .map(|s| (*s).to_string()),
     );
-    let csv =
-        to_csv(rows.iter().flat_map(|(_, o)| o.iter()), &obstacle_lead, &[], &[]).map_err(|message| {
-            EvalError::Input {
-                path: obstacles_csv.clone(),
-                message,
-            }
-        })?;
-    write_bytes(&obstacles_csv, &csv)?;
+    write_json_rows(
+        &obstacles_csv,
+        rows.iter().flat_map(|(_, o)| o.iter()),
+        &obstacle_lead,
+        &[],
+        &[],
+    )?;
     Ok(vec![runs_csv, runs_jsonl, obstacles_csv])
 }
 
-/// CSV of JSON objects: `lead` columns first, then `then`, the rest sorted, `last` at the end. Null is an
-/// empty cell; nested values are written as JSON.
-fn to_csv<'a>(
+/// Writes JSON objects as a CSV table at `path`: `lead` columns first, then `then`, the rest sorted, `last` at
+/// the end. Null is an empty cell; nested values are written as JSON.
+fn write_json_rows<'a>(
+    path: &Path,
     rows: impl Iterator<Item = &'a Json> + Clone,
     lead: &[String],
     then: &[&str],
     last: &[&str],
-) -> std::result::Result<Vec<u8>, String> {
+) -> Result<()> {
     let mut rest: BTreeMap<&str, ()> = BTreeMap::new();
     for r in rows.clone() {
         if let Json::Object(m) = r {
@@ -254,5 +250,5 @@ fn to_csv<'a>(
             })
             .collect::<Vec<String>>()
     });
-    crate::output::csv_bytes(&columns, records)
+    crate::output::write_csv(path, &columns, records)
 }
