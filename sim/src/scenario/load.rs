@@ -23,12 +23,12 @@ pub const MAX_OBJECTS: usize = 10_000;
 /// collider, about a kilobyte).
 pub const MAX_PARTS: usize = 100_000;
 /// The most rays a run may cast, all sensors together (rate x duration x rays per scan): 2 billion. The
-/// simulation and the map each process a few million rays a second on one core of the reference machine, so
+/// simulation casts a few million rays a second and the map integrates about a million on the reference machine, so
 /// the worst valid scenario finishes, in hours rather than never (README, "Bounds").
 pub const MAX_RAYS_PER_RUN: f64 = 2e9;
 /// The most cells a run's rays may cross, all sensors together (rays x their longest range / the cell size):
-/// 10^12. The map walks a few hundred million cells a second on one core of the reference machine
-/// (README, "Speed and memory"), so this too keeps the worst valid scenario to hours.
+/// 10^12. The map walks 65-84 million cells a second on one core of the reference machine (README, "Bad
+/// input, bounds and outputs"), so this too keeps the worst valid scenario to hours.
 pub const MAX_CELL_VISITS_PER_RUN: f64 = 1e12;
 
 /// One step of a path to a value in the file: a key or an array index.
