@@ -21,7 +21,7 @@ pub fn inspect(path: &Path) -> Result<String> {
     let m = &header.config.model;
     // Writing into a String cannot fail.
     let _ = writeln!(out, "file:                 {}", path.display());
-    let _ = writeln!(out, "format version:       {}", mapfile::FORMAT_VERSION);
+    let _ = writeln!(out, "format version:       {}", header.format_version());
     let _ = writeln!(out, "written by:           {}", header.written_by);
     let _ = writeln!(out, "resolution:           {} m", header.config.resolution_m);
     let _ = writeln!(
@@ -29,6 +29,14 @@ pub fn inspect(path: &Path) -> Result<String> {
         "tiles:                {} of {}x{} cells",
         header.num_tiles, header.tile_size, header.tile_size
     );
+    if header.num_ceiling_tiles > 0 {
+        let _ = writeln!(
+            out,
+            "ceiling layer:        {} tiles, {} cells with a structure over their surface",
+            header.num_ceiling_tiles,
+            map.num_ceilings()
+        );
+    }
     let _ = writeln!(out, "scans integrated:     {}", header.num_scans);
     let _ = writeln!(out, "rays integrated:      {}", header.totals.num_rays);
     let _ = writeln!(

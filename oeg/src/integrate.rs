@@ -4,15 +4,15 @@
 
 use nalgebra::Vector3;
 
-use crate::cell::Cell;
+use crate::cell::{Cell, SeenFrom};
 use crate::error::{Error, Result};
 use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
-    Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level,
-    ModelOptions, ScanHitElevation, band_contradicts, clamp_probability, correlated_variance,
-    elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds, ray_bound,
-    spread_variance, surface_level, update_log_odds, vertical_variance,
+    CeilingHit, Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight,
+    Level, ModelOptions, OverheadHits, ScanHitElevation, band_contradicts, ceiling_contradicts, clamp_probability,
+    correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds,
+    ray_bound, spread_variance, surface_level, update_ceiling, update_log_odds, vertical_variance,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -41,7 +41,17 @@ pub(crate) struct ScanEvidence {
     /// Whether a free sample passed through the cell's surface band
     /// ([`FreeSpaceOccupancy::SurfaceBand`]).
     band_contradicted: bool,
+    /// Whether a free sample passed through the band of the cell's ceiling.
+    ceiling_contradicted: bool,
+    /// From which side the beams of the scan's overhead hits came.
+    ceiling_seen_from: SeenFrom,
+    /// The scan's hits above the cell's surface band ([`OverheadHits::Ceiling`]) as a sample, and their largest
+    /// probability (0: none).
+    overhead: HitSample,
+    ceiling_p: f32,
 }
+
+const _: () = assert!(size_of::<ScanEvidence>() == 60);
 
 impl ScanEvidence {
     pub(crate) const NONE: Self = Self {
@@ -52,7 +62,45 @@ impl ScanEvidence {
         free_z_m: f32::INFINITY,
         free_var_m2: f32::INFINITY,
         band_contradicted: false,
+        ceiling_contradicted: false,
+        ceiling_seen_from: SeenFrom::Both,
+        overhead: HitSample::NONE,
+        ceiling_p: 0.0,
     };
+
+    /// Whether the scan said something about the cell's ceiling.
+    fn touches_ceiling(&self) -> bool {
+        self.ceiling_contradicted || self.ceiling_p > 0.0
+    }
+
+    /// The scan's measurement of the cell's ceiling, if it hit one: the mean of its overhead hits, with the
+    /// variance of [`ScanHitElevation::MeanWithSpread`] (the hits' spread over their noise is the structure's
+    /// extent in the cell), the hits no better than `rho` of one ([`ModelOptions::measurement_correlation`]).
+    fn ceiling_hit(&self, rho: f32) -> Option<CeilingHit> {
+        let hits = &self.overhead;
+        (self.ceiling_p > 0.0).then(|| CeilingHit {
+            z_m: hits.mean_m,
+            var_m2: spread_variance(
+                (hits.mean_variance() / hits.n).max(rho * hits.mean_variance()),
+                hits.sample_variance(),
+                hits.mean_variance(),
+            ),
+            p: self.ceiling_p,
+            seen_from: self.ceiling_seen_from,
+        })
+    }
+
+    /// A hit above the cell's surface band ([`OverheadHits::Ceiling`]), by a beam from `side`.
+    #[inline(always)]
+    fn add_overhead(&mut self, p: f32, z_m: f32, var_m2: f32, side: SeenFrom) {
+        self.ceiling_seen_from = if self.ceiling_p > 0.0 {
+            self.ceiling_seen_from.and(side)
+        } else {
+            side
+        };
+        self.ceiling_p = self.ceiling_p.max(p);
+        self.overhead.add(z_m, var_m2);
+    }
 
     fn is_untouched(&self) -> bool {
         self.p_max == 0.0
@@ -225,6 +273,7 @@ impl Map {
         let max_range_m = opts.max_range_m.map_or(f64::INFINITY, f64::from);
         let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
         let needs_surface = band_rule || opts.free_space_max_depth_m.is_some();
+        let ceiling_rule = opts.overhead_hits == OverheadHits::Ceiling;
         let scratch_limit = self
             .config
             .memory_limit_bytes
@@ -338,17 +387,25 @@ impl Map {
                     } else {
                         None
                     };
-                    // Whether the beam crosses the band of the cell's surface (surface-band rule).
-                    let crosses_band = |e| {
+                    // The beam's lowest point inside the cell.
+                    let beam_bottom = || {
                         let l_bottom = if top_at_exit {
                             crossing.l_enter
                         } else {
                             crossing.l_exit
                         };
-                        let beam_bottom = (o.z + dir.z * l_bottom) as f32;
-                        band_contradicts(e, beam_bottom, beam_top, opts.surface_band_sigmas)
+                        (o.z + dir.z * l_bottom) as f32
                     };
+                    // Whether the beam crosses the band of the cell's surface (surface-band rule).
+                    let crosses_band =
+                        |e| band_contradicts(e, beam_bottom(), beam_top, opts.surface_band_sigmas);
                     if hit_range_m.is_some() {
+                        if ceiling_rule
+                            && let Some(c) = self.ceilings.get(crossing.cell).filter(|c| c.is_some())
+                            && ceiling_contradicts(c, beam_bottom(), beam_top, opts.surface_band_sigmas)
+                        {
+                            evidence.ceiling_contradicted = true;
+                        }
                         if let (Some(depth), Some(e)) = (opts.free_space_max_depth_m, surface)
                             && e.mean_m - beam_top > depth
                         {
@@ -392,6 +449,23 @@ impl Map {
                 match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold)
                     .filter(|_| measures_height)
                 {
+                    // Above the band of the cell's surface: a structure over it.
+                    Some(z)
+                        if ceiling_rule
+                            && self
+                                .cells
+                                .get(crossing.cell)
+                                .and_then(Cell::elevation)
+                                .is_some_and(|e| {
+                                    let grown = Elevation {
+                                        var_m2: e.var_m2 + opts.process_noise_var_m2,
+                                        ..e
+                                    };
+                                    surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above
+                                }) =>
+                    {
+                        evidence.add_overhead(p, z, s2, SeenFrom::of_beam(dir.z));
+                    }
                     Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
                     // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
                     // the occupancy, but its height bounds nothing (a noisy long reading would otherwise
@@ -410,20 +484,45 @@ impl Map {
             .config
             .memory_limit_bytes
             .saturating_sub(self.scratch.memory_bytes());
+        let scratch_bytes = self.scratch.memory_bytes();
         for (tile, evidence) in self.scratch.tiles() {
+            let memory_error = |e: crate::storage::CapacityExceeded| Error::MemoryLimit {
+                requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
+                limit_bytes: self.config.memory_limit_bytes,
+            };
             let cells = self
                 .cells
-                .tile_or_insert(tile, limit)
-                .map_err(|e| Error::MemoryLimit {
-                    requested_bytes: e.requested_bytes + self.scratch.memory_bytes(),
-                    limit_bytes: self.config.memory_limit_bytes,
-                })?;
+                .tile_or_insert(tile, limit.saturating_sub(self.ceilings.memory_bytes()))
+                .map_err(memory_error)?;
             for (cell, ev) in cells.iter_mut().zip(evidence.iter()) {
                 if ev.is_untouched() {
                     continue;
                 }
                 stats.num_cells_updated += 1;
                 update_cell(cell, ev, &opts, self.occupied_log_odds, self.free_log_odds);
+            }
+            // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
+            let ceilings = if evidence.iter().any(|ev| ev.ceiling_p > 0.0) {
+                let room = limit.saturating_sub(self.cells.memory_bytes());
+                Some(self.ceilings.tile_or_insert(tile, room).map_err(memory_error)?)
+            } else if evidence.iter().any(|ev| ev.ceiling_contradicted) {
+                self.ceilings.tile_mut(tile)
+            } else {
+                None
+            };
+            if let Some(ceilings) = ceilings {
+                for (ceiling, ev) in ceilings.iter_mut().zip(evidence.iter()) {
+                    if ev.touches_ceiling() {
+                        *ceiling =
+                            update_ceiling(
+                            *ceiling,
+                            ev.ceiling_hit(opts.measurement_correlation),
+                            ev.ceiling_contradicted,
+                            &opts,
+                            self.occupied_log_odds,
+                        );
+                    }
+                }
             }
         }
         Ok(())

@@ -11,7 +11,7 @@ use crate::geometry::{CellIndex, CellRegion};
 use crate::map::Map;
 use crate::model::{Elevation, Level, probability_from_log_odds, surface_level};
 use crate::traversability::{
-    RobotProfile, Traversability, TraversabilityRule, footprint_decision, step_decision,
+    RobotProfile, Traversability, TraversabilityRule, ceiling_decision, footprint_decision, more_restrictive, step_decision,
 };
 
 /// A per-cell quantity of the map.
@@ -121,8 +121,42 @@ impl Map {
         })
     }
 
-    /// The traversability of one cell for `profile` under `rule`.
+    /// The traversability of one cell for `profile` under `rule`: its surface's decision, or the structure's
+    /// over it ([`crate::OverheadHits::Ceiling`], [`ceiling_decision`]) where that is more restrictive.
     pub fn traversability(
+        &self,
+        cell: CellIndex,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> Traversability {
+        let surface = self.surface_traversability(cell, profile, rule);
+        let Some(ceiling) = self.ceiling(cell).and_then(|c| c.height()) else {
+            return surface;
+        };
+        let kappa = match rule {
+            TraversabilityRule::Contact { kappa, .. } => kappa,
+            _ => 0.0,
+        };
+        // The clearance is measured from the cell's own surface, the ground the structure was seen over; a cell
+        // that has forgotten it measures from the lowest level in the robot's contact distance.
+        let ground = self
+            .cell(cell)
+            .elevation()
+            .or_else(|| self.ground_within(cell, profile.contact_distance_m(), kappa));
+        let over_ceiling = match ground {
+            Some(g) => ceiling_decision(
+                ceiling.mean_m - g.mean_m,
+                (ceiling.var_m2 + g.var_m2).sqrt(),
+                kappa,
+                profile,
+            ),
+            None => Some(Traversability::Uncertain),
+        };
+        more_restrictive(surface, over_ceiling)
+    }
+
+    /// The traversability of one cell's surface for `profile` under `rule`.
+    fn surface_traversability(
         &self,
         cell: CellIndex,
         profile: &RobotProfile,

@@ -15,14 +15,14 @@ pub mod storage;
 pub mod traversability;
 pub mod traversal;
 
-pub use cell::Cell;
+pub use cell::{Ceiling, Cell, SeenFrom};
 pub use error::{Error, Result};
 pub use geometry::{CellIndex, CellRegion, GridGeometry};
 pub use layers::{Layer, LayerKind, Raster, TraversabilityCounts};
 pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Map, MapConfig};
 pub use model::{
     Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, MapPreset, ModelOptions,
-    ScanHitElevation,
+    OverheadHits, ScanHitElevation,
 };
 pub use planner::{Plan, PlannerOptions, UncertainCells, UnknownCells};
 pub use scan::{Ray, RayKind, Scan};

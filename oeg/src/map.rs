@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cell::Cell;
+use crate::cell::{Ceiling, Cell};
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
 use crate::integrate::ScanEvidence;
@@ -83,6 +83,8 @@ pub struct Map {
     pub(crate) config: MapConfig,
     pub(crate) geometry: GridGeometry,
     pub(crate) cells: TileGrid<Cell>,
+    /// The ceiling layer ([`crate::OverheadHits::Ceiling`]): tiles only where a ceiling was seen.
+    pub(crate) ceilings: TileGrid<Ceiling>,
     pub(crate) scratch: TileGrid<ScanEvidence>,
     /// `L` above which a cell is occupied (the occupancy threshold in log-odds).
     pub(crate) occupied_log_odds: f32,
@@ -103,6 +105,7 @@ impl Map {
         Ok(Self {
             geometry,
             cells: TileGrid::new(Cell::UNOBSERVED),
+            ceilings: TileGrid::new(Ceiling::NONE),
             scratch: TileGrid::new(ScanEvidence::NONE),
             occupied_log_odds: log_odds(config.model.occupied_threshold),
             free_log_odds: log_odds(config.model.p_min),
@@ -137,6 +140,11 @@ impl Map {
         self.cells.get(cell).copied().unwrap_or(Cell::UNOBSERVED)
     }
 
+    /// The lowest structure seen over the cell's surface ([`crate::OverheadHits::Ceiling`]), if any.
+    pub fn ceiling(&self, cell: CellIndex) -> Option<Ceiling> {
+        self.ceilings.get(cell).copied().filter(Ceiling::is_some)
+    }
+
     /// The cell holding the world point `(x, y)`, if any.
     pub fn cell_at(&self, x_m: f64, y_m: f64) -> Option<Cell> {
         self.geometry.cell_of(x_m, y_m).map(|c| self.cell(c))
@@ -153,9 +161,13 @@ impl Map {
         self.occupied_log_odds
     }
 
-    /// Bytes the map holds: the cells' tiles, their index and the per-scan scratch kept for reuse.
+    /// Bytes the map holds: the cells' tiles, the ceiling layer's, their indices and the per-scan scratch kept
+    /// for reuse.
     pub fn memory_bytes(&self) -> u64 {
-        self.cells.memory_bytes() + self.scratch.memory_bytes() + size_of::<Self>() as u64
+        self.cells.memory_bytes()
+            + self.ceilings.memory_bytes()
+            + self.scratch.memory_bytes()
+            + size_of::<Self>() as u64
     }
 
     /// Bytes of the cells alone: 12 per cell of every allocated tile (observed or not).
@@ -187,6 +199,14 @@ impl Map {
             .sum()
     }
 
+    /// Number of cells with a structure over their surface ([`Map::ceiling`]).
+    pub fn num_ceilings(&self) -> u64 {
+        self.ceilings
+            .tiles()
+            .map(|(_, t)| t.iter().filter(|c| c.is_some()).count() as u64)
+            .sum()
+    }
+
     /// The smallest region holding every observed cell, or `None` for an empty map.
     pub fn observed_region(&self) -> Option<CellRegion> {
         let mut it = self.observed_cells().map(|(c, _)| c);
@@ -207,9 +227,30 @@ impl Map {
     pub(crate) fn insert_tile(&mut self, tile: TileIndex, cells: Box<[Cell; TILE_CELLS]>) -> Result<()> {
         let limit = self.config.memory_limit_bytes;
         self.cells
-            .insert_tile(tile, cells, limit)
+            .insert_tile(tile, cells, limit.saturating_sub(self.ceilings.memory_bytes()))
             .map_err(|e| Error::MemoryLimit {
                 requested_bytes: e.requested_bytes,
+                limit_bytes: limit,
+            })
+    }
+
+    /// Tiles of the ceiling layer that hold a ceiling, in a fixed order.
+    pub(crate) fn ceiling_tiles(&self) -> impl Iterator<Item = (TileIndex, &[Ceiling; TILE_CELLS])> + '_ {
+        self.ceilings
+            .tiles()
+            .filter(|(_, t)| t.iter().any(Ceiling::is_some))
+    }
+
+    pub(crate) fn insert_ceiling_tile(
+        &mut self,
+        tile: TileIndex,
+        ceilings: Box<[Ceiling; TILE_CELLS]>,
+    ) -> Result<()> {
+        let limit = self.config.memory_limit_bytes;
+        self.ceilings
+            .insert_tile(tile, ceilings, limit.saturating_sub(self.cells.memory_bytes()))
+            .map_err(|e| Error::MemoryLimit {
+                requested_bytes: e.requested_bytes.saturating_add(self.cells.memory_bytes()),
                 limit_bytes: limit,
             })
     }

@@ -220,6 +220,35 @@ pub fn footprint_decision(
     }
 }
 
+/// The decision for a structure `clearance_m` over a cell's ground, with standard deviation `sigma_m` (of the
+/// difference): the robot drives over it when it is no higher than a step, under it when it is higher than the
+/// robot, and hits it in between, whatever it is (a board, a table top, a person): `Blocked`, or `Uncertain`
+/// within `kappa` sigma of either threshold. `None` leaves the decision to the cell's surface.
+pub fn ceiling_decision(clearance_m: f32, sigma_m: f32, kappa: f32, profile: &RobotProfile) -> Option<Traversability> {
+    let band = kappa * sigma_m;
+    if clearance_m > profile.height_m + band || clearance_m < profile.max_step_m - band {
+        None
+    } else if clearance_m > profile.max_step_m + band && clearance_m < profile.height_m - band {
+        Some(Traversability::Blocked)
+    } else {
+        Some(Traversability::Uncertain)
+    }
+}
+
+/// The more restrictive of two decisions about one cell: blocked over uncertain over the rest (`a` when
+/// neither restricts more).
+pub fn more_restrictive(a: Traversability, b: Option<Traversability>) -> Traversability {
+    let rank = |t: Traversability| match t {
+        Traversability::Blocked => 2,
+        Traversability::Uncertain => 1,
+        _ => 0,
+    };
+    match b {
+        Some(b) if rank(b) > rank(a) => b,
+        _ => a,
+    }
+}
+
 /// The step decision for one occupied cell: `step_m` is the measured step (for [`TraversabilityRule::Terrain`],
 /// already relative to the neighbours' ground), `sigma_m` the elevation standard deviation.
 pub fn step_decision(
@@ -286,6 +315,29 @@ mod tests {
             .validate()
             .is_err()
         );
+    }
+
+    #[test]
+    fn a_structure_between_a_step_and_the_robots_height_over_the_ground_blocks_it() {
+        let p = RobotProfile::default();
+        // A board 0.30 m over the ground, known to 1 cm: blocked; 0.44 m: within 2 sigma of 0.46 m, uncertain.
+        assert_eq!(ceiling_decision(0.30, 0.01, 2.0, &p), Some(Traversability::Blocked));
+        assert_eq!(ceiling_decision(0.44, 0.01, 2.0, &p), Some(Traversability::Uncertain));
+        // 0.50 m: the robot passes under it; 2 cm: it drives over it. Both leave the decision to the surface.
+        assert_eq!(ceiling_decision(0.50, 0.01, 2.0, &p), None);
+        assert_eq!(ceiling_decision(0.02, 0.005, 2.0, &p), None);
+        // 3.5 cm known to 5 mm: cannot tell whether it is a step.
+        assert_eq!(ceiling_decision(0.035, 0.005, 2.0, &p), Some(Traversability::Uncertain));
+        // Without an uncertain band (kappa 0) the thresholds are sharp.
+        assert_eq!(ceiling_decision(0.459, 0.01, 0.0, &p), Some(Traversability::Blocked));
+        assert_eq!(ceiling_decision(0.461, 0.01, 0.0, &p), None);
+        // The more restrictive decision wins.
+        let (b, u, t) = (Traversability::Blocked, Traversability::Uncertain, Traversability::Traversable);
+        assert_eq!(more_restrictive(t, Some(b)), b);
+        assert_eq!(more_restrictive(b, Some(u)), b);
+        assert_eq!(more_restrictive(Traversability::Free, Some(u)), u);
+        assert_eq!(more_restrictive(u, None), u);
+        assert_eq!(more_restrictive(t, Some(Traversability::Free)), t);
     }
 
     #[test]

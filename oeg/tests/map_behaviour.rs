@@ -243,9 +243,9 @@ fn a_map_over_its_memory_limit_is_an_error() {
         ..MapConfig::new(0.05)
     };
     let mut map = Map::new(config).expect("valid");
-    // A 10 m ray at 0.05 m touches ~4 tiles of 48 KiB plus their scratch (112 KiB each): fine. A 500 m ray
-    // is not.
-    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(10.0, 0.0, 0.0)]))
+    // A 6 m ray at 0.05 m touches 2 tiles of 48 KiB plus their scratch (208 KiB each): fine. A 500 m ray is
+    // not.
+    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(6.0, 0.0, 0.0)]))
         .expect("fits");
     let err = map
         .integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(500.0, 300.0, 0.0)]))
@@ -261,7 +261,7 @@ fn a_raster_counts_against_the_same_budget_as_the_map() {
         ..MapConfig::new(0.05)
     };
     let mut map = Map::new(config).expect("valid");
-    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(10.0, 0.0, 0.0)]))
+    map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(6.0, 0.0, 0.0)]))
         .expect("fits");
     let held = map.memory_bytes();
     assert!(held > 0 && held < 1 << 20);
@@ -643,4 +643,78 @@ fn grounds_for_several_distances_in_one_walk_are_each_the_ground_alone() {
             [map.ground_within(c, 0.25, 2.0), map.ground_within(c, 0.1, 2.0)]
         );
     }
+}
+
+/// Ground seen under a board every scan by a low laser, the board's top hit only every tenth scan by a higher
+/// one: the robust preset with overhead hits as given.
+fn board_seen_now_and_then(overhead_hits: oeg::OverheadHits) -> Map {
+    let profile = RobotProfile::default();
+    let mut map = map_with(
+        0.05,
+        ModelOptions {
+            overhead_hits,
+            ..oeg::MapPreset::Robust.model(&profile)
+        },
+    );
+    for k in 0..60 {
+        // Beams from 0.25 m down to the ground beyond and under the board (its top at 0.34 m).
+        let ground: Vec<_> = (0..8).map(|i| (1.6 + 0.1 * f64::from(i), 0.025, 0.0)).collect();
+        map.integrate(&scan_of(Point3::new(0.025, 0.025, 0.25), &ground))
+            .expect("integrated");
+        if k % 10 == 0 {
+            map.integrate(&scan_of(Point3::new(0.025, 0.025, 0.45), &[(2.025, 0.025, 0.34)]))
+                .expect("integrated");
+        }
+    }
+    map
+}
+
+#[test]
+fn a_board_hit_now_and_then_over_ground_hit_every_scan_is_kept_as_a_ceiling() {
+    let p = RobotProfile::default();
+    let rule = oeg::MapPreset::Robust.traversability();
+    let kept = board_seen_now_and_then(oeg::OverheadHits::Ceiling);
+    let c = cell(&kept, 2.025, 0.025);
+    let ceiling = kept.ceiling(c).expect("a ceiling over the ground");
+    assert!((ceiling.z_m - 0.34).abs() < 0.01, "{ceiling:?}");
+    let ground = kept.cell(c).elevation().expect("ground");
+    assert!(ground.mean_m.abs() < 0.01, "the ground stays the surface: {ground:?}");
+    assert_eq!(kept.traversability(c, &p, rule), Traversability::Blocked);
+    // Beams under the board never pass through its band, so they leave it alone.
+    assert_eq!(kept.num_ceilings(), 1);
+    // One height per cell: the ground under it outvotes the board's rare hits.
+    let lost = board_seen_now_and_then(oeg::OverheadHits::Surface);
+    assert!(lost.ceiling(c).is_none());
+    assert_eq!(lost.traversability(c, &p, rule), Traversability::Traversable);
+}
+
+#[test]
+fn a_person_over_the_ground_is_a_ceiling_that_beams_through_it_clear() {
+    let p = RobotProfile::default();
+    let rule = oeg::MapPreset::Robust.traversability();
+    let mut map = map_with(0.05, oeg::MapPreset::Robust.model(&p));
+    let origin = Point3::new(0.025, 0.025, 0.45);
+    let ground_behind: Vec<_> = (0..10).map(|i| (2.0 + 0.05 * f64::from(i), 0.025, 0.0)).collect();
+    for _ in 0..5 {
+        map.integrate(&scan_of(origin, &ground_behind)).expect("integrated");
+    }
+    // A person stands at x = 2.0-2.5 m: the beams stop on their front at 0.10-0.45 m.
+    let front: Vec<_> = (0..10)
+        .map(|i| (2.025 + 0.05 * f64::from(i), 0.025, 0.10 + 0.035 * f64::from(i)))
+        .collect();
+    for _ in 0..20 {
+        map.integrate(&scan_of(origin, &front)).expect("integrated");
+    }
+    let c = cell(&map, 2.025, 0.025);
+    assert!(map.ceiling(c).is_some());
+    assert_eq!(map.traversability(c, &p, rule), Traversability::Blocked);
+    // The person leaves: the beams reach the ground again and pass through the heights where they stood.
+    let far: Vec<_> = (0..10).map(|i| (2.6 + 0.1 * f64::from(i), 0.025, 0.0)).collect();
+    let mut scans = 0;
+    while map.ceiling(c).is_some() {
+        map.integrate(&scan_of(origin, &far)).expect("integrated");
+        scans += 1;
+        assert!(scans <= 2, "a ceiling at the clamp is gone within 2 contradicting scans");
+    }
+    assert_ne!(map.traversability(c, &p, rule), Traversability::Blocked);
 }

@@ -195,7 +195,7 @@ pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
     let f64_at = |b: &[u8]| f64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
     let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
 
-    let prefix = container::read_prefix(path, data, MAGIC, FORMAT_VERSION, "an OEG sensor log")?;
+    let prefix = container::read_prefix(path, data, MAGIC, &[FORMAT_VERSION], "an OEG sensor log")?;
     let header: LogHeader =
         serde_json::from_slice(prefix.header).map_err(|e| fail(16, format!("malformed header: {e}")))?;
     let mut pos = prefix.body_start;

@@ -24,7 +24,7 @@ pub const BUILT_IN: [(&str, &str); 3] = [
 ];
 
 /// The model options that are update rules; `paper` returns each to its default.
-const RULE_KEYS: [&str; 18] = [
+const RULE_KEYS: [&str; 19] = [
     "map.preset",
     "map.model.log_odds_min",
     "map.model.log_odds_max",
@@ -38,6 +38,7 @@ const RULE_KEYS: [&str; 18] = [
     "map.model.free_space_max_depth_m",
     "map.model.hit_height",
     "map.model.scan_hit_elevation",
+    "map.model.overhead_hits",
     "map.model.elevation_fusion",
     "map.model.process_noise_var_m2",
     "map.model.surface_band_sigmas",

@@ -26,9 +26,11 @@ pub struct Prefix<'a> {
     pub header: &'a [u8],
     /// Byte offset of the body.
     pub body_start: usize,
+    /// The format version the file declares (one of those asked for).
+    pub version: u32,
 }
 
-/// Reads the prefix of a container of `format` (its name for messages) with `magic` and `version`.
+/// Reads the prefix of a container of `format` (its name for messages) with `magic` and one of the `versions`.
 ///
 /// # Errors
 /// [`crate::Error::Parse`] naming the file and byte: a wrong magic number, another version, or a header
@@ -37,7 +39,7 @@ pub fn read_prefix<'a>(
     path: &'a Path,
     data: &'a [u8],
     magic: &[u8; 8],
-    version: u32,
+    versions: &[u32],
     format: &str,
 ) -> Result<Prefix<'a>> {
     let mut r = ByteReader::new(path, data);
@@ -45,10 +47,14 @@ pub fn read_prefix<'a>(
         return Err(r.error_at(0, format!("not {format} (wrong magic number)")));
     }
     let found = r.u32("the format version")?;
-    if found != version {
+    if !versions.contains(&found) {
+        let known: Vec<String> = versions.iter().map(u32::to_string).collect();
         return Err(r.error_at(
             8,
-            format!("format version {found} is not supported (this build reads {version})"),
+            format!(
+                "format version {found} is not supported (this build reads {})",
+                known.join(" and ")
+            ),
         ));
     }
     let header_len = r.u32("the header length")? as usize;
@@ -56,6 +62,7 @@ pub fn read_prefix<'a>(
     Ok(Prefix {
         header,
         body_start: r.pos(),
+        version: found,
     })
 }
 

@@ -1,5 +1,5 @@
-//! The map file format (`.oeg`), version 1, in the framed container of [`super::container`]. Little-endian
-//! throughout:
+//! The map file format (`.oeg`), versions 1 and 2, in the framed container of [`super::container`].
+//! Little-endian throughout:
 //!
 //! ```text
 //! offset  size  what
@@ -9,8 +9,14 @@
 //! 16      H     header, UTF-8 JSON: see MapFileHeader (resolution, tile size, tile count, model options, ...)
 //! 16+H    ...   num_tiles times: i32 tile column, i32 tile row, then 64 x 64 cells row-major from the tile's
 //!               min-x, min-y cell, each cell three f32: log-odds, elevation mean (m), elevation variance (m^2)
+//! ...     ...   version 2 only, num_ceiling_tiles times: i32 tile column, i32 tile row, then 64 x 64 ceilings
+//!               in the same order, each three f32: height (m), variance (m^2), log-odds (NaN: none), then
+//!               one u8: the side the beams came from, 0 above (a top), 1 below (an underside), 2 both
 //! end-8   8     u64 FNV-1a-64 checksum of every byte before it
 //! ```
+//!
+//! A map without a ceiling layer ([`crate::OverheadHits::Ceiling`]) is written as version 1, byte for byte
+//! as before the layer existed; a map with one as version 2, whose header adds `num_ceiling_tiles`.
 //!
 //! A never-observed cell has NaN log-odds; a cell without an elevation estimate has an infinite variance (see
 //! [`crate::Cell`]). Tile `(ti, tj)` holds cells `(64 ti .. 64 ti + 63, 64 tj .. 64 tj + 63)`.
@@ -20,16 +26,20 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::{ByteReader, container, read_file, write_atomically};
-use crate::cell::Cell;
+use crate::cell::{Ceiling, Cell, SeenFrom};
 use crate::error::{Error, Result};
 use crate::map::{IntegrationStats, Map, MapConfig};
 use crate::storage::{TILE_CELLS, TILE_SIZE, TileIndex};
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"OEGMAP\r\n";
-/// The format version this crate writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version of a map with a ceiling layer; one without is written as [`FORMAT_VERSION_NO_CEILINGS`].
+/// This crate reads both.
+pub const FORMAT_VERSION: u32 = 2;
+/// The format version of a map without a ceiling layer (the format before the layer existed).
+pub const FORMAT_VERSION_NO_CEILINGS: u32 = 1;
 const TILE_RECORD_BYTES: usize = 8 + TILE_CELLS * 12;
+const CEILING_RECORD_BYTES: usize = 8 + TILE_CELLS * 13;
 
 /// The JSON header of a map file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -41,6 +51,9 @@ pub struct MapFileHeader {
     pub tile_size: u32,
     /// Number of tile records that follow.
     pub num_tiles: u64,
+    /// Number of ceiling tile records after them (version 2; absent in version 1).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub num_ceiling_tiles: u64,
     /// Scans integrated into the map.
     pub num_scans: u64,
     /// Integration totals.
@@ -49,21 +62,38 @@ pub struct MapFileHeader {
     pub written_by: String,
 }
 
+impl MapFileHeader {
+    /// The format version a file with this header has: 2 with a ceiling layer, 1 without.
+    pub fn format_version(&self) -> u32 {
+        if self.num_ceiling_tiles == 0 {
+            FORMAT_VERSION_NO_CEILINGS
+        } else {
+            FORMAT_VERSION
+        }
+    }
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
 /// Serialises the map into the bytes of a map file.
 pub fn to_bytes(map: &Map) -> Vec<u8> {
     let tiles: Vec<_> = map.tiles().collect();
+    let ceiling_tiles: Vec<_> = map.ceiling_tiles().collect();
     let header = MapFileHeader {
         config: *map.config(),
         tile_size: TILE_SIZE as u32,
         num_tiles: tiles.len() as u64,
+        num_ceiling_tiles: ceiling_tiles.len() as u64,
         num_scans: map.num_scans(),
         totals: map.totals(),
         written_by: format!("oeg {}", env!("CARGO_PKG_VERSION")),
     };
     // A plain struct of numbers and strings always serialises.
     let json = serde_json::to_vec(&header).unwrap_or_default();
-    let mut out = container::prefix_bytes(MAGIC, FORMAT_VERSION, &json);
-    out.reserve(tiles.len() * TILE_RECORD_BYTES + 8);
+    let mut out = container::prefix_bytes(MAGIC, header.format_version(), &json);
+    out.reserve(tiles.len() * TILE_RECORD_BYTES + ceiling_tiles.len() * CEILING_RECORD_BYTES + 8);
     for (tile, cells) in tiles {
         out.extend_from_slice(&tile.ti.to_le_bytes());
         out.extend_from_slice(&tile.tj.to_le_bytes());
@@ -71,6 +101,16 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
             for v in [c.log_odds, c.mean_m, c.var_m2] {
                 out.extend_from_slice(&v.to_le_bytes());
             }
+        }
+    }
+    for (tile, ceilings) in ceiling_tiles {
+        out.extend_from_slice(&tile.ti.to_le_bytes());
+        out.extend_from_slice(&tile.tj.to_le_bytes());
+        for c in ceilings.iter() {
+            for v in [c.z_m, c.var_m2, c.log_odds] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            out.push(c.seen_from as u8);
         }
     }
     container::seal(&mut out);
@@ -129,7 +169,13 @@ pub fn map_from_bytes(path: &Path, data: &[u8], limit_bytes: u64) -> Result<Map>
 const TILE_COORD_RANGE: std::ops::RangeInclusive<i32> = (i32::MIN >> 6)..=(i32::MAX >> 6);
 
 fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader, Option<Map>)> {
-    let prefix = container::read_prefix(path, data, MAGIC, FORMAT_VERSION, "an OEG map file")?;
+    let prefix = container::read_prefix(
+        path,
+        data,
+        MAGIC,
+        &[FORMAT_VERSION_NO_CEILINGS, FORMAT_VERSION],
+        "an OEG map file",
+    )?;
     let mut r = ByteReader::new(path, data);
     r.take(prefix.body_start, "the header")?;
     let header: MapFileHeader = serde_json::from_slice(prefix.header)
@@ -143,12 +189,28 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
             ),
         ));
     }
-    let expected_len =
-        prefix.body_start as u64 + header.num_tiles.saturating_mul(TILE_RECORD_BYTES as u64) + 8;
+    if prefix.version == FORMAT_VERSION_NO_CEILINGS && header.num_ceiling_tiles != 0 {
+        return Err(r.error_at(
+            16,
+            format!(
+                "a version 1 header declares {} ceiling tiles (expected none: the ceiling layer is version 2)",
+                header.num_ceiling_tiles
+            ),
+        ));
+    }
+    let expected_len = (prefix.body_start as u64).saturating_add(
+        header
+            .num_tiles
+            .saturating_mul(TILE_RECORD_BYTES as u64)
+            .saturating_add(header.num_ceiling_tiles.saturating_mul(CEILING_RECORD_BYTES as u64))
+            .saturating_add(8),
+    );
     if expected_len != data.len() as u64 {
         return Err(r.error(format!(
-            "the header declares {} tiles, so the file should be {expected_len} bytes, but it is {}: truncated or corrupt",
+            "the header declares {} tiles and {} ceiling tiles, so the file should be {expected_len} bytes, but it \
+             is {}: truncated or corrupt",
             header.num_tiles,
+            header.num_ceiling_tiles,
             data.len()
         )));
     }
@@ -163,23 +225,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
     let mut map = Map::new(config).map_err(|e| r.error_at(16, format!("invalid map settings: {e}")))?;
     for t in 0..header.num_tiles {
         let what = format!("tile {t}");
-        let at = r.pos();
-        let tile = TileIndex {
-            ti: r.i32(&what)?,
-            tj: r.i32(&what)?,
-        };
-        if !(TILE_COORD_RANGE.contains(&tile.ti) && TILE_COORD_RANGE.contains(&tile.tj)) {
-            return Err(r.error_at(
-                at,
-                format!(
-                    "{what} has coordinates ({}, {}), outside the grid's tiles {} ..= {}",
-                    tile.ti,
-                    tile.tj,
-                    TILE_COORD_RANGE.start(),
-                    TILE_COORD_RANGE.end()
-                ),
-            ));
-        }
+        let tile = read_tile_index(&mut r, &what)?;
         let mut cells = Box::new([Cell::UNOBSERVED; TILE_CELLS]);
         for (k, c) in cells.iter_mut().enumerate() {
             let at = r.pos();
@@ -197,8 +243,83 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
             other => other,
         })?;
     }
+    for t in 0..header.num_ceiling_tiles {
+        let what = format!("ceiling tile {t}");
+        let tile = read_tile_index(&mut r, &what)?;
+        let mut ceilings = Box::new([Ceiling::NONE; TILE_CELLS]);
+        for (k, c) in ceilings.iter_mut().enumerate() {
+            let at = r.pos();
+            *c = Ceiling {
+                z_m: r.f32(&what)?,
+                var_m2: r.f32(&what)?,
+                log_odds: r.f32(&what)?,
+                seen_from: {
+                    let b = r.take(1, &what)?[0];
+                    SeenFrom::from_byte(b).ok_or_else(|| {
+                        r.error_at(
+                            at + 12,
+                            format!("{what}, cell {k}: side {b} is not 0 (above), 1 (below) or 2 (both)"),
+                        )
+                    })?
+                },
+            };
+            if let Some(problem) = ceiling_problem(c) {
+                return Err(r.error_at(at, format!("{what}, cell {k}: {problem}")));
+            }
+        }
+        map.insert_ceiling_tile(tile, ceilings).map_err(|e| match e {
+            Error::MemoryLimit { .. } => Error::parse(path, format!("loading ceiling tile {t}: {e}")),
+            other => other,
+        })?;
+    }
     map.restore_counters(header.num_scans, header.totals);
     Ok((header, Some(map)))
+}
+
+/// Reads a tile record's coordinates, refusing a tile outside the grid.
+fn read_tile_index(r: &mut ByteReader<'_>, what: &str) -> Result<TileIndex> {
+    let at = r.pos();
+    let tile = TileIndex {
+        ti: r.i32(what)?,
+        tj: r.i32(what)?,
+    };
+    if !(TILE_COORD_RANGE.contains(&tile.ti) && TILE_COORD_RANGE.contains(&tile.tj)) {
+        return Err(r.error_at(
+            at,
+            format!(
+                "{what} has coordinates ({}, {}), outside the grid's tiles {} ..= {}",
+                tile.ti,
+                tile.tj,
+                TILE_COORD_RANGE.start(),
+                TILE_COORD_RANGE.end()
+            ),
+        ));
+    }
+    Ok(tile)
+}
+
+/// What makes a ceiling's values impossible, if anything: none (NaN log-odds), or a finite log-odds, a finite
+/// height and a finite variance of 0 or more.
+fn ceiling_problem(c: &Ceiling) -> Option<String> {
+    if !c.is_some() {
+        return None;
+    }
+    if c.log_odds.is_infinite() {
+        return Some(format!(
+            "ceiling log-odds {} is infinite (expected NaN or a finite number)",
+            c.log_odds
+        ));
+    }
+    if !c.z_m.is_finite() {
+        return Some(format!("ceiling height {} m is not a finite number", c.z_m));
+    }
+    if !(c.var_m2.is_finite() && c.var_m2 >= 0.0) {
+        return Some(format!(
+            "ceiling variance {} m^2 is not a finite variance of 0 or more",
+            c.var_m2
+        ));
+    }
+    None
 }
 
 /// What makes a cell's values impossible for a map to hold, if anything: the log-odds is NaN (never observed)
@@ -314,6 +435,7 @@ mod tests {
             config,
             tile_size: TILE_SIZE as u32,
             num_tiles: tiles.len() as u64,
+            num_ceiling_tiles: 0,
             num_scans: 1,
             totals: IntegrationStats::default(),
             written_by: "a test".into(),
@@ -422,4 +544,71 @@ mod tests {
             assert!(parse(p, &bytes, Some(1 << 30)).is_ok(), "{fine:?}");
         }
     }
+
+    /// A map with ground under a board whose top was hit once: one ceiling ([`crate::OverheadHits::Ceiling`]).
+    fn map_with_a_ceiling() -> Map {
+        let model = crate::MapPreset::Robust.model(&crate::RobotProfile::default());
+        let mut map = Map::new(MapConfig {
+            model,
+            ..MapConfig::new(0.05)
+        })
+        .expect("valid");
+        let mut ground = Scan::new(Point3::new(0.025, 0.025, 0.25), SensorModel::laser());
+        ground.push_hit(Point3::new(2.025, 0.025, 0.0));
+        let mut top = Scan::new(Point3::new(0.025, 0.025, 0.45), SensorModel::laser());
+        top.push_hit(Point3::new(2.025, 0.025, 0.34));
+        map.integrate(&ground).expect("integrated");
+        map.integrate(&top).expect("integrated");
+        assert_eq!(map.num_ceilings(), 1);
+        map
+    }
+
+    #[test]
+    fn a_map_with_a_ceiling_layer_is_version_2_and_loads_back_identically() {
+        let map = map_with_a_ceiling();
+        let bytes = to_bytes(&map);
+        assert_eq!(bytes[8..12], 2u32.to_le_bytes());
+        let p = Path::new("ceiling.oeg");
+        let back = map_from_bytes(p, &bytes, crate::DEFAULT_MEMORY_LIMIT_BYTES).expect("loaded");
+        let c = map.geometry().cell_of(2.025, 0.025).expect("cell");
+        assert_eq!(back.ceiling(c), map.ceiling(c));
+        assert!(back.ceiling(c).is_some_and(|c| c.seen_from == SeenFrom::Above));
+        assert!(to_bytes(&back) == bytes, "same map, same bytes");
+        // Without a ceiling the file is version 1, as before the layer existed.
+        assert_eq!(to_bytes(&small_map())[8..12], 1u32.to_le_bytes());
+
+        // Where the one ceiling's record starts.
+        let prefix = container::read_prefix(p, &bytes, MAGIC, &[2], "a map").expect("prefix");
+        let k = crate::storage::offset_in_tile(c);
+        let at = prefix.body_start + map.tiles().count() * TILE_RECORD_BYTES + 8 + k * 13;
+        let forge = |offset: usize, value: &[u8]| {
+            let mut b = bytes[..bytes.len() - 8].to_vec();
+            b[offset..offset + value.len()].copy_from_slice(value);
+            container::seal(&mut b);
+            b
+        };
+        for (offset, value, expected) in [
+            (at + 12, vec![7u8], "side 7 is not 0 (above)"),
+            (at, f32::INFINITY.to_le_bytes().to_vec(), "ceiling height inf m"),
+            (at + 4, (-1.0f32).to_le_bytes().to_vec(), "ceiling variance -1"),
+            (at + 8, f32::INFINITY.to_le_bytes().to_vec(), "ceiling log-odds inf"),
+        ] {
+            let err = map_from_bytes(p, &forge(offset, &value), 1 << 30)
+                .expect_err("bad ceiling")
+                .to_string();
+            assert!(
+                err.contains(&format!("ceiling tile 0, cell {k}")) && err.contains(expected),
+                "{err}"
+            );
+        }
+        // A version 1 file cannot declare a ceiling layer; a truncated one names the sizes.
+        let v1 = forge(8, &1u32.to_le_bytes());
+        let err = map_from_bytes(p, &v1, 1 << 30).expect_err("v1 with ceilings").to_string();
+        assert!(err.contains("version 1 header declares 1 ceiling tiles"), "{err}");
+        let err = map_from_bytes(p, &bytes[..bytes.len() - 100], 1 << 30)
+            .expect_err("truncated")
+            .to_string();
+        assert!(err.contains("1 ceiling tiles"), "{err}");
+    }
+
 }

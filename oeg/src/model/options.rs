@@ -145,6 +145,32 @@ impl HitHeight {
     }
 }
 
+/// What a hit more than the surface band above a cell's surface is (eq. 12's `z` when the cell already holds
+/// a lower surface).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OverheadHits {
+    /// The paper: a measurement of the cell's one surface, fused by [`ElevationFusion`].
+    #[default]
+    Surface,
+    /// A structure over the surface (a board or a table top over the ground, a person who stepped onto it):
+    /// the hit goes to the cell's ceiling ([`crate::cell::Ceiling`], [`crate::model::update_ceiling`]), the
+    /// lowest structure seen over the surface, and leaves the surface alone. One height per cell cannot hold a
+    /// board seen now and then over ground seen all the time: fused into the surface, the board's rare top hits
+    /// are outvoted by the ground under it. A ceiling is cleared by beams through its band, as a surface is;
+    /// the robot is blocked where the clearance under it lies between its step and its height
+    /// ([`crate::traversability::ceiling_decision`]). The recommended preset's rule.
+    Ceiling,
+}
+
+impl OverheadHits {
+    /// Whether this is the paper's rule (left out of serialized options, so that the paper's files keep their
+    /// bytes).
+    pub fn is_paper(&self) -> bool {
+        *self == Self::Surface
+    }
+}
+
 /// Whether a sample the beam passed through lowers a cell's occupancy (eq. 10's `p_min` branch).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -201,6 +227,9 @@ pub struct ModelOptions {
     pub hit_height: HitHeight,
     /// Which of a scan's hits in a cell make its elevation measurement.
     pub scan_hit_elevation: ScanHitElevation,
+    /// What a hit above the band of a cell's surface is: the surface, or a structure over it.
+    #[serde(skip_serializing_if = "OverheadHits::is_paper")]
+    pub overhead_hits: OverheadHits,
     /// How hit elevations are fused.
     pub elevation_fusion: ElevationFusion,
     /// Variance added to a cell's elevation variance before each fusion, m^2 per update. 0 (the paper) keeps
@@ -246,6 +275,7 @@ impl Default for ModelOptions {
             free_space_max_depth_m: None,
             hit_height: HitHeight::BeamSample,
             scan_hit_elevation: ScanHitElevation::Highest,
+            overhead_hits: OverheadHits::Surface,
             elevation_fusion: ElevationFusion::Kalman,
             process_noise_var_m2: 0.0,
             vertical_variance: false,

@@ -4,7 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::options::{
-    ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, ModelOptions, ScanHitElevation,
+    ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, ModelOptions, OverheadHits,
+    ScanHitElevation,
 };
 use crate::traversability::{DEFAULT_REACH_M, DEFAULT_UNCERTAIN_KAPPA, RobotProfile, TraversabilityRule};
 
@@ -23,7 +24,8 @@ pub enum MapPreset {
     #[default]
     Paper,
     /// The recommended model: the paper's equations with the surface-band free-space rule, heights at the
-    /// hits' end points, the highest level of a scan's hits with its spread, the top surface across scans, the
+    /// hits' end points, the highest level of a scan's hits with its spread, structures over a surface kept
+    /// in a ceiling layer, the top surface across scans, the
     /// vertical variance of a hit, correlated measurements, height thresholding at the robot's height and the
     /// contact step rule with an uncertain band.
     Robust,
@@ -50,6 +52,7 @@ impl MapPreset {
                 free_space_elevation: FreeSpaceElevation::Forget,
                 hit_height: HitHeight::Endpoint,
                 scan_hit_elevation: ScanHitElevation::HighestLevel,
+                overhead_hits: OverheadHits::Ceiling,
                 elevation_fusion: ElevationFusion::TopSurface,
                 measurement_correlation: 1.0,
                 vertical_variance: true,

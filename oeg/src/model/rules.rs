@@ -2,8 +2,9 @@
 //! hit is fused with a cell's estimate, and whether a free sample says anything about a cell. The options
 //! that select them are in [`super::options`]; `oeg/README.md` gives each rule's source.
 
-use super::equations::{Elevation, kalman_fuse};
-use super::options::{ElevationFusion, FreeSpaceOccupancy, ScanHitElevation};
+use super::equations::{Elevation, kalman_fuse, log_odds, update_log_odds};
+use super::options::{ElevationFusion, FreeSpaceOccupancy, ModelOptions, ScanHitElevation};
+use crate::cell::{Ceiling, SeenFrom};
 
 /// Fuses the elevation measurement `h` (variance `s2`) into `prior` under `rule` (see [`ElevationFusion`]);
 /// `band_sigmas` is the surface band's half width for [`ElevationFusion::TopSurface`].
@@ -182,6 +183,107 @@ pub fn fuse_with_disagreement(
 pub fn band_contradicts(prior: Elevation, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
     let half = band_sigmas * prior.var_m2.sqrt();
     z_lo_m <= prior.mean_m + half && z_hi_m >= prior.mean_m - half
+}
+
+/// One scan's measurement of the structure over a cell ([`crate::OverheadHits::Ceiling`]): the lowest level of
+/// its hits above the cell's surface band.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CeilingHit {
+    /// Height, world z, metres.
+    pub z_m: f32,
+    /// Variance, m^2.
+    pub var_m2: f32,
+    /// The largest inverse-sensor-model probability among the hits (eq. 10).
+    pub p: f32,
+    /// From which side the beams came.
+    pub seen_from: SeenFrom,
+}
+
+/// [`crate::OverheadHits::Ceiling`]: a cell's ceiling after one scan, from the scan's `hit` (if any) and
+/// whether a beam passed through the structure's side of its band (`contradicted`, [`ceiling_contradicts`]).
+///
+/// * A hit within the band of the ceiling is the same structure: its height is fused by eq. 8-9 (with
+///   [`correlated_variance`]) and its evidence raised by the hit's log-odds (eq. 5-7).
+/// * A hit below the band is a lower structure, and the robot's clearance is set by the lowest: it replaces the
+///   ceiling. So does a hit above the band in a scan whose beams contradicted the ceiling (the structure's lower
+///   part has gone).
+/// * A hit above the band alone is a higher part of the structure and leaves the ceiling as it is.
+/// * A scan that only contradicts it lowers its evidence by as much as the surest hit raises it, eq. 6 of
+///   `1 - p_max`: the band is the thin slab where the structure was measured, and a beam through it says
+///   there is nothing there as surely as a beam ending in it says there is (the symmetric inverse sensor
+///   model of a voxel, Thrun et al.'s `l_occ = -l_free`). A 2.5D cell's `p_min` is weak because a beam
+///   passing a cell's column says little of its surface; a beam through this slab says all. A ceiling whose
+///   evidence falls to `occupied_log_odds` is gone: at the defaults (`p_max` 0.9, clamp 3.5) after 2 such scans,
+///   after 1 when a single hit made it.
+///
+/// Hits win over contradictions in the same scan, as occupied samples win over free ones in a cell (OctoMap).
+pub fn update_ceiling(
+    prior: Ceiling,
+    hit: Option<CeilingHit>,
+    contradicted: bool,
+    opts: &ModelOptions,
+    occupied_log_odds: f32,
+) -> Ceiling {
+    let evidence = |l: f32, p: f32| update_log_odds(l, log_odds(p), opts.log_odds_min, opts.log_odds_max);
+    let fresh = |h: CeilingHit| Ceiling {
+        z_m: h.z_m,
+        var_m2: h.var_m2,
+        log_odds: evidence(0.0, h.p),
+        seen_from: h.seen_from,
+    };
+    match (prior.height(), hit) {
+        (None, Some(h)) => fresh(h),
+        (Some(c), Some(h)) => match surface_level(c, h.z_m, h.var_m2, opts.surface_band_sigmas) {
+            Level::Same => {
+                let q = opts.process_noise_var_m2;
+                let fused = kalman_fuse(Some(c), h.z_m, h.var_m2, q);
+                Ceiling {
+                    z_m: fused.mean_m,
+                    var_m2: correlated_variance(
+                        fused.var_m2,
+                        c.var_m2 + q,
+                        h.var_m2,
+                        opts.measurement_correlation,
+                    ),
+                    log_odds: evidence(prior.log_odds, h.p),
+                    seen_from: prior.seen_from.and(h.seen_from),
+                }
+            }
+            Level::Below => fresh(h),
+            Level::Above if contradicted => fresh(h),
+            Level::Above => prior,
+        },
+        (Some(_), None) if contradicted => {
+            let l = evidence(prior.log_odds, 1.0 - opts.p_max);
+            if l <= occupied_log_odds {
+                Ceiling::NONE
+            } else {
+                Ceiling {
+                    log_odds: l,
+                    ..prior
+                }
+            }
+        }
+        _ => prior,
+    }
+}
+
+/// [`crate::OverheadHits::Ceiling`]: whether a beam whose path through a cell spans the heights `[z_lo_m, z_hi_m]`
+/// contradicts the structure over it: it passes through the structure's side of its band, `[z - k sigma, z]`
+/// for a top seen from above, `[z, z + k sigma]` for an underside seen from below, the whole band for one seen
+/// from both sides. A beam skimming just over a top (one that lands on it a little further on, or on the
+/// ground behind) or just under an underside passes where the structure leaves room; the symmetric band of
+/// [`band_contradicts`] would have such grazing beams clear the structures they keep measuring. The band is
+/// as wide as the structure's hits spread ([`spread_variance`]): a person's front, hit from the ankles up,
+/// is contradicted by any beam through where they stood.
+pub fn ceiling_contradicts(ceiling: &Ceiling, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
+    let half = band_sigmas * ceiling.var_m2.sqrt();
+    let (lo, hi) = match ceiling.seen_from {
+        SeenFrom::Above => (ceiling.z_m - half, ceiling.z_m),
+        SeenFrom::Below => (ceiling.z_m, ceiling.z_m + half),
+        SeenFrom::Both => (ceiling.z_m - half, ceiling.z_m + half),
+    };
+    z_lo_m <= hi && z_hi_m >= lo
 }
 
 /// [`ScanHitElevation::MeanWithSpread`]: the variance of a scan's measurement of a cell, the inverse-variance
@@ -430,6 +532,90 @@ mod tests {
             fuse_with_disagreement(None, 0.2, 1e-4, 0.0),
             kalman_fuse(None, 0.2, 1e-4, 0.0)
         );
+    }
+
+    #[test]
+    fn a_ceiling_is_confirmed_lowered_and_cleared_as_its_evidence_says() {
+        let opts = ModelOptions::default();
+        let occupied = log_odds(opts.occupied_threshold);
+        let hit = |z_m: f32| CeilingHit {
+            z_m,
+            var_m2: 1e-4,
+            p: 0.9,
+            seen_from: SeenFrom::Above,
+        };
+        // A first hit makes a ceiling with one hit's evidence (log-odds of 0.9 = 2.2).
+        let board = update_ceiling(Ceiling::NONE, Some(hit(0.34)), false, &opts, occupied);
+        assert_eq!((board.z_m, board.var_m2), (0.34, 1e-4));
+        assert!((board.log_odds - log_odds(0.9)).abs() < 1e-6);
+        // The same structure again: fused, and its evidence grows to the clamp.
+        let again = update_ceiling(board, Some(hit(0.35)), false, &opts, occupied);
+        assert_eq!(
+            Elevation {
+                mean_m: again.z_m,
+                var_m2: again.var_m2
+            },
+            kalman_fuse(board.height(), 0.35, 1e-4, 0.0)
+        );
+        assert_eq!(again.log_odds, opts.log_odds_max);
+        // A lower structure sets the clearance: it replaces the ceiling.
+        let lower = update_ceiling(again, Some(hit(0.20)), false, &opts, occupied);
+        assert_eq!(lower.z_m, 0.20);
+        // A higher hit alone is a higher part of the structure; with a contradiction, the lower part has gone.
+        assert_eq!(update_ceiling(lower, Some(hit(0.40)), false, &opts, occupied), lower);
+        assert_eq!(update_ceiling(lower, Some(hit(0.40)), true, &opts, occupied).z_m, 0.40);
+        // A hit wins over a contradiction in the same scan.
+        assert_eq!(
+            update_ceiling(board, Some(hit(0.345)), true, &opts, occupied).log_odds,
+            opts.log_odds_max
+        );
+        // Nothing said: unchanged.
+        assert_eq!(update_ceiling(board, None, false, &opts, occupied), board);
+        assert!(!update_ceiling(Ceiling::NONE, None, true, &opts, occupied).is_some());
+        // Contradictions alone, each as strong as the surest hit (logit of 1 - p_max = -2.2): from the clamp's
+        // top (3.5), gone after exactly 2 scans; from one hit, after 1.
+        let once = update_ceiling(again, None, true, &opts, occupied);
+        assert!((once.log_odds - (3.5 - log_odds(0.9))).abs() < 1e-5, "{once:?}");
+        assert!(!update_ceiling(once, None, true, &opts, occupied).is_some());
+        assert!(!update_ceiling(board, None, true, &opts, occupied).is_some());
+    }
+
+    #[test]
+    fn a_beam_contradicts_a_ceiling_only_on_the_structures_side_of_it() {
+        // A board's top at 0.34 m known to 1 cm, seen from above: the board lies under it.
+        let top = Ceiling {
+            z_m: 0.34,
+            var_m2: 1e-4,
+            log_odds: 2.0,
+            seen_from: SeenFrom::Above,
+        };
+        assert!(ceiling_contradicts(&top, 0.33, 0.335, 3.0), "through the board");
+        assert!(ceiling_contradicts(&top, 0.30, 0.40, 3.0), "a steep beam across it");
+        assert!(!ceiling_contradicts(&top, 0.341, 0.345, 3.0), "skimming over the top");
+        assert!(!ceiling_contradicts(&top, 0.20, 0.30, 3.0), "under the board");
+        // Its underside at 0.30 m seen from below: the board lies over it.
+        let underside = Ceiling {
+            z_m: 0.30,
+            seen_from: SeenFrom::Below,
+            ..top
+        };
+        assert!(ceiling_contradicts(&underside, 0.305, 0.31, 3.0), "through the board");
+        assert!(!ceiling_contradicts(&underside, 0.29, 0.299, 3.0), "skimming under it");
+        assert!(!ceiling_contradicts(&underside, 0.40, 0.45, 3.0), "over the board");
+        // Seen from both sides: either side of it.
+        let front = Ceiling {
+            seen_from: SeenFrom::Both,
+            ..top
+        };
+        assert!(ceiling_contradicts(&front, 0.341, 0.345, 3.0));
+        assert!(ceiling_contradicts(&front, 0.33, 0.335, 3.0));
+        assert!(!ceiling_contradicts(&front, 0.20, 0.30, 3.0));
+        assert_eq!(SeenFrom::Above.and(SeenFrom::Below), SeenFrom::Both);
+        assert_eq!(SeenFrom::Below.and(SeenFrom::Below), SeenFrom::Below);
+        for side in [SeenFrom::Above, SeenFrom::Below, SeenFrom::Both] {
+            assert_eq!(SeenFrom::from_byte(side as u8), Some(side));
+        }
+        assert_eq!(SeenFrom::from_byte(3), None);
     }
 
     #[test]
