@@ -6,6 +6,7 @@
 
 use oeg::Map;
 use sim::scenario;
+use sim::sensors::ObstacleReturns;
 use sim::truth::TruthRaster;
 
 use crate::error::Result;
@@ -28,17 +29,23 @@ pub struct Evaluation {
     pub verdicts: Verdicts,
 }
 
-/// Judges `map` against `truth` under the scenario's decisions.
+/// Judges `map` against `truth` under the scenario's decisions; `returns` are the readings each obstacle gave
+/// the sensors (whether it was seen at all).
 ///
 /// # Errors
 /// A planner check that cannot run (a start or goal outside the region).
-pub fn evaluate(s: &scenario::Scenario, map: &Map, truth: &TruthRaster) -> Result<Evaluation> {
+pub fn evaluate(
+    s: &scenario::Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    returns: &ObstacleReturns,
+) -> Result<Evaluation> {
     let verdicts = Verdicts::new(map, truth, s.map.traversability)?;
     let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &verdicts);
     let plan = crate::plan::check(s, map.geometry(), &verdicts)?;
     record_plan(&mut metrics, &plan);
     let failed = metrics::check_expectations(&mut metrics, &s.expectations);
-    let obstacles = crate::obstacles::decisions(s, map, truth, &verdicts);
+    let obstacles = crate::obstacles::decisions(s, map, truth, &verdicts, returns);
     Ok(Evaluation {
         metrics,
         failed,

@@ -6,6 +6,7 @@ use nalgebra::{Isometry2, Point2, Vector2};
 use oeg::{Map, Traversability};
 use serde::Serialize;
 use sim::scenario::{Obstacle, Scenario};
+use sim::sensors::ObstacleReturns;
 use sim::truth::TruthRaster;
 
 use crate::verdict::{Verdict, Verdicts};
@@ -22,6 +23,10 @@ pub struct ObstacleDecision {
     /// The height that decides: a box's or cylinder's height, a ramp's or bush's top, an overhang's clearance
     /// (the free gap under it), metres.
     pub height_m: f64,
+    /// Readings the sensors got from the obstacle over the run (its own returns, spurious ones left out). 0: no
+    /// beam ever reached it (between a lidar's beams, over or under every beam), so no map of these readings
+    /// can hold it, whatever its model.
+    pub sensor_returns: u64,
     /// Cells whose centre lies in the footprint, plus the cell of the obstacle's centre.
     pub num_cells: u64,
     /// Of those, observed by the map.
@@ -143,7 +148,13 @@ fn deciding_height(o: &Obstacle) -> f64 {
 /// cells that decide: the truly blocked ones for a blocked obstacle, every observed one for a passable one.
 /// It is `blocked` when most of them are mapped blocked, `uncertain` when most are mapped blocked or
 /// uncertain, `passable` otherwise, and `unseen` when none was observed.
-pub fn decisions(s: &Scenario, map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<ObstacleDecision> {
+pub fn decisions(
+    s: &Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    verdicts: &Verdicts,
+    returns: &ObstacleReturns,
+) -> Vec<ObstacleDecision> {
     let geometry = *map.geometry();
     s.obstacles
         .iter()
@@ -155,6 +166,7 @@ pub fn decisions(s: &Scenario, map: &Map, truth: &TruthRaster, verdicts: &Verdic
                 kind: o.kind().to_string(),
                 // Rounded to the micrometre: 0.036, not 0.036000000000000004.
                 height_m: (deciding_height(o) * 1e6).round() / 1e6,
+                sensor_returns: returns.of(index),
                 num_cells: 0,
                 num_observed_cells: 0,
                 true_blocked_cells: 0,
@@ -251,6 +263,7 @@ impl crate::output::CsvRow for ObstacleDecision {
         "name",
         "kind",
         "height_m",
+        "sensor_returns",
         "num_cells",
         "num_observed_cells",
         "true_blocked_cells",

@@ -305,14 +305,14 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     let geometry = *map.geometry();
     let truth = truth_of(s, simulation.world(), &geometry)?;
     let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
-    let evaluation = evaluate(s, &map, &truth)?;
+    let evaluation = evaluate(s, &map, &truth, simulation.obstacle_returns())?;
 
     let staged = Staged::begin(&out_dir)?;
     let stage = staged.dir();
     let mut files = write_report(stage, s, &map, &truth, &evaluation)?;
     let mut compared_metrics = None;
     if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
-        let other_eval = evaluate(c, &other, &truth)?;
+        let other_eval = evaluate(c, &other, &truth, simulation.obstacle_returns())?;
         let dir = stage.join(preset.name());
         create_dir(&dir)?;
         files.extend(write_report(&dir, c, &other, &truth, &other_eval)?);

@@ -111,7 +111,9 @@ impl SeenFrom {
 
     /// From its byte in a map file.
     pub fn from_byte(b: u8) -> Option<Self> {
-        [Self::Above, Self::Below, Self::Both].into_iter().find(|s| *s as u8 == b)
+        [Self::Above, Self::Below, Self::Both]
+            .into_iter()
+            .find(|s| *s as u8 == b)
     }
 }
 

@@ -9,8 +9,8 @@ use crate::error::{Error, Result};
 use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
-    CeilingHit, Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight,
-    Level, ModelOptions, OverheadHits, ScanHitElevation, band_contradicts, ceiling_contradicts, clamp_probability,
+    CeilingHit, Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level,
+    ModelOptions, OverheadHits, ScanHitElevation, band_contradicts, ceiling_contradicts, clamp_probability,
     correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds,
     ray_bound, spread_variance, surface_level, update_ceiling, update_log_odds, vertical_variance,
 };
@@ -513,8 +513,7 @@ impl Map {
             if let Some(ceilings) = ceilings {
                 for (ceiling, ev) in ceilings.iter_mut().zip(evidence.iter()) {
                     if ev.touches_ceiling() {
-                        *ceiling =
-                            update_ceiling(
+                        *ceiling = update_ceiling(
                             *ceiling,
                             ev.ceiling_hit(opts.measurement_correlation),
                             ev.ceiling_contradicted,

@@ -9,9 +9,10 @@ use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion};
 use crate::map::Map;
-use crate::model::{Elevation, Level, probability_from_log_odds, surface_level};
+use crate::model::{Elevation, Level, ceiling_confirmed, probability_from_log_odds, surface_level};
 use crate::traversability::{
-    RobotProfile, Traversability, TraversabilityRule, ceiling_decision, footprint_decision, more_restrictive, step_decision,
+    RobotProfile, Traversability, TraversabilityRule, ceiling_decision, footprint_decision, more_restrictive,
+    step_decision,
 };
 
 /// A per-cell quantity of the map.
@@ -130,9 +131,10 @@ impl Map {
         rule: TraversabilityRule,
     ) -> Traversability {
         let surface = self.surface_traversability(cell, profile, rule);
-        let Some(ceiling) = self.ceiling(cell).and_then(|c| c.height()) else {
+        let Some(ceiling) = self.ceiling(cell) else {
             return surface;
         };
+        let confirmed = ceiling_confirmed(ceiling.log_odds, self.config.model.p_max);
         let kappa = match rule {
             TraversabilityRule::Contact { kappa, .. } => kappa,
             _ => 0.0,
@@ -145,10 +147,11 @@ impl Map {
             .or_else(|| self.ground_within(cell, profile.contact_distance_m(), kappa));
         let over_ceiling = match ground {
             Some(g) => ceiling_decision(
-                ceiling.mean_m - g.mean_m,
+                ceiling.z_m - g.mean_m,
                 (ceiling.var_m2 + g.var_m2).sqrt(),
                 kappa,
                 profile,
+                confirmed,
             ),
             None => Some(Traversability::Uncertain),
         };

@@ -223,12 +223,20 @@ pub fn footprint_decision(
 /// The decision for a structure `clearance_m` over a cell's ground, with standard deviation `sigma_m` (of the
 /// difference): the robot drives over it when it is no higher than a step, under it when it is higher than the
 /// robot, and hits it in between, whatever it is (a board, a table top, a person): `Blocked`, or `Uncertain`
-/// within `kappa` sigma of either threshold. `None` leaves the decision to the cell's surface.
-pub fn ceiling_decision(clearance_m: f32, sigma_m: f32, kappa: f32, profile: &RobotProfile) -> Option<Traversability> {
+/// within `kappa` sigma of either threshold. A structure that is not `confirmed` (seen less surely than one
+/// sure hit: [`crate::model::ceiling_confirmed`]) may not be there at all, and blocks nothing for sure: it is
+/// `Uncertain` where a confirmed one would be `Blocked`. `None` leaves the decision to the cell's surface.
+pub fn ceiling_decision(
+    clearance_m: f32,
+    sigma_m: f32,
+    kappa: f32,
+    profile: &RobotProfile,
+    confirmed: bool,
+) -> Option<Traversability> {
     let band = kappa * sigma_m;
     if clearance_m > profile.height_m + band || clearance_m < profile.max_step_m - band {
         None
-    } else if clearance_m > profile.max_step_m + band && clearance_m < profile.height_m - band {
+    } else if confirmed && clearance_m > profile.max_step_m + band && clearance_m < profile.height_m - band {
         Some(Traversability::Blocked)
     } else {
         Some(Traversability::Uncertain)
@@ -321,18 +329,40 @@ mod tests {
     fn a_structure_between_a_step_and_the_robots_height_over_the_ground_blocks_it() {
         let p = RobotProfile::default();
         // A board 0.30 m over the ground, known to 1 cm: blocked; 0.44 m: within 2 sigma of 0.46 m, uncertain.
-        assert_eq!(ceiling_decision(0.30, 0.01, 2.0, &p), Some(Traversability::Blocked));
-        assert_eq!(ceiling_decision(0.44, 0.01, 2.0, &p), Some(Traversability::Uncertain));
+        assert_eq!(
+            ceiling_decision(0.30, 0.01, 2.0, &p, true),
+            Some(Traversability::Blocked)
+        );
+        assert_eq!(
+            ceiling_decision(0.44, 0.01, 2.0, &p, true),
+            Some(Traversability::Uncertain)
+        );
         // 0.50 m: the robot passes under it; 2 cm: it drives over it. Both leave the decision to the surface.
-        assert_eq!(ceiling_decision(0.50, 0.01, 2.0, &p), None);
-        assert_eq!(ceiling_decision(0.02, 0.005, 2.0, &p), None);
+        assert_eq!(ceiling_decision(0.50, 0.01, 2.0, &p, true), None);
+        assert_eq!(ceiling_decision(0.02, 0.005, 2.0, &p, true), None);
         // 3.5 cm known to 5 mm: cannot tell whether it is a step.
-        assert_eq!(ceiling_decision(0.035, 0.005, 2.0, &p), Some(Traversability::Uncertain));
+        assert_eq!(
+            ceiling_decision(0.035, 0.005, 2.0, &p, true),
+            Some(Traversability::Uncertain)
+        );
         // Without an uncertain band (kappa 0) the thresholds are sharp.
-        assert_eq!(ceiling_decision(0.459, 0.01, 0.0, &p), Some(Traversability::Blocked));
-        assert_eq!(ceiling_decision(0.461, 0.01, 0.0, &p), None);
+        assert_eq!(
+            ceiling_decision(0.459, 0.01, 0.0, &p, true),
+            Some(Traversability::Blocked)
+        );
+        assert_eq!(ceiling_decision(0.461, 0.01, 0.0, &p, true), None);
+        // Seen less surely than one sure hit (a far stereo pixel), it may not be there: uncertain, not blocked.
+        assert_eq!(
+            ceiling_decision(0.30, 0.01, 2.0, &p, false),
+            Some(Traversability::Uncertain)
+        );
+        assert_eq!(ceiling_decision(0.50, 0.01, 2.0, &p, false), None);
         // The more restrictive decision wins.
-        let (b, u, t) = (Traversability::Blocked, Traversability::Uncertain, Traversability::Traversable);
+        let (b, u, t) = (
+            Traversability::Blocked,
+            Traversability::Uncertain,
+            Traversability::Traversable,
+        );
         assert_eq!(more_restrictive(t, Some(b)), b);
         assert_eq!(more_restrictive(b, Some(u)), b);
         assert_eq!(more_restrictive(Traversability::Free, Some(u)), u);

@@ -678,7 +678,10 @@ fn a_board_hit_now_and_then_over_ground_hit_every_scan_is_kept_as_a_ceiling() {
     let ceiling = kept.ceiling(c).expect("a ceiling over the ground");
     assert!((ceiling.z_m - 0.34).abs() < 0.01, "{ceiling:?}");
     let ground = kept.cell(c).elevation().expect("ground");
-    assert!(ground.mean_m.abs() < 0.01, "the ground stays the surface: {ground:?}");
+    assert!(
+        ground.mean_m.abs() < 0.01,
+        "the ground stays the surface: {ground:?}"
+    );
     assert_eq!(kept.traversability(c, &p, rule), Traversability::Blocked);
     // Beams under the board never pass through its band, so they leave it alone.
     assert_eq!(kept.num_ceilings(), 1);
@@ -696,7 +699,8 @@ fn a_person_over_the_ground_is_a_ceiling_that_beams_through_it_clear() {
     let origin = Point3::new(0.025, 0.025, 0.45);
     let ground_behind: Vec<_> = (0..10).map(|i| (2.0 + 0.05 * f64::from(i), 0.025, 0.0)).collect();
     for _ in 0..5 {
-        map.integrate(&scan_of(origin, &ground_behind)).expect("integrated");
+        map.integrate(&scan_of(origin, &ground_behind))
+            .expect("integrated");
     }
     // A person stands at x = 2.0-2.5 m: the beams stop on their front at 0.10-0.45 m.
     let front: Vec<_> = (0..10)
@@ -714,7 +718,10 @@ fn a_person_over_the_ground_is_a_ceiling_that_beams_through_it_clear() {
     while map.ceiling(c).is_some() {
         map.integrate(&scan_of(origin, &far)).expect("integrated");
         scans += 1;
-        assert!(scans <= 2, "a ceiling at the clamp is gone within 2 contradicting scans");
+        assert!(
+            scans <= 2,
+            "a ceiling at the clamp is gone within 2 contradicting scans"
+        );
     }
     assert_ne!(map.traversability(c, &p, rule), Traversability::Blocked);
 }

@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::scenario::LoadedScenario;
-use crate::sensors::{SensorRay, SensorScan, SimSensor};
+use crate::sensors::{ObstacleReturns, SensorRay, SensorScan, SimSensor};
 use crate::world::World;
 
 /// A running simulation of one scenario.
@@ -15,6 +15,8 @@ pub struct Simulation {
     next: Vec<u64>,
     duration_s: f64,
     buffer: Vec<SensorRay>,
+    sources: Vec<Option<u32>>,
+    returns: ObstacleReturns,
     num_rays: u64,
 }
 
@@ -40,6 +42,8 @@ impl Simulation {
             sensors,
             duration_s: loaded.scenario.duration_s,
             buffer: Vec::new(),
+            sources: Vec::new(),
+            returns: ObstacleReturns::new(loaded.scenario.obstacles.len()),
             num_rays: 0,
         })
     }
@@ -62,6 +66,11 @@ impl Simulation {
     /// The scenario's duration, seconds.
     pub fn duration_s(&self) -> f64 {
         self.duration_s
+    }
+
+    /// The readings each obstacle returned so far.
+    pub fn obstacle_returns(&self) -> &ObstacleReturns {
+        &self.returns
     }
 
     /// Rays cast so far.
@@ -88,7 +97,13 @@ impl Simulation {
             .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
         self.next[index] += 1;
         self.world.advance_to(t);
-        let scan = self.sensors[index].capture(&self.world, index, &mut self.buffer)?;
+        let scan = self.sensors[index].capture(
+            &self.world,
+            index,
+            &mut self.buffer,
+            &mut self.sources,
+            &mut self.returns,
+        )?;
         self.num_rays += scan.rays.len() as u64;
         Some(scan)
     }

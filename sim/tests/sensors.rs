@@ -385,3 +385,33 @@ fn mixed_pixels_fall_between_the_surfaces_at_a_depth_edge() {
         "mixed pixels only at the edges {edges:?}: {mixed:?}"
     );
 }
+
+#[test]
+fn each_obstacle_counts_the_readings_it_returned_and_one_no_beam_reaches_counts_none() {
+    // The wall ahead (obstacle 0); a board 1 m up, above the laser's plane (1); a box behind the robot, outside
+    // the laser's 90 degree fan (2).
+    let others = "[[obstacles]]\nkind = \"overhang\"\nname = \"high board\"\ncenter_xy_m = [2.0, 0.0]\n\
+                  size_m = [0.5, 0.5, 0.05]\nclearance_m = 1.0\n\n[[obstacles]]\nkind = \"box\"\nname = \"behind\"\n\
+                  center_xy_m = [-1.5, 0.0]\nsize_m = [0.2, 0.2, 0.5]\n";
+    let (scan, sim) = scan_with(
+        "returns",
+        &format!("{LASER}\n[sensors.noise]\nrange_sigma_m = 0.0\n"),
+        others,
+    );
+    let hits = scan.rays.iter().filter(|r| r.kind == RayKind::Hit).count() as u64;
+    assert!(hits > 0);
+    let returns = sim.obstacle_returns();
+    assert_eq!(returns.of(0), hits, "every hit of this scan is the wall's");
+    assert_eq!(returns.of(1), 0, "no beam reaches a board over the laser's plane");
+    assert_eq!(returns.of(2), 0, "nor a box behind the fan");
+    assert_eq!(returns.of(99), 0);
+    // Spurious returns are not the wall's, though they are hits.
+    let (scan, sim) = scan_with(
+        "spurious_returns",
+        &format!("{LASER}\n[sensors.noise]\nrange_sigma_m = 0.0\nspurious_probability = 0.5\n"),
+        "",
+    );
+    let hits = scan.rays.iter().filter(|r| r.kind == RayKind::Hit).count() as u64;
+    let returned = sim.obstacle_returns().of(0);
+    assert!(returned > 0 && returned < hits, "{returned} of {hits}");
+}

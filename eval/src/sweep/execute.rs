@@ -322,7 +322,8 @@ fn simulate_group(
                 }
             };
             let truth = &truths[k].1;
-            let evaluation = crate::evaluation::evaluate(s, map, truth).map_err(|e| e.to_string())?;
+            let evaluation = crate::evaluation::evaluate(s, map, truth, simulation.obstacle_returns())
+                .map_err(|e| e.to_string())?;
             Ok(Outcome {
                 evaluation,
                 max_step_m: s.robot.max_step_m,

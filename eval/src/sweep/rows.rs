@@ -70,6 +70,14 @@ pub fn metric_columns(row: &mut JsonMap<String, Json>, o: &Outcome) {
     row.insert("obstacles_overcautious".into(), Json::from(cautious));
     row.insert("obstacles_uncertain".into(), Json::from(uncertain));
     row.insert("obstacles_unseen".into(), Json::from(unseen));
+    // Obstacles no reading ever came from: invisible to the sensor set, whatever the map does.
+    let never_returned = o
+        .evaluation
+        .obstacles
+        .iter()
+        .filter(|d| d.sensor_returns == 0)
+        .count();
+    row.insert("obstacles_never_returned".into(), Json::from(never_returned));
     // Uncertain obstacles are not errors: the map said it could not tell.
     let judged = right + unsafe_ + cautious;
     let rate = if judged > 0 {
@@ -102,6 +110,7 @@ pub fn obstacle_rows(run: &Run, o: &Outcome) -> Vec<Json> {
                 "threshold_distance_m".into(),
                 Json::from(((d.height_m - threshold) * 1e6).round() / 1e6),
             );
+            row.insert("sensor_returns".into(), Json::from(d.sensor_returns));
             row.insert("num_observed_cells".into(), Json::from(d.num_observed_cells));
             row.insert("unsafe_cells".into(), Json::from(d.unsafe_cells));
             row.insert("overcautious_cells".into(), Json::from(d.overcautious_cells));

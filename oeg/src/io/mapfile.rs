@@ -202,7 +202,11 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         header
             .num_tiles
             .saturating_mul(TILE_RECORD_BYTES as u64)
-            .saturating_add(header.num_ceiling_tiles.saturating_mul(CEILING_RECORD_BYTES as u64))
+            .saturating_add(
+                header
+                    .num_ceiling_tiles
+                    .saturating_mul(CEILING_RECORD_BYTES as u64),
+            )
             .saturating_add(8),
     );
     if expected_len != data.len() as u64 {
@@ -591,7 +595,11 @@ mod tests {
             (at + 12, vec![7u8], "side 7 is not 0 (above)"),
             (at, f32::INFINITY.to_le_bytes().to_vec(), "ceiling height inf m"),
             (at + 4, (-1.0f32).to_le_bytes().to_vec(), "ceiling variance -1"),
-            (at + 8, f32::INFINITY.to_le_bytes().to_vec(), "ceiling log-odds inf"),
+            (
+                at + 8,
+                f32::INFINITY.to_le_bytes().to_vec(),
+                "ceiling log-odds inf",
+            ),
         ] {
             let err = map_from_bytes(p, &forge(offset, &value), 1 << 30)
                 .expect_err("bad ceiling")
@@ -603,12 +611,13 @@ mod tests {
         }
         // A version 1 file cannot declare a ceiling layer; a truncated one names the sizes.
         let v1 = forge(8, &1u32.to_le_bytes());
-        let err = map_from_bytes(p, &v1, 1 << 30).expect_err("v1 with ceilings").to_string();
+        let err = map_from_bytes(p, &v1, 1 << 30)
+            .expect_err("v1 with ceilings")
+            .to_string();
         assert!(err.contains("version 1 header declares 1 ceiling tiles"), "{err}");
         let err = map_from_bytes(p, &bytes[..bytes.len() - 100], 1 << 30)
             .expect_err("truncated")
             .to_string();
         assert!(err.contains("1 ceiling tiles"), "{err}");
     }
-
 }

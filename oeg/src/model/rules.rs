@@ -258,14 +258,22 @@ pub fn update_ceiling(
             if l <= occupied_log_odds {
                 Ceiling::NONE
             } else {
-                Ceiling {
-                    log_odds: l,
-                    ..prior
-                }
+                Ceiling { log_odds: l, ..prior }
             }
         }
         _ => prior,
     }
+}
+
+/// [`crate::OverheadHits::Ceiling`]: whether a ceiling's evidence `log_odds_value` makes it sure enough to block
+/// the robot: at least what the surest single hit gives, `logit(p_max)`. One hit of a precise sensor confirms
+/// a structure; a noisy sensor's (eq. 10 gives a far stereo pixel about 0.55) needs several at that height.
+/// A single weak hit above the surface band may be noise's tail (among the hundred pixels a camera puts in a
+/// cell each frame, one lies beyond 3 sigma every few frames): the cell is then uncertain, not blocked
+/// ([`crate::traversability::ceiling_decision`]).
+pub fn ceiling_confirmed(log_odds_value: f32, p_max: f32) -> bool {
+    // Less a float's rounding: one sure hit confirms.
+    log_odds_value >= log_odds(p_max) - 1e-5
 }
 
 /// [`crate::OverheadHits::Ceiling`]: whether a beam whose path through a cell spans the heights `[z_lo_m, z_hi_m]`
@@ -562,13 +570,29 @@ mod tests {
         let lower = update_ceiling(again, Some(hit(0.20)), false, &opts, occupied);
         assert_eq!(lower.z_m, 0.20);
         // A higher hit alone is a higher part of the structure; with a contradiction, the lower part has gone.
-        assert_eq!(update_ceiling(lower, Some(hit(0.40)), false, &opts, occupied), lower);
-        assert_eq!(update_ceiling(lower, Some(hit(0.40)), true, &opts, occupied).z_m, 0.40);
+        assert_eq!(
+            update_ceiling(lower, Some(hit(0.40)), false, &opts, occupied),
+            lower
+        );
+        assert_eq!(
+            update_ceiling(lower, Some(hit(0.40)), true, &opts, occupied).z_m,
+            0.40
+        );
         // A hit wins over a contradiction in the same scan.
         assert_eq!(
             update_ceiling(board, Some(hit(0.345)), true, &opts, occupied).log_odds,
             opts.log_odds_max
         );
+        // One sure hit confirms a structure, one weak hit (a far stereo pixel) does not.
+        assert!(ceiling_confirmed(board.log_odds, opts.p_max));
+        let weak = update_ceiling(
+            Ceiling::NONE,
+            Some(CeilingHit { p: 0.6, ..hit(0.34) }),
+            false,
+            &opts,
+            occupied,
+        );
+        assert!(weak.is_some() && !ceiling_confirmed(weak.log_odds, opts.p_max));
         // Nothing said: unchanged.
         assert_eq!(update_ceiling(board, None, false, &opts, occupied), board);
         assert!(!update_ceiling(Ceiling::NONE, None, true, &opts, occupied).is_some());
@@ -590,8 +614,14 @@ mod tests {
             seen_from: SeenFrom::Above,
         };
         assert!(ceiling_contradicts(&top, 0.33, 0.335, 3.0), "through the board");
-        assert!(ceiling_contradicts(&top, 0.30, 0.40, 3.0), "a steep beam across it");
-        assert!(!ceiling_contradicts(&top, 0.341, 0.345, 3.0), "skimming over the top");
+        assert!(
+            ceiling_contradicts(&top, 0.30, 0.40, 3.0),
+            "a steep beam across it"
+        );
+        assert!(
+            !ceiling_contradicts(&top, 0.341, 0.345, 3.0),
+            "skimming over the top"
+        );
         assert!(!ceiling_contradicts(&top, 0.20, 0.30, 3.0), "under the board");
         // Its underside at 0.30 m seen from below: the board lies over it.
         let underside = Ceiling {
@@ -599,9 +629,18 @@ mod tests {
             seen_from: SeenFrom::Below,
             ..top
         };
-        assert!(ceiling_contradicts(&underside, 0.305, 0.31, 3.0), "through the board");
-        assert!(!ceiling_contradicts(&underside, 0.29, 0.299, 3.0), "skimming under it");
-        assert!(!ceiling_contradicts(&underside, 0.40, 0.45, 3.0), "over the board");
+        assert!(
+            ceiling_contradicts(&underside, 0.305, 0.31, 3.0),
+            "through the board"
+        );
+        assert!(
+            !ceiling_contradicts(&underside, 0.29, 0.299, 3.0),
+            "skimming under it"
+        );
+        assert!(
+            !ceiling_contradicts(&underside, 0.40, 0.45, 3.0),
+            "over the board"
+        );
         // Seen from both sides: either side of it.
         let front = Ceiling {
             seen_from: SeenFrom::Both,

@@ -31,7 +31,7 @@ pub use config::{BeamPattern, Noise, RangeNoise, SensorKind, SensorSpec};
 
 use crate::robot::rotation_from_rpy;
 use crate::seed::{self, Stream};
-use crate::world::{Actors, RayStart, World};
+use crate::world::{Actors, HitKind, RayStart, World};
 
 /// Range difference beyond which two neighbouring beams see a depth edge, metres.
 pub const DEPTH_EDGE_M: f64 = 0.1;
@@ -45,6 +45,34 @@ pub struct SensorRay {
     pub vector_in_sensor: Vector3<f32>,
     /// The range error of the sensor model at the measured range, metres (0 for no returns).
     pub range_sigma_m: f32,
+}
+
+/// How many readings each obstacle returned over a run: whether the sensors saw it at all. An obstacle with none
+/// is invisible to the sensor set (between a lidar's beams, above or below every beam), and no map of those
+/// readings can hold it.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ObstacleReturns {
+    counts: Vec<u64>,
+}
+
+impl ObstacleReturns {
+    /// Counts for `num_obstacles` obstacles, all zero.
+    pub fn new(num_obstacles: usize) -> Self {
+        Self {
+            counts: vec![0; num_obstacles],
+        }
+    }
+
+    fn add(&mut self, index: usize) {
+        if let Some(c) = self.counts.get_mut(index) {
+            *c += 1;
+        }
+    }
+
+    /// Readings returned by obstacle `index` (0 for an index beyond the scenario's obstacles).
+    pub fn of(&self, index: usize) -> u64 {
+        self.counts.get(index).copied().unwrap_or(0)
+    }
 }
 
 /// Which pose a scan is placed with in the world.
@@ -191,12 +219,16 @@ impl SimSensor {
         }
     }
 
-    /// Takes one scan of the world at its current time into `rays` (reused between scans).
+    /// Takes one scan of the world at its current time into `rays` (reused between scans). `returns` gets one
+    /// more for each reading that is an obstacle's own return (index in the scenario's `obstacles`, not a
+    /// spurious one), `sources` is scratch reused between scans.
     pub fn capture(
         &mut self,
         world: &World,
         sensor_index: usize,
         rays: &mut Vec<SensorRay>,
+        sources: &mut Vec<Option<u32>>,
+        returns: &mut ObstacleReturns,
     ) -> Option<SensorScan> {
         let world_from_link = world.world_from_link(&self.spec.mount_link)?;
         let estimated = world.estimated_world_from_link(&self.spec.mount_link)?;
@@ -209,7 +241,10 @@ impl SimSensor {
         (0..this.directions.len())
             .into_par_iter()
             .map(|k| this.beam(world, &origin, &rotation, scan_index, k))
-            .collect_into_vec(rays);
+            .unzip_into_vecs(rays, sources);
+        for index in sources.iter().flatten() {
+            returns.add(*index as usize);
+        }
         if matches!(self.spec.kind, SensorKind::Stereo | SensorKind::DepthCamera) {
             // A camera pixel without depth is an invalid measurement, not a ray that saw nothing up to its
             // range (a laser's no return): it is left out, as depth images mark it NaN.
@@ -225,6 +260,8 @@ impl SimSensor {
         })
     }
 
+    /// One beam's reading, and the obstacle whose return it is (`None`: terrain, a person, no return or a
+    /// spurious return).
     fn beam(
         &self,
         world: &World,
@@ -232,7 +269,7 @@ impl SimSensor {
         rotation: &nalgebra::UnitQuaternion<f64>,
         scan_index: u64,
         k: usize,
-    ) -> SensorRay {
+    ) -> (SensorRay, Option<u32>) {
         let noise = &self.spec.noise;
         let nominal = self.directions[k];
         let no_return = SensorRay {
@@ -253,10 +290,10 @@ impl SimSensor {
             travelled = (nominal + (e1 * a + e2 * b) * noise.angular_jitter_rad).normalize();
         }
         if noise.hole_probability > 0.0 && rng.random::<f64>() < noise.hole_probability {
-            return no_return;
+            return (no_return, None);
         }
         if noise.dropout_probability > 0.0 && rng.random::<f64>() < noise.dropout_probability {
-            return no_return;
+            return (no_return, None);
         }
         let cast = |d: &Vector3<f64>| {
             world.cast_ray(
@@ -268,11 +305,11 @@ impl SimSensor {
             )
         };
         let Some(hit) = cast(&travelled) else {
-            return no_return;
+            return (no_return, None);
         };
         let mut range = hit.distance_m;
         if range < self.spec.min_range_m {
-            return no_return;
+            return (no_return, None);
         }
         if noise.mixed_pixel_probability > 0.0 && rng.random::<f64>() < noise.mixed_pixel_probability {
             let neighbour = (travelled + e1 * self.spacing_rad).normalize();
@@ -281,8 +318,13 @@ impl SimSensor {
                 range = rng.random_range(range.min(other)..range.max(other));
             }
         }
+        let mut source = match hit.kind {
+            HitKind::Obstacle { index } => u32::try_from(index).ok(),
+            HitKind::Terrain | HitKind::Actor { .. } => None,
+        };
         if noise.spurious_probability > 0.0 && rng.random::<f64>() < noise.spurious_probability {
             range = rng.random_range(self.spec.min_range_m..range.max(self.spec.min_range_m + 1e-6));
+            source = None;
         }
         let forward = nominal.x.max(1e-6);
         let sigma = noise.range_sigma_m(range, forward);
@@ -292,14 +334,17 @@ impl SimSensor {
             measured += sigma * z;
         }
         if measured <= self.spec.min_range_m || measured > self.spec.max_range_m {
-            return no_return;
+            return (no_return, None);
         }
         let sigma_at_measured = noise.range_sigma_m(measured, forward);
-        SensorRay {
-            kind: RayKind::Hit,
-            vector_in_sensor: (nominal * measured).cast(),
-            range_sigma_m: sigma_at_measured as f32,
-        }
+        (
+            SensorRay {
+                kind: RayKind::Hit,
+                vector_in_sensor: (nominal * measured).cast(),
+                range_sigma_m: sigma_at_measured as f32,
+            },
+            source,
+        )
     }
 }
 
