@@ -62,7 +62,8 @@ fn cells_near(out: &Path, error: &str, (x, y): (f64, f64), radius_m: f64) -> usi
 #[test]
 fn a_standing_robot_forgets_a_person_who_stood_in_front_of_it() {
     // The person stood at (1.6, 0) from 0.5 to 3.5 s and was gone by 4.5 s; the run ends at 6 s, 1.5 s (37
-    // scans of each laser, 7 of the camera) later: within the documented bound of 9 scans through the band.
+    // scans of each laser, 7 of the camera) later: more than the documented bounds, 2 scans through the
+    // structure's side of a ceiling's band and 9 through a surface's band.
     let robust = run("person_standing", "robust");
     assert_eq!(
         cells_near(&robust, "over_cautious", (1.6, 0.0), 0.4),
@@ -131,28 +132,28 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
     assert_eq!(rows(&paper.join("obstacles.csv"))[0]["decision"], "unsafe");
 }
 
-/// The shipped scenes under `robust`: regression bounds from the run of 2026-12-02 (`oeg suite scenarios --set
-/// map.preset=robust`), with a margin. They pin what the preset does today, not what it should do: the
-/// scenarios' own `[expectations]` (set for their own settings) fail under it, and the planner finds no path
-/// in 6 of the 15 scenes because of uncertain cells (the closing note of issue 12).
+/// The shipped scenes under `robust`: regression bounds from the run of 2026-12-02 after the ceiling layer
+/// (`oeg suite scenarios --set map.preset=robust`), with a margin. They pin what the preset does today, not what
+/// it should do: the scenarios' own `[expectations]` (set for their own settings) fail under it, and the planner
+/// finds no path in 5 of the 15 scenes because of uncertain cells (the closing note of issue 12).
 const ROBUST_BOUNDS: [(&str, u64, u64, f64); 15] = [
     // (scenario, unsafe step cells, unsafe clearance cells: measured + about 10 % + 2; elevation within 2 sigma:
     // measured - 0.02).
-    ("boards_and_branches", 2, 2, 0.97),
+    ("boards_and_branches", 2, 6, 0.96),
     ("corridor_lasers", 2, 2, 0.96),
-    ("curb_staircase", 51, 2, 0.96),
-    ("curbs_and_boards", 4, 46, 0.96),
-    ("default", 6, 347, 0.91),
+    ("curb_staircase", 23, 2, 0.96),
+    ("curbs_and_boards", 2, 40, 0.95),
+    ("default", 5, 280, 0.92),
     ("large_outdoor", 2, 525, 0.97),
-    ("long_range_stereo", 11, 2, 0.85),
-    ("outdoor_stereo", 6, 17, 0.88),
+    ("long_range_stereo", 4, 2, 0.87),
+    ("outdoor_stereo", 2, 3, 0.89),
     ("people_walking", 2, 2, 0.94),
     ("pose_drift", 42, 2, 0.96),
-    ("ramp_and_slope", 115, 2, 0.97),
-    ("spurious_returns", 13, 2, 0.94),
-    ("thin_pole", 2, 2, 0.97),
-    ("trees_no_threshold", 4, 2, 0.96),
-    ("trees_threshold", 6, 2, 0.96),
+    ("ramp_and_slope", 34, 2, 0.97),
+    ("spurious_returns", 14, 2, 0.96),
+    ("thin_pole", 3, 2, 0.97),
+    ("trees_no_threshold", 17, 2, 0.96),
+    ("trees_threshold", 16, 2, 0.96),
 ];
 
 #[test]

@@ -52,6 +52,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut map = oeg::Map::new(oeg::MapConfig::new(0.5))?;
     map.integrate(&scan)?;
     oeg::io::mapfile::save_map(&map, &dir("map")?.join("seed_ring.oeg"))?;
+    // A map with a ceiling layer (version 2): the ground under a board, then the board's top over it.
+    let robust = oeg::MapPreset::Robust.model(&oeg::RobotProfile::default());
+    let mut map = oeg::Map::new(oeg::MapConfig {
+        model: robust,
+        ..oeg::MapConfig::new(0.5)
+    })?;
+    for (z0, z1) in [(0.25, 0.0), (0.45, 0.34)] {
+        let mut scan = oeg::Scan::new(Point3::new(0.25, 0.25, z0), oeg::SensorModel::laser());
+        scan.push_hit(Point3::new(2.25, 0.25, z1));
+        map.integrate(&scan)?;
+    }
+    assert_eq!(map.num_ceilings(), 1, "the seed must hold a ceiling");
+    oeg::io::mapfile::save_map(&map, &dir("map")?.join("seed_ceiling.oeg"))?;
     // A short recorded log of the smallest shipped scene.
     let mut loaded = sim::scenario::load(&root.join("scenarios/thin_pole.toml"))?;
     loaded.scenario.duration_s = 0.2;
