@@ -227,55 +227,24 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         ..header.config
     };
     let mut map = Map::new(config).map_err(|e| r.error_at(16, format!("invalid map settings: {e}")))?;
-    for t in 0..header.num_tiles {
-        let what = format!("tile {t}");
-        let tile = read_tile_index(&mut r, &what)?;
-        let mut cells = Box::new([Cell::UNOBSERVED; TILE_CELLS]);
-        for (k, c) in cells.iter_mut().enumerate() {
-            let at = r.pos();
-            *c = Cell {
-                log_odds: r.f32(&what)?,
-                mean_m: r.f32(&what)?,
-                var_m2: r.f32(&what)?,
-            };
-            if let Some(problem) = cell_problem(c) {
-                return Err(r.error_at(at, format!("{what}, cell {k}: {problem}")));
-            }
-        }
-        map.insert_tile(tile, cells).map_err(|e| match e {
-            Error::MemoryLimit { .. } => Error::parse(path, format!("loading tile {t}: {e}")),
-            other => other,
-        })?;
-    }
-    for t in 0..header.num_ceiling_tiles {
-        let what = format!("ceiling tile {t}");
-        let tile = read_tile_index(&mut r, &what)?;
-        let mut ceilings = Box::new([Ceiling::NONE; TILE_CELLS]);
-        for (k, c) in ceilings.iter_mut().enumerate() {
-            let at = r.pos();
-            *c = Ceiling {
-                z_m: r.f32(&what)?,
-                var_m2: r.f32(&what)?,
-                log_odds: r.f32(&what)?,
-                seen_from: {
-                    let b = r.take(1, &what)?[0];
-                    SeenFrom::from_byte(b).ok_or_else(|| {
-                        r.error_at(
-                            at + 12,
-                            format!("{what}, cell {k}: side {b} is not 0 (above), 1 (below) or 2 (both)"),
-                        )
-                    })?
-                },
-            };
-            if let Some(problem) = ceiling_problem(c) {
-                return Err(r.error_at(at, format!("{what}, cell {k}: {problem}")));
-            }
-        }
-        map.insert_ceiling_tile(tile, ceilings).map_err(|e| match e {
-            Error::MemoryLimit { .. } => Error::parse(path, format!("loading ceiling tile {t}: {e}")),
-            other => other,
-        })?;
-    }
+    read_tiles(
+        &mut r,
+        path,
+        header.num_tiles,
+        "tile",
+        Cell::UNOBSERVED,
+        read_cell,
+        |tile, cells| map.insert_tile(tile, cells),
+    )?;
+    read_tiles(
+        &mut r,
+        path,
+        header.num_ceiling_tiles,
+        "ceiling tile",
+        Ceiling::NONE,
+        read_ceiling,
+        |tile, ceilings| map.insert_ceiling_tile(tile, ceilings),
+    )?;
     map.restore_counters(header.num_scans, header.totals);
     Ok((header, Some(map)))
 }
@@ -300,6 +269,70 @@ fn read_tile_index(r: &mut ByteReader<'_>, what: &str) -> Result<TileIndex> {
         ));
     }
     Ok(tile)
+}
+
+/// Reads `count` tile records of `kind` (`"tile"`, `"ceiling tile"`: the name in errors), each a tile index and
+/// 64 x 64 values read by `read` (given the record's name and the cell's position in the tile), and hands each
+/// tile to `insert`; a memory-limit error names the record.
+fn read_tiles<T: Copy>(
+    r: &mut ByteReader<'_>,
+    path: &Path,
+    count: u64,
+    kind: &str,
+    fill: T,
+    read: fn(&mut ByteReader<'_>, &str, usize) -> Result<T>,
+    mut insert: impl FnMut(TileIndex, Box<[T; TILE_CELLS]>) -> Result<()>,
+) -> Result<()> {
+    for t in 0..count {
+        let what = format!("{kind} {t}");
+        let tile = read_tile_index(r, &what)?;
+        let mut values = Box::new([fill; TILE_CELLS]);
+        for (k, v) in values.iter_mut().enumerate() {
+            *v = read(r, &what, k)?;
+        }
+        insert(tile, values).map_err(|e| match e {
+            Error::MemoryLimit { .. } => Error::parse(path, format!("loading {what}: {e}")),
+            other => other,
+        })?;
+    }
+    Ok(())
+}
+
+/// One cell of a tile record (`what`, cell `k`), refused with its place if no map holds it.
+fn read_cell(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Cell> {
+    let at = r.pos();
+    let c = Cell {
+        log_odds: r.f32(what)?,
+        mean_m: r.f32(what)?,
+        var_m2: r.f32(what)?,
+    };
+    match cell_problem(&c) {
+        Some(problem) => Err(r.error_at(at, format!("{what}, cell {k}: {problem}"))),
+        None => Ok(c),
+    }
+}
+
+/// One ceiling of a ceiling tile record (`what`, cell `k`), refused with its place if no map holds it.
+fn read_ceiling(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Ceiling> {
+    let at = r.pos();
+    let (z_m, var_m2, log_odds) = (r.f32(what)?, r.f32(what)?, r.f32(what)?);
+    let side = r.take(1, what)?[0];
+    let seen_from = SeenFrom::from_byte(side).ok_or_else(|| {
+        r.error_at(
+            at + 12,
+            format!("{what}, cell {k}: side {side} is not 0 (above), 1 (below) or 2 (both)"),
+        )
+    })?;
+    let c = Ceiling {
+        z_m,
+        var_m2,
+        log_odds,
+        seen_from,
+    };
+    match ceiling_problem(&c) {
+        Some(problem) => Err(r.error_at(at, format!("{what}, cell {k}: {problem}"))),
+        None => Ok(c),
+    }
 }
 
 /// What makes a ceiling's values impossible, if anything: none (NaN log-odds), or a finite log-odds, a finite
