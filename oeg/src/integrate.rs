@@ -480,11 +480,9 @@ impl Map {
     /// Updates every cell the scan touched, once.
     fn apply(&mut self, stats: &mut IntegrationStats) -> Result<()> {
         let opts = self.config.model;
-        let limit = self
-            .config
-            .memory_limit_bytes
-            .saturating_sub(self.scratch.memory_bytes());
+        let ceiling_rule = opts.overhead_hits == OverheadHits::Ceiling;
         let scratch_bytes = self.scratch.memory_bytes();
+        let limit = self.config.memory_limit_bytes.saturating_sub(scratch_bytes);
         for (tile, evidence) in self.scratch.tiles() {
             let memory_error = |e: crate::storage::CapacityExceeded| Error::MemoryLimit {
                 requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
@@ -501,11 +499,17 @@ impl Map {
                 stats.num_cells_updated += 1;
                 update_cell(cell, ev, &opts, self.occupied_log_odds, self.free_log_odds);
             }
-            // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
-            let ceilings = if evidence.iter().any(|ev| ev.ceiling_p > 0.0) {
+            if !ceiling_rule {
+                continue;
+            }
+            // The ceiling layer: allocated where a ceiling is hit, updated where one exists. One pass tells both.
+            let (hit, contradicted) = evidence.iter().fold((false, false), |(h, c), ev| {
+                (h || ev.ceiling_p > 0.0, c || ev.ceiling_contradicted)
+            });
+            let ceilings = if hit {
                 let room = limit.saturating_sub(self.cells.memory_bytes());
                 Some(self.ceilings.tile_or_insert(tile, room).map_err(memory_error)?)
-            } else if evidence.iter().any(|ev| ev.ceiling_contradicted) {
+            } else if contradicted {
                 self.ceilings.tile_mut(tile)
             } else {
                 None
