@@ -143,7 +143,7 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 15] = [
     ("corridor_lasers", 2, 2, 0.96),
     ("curb_staircase", 23, 2, 0.96),
     ("curbs_and_boards", 2, 40, 0.95),
-    ("default", 5, 280, 0.92),
+    ("default", 33, 280, 0.93),
     ("large_outdoor", 2, 525, 0.97),
     ("long_range_stereo", 4, 2, 0.87),
     ("outdoor_stereo", 2, 3, 0.89),
@@ -152,8 +152,8 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 15] = [
     ("ramp_and_slope", 34, 2, 0.97),
     ("spurious_returns", 14, 2, 0.96),
     ("thin_pole", 3, 2, 0.97),
-    ("trees_no_threshold", 17, 2, 0.96),
-    ("trees_threshold", 16, 2, 0.96),
+    ("trees_no_threshold", 11, 2, 0.97),
+    ("trees_threshold", 11, 2, 0.97),
 ];
 
 #[test]

@@ -174,15 +174,22 @@ pub fn fuse_with_disagreement(
 
 /// [`FreeSpaceOccupancy::SurfaceBand`]: whether a beam whose path through a cell spans the heights
 /// `[z_lo_m, z_hi_m]` passes through the band where the cell's surface is believed to be, and so contradicts
-/// it: `[mu - k sigma, mu + k sigma]` with `k = band_sigmas`. A beam below the band passed under the surface (a
-/// board, a table, a branch); one above it passed over it (a curb, a low wall). Neither says anything about
-/// it.
+/// it. A cell's surface is the top of what fills its column, so the band is its lower half, `[mu - k sigma,
+/// mu]` with `k = band_sigmas`: a beam there went through where the top is believed to be. A beam below the
+/// band passed under the surface (a board, a table, a branch); one above `mu` passed over it (a curb, a low
+/// wall), where the surface leaves room. Neither says anything about it.
+///
+/// The upper half is left out for the same reason as a top's in [`ceiling_contradicts`]: a beam that lands on
+/// the ground or on a curb's top a little further on skims the cells before it within millimetres of their
+/// surface. With the whole band, every such beam contradicted a surface it agrees with: the cells just short
+/// of each lidar ring lost their ground, and a low wall's or a curb's top lost the cells over which the beams
+/// that land on its far part pass.
 ///
 /// The anchors' visibility clean-up (elevation_mapping, elevation_mapping_cupy) removes a cell whenever a
 /// ray passes below its height, which also removes every overhang a ray passes under; the band keeps them.
 pub fn band_contradicts(prior: Elevation, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
     let half = band_sigmas * prior.var_m2.sqrt();
-    z_lo_m <= prior.mean_m + half && z_hi_m >= prior.mean_m - half
+    z_lo_m <= prior.mean_m && z_hi_m >= prior.mean_m - half
 }
 
 /// One scan's measurement of the structure over a cell ([`crate::OverheadHits::Ceiling`]): the lowest level of
@@ -280,8 +287,8 @@ pub fn ceiling_confirmed(log_odds_value: f32, p_max: f32) -> bool {
 /// contradicts the structure over it: it passes through the structure's side of its band, `[z - k sigma, z]`
 /// for a top seen from above, `[z, z + k sigma]` for an underside seen from below, the whole band for one seen
 /// from both sides. A beam skimming just over a top (one that lands on it a little further on, or on the
-/// ground behind) or just under an underside passes where the structure leaves room; the symmetric band of
-/// [`band_contradicts`] would have such grazing beams clear the structures they keep measuring. The band is
+/// ground behind) or just under an underside passes where the structure leaves room: a symmetric band would
+/// have such grazing beams clear the structures they keep measuring. The band is
 /// as wide as the structure's hits spread ([`spread_variance`]): a person's front, hit from the ankles up,
 /// is contradicted by any beam through where they stood.
 pub fn ceiling_contradicts(ceiling: &Ceiling, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
@@ -432,15 +439,19 @@ mod tests {
 
     #[test]
     fn a_beam_through_the_surface_band_contradicts_it_and_one_under_or_over_does_not() {
-        // A board whose top is at 0.46 m, known to 1 cm: its band is [0.43, 0.49].
+        // A board whose top is at 0.46 m, known to 1 cm: its band is [0.43, 0.46].
         let board = Elevation {
             mean_m: 0.46,
             var_m2: 1e-4,
         };
         assert!(band_contradicts(board, 0.44, 0.445, 3.0), "through the board");
         assert!(
-            band_contradicts(board, 0.47, 0.48, 3.0),
+            band_contradicts(board, 0.455, 0.465, 3.0),
             "where its top is believed to be"
+        );
+        assert!(
+            !band_contradicts(board, 0.465, 0.48, 3.0),
+            "skimming over its top, within the band's upper half"
         );
         assert!(!band_contradicts(board, 0.30, 0.42, 3.0), "under the board");
         assert!(!band_contradicts(board, 0.50, 0.60, 3.0), "over it");
