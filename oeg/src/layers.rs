@@ -11,8 +11,8 @@ use crate::geometry::{CellIndex, CellRegion};
 use crate::map::Map;
 use crate::model::{Elevation, Level, ceiling_confirmed, probability_from_log_odds, surface_level};
 use crate::traversability::{
-    RobotProfile, Traversability, TraversabilityRule, ceiling_decision, footprint_decision, more_restrictive,
-    step_decision,
+    RobotProfile, Traversability, TraversabilityRule, ceiling_decision, contact_decision, footprint_decision,
+    more_restrictive, step_decision,
 };
 
 /// A per-cell quantity of the map.
@@ -170,7 +170,15 @@ impl Map {
             return Traversability::Unknown;
         }
         if c.log_odds <= self.occupied_log_odds() {
-            return Traversability::Free;
+            // Beams passed through the cell and none ended in it. Under the contact rule that is not a ground a
+            // wheel can stand on: no height was measured, and the beams bound it only from above (a low wall's
+            // top that the lidar grazes is passed over, never hit).
+            return match (rule, c.elevation()) {
+                (TraversabilityRule::Contact { kappa, reach_m }, None) => {
+                    self.unmeasured_decision(cell, profile, kappa, reach_m)
+                }
+                _ => Traversability::Free,
+            };
         }
         let Some(e) = c.elevation() else {
             // Occupied, height unknown: the rules without an uncertain answer assume the worst.
@@ -206,11 +214,60 @@ impl Map {
                 ) {
                     return t;
                 }
-                (e.mean_m - ground.mean_m, e.var_m2 + ground.var_m2)
+                let decision = contact_decision(
+                    e.mean_m - ground.mean_m,
+                    (e.var_m2 + ground.var_m2).sqrt(),
+                    kappa,
+                    profile,
+                );
+                // A wheel may come from any cell within the contact distance. One with no height that may be
+                // part of a step (the shadow behind a curb's far edge: `unmeasured_decision`) may lie a step
+                // lower: the cell cannot be called drivable.
+                return if decision == Traversability::Traversable
+                    && self.step_may_hide_within(cell, e, profile, kappa, reach_m)
+                {
+                    Traversability::Uncertain
+                } else {
+                    decision
+                };
             }
             TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => (e.mean_m, e.var_m2),
         };
         step_decision(step_m, var_m2.sqrt(), rule, profile)
+    }
+
+    /// [`TraversabilityRule::Contact`]'s decision for a free cell, which holds no height: `Free` where the
+    /// cells around it say it is ground, `Uncertain` where it may be part of a step. The cell is judged as if it
+    /// were as high as the highest estimate within the contact distance: where that would be drivable, the
+    /// cell lies in ground that is level to within a step (a gap between a lidar's rings, ground the robot
+    /// drove over out of its sensors' view); where it would not, it lies beside something higher (the top of a
+    /// low wall that the lidar grazes and never hits, the shadow behind a curb) and cannot be told from it.
+    /// With no estimate within reach it is free, as in the paper.
+    pub fn unmeasured_decision(
+        &self,
+        cell: CellIndex,
+        profile: &RobotProfile,
+        kappa: f32,
+        reach_m: f32,
+    ) -> Traversability {
+        let highest = self
+            .cells_within(cell, profile.contact_distance_m())
+            .filter_map(|(_, c)| self.cell(c).elevation())
+            .max_by(|a, b| a.mean_m.total_cmp(&b.mean_m));
+        let [wide, ground] = self.grounds_within(cell, [reach_m, profile.contact_distance_m()], kappa);
+        let (Some(top), Some(wide), Some(ground)) = (highest, wide, ground) else {
+            return Traversability::Free;
+        };
+        let rise = |g: Elevation| (top.mean_m - g.mean_m, (top.var_m2 + g.var_m2).sqrt());
+        let (wide_rise, wide_sigma) = rise(wide);
+        let (step, sigma) = rise(ground);
+        let level = footprint_decision(wide_rise, wide_sigma, reach_m, kappa, profile).is_none()
+            && contact_decision(step, sigma, kappa, profile) == Traversability::Traversable;
+        if level {
+            Traversability::Free
+        } else {
+            Traversability::Uncertain
+        }
     }
 
     /// The ground a wheel on `cell` would come from: the lowest level among the cells that hold a point within
@@ -225,6 +282,57 @@ impl Map {
         ground
     }
 
+    /// The cells that hold a point within `distance_m` of a point of `cell` (the gap between the two squares,
+    /// not their centres), `cell` included, with the square of that gap in cells, row by row.
+    fn cells_within(&self, cell: CellIndex, distance_m: f32) -> impl Iterator<Item = (f64, CellIndex)> {
+        let reach = f64::from(distance_m) / self.geometry().resolution_m() + 1e-9;
+        let r = reach.floor() as i32 + 1;
+        (-r..=r)
+            .flat_map(move |dj| (-r..=r).map(move |di| (di, dj)))
+            .filter_map(move |(di, dj)| {
+                let (gi, gj) = (f64::from((di.abs() - 1).max(0)), f64::from((dj.abs() - 1).max(0)));
+                let gap2 = gi * gi + gj * gj;
+                (gap2 <= reach * reach).then(|| {
+                    (
+                        gap2,
+                        CellIndex::new(cell.i.saturating_add(di), cell.j.saturating_add(dj)),
+                    )
+                })
+            })
+    }
+
+    /// Whether a free cell within the robot's contact distance of `cell` (whose surface is `surface`) may lie a
+    /// step below it: it may be part of a step ([`Map::unmeasured_decision`] says `Uncertain`), and the lowest
+    /// ground within `reach_m` of it lies a step or more below `surface`. The shadow behind a curb's far edge
+    /// is such a cell for the curb's top; for the ground beyond the shadow it is not.
+    fn step_may_hide_within(
+        &self,
+        cell: CellIndex,
+        surface: Elevation,
+        profile: &RobotProfile,
+        kappa: f32,
+        reach_m: f32,
+    ) -> bool {
+        self.cells_within(cell, profile.contact_distance_m())
+            .any(|(_, c)| {
+                let n = self.cell(c);
+                if !n.is_observed() || n.log_odds > self.occupied_log_odds() || n.elevation().is_some() {
+                    return false;
+                }
+                let Some(low) = self.ground_within(c, reach_m, kappa) else {
+                    return false;
+                };
+                let drop = contact_decision(
+                    surface.mean_m - low.mean_m,
+                    (surface.var_m2 + low.var_m2).sqrt(),
+                    kappa,
+                    profile,
+                );
+                drop != Traversability::Traversable
+                    && self.unmeasured_decision(c, profile, kappa, reach_m) == Traversability::Uncertain
+            })
+    }
+
     /// [`Map::ground_within`] for several distances at once, in one walk over the widest window: each
     /// distance's cells are visited in the same order as alone, so each ground is the same to the bit.
     pub fn grounds_within<const N: usize>(
@@ -235,21 +343,11 @@ impl Map {
     ) -> [Option<Elevation>; N] {
         let res = self.geometry().resolution_m();
         let reach = distances_m.map(|d| f64::from(d) / res + 1e-9);
-        let r = reach.iter().fold(0.0_f64, |a, b| a.max(*b)).floor() as i32 + 1;
+        let widest = distances_m.iter().fold(0.0_f32, |a, b| a.max(*b));
         // Every estimate in the widest window, with the square of its gap to `cell` in cells.
         let window = move || {
-            (-r..=r)
-                .flat_map(move |dj| (-r..=r).map(move |di| (di, dj)))
-                .filter_map(move |(di, dj)| {
-                    let (gi, gj) = (f64::from((di.abs() - 1).max(0)), f64::from((dj.abs() - 1).max(0)));
-                    let e = self
-                        .cell(CellIndex::new(
-                            cell.i.saturating_add(di),
-                            cell.j.saturating_add(dj),
-                        ))
-                        .elevation()?;
-                    Some((gi * gi + gj * gj, e))
-                })
+            self.cells_within(cell, widest)
+                .filter_map(move |(gap2, c)| Some((gap2, self.cell(c).elevation()?)))
         };
         let mut lowest: [Option<Elevation>; N] = [None; N];
         for (gap2, e) in window() {

@@ -132,6 +132,13 @@ pub enum TraversabilityRule {
     /// `kappa` standard deviations of the robot's height (an overhang the robot might just pass under); the
     /// standard deviation is that of the difference, `sqrt(sigma^2 + sigma_ground^2)`.
     ///
+    /// A free cell (beams passed through it and none ended there) holds no measured ground, and the beams bound
+    /// it only from above: it is judged as if it were as high as the highest estimate within the contact
+    /// distance, free where that would be drivable and uncertain where not (a low wall's top that a lidar
+    /// grazes and never hits, the shadow behind a curb). A cell that would be traversable is uncertain when
+    /// such a cell within the contact distance lies beside ground a step below it: a curb's far edge may drop
+    /// into its own shadow.
+    ///
     /// Over the robot's half width `reach_m` the same holds with the rise a slope allows:
     /// [`footprint_decision`]. A top that rises more over the robot's own extent than it can climb is a
     /// structure it cannot pass under (a board, a table top) or a plateau it cannot have climbed; from one height

@@ -589,11 +589,7 @@ fn the_contact_rule_measures_a_step_from_the_lowest_level_not_the_lowest_cell() 
         for i in 0..24 {
             let (x, y) = (0.025 + 0.05 * f64::from(i), 0.025 + 0.05 * f64::from(j));
             let z = noise[((i * 7 + j * 3) % 8) as usize] + if i >= 12 { 0.05 } else { 0.0 };
-            // A straight-down ray into each cell, its range (and so its height) known to 5 mm.
-            let mut scan = Scan::new(Point3::new(x, y, z + 1.0), SensorModel::laser());
-            scan.rays
-                .push(Ray::hit(Vector3::new(0.0, 0.0, -1.0)).with_range_sigma_m(0.005));
-            map.integrate(&scan).expect("integrated");
+            hit_from_above(&mut map, x, y, z);
         }
     }
     let rule = TraversabilityRule::Contact {
@@ -603,12 +599,14 @@ fn the_contact_rule_measures_a_step_from_the_lowest_level_not_the_lowest_cell() 
     let at = |x: f64| map.traversability(cell(&map, x, 0.3), &profile, rule);
     // Noisy flat cells 0.3 m from the curb: their lowest neighbour is 1.2 cm low (a 2.4 cm rise for the highest,
     // within 2 sigma of 3.5 cm), the lowest level is not.
-    for x in [0.075, 0.275, 0.325] {
+    for x in [0.175, 0.275, 0.325] {
         assert_eq!(at(x), Traversability::Traversable, "x = {x}");
     }
     // The curb's first cells, and its top more than the contact distance inside: a step, then a plateau.
     assert_eq!(at(0.625), Traversability::Blocked);
+    assert_eq!(at(0.925), Traversability::Traversable);
     assert_eq!(at(1.125), Traversability::Traversable);
+    assert_eq!(at(0.075), Traversability::Traversable);
     let ground = map
         .ground_within(cell(&map, 0.275, 0.3), profile.contact_distance_m(), 2.0)
         .expect("ground");
@@ -658,7 +656,9 @@ fn board_seen_now_and_then(overhead_hits: oeg::OverheadHits) -> Map {
     );
     for k in 0..60 {
         // Beams from 0.25 m down to the ground beyond and under the board (its top at 0.34 m).
-        let ground: Vec<_> = (0..8).map(|i| (1.6 + 0.1 * f64::from(i), 0.025, 0.0)).collect();
+        let ground: Vec<_> = (0..16)
+            .map(|i| (1.625 + 0.05 * f64::from(i), 0.025, 0.0))
+            .collect();
         map.integrate(&scan_of(Point3::new(0.025, 0.025, 0.25), &ground))
             .expect("integrated");
         if k % 10 == 0 {
@@ -724,4 +724,54 @@ fn a_person_over_the_ground_is_a_ceiling_that_beams_through_it_clear() {
         );
     }
     assert_ne!(map.traversability(c, &p, rule), Traversability::Blocked);
+}
+
+/// A straight-down ray onto `(x, y, z)`, its range (and so its height) known to 5 mm.
+fn hit_from_above(map: &mut Map, x: f64, y: f64, z: f64) {
+    let mut scan = Scan::new(Point3::new(x, y, z + 1.0), SensorModel::laser());
+    scan.rays
+        .push(Ray::hit(Vector3::new(0.0, 0.0, -1.0)).with_range_sigma_m(0.005));
+    map.integrate(&scan).expect("integrated");
+}
+
+#[test]
+fn a_free_cell_beside_a_step_is_uncertain_and_one_in_level_ground_is_free() {
+    let profile = RobotProfile::default();
+    let rule = oeg::MapPreset::Robust.traversability();
+    let mut map = map_with(0.05, oeg::MapPreset::Robust.model(&profile));
+    let at = |i: i32| 0.025 + 0.05 * f64::from(i);
+    // Ground, a 5 cm curb top on cells 10 to 13, its shadow (cells 14 to 16) never hit, ground beyond; one cell
+    // of the ground, (4, 6), is never hit either.
+    let never_hit = |i: i32, j: i32| (14..17).contains(&i) || (i, j) == (4, 6);
+    for j in 0..12 {
+        for i in (0..24).filter(|&i| !never_hit(i, j)) {
+            let z = if (10..14).contains(&i) { 0.05 } else { 0.0 };
+            hit_from_above(&mut map, at(i), at(j), z);
+        }
+        // A beam over the shadow, landing on the ground beyond it.
+        map.integrate(&scan_of(Point3::new(at(14), at(j), 0.3), &[(at(18), at(j), 0.0)]))
+            .expect("integrated");
+    }
+    // And one over the unhit ground cell.
+    map.integrate(&scan_of(Point3::new(at(4), at(6), 0.3), &[(at(6), at(6), 0.0)]))
+        .expect("integrated");
+    let decision = |i: i32| map.traversability(CellIndex::new(i, 6), &profile, rule);
+    for i in [4, 14, 15, 16] {
+        let c = map.cell(CellIndex::new(i, 6));
+        assert!(c.is_observed() && c.elevation().is_none(), "cell {i} is free");
+    }
+    // In level ground a free cell is ground as its neighbours are.
+    assert_eq!(decision(4), Traversability::Free);
+    // Beside the curb's top it may be part of the curb, or ground a step below it.
+    assert_eq!(decision(14), Traversability::Uncertain);
+    // The curb's near edge is a step; its far edge may drop into the shadow; the ground beyond cannot.
+    assert_eq!(decision(10), Traversability::Blocked);
+    assert_eq!(decision(13), Traversability::Uncertain);
+    assert_eq!(decision(18), Traversability::Traversable);
+    assert_eq!(decision(20), Traversability::Traversable);
+    // The paper's rules call every free cell free.
+    assert_eq!(
+        map.traversability(CellIndex::new(14, 6), &profile, TraversabilityRule::Absolute),
+        Traversability::Free
+    );
 }

@@ -186,12 +186,12 @@ pub enum FreeSpaceOccupancy {
     /// their top. With [`FreeSpaceElevation::Zero`], an occupied cell keeps its elevation while free samples
     /// lower its occupancy, and restarts from the ground once it turns free.
     BelowElevation,
-    /// A free sample counts only where the beam passes through the band in which the cell's surface is
-    /// believed to be: within `surface_band_sigmas` standard deviations of `mu` (see
+    /// A free sample counts only where the beam passes through the band in which the top of the cell's surface
+    /// is believed to be: up to `surface_band_sigmas` standard deviations below `mu`, and not above it (see
     /// [`crate::model::band_contradicts`]). A beam far below the surface (under a board or a
-    /// table) or above it (over a curb or a low wall) says nothing about it. Cells without an estimate are
-    /// updated as in the paper. In the same scan, a hit below a contradicted surface replaces it (the surface
-    /// has gone down: a person who left).
+    /// table) or above it (over a curb or a low wall, or skimming the ground it lands on next) says nothing
+    /// about it. Cells without an estimate are updated as in the paper. In the same scan, a hit below a
+    /// contradicted surface replaces it (the surface has gone down: a person who left).
     SurfaceBand,
 }
 
