@@ -15,6 +15,11 @@ use crate::traversability::{
     more_restrictive, step_decision,
 };
 
+/// How far `top` lies above `ground`, metres, with the standard deviation of the difference.
+fn rise_over(top: Elevation, ground: Elevation) -> (f32, f32) {
+    (top.mean_m - ground.mean_m, (top.var_m2 + ground.var_m2).sqrt())
+}
+
 /// A per-cell quantity of the map.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -205,21 +210,12 @@ impl Map {
                 let [wide, ground] = self
                     .grounds_within(cell, [reach_m, profile.contact_distance_m()], kappa)
                     .map(|g| g.unwrap_or(e));
-                if let Some(t) = footprint_decision(
-                    e.mean_m - wide.mean_m,
-                    (e.var_m2 + wide.var_m2).sqrt(),
-                    reach_m,
-                    kappa,
-                    profile,
-                ) {
+                let (wide_rise, wide_sigma) = rise_over(e, wide);
+                if let Some(t) = footprint_decision(wide_rise, wide_sigma, reach_m, kappa, profile) {
                     return t;
                 }
-                let decision = contact_decision(
-                    e.mean_m - ground.mean_m,
-                    (e.var_m2 + ground.var_m2).sqrt(),
-                    kappa,
-                    profile,
-                );
+                let (step, sigma) = rise_over(e, ground);
+                let decision = contact_decision(step, sigma, kappa, profile);
                 // A wheel may come from any cell within the contact distance. One with no height that may be
                 // part of a step (the shadow behind a curb's far edge: `unmeasured_decision`) may lie a step
                 // lower: the cell cannot be called drivable.
@@ -258,9 +254,8 @@ impl Map {
         let (Some(top), Some(wide), Some(ground)) = (highest, wide, ground) else {
             return Traversability::Free;
         };
-        let rise = |g: Elevation| (top.mean_m - g.mean_m, (top.var_m2 + g.var_m2).sqrt());
-        let (wide_rise, wide_sigma) = rise(wide);
-        let (step, sigma) = rise(ground);
+        let (wide_rise, wide_sigma) = rise_over(top, wide);
+        let (step, sigma) = rise_over(top, ground);
         let level = footprint_decision(wide_rise, wide_sigma, reach_m, kappa, profile).is_none()
             && contact_decision(step, sigma, kappa, profile) == Traversability::Traversable;
         if level {
@@ -322,13 +317,8 @@ impl Map {
                 let Some(low) = self.ground_within(c, reach_m, kappa) else {
                     return false;
                 };
-                let drop = contact_decision(
-                    surface.mean_m - low.mean_m,
-                    (surface.var_m2 + low.var_m2).sqrt(),
-                    kappa,
-                    profile,
-                );
-                drop != Traversability::Traversable
+                let (drop, sigma) = rise_over(surface, low);
+                contact_decision(drop, sigma, kappa, profile) != Traversability::Traversable
                     && self.unmeasured_decision(c, profile, kappa, reach_m) == Traversability::Uncertain
             })
     }
