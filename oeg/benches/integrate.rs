@@ -7,6 +7,9 @@
 //! * `options/<settings>`: the room scan integrated 5 times at 0.05 m under the paper's model and under the
 //!   static settings of the README (`below_elevation`, `highest_surface`, `free_space_max_depth_m`) and with
 //!   `scan_hit_elevation = weighted_mean`, in the same run, so their ratios are the cost of those options.
+//! * `decisions/<rule>`: the traversability of every cell of the 12 m x 12 m room (57,600 cells at 0.05 m) from
+//!   the `robust` map of those 5 scans, under the paper's absolute step rule and under `robust`'s contact rule
+//!   (the ground within the contact distance and the robot's half width, and the free cells' own rule).
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -150,5 +153,38 @@ fn options(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, real, synthetic, options);
+fn decisions(c: &mut Criterion) {
+    let profile = oeg::RobotProfile::default();
+    let scans = vec![room_scan(); 5];
+    let map = build_with(
+        &scans,
+        MapConfig {
+            model: oeg::MapPreset::Robust.model(&profile),
+            ..MapConfig::new(0.05)
+        },
+    );
+    let region = map
+        .geometry()
+        .region_covering((-6.0, -6.0), (6.0, 6.0))
+        .expect("region");
+    let mut group = c.benchmark_group("decisions");
+    group.throughput(Throughput::Elements(region.num_cells()));
+    group.sample_size(20);
+    for (name, rule) in [
+        ("absolute", oeg::TraversabilityRule::Absolute),
+        ("contact", oeg::MapPreset::Robust.traversability()),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                black_box(
+                    map.traversability_layer(region, &profile, rule)
+                        .expect("within the limit"),
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, real, synthetic, options, decisions);
 criterion_main!(benches);

@@ -220,7 +220,7 @@ impl Map {
                 // part of a step (the shadow behind a curb's far edge: `unmeasured_decision`) may lie a step
                 // lower: the cell cannot be called drivable.
                 return if decision == Traversability::Traversable
-                    && self.step_may_hide_within(cell, e, profile, kappa, reach_m)
+                    && self.step_may_hide_within(cell, (e, wide), profile, kappa, reach_m)
                 {
                     Traversability::Uncertain
                 } else {
@@ -296,29 +296,28 @@ impl Map {
             })
     }
 
-    /// Whether a free cell within the robot's contact distance of `cell` (whose surface is `surface`) may lie a
-    /// step below it: it may be part of a step ([`Map::unmeasured_decision`] says `Uncertain`), and the lowest
-    /// ground within `reach_m` of it lies a step or more below `surface`. The shadow behind a curb's far edge
-    /// is such a cell for the curb's top; for the ground beyond the shadow it is not.
+    /// Whether a free cell within the robot's contact distance of `cell` may lie a step below it: `cell`'s
+    /// surface lies a step or more above the lowest ground within `reach_m` (`surface` and that ground), and
+    /// the free cell may be part of a step ([`Map::unmeasured_decision`] says `Uncertain`). The shadow behind
+    /// a curb's far edge is such a cell for the curb's top; for the ground beyond the shadow it is not.
     fn step_may_hide_within(
         &self,
         cell: CellIndex,
-        surface: Elevation,
+        (surface, wide): (Elevation, Elevation),
         profile: &RobotProfile,
         kappa: f32,
         reach_m: f32,
     ) -> bool {
+        let (drop, sigma) = rise_over(surface, wide);
+        if contact_decision(drop, sigma, kappa, profile) == Traversability::Traversable {
+            return false;
+        }
         self.cells_within(cell, profile.contact_distance_m())
             .any(|(_, c)| {
                 let n = self.cell(c);
-                if !n.is_observed() || n.log_odds > self.occupied_log_odds() || n.elevation().is_some() {
-                    return false;
-                }
-                let Some(low) = self.ground_within(c, reach_m, kappa) else {
-                    return false;
-                };
-                let (drop, sigma) = rise_over(surface, low);
-                contact_decision(drop, sigma, kappa, profile) != Traversability::Traversable
+                n.is_observed()
+                    && n.log_odds <= self.occupied_log_odds()
+                    && n.elevation().is_none()
                     && self.unmeasured_decision(c, profile, kappa, reach_m) == Traversability::Uncertain
             })
     }
