@@ -143,7 +143,7 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 15] = [
     ("corridor_lasers", 2, 2, 0.96),
     ("curb_staircase", 12, 2, 0.96),
     ("curbs_and_boards", 2, 40, 0.95),
-    ("default", 20, 244, 0.93),
+    ("default", 31, 244, 0.93),
     ("large_outdoor", 2, 399, 0.97),
     ("long_range_stereo", 4, 2, 0.87),
     ("outdoor_stereo", 2, 3, 0.89),
