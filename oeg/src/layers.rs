@@ -175,9 +175,9 @@ impl Map {
             return Traversability::Unknown;
         }
         if c.log_odds <= self.occupied_log_odds() {
-            // Beams passed through the cell and none ended in it. Under the contact rule that is not a ground a
-            // wheel can stand on: no height was measured, and the beams bound it only from above (a low wall's
-            // top that the lidar grazes is passed over, never hit).
+            // Beams passed through the cell and none ended in it: no height was measured, and the beams bound it
+            // only from above (a low wall's top that the lidar grazes is passed over, never hit). The contact
+            // rule judges it by the estimates around it.
             return match (rule, c.elevation()) {
                 (TraversabilityRule::Contact { kappa, reach_m }, None) => {
                     self.unmeasured_decision(cell, profile, kappa, reach_m)
