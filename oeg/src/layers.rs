@@ -249,19 +249,22 @@ impl Map {
         // Level ground, the common case, in one pass: where no estimate within reach rises a step over another,
         // the cell is ground. The tests below would say so too: the rises they take are at most `hi - lo`, and
         // their standard deviations at most `sqrt(2 var_max)`.
+        // The same pass finds the highest estimate within the contact distance (the last of equal ones).
+        let contact = self.reach_cells(profile.contact_distance_m());
         let (mut lo, mut hi, mut var_max) = (f32::INFINITY, f32::NEG_INFINITY, 0.0_f32);
-        for (_, c) in self.cells_within(cell, reach_m.max(profile.contact_distance_m())) {
+        let mut highest: Option<Elevation> = None;
+        for (gap2, c) in self.cells_within(cell, reach_m.max(profile.contact_distance_m())) {
             if let Some(e) = self.cell(c).elevation() {
                 (lo, hi, var_max) = (lo.min(e.mean_m), hi.max(e.mean_m), var_max.max(e.var_m2));
+                if gap2 <= contact * contact && highest.is_none_or(|h| e.mean_m.total_cmp(&h.mean_m).is_ge())
+                {
+                    highest = Some(e);
+                }
             }
         }
         if lo > hi || hi - lo + kappa * (2.0 * var_max).sqrt() < profile.max_step_m {
             return Traversability::Free;
         }
-        let highest = self
-            .cells_within(cell, profile.contact_distance_m())
-            .filter_map(|(_, c)| self.cell(c).elevation())
-            .max_by(|a, b| a.mean_m.total_cmp(&b.mean_m));
         let [wide, ground] = self.grounds_within(cell, [reach_m, profile.contact_distance_m()], kappa);
         let (Some(top), Some(wide), Some(ground)) = (highest, wide, ground) else {
             return Traversability::Free;
@@ -289,10 +292,16 @@ impl Map {
         ground
     }
 
+    /// `distance_m` in cells, the largest gap [`Map::cells_within`] keeps (a hair over, so that a distance of a
+    /// whole number of cells keeps its last ring despite rounding).
+    fn reach_cells(&self, distance_m: f32) -> f64 {
+        f64::from(distance_m) / self.geometry().resolution_m() + 1e-9
+    }
+
     /// The cells that hold a point within `distance_m` of a point of `cell` (the gap between the two squares,
     /// not their centres), `cell` included, with the square of that gap in cells, row by row.
     fn cells_within(&self, cell: CellIndex, distance_m: f32) -> impl Iterator<Item = (f64, CellIndex)> {
-        let reach = f64::from(distance_m) / self.geometry().resolution_m() + 1e-9;
+        let reach = self.reach_cells(distance_m);
         let r = reach.floor() as i32 + 1;
         (-r..=r)
             .flat_map(move |dj| (-r..=r).map(move |di| (di, dj)))
@@ -342,8 +351,7 @@ impl Map {
         distances_m: [f32; N],
         kappa: f32,
     ) -> [Option<Elevation>; N] {
-        let res = self.geometry().resolution_m();
-        let reach = distances_m.map(|d| f64::from(d) / res + 1e-9);
+        let reach = distances_m.map(|d| self.reach_cells(d));
         let widest = distances_m.iter().fold(0.0_f32, |a, b| a.max(*b));
         // Every estimate in the widest window, with the square of its gap to `cell` in cells.
         let window = move || {
