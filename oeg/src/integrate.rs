@@ -12,7 +12,8 @@ use crate::model::{
     CeilingHit, Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level,
     ModelOptions, OverheadHits, ScanHitElevation, band_contradicts, ceiling_contradicts, clamp_probability,
     correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds,
-    ray_bound, spread_variance, surface_level, update_ceiling, update_log_odds, vertical_variance,
+    overhead_significant, ray_bound, spread_variance, surface_level, update_ceiling, update_log_odds,
+    vertical_variance,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -49,9 +50,14 @@ pub(crate) struct ScanEvidence {
     /// probability (0: none).
     overhead: HitSample,
     ceiling_p: f32,
+    /// The largest distance of an overhead hit above the cell's surface, in standard deviations of the
+    /// difference ([`overhead_significant`]).
+    overhead_score: f32,
+    /// The number of the scan's samples in the cell that measured a height, overhead hits included.
+    num_heights: f32,
 }
 
-const _: () = assert!(size_of::<ScanEvidence>() == 60);
+const _: () = assert!(size_of::<ScanEvidence>() == 68);
 
 impl ScanEvidence {
     pub(crate) const NONE: Self = Self {
@@ -66,6 +72,8 @@ impl ScanEvidence {
         ceiling_seen_from: SeenFrom::Both,
         overhead: HitSample::NONE,
         ceiling_p: 0.0,
+        overhead_score: 0.0,
+        num_heights: 0.0,
     };
 
     /// Whether the scan said something about the cell's ceiling.
@@ -76,9 +84,13 @@ impl ScanEvidence {
     /// The scan's measurement of the cell's ceiling, if it hit one: the mean of its overhead hits, with the
     /// variance of [`ScanHitElevation::MeanWithSpread`] (the hits' spread over their noise is the structure's
     /// extent in the cell), the hits no better than `rho` of one ([`ModelOptions::measurement_correlation`]).
-    fn ceiling_hit(&self, rho: f32) -> Option<CeilingHit> {
+    /// None when the overhead hits are the tail of the surface's noise among the scan's samples of the cell
+    /// ([`overhead_significant`], with the band `band_sigmas` wide).
+    fn ceiling_hit(&self, rho: f32, band_sigmas: f32) -> Option<CeilingHit> {
         let hits = &self.overhead;
-        (self.ceiling_p > 0.0).then(|| CeilingHit {
+        let structure =
+            self.ceiling_p > 0.0 && overhead_significant(self.overhead_score, self.num_heights, band_sigmas);
+        structure.then(|| CeilingHit {
             z_m: hits.mean_m,
             var_m2: spread_variance(
                 (hits.mean_variance() / hits.n).max(rho * hits.mean_variance()),
@@ -90,9 +102,12 @@ impl ScanEvidence {
         })
     }
 
-    /// A hit above the cell's surface band ([`OverheadHits::Ceiling`]), by a beam from `side`.
+    /// A hit above the cell's surface band ([`OverheadHits::Ceiling`]), by a beam from `side`, `score` standard
+    /// deviations above the surface.
     #[inline(always)]
-    fn add_overhead(&mut self, p: f32, z_m: f32, var_m2: f32, side: SeenFrom) {
+    fn add_overhead(&mut self, p: f32, z_m: f32, var_m2: f32, side: SeenFrom, score: f32) {
+        self.num_heights += 1.0;
+        self.overhead_score = self.overhead_score.max(score);
         self.ceiling_seen_from = if self.ceiling_p > 0.0 {
             self.ceiling_seen_from.and(side)
         } else {
@@ -119,6 +134,7 @@ impl ScanEvidence {
     #[inline(always)]
     fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation, band_sigmas: f32) {
         self.raise_p(p);
+        self.num_heights += 1.0;
         if rule == ScanHitElevation::HighestLevel && self.hits.n > 0.0 {
             let level = Elevation {
                 mean_m: self.hits.mean_m,
@@ -446,25 +462,22 @@ impl Map {
                 // Under `HitHeight::Endpoint` only the cell holding the end point (where the clamp leaves
                 // `l_p` as it is) measures a height.
                 let measures_height = opts.hit_height == HitHeight::BeamSample || l == l_p;
-                match elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold)
-                    .filter(|_| measures_height)
-                {
-                    // Above the band of the cell's surface: a structure over it.
-                    Some(z)
-                        if ceiling_rule
-                            && self
-                                .cells
-                                .get(crossing.cell)
-                                .and_then(Cell::elevation)
-                                .is_some_and(|e| {
-                                    let grown = Elevation {
-                                        var_m2: e.var_m2 + opts.process_noise_var_m2,
-                                        ..e
-                                    };
-                                    surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above
-                                }) =>
-                    {
-                        evidence.add_overhead(p, z, s2, SeenFrom::of_beam(dir.z));
+                let z = elevation_observation(p, (o.z + dir.z * l) as f32, opts.elevation_threshold)
+                    .filter(|_| measures_height);
+                // How far above the band of the cell's surface the hit lies, in standard deviations: above
+                // it, a structure over the surface (if it stands out of the scan's hits: `ceiling_hit`).
+                let overhead_score = z.filter(|_| ceiling_rule).and_then(|z| {
+                    let e = self.cells.get(crossing.cell).and_then(Cell::elevation)?;
+                    let grown = Elevation {
+                        var_m2: e.var_m2 + opts.process_noise_var_m2,
+                        ..e
+                    };
+                    (surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above)
+                        .then(|| (z - grown.mean_m) / (grown.var_m2 + s2).sqrt())
+                });
+                match z {
+                    Some(z) if let Some(score) = overhead_score => {
+                        evidence.add_overhead(p, z, s2, SeenFrom::of_beam(dir.z), score);
                     }
                     Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
                     // Within 3 sigma of the measured range the surface may lie anywhere: the sample counts for
@@ -519,7 +532,7 @@ impl Map {
                     if ev.touches_ceiling() {
                         *ceiling = update_ceiling(
                             *ceiling,
-                            ev.ceiling_hit(opts.measurement_correlation),
+                            ev.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas),
                             ev.ceiling_contradicted,
                             &opts,
                             self.occupied_log_odds,

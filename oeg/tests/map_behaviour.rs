@@ -725,6 +725,53 @@ fn a_person_over_the_ground_is_a_ceiling_that_beams_through_it_clear() {
     assert_ne!(map.traversability(c, &p, rule), Traversability::Blocked);
 }
 
+/// One frame of a camera that puts a ray on `(x, y, z)` for each `z` of `heights`, straight down from 1 m above
+/// the ground, each range known to 5 mm.
+fn frame_from_above(map: &mut Map, x: f64, y: f64, heights: &[f64]) {
+    let mut scan = Scan::new(Point3::new(x, y, 1.0), SensorModel::laser());
+    for z in heights {
+        scan.rays
+            .push(Ray::hit(Vector3::new(0.0, 0.0, (z - 1.0) as f32)).with_range_sigma_m(0.005));
+    }
+    map.integrate(&scan).expect("integrated");
+}
+
+#[test]
+fn a_hit_in_the_tail_of_many_raises_no_ceiling_but_a_structure_among_many_does() {
+    let profile = RobotProfile::default();
+    let rule = oeg::MapPreset::Robust.traversability();
+    let ground = || {
+        let mut map = map_with(0.05, oeg::MapPreset::Robust.model(&profile));
+        for _ in 0..10 {
+            frame_from_above(&mut map, 0.025, 0.025, &[0.0; 200]);
+        }
+        map
+    };
+    let c = CellIndex::new(0, 0);
+    let sigma = ground().cell(c).elevation().expect("ground").var_m2.sqrt();
+    // The difference of a hit and the surface has a standard deviation of about sqrt(2) sigma.
+    let diff = f64::from(sigma) * 2.0_f64.sqrt();
+    // A hundred and ninety-nine pixels on the ground and one 3.3 sigma over it: among 200, that is the noise's
+    // tail (Bonferroni asks 4.4 sigma), and the flat ground stays drivable.
+    let mut map = ground();
+    let mut tail = vec![0.0; 199];
+    tail.push(3.3 * diff);
+    frame_from_above(&mut map, 0.025, 0.025, &tail);
+    assert!(map.ceiling(c).is_none(), "{:?}", map.ceiling(c));
+    assert_eq!(map.traversability(c, &profile, rule), Traversability::Traversable);
+    // The same hit alone in its scan is judged by the band itself: a structure.
+    let mut map = ground();
+    frame_from_above(&mut map, 0.025, 0.025, &[3.3 * diff]);
+    assert!(map.ceiling(c).is_some());
+    // A structure 10 sigma over the ground stands out among 200.
+    let mut map = ground();
+    let mut board = vec![0.0; 199];
+    board.push(10.0 * diff);
+    frame_from_above(&mut map, 0.025, 0.025, &board);
+    let ceiling = map.ceiling(c).expect("a structure");
+    assert!((f64::from(ceiling.z_m) - 10.0 * diff).abs() < 1e-3, "{ceiling:?}");
+}
+
 /// A straight-down ray onto `(x, y, z)`, its range (and so its height) known to 5 mm.
 fn hit_from_above(map: &mut Map, x: f64, y: f64, z: f64) {
     let mut scan = Scan::new(Point3::new(x, y, z + 1.0), SensorModel::laser());

@@ -118,6 +118,36 @@ pub fn surface_level(surface: Elevation, h_m: f32, s2_m2: f32, band_sigmas: f32)
     }
 }
 
+/// The upper tail of the standard normal distribution, `P(Z > z)`: `erfc(z / sqrt 2) / 2` by the Chebyshev
+/// fit of Numerical Recipes' `erfcc` (fractional error below 1.2e-7 everywhere).
+pub fn normal_tail(z: f64) -> f64 {
+    let x = z / std::f64::consts::SQRT_2;
+    let a = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * a);
+    let poly = -a * a - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    let erfc = t * poly.exp();
+    0.5 * if x >= 0.0 { erfc } else { 2.0 - erfc }
+}
+
+/// [`crate::OverheadHits::Ceiling`]: whether a scan's hits above a cell's surface band are a structure over it
+/// and not the tail of the surface's own noise. `score` is the largest of them in standard deviations of the
+/// difference from the surface, among `n` hits of the scan in the cell. One hit beyond `band_sigmas` is a
+/// false alarm with the tail probability `Q(band_sigmas)` (0.13 % at 3); the most extreme of `n` is one with
+/// `n` times that, so a camera that puts a hundred pixels in a cell each frame would raise a structure out
+/// of flat ground every few frames. The test keeps the scan's false-alarm rate at that of one hit
+/// (Bonferroni): `n Q(score) <= Q(band_sigmas)`. One hit is judged by the band alone; among 100 the largest
+/// must lie 4.2 sigma out, among 1,000 4.6.
+pub fn overhead_significant(score: f32, n: f32, band_sigmas: f32) -> bool {
+    f64::from(n.max(1.0)) * normal_tail(f64::from(score)) <= normal_tail(f64::from(band_sigmas))
+}
+
 /// [`ElevationFusion::TopSurface`]: a measurement within the band of `prior` is fused by eq. 8-9 (it is the same
 /// surface, and its disagreement is noise); one above it pulls the estimate up by [`fuse_with_disagreement`], the
 /// disagreement kept as variance (a higher surface, or a spurious return that the next measurements outvote);
@@ -502,6 +532,35 @@ mod tests {
             var = correlated_variance(fused, var, s2, rho);
         }
         assert!((var - rho * s2).abs() < 1e-9, "{var}");
+    }
+
+    #[test]
+    fn the_normal_tail_matches_its_table() {
+        // Abramowitz and Stegun, table 26.1, to 10 digits.
+        for (z, q) in [
+            (0.0, 0.5),
+            (1.0, 0.158_655_253_9),
+            (2.0, 0.022_750_131_95),
+            (3.0, 0.001_349_898_032),
+            (5.0, 2.866_515_719e-7),
+        ] {
+            let got = normal_tail(z);
+            assert!((got - q).abs() <= 2e-7 * q, "Q({z}) = {got}, not {q}");
+        }
+        assert!((normal_tail(-1.0) - (1.0 - 0.158_655_253_9)).abs() < 2e-7);
+    }
+
+    #[test]
+    fn an_overhead_hit_among_many_must_stand_out_further() {
+        // One hit: the band itself.
+        assert!(overhead_significant(3.01, 1.0, 3.0));
+        assert!(!overhead_significant(2.99, 1.0, 3.0));
+        // The tail of a hundred pixels: 3.1 sigma is noise, 4.3 a structure.
+        assert!(!overhead_significant(3.1, 100.0, 3.0));
+        assert!(overhead_significant(4.3, 100.0, 3.0));
+        assert!(!overhead_significant(4.3, 1000.0, 3.0));
+        // A board's face 30 sigma over the ground stands out among any number.
+        assert!(overhead_significant(30.0, 1e6, 3.0));
     }
 
     #[test]
