@@ -21,7 +21,7 @@ pub fn inspect(path: &Path) -> Result<String> {
     let m = &header.config.model;
     // Writing into a String cannot fail.
     let _ = writeln!(out, "file:                 {}", path.display());
-    let _ = writeln!(out, "format version:       {}", header.format_version());
+    let _ = writeln!(out, "format version:       {}", header.file_version);
     let _ = writeln!(out, "written by:           {}", header.written_by);
     let _ = writeln!(out, "resolution:           {} m", header.config.resolution_m);
     let _ = writeln!(

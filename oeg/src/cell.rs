@@ -82,6 +82,11 @@ pub struct Ceiling {
     pub log_odds: f32,
     /// From which side the beams that measured it came ([`crate::model::ceiling_contradicts`]).
     pub seen_from: SeenFrom,
+    /// The highest point, world z in metres, at which a beam passed freely through the cell under the
+    /// structure's band since the structure was first seen (`-inf`: none). The structure's lowest part lies
+    /// between it and `z_m`: a beam that rises onto a board's face measures where it met the face, not the
+    /// underside, which may hang lower ([`crate::traversability::ceiling_decision`]).
+    pub clear_m: f32,
 }
 
 /// From which side the beams that measured a structure came.
@@ -124,6 +129,7 @@ impl Ceiling {
         var_m2: f32::INFINITY,
         log_odds: f32::NAN,
         seen_from: SeenFrom::Both,
+        clear_m: f32::NEG_INFINITY,
     };
 
     /// Whether there is a structure over the cell.

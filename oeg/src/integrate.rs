@@ -10,10 +10,10 @@ use crate::geometry::CellIndex;
 use crate::map::{IntegrationStats, Map};
 use crate::model::{
     CeilingHit, Elevation, FreeSpaceElevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level,
-    ModelOptions, OverheadHits, ScanHitElevation, band_contradicts, ceiling_contradicts, clamp_probability,
-    correlated_variance, elevation_observation, fuse_elevation, inverse_sensor_model, kalman_fuse, log_odds,
-    overhead_significant, ray_bound, spread_variance, surface_level, update_ceiling, update_log_odds,
-    vertical_variance,
+    ModelOptions, OverheadHits, ScanHitElevation, band_contradicts, ceiling_contradicts,
+    ceiling_passed_under, clamp_probability, correlated_variance, elevation_observation, fuse_elevation,
+    inverse_sensor_model, kalman_fuse, log_odds, overhead_significant, ray_bound, spread_variance,
+    surface_level, update_ceiling, update_log_odds, vertical_variance,
 };
 use crate::scan::{RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
@@ -44,6 +44,8 @@ pub(crate) struct ScanEvidence {
     band_contradicted: bool,
     /// Whether a free sample passed through the band of the cell's ceiling.
     ceiling_contradicted: bool,
+    /// The highest point of a free sample that passed under the band of the cell's ceiling (-inf: none).
+    ceiling_clear_m: f32,
     /// From which side the beams of the scan's overhead hits came.
     ceiling_seen_from: SeenFrom,
     /// The scan's hits above the cell's surface band ([`OverheadHits::Ceiling`]) as a sample, and their largest
@@ -57,7 +59,7 @@ pub(crate) struct ScanEvidence {
     num_heights: f32,
 }
 
-const _: () = assert!(size_of::<ScanEvidence>() == 68);
+const _: () = assert!(size_of::<ScanEvidence>() == 72);
 
 impl ScanEvidence {
     pub(crate) const NONE: Self = Self {
@@ -69,6 +71,7 @@ impl ScanEvidence {
         free_var_m2: f32::INFINITY,
         band_contradicted: false,
         ceiling_contradicted: false,
+        ceiling_clear_m: f32::NEG_INFINITY,
         ceiling_seen_from: SeenFrom::Both,
         overhead: HitSample::NONE,
         ceiling_p: 0.0,
@@ -78,7 +81,7 @@ impl ScanEvidence {
 
     /// Whether the scan said something about the cell's ceiling.
     fn touches_ceiling(&self) -> bool {
-        self.ceiling_contradicted || self.ceiling_p > 0.0
+        self.ceiling_contradicted || self.ceiling_p > 0.0 || self.ceiling_clear_m > f32::NEG_INFINITY
     }
 
     /// The scan's measurement of the cell's ceiling, if it hit one: the mean of its overhead hits, with the
@@ -418,9 +421,12 @@ impl Map {
                     if hit_range_m.is_some() {
                         if ceiling_rule
                             && let Some(c) = self.ceilings.get(crossing.cell).filter(|c| c.is_some())
-                            && ceiling_contradicts(c, beam_bottom(), beam_top, opts.surface_band_sigmas)
                         {
-                            evidence.ceiling_contradicted = true;
+                            if ceiling_contradicts(c, beam_bottom(), beam_top, opts.surface_band_sigmas) {
+                                evidence.ceiling_contradicted = true;
+                            } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas) {
+                                evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
+                            }
                         }
                         if let (Some(depth), Some(e)) = (opts.free_space_max_depth_m, surface)
                             && e.mean_m - beam_top > depth
@@ -516,13 +522,13 @@ impl Map {
                 continue;
             }
             // The ceiling layer: allocated where a ceiling is hit, updated where one exists. One pass tells both.
-            let (hit, contradicted) = evidence.iter().fold((false, false), |(h, c), ev| {
-                (h || ev.ceiling_p > 0.0, c || ev.ceiling_contradicted)
+            let (hit, touched) = evidence.iter().fold((false, false), |(h, t), ev| {
+                (h || ev.ceiling_p > 0.0, t || ev.touches_ceiling())
             });
             let ceilings = if hit {
                 let room = limit.saturating_sub(self.cells.memory_bytes());
                 Some(self.ceilings.tile_or_insert(tile, room).map_err(memory_error)?)
-            } else if contradicted {
+            } else if touched {
                 self.ceilings.tile_mut(tile)
             } else {
                 None
@@ -534,6 +540,7 @@ impl Map {
                             *ceiling,
                             ev.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas),
                             ev.ceiling_contradicted,
+                            ev.ceiling_clear_m,
                             &opts,
                             self.occupied_log_odds,
                         );

@@ -153,6 +153,7 @@ impl Map {
         let over_ceiling = match ground {
             Some(g) => ceiling_decision(
                 ceiling.z_m - g.mean_m,
+                ceiling.clear_m - g.mean_m,
                 (ceiling.var_m2 + g.var_m2).sqrt(),
                 kappa,
                 profile,

@@ -233,16 +233,27 @@ pub fn footprint_decision(
 /// within `kappa` sigma of either threshold. A structure that is not `confirmed` (seen less surely than one
 /// sure hit: [`crate::model::ceiling_confirmed`]) may not be there at all, and blocks nothing for sure: it is
 /// `Uncertain` where a confirmed one would be `Blocked`. `None` leaves the decision to the cell's surface.
+///
+/// A structure measured higher than the robot is passed under only where a beam passed under it higher than
+/// the robot too: `passed_under_m`, the highest point over the ground at which a beam crossed the cell under
+/// it ([`crate::Ceiling::clear_m`]; `-inf`: none). The hits say where beams met the structure, not where its
+/// lowest part is: a lidar ring rising onto a board's face meets it above the board's underside, and the
+/// underside may lie anywhere between the highest beam that passed under it and the hits. Where that span
+/// reaches down to the robot's height, `Uncertain`. A flat underside seen from a robot that moves is crossed
+/// just under its height in the scans before each part of it is hit, so it is passed under.
 pub fn ceiling_decision(
     clearance_m: f32,
+    passed_under_m: f32,
     sigma_m: f32,
     kappa: f32,
     profile: &RobotProfile,
     confirmed: bool,
 ) -> Option<Traversability> {
     let band = kappa * sigma_m;
-    if clearance_m > profile.height_m + band || clearance_m < profile.max_step_m - band {
+    if clearance_m < profile.max_step_m - band {
         None
+    } else if clearance_m > profile.height_m + band {
+        (passed_under_m <= profile.height_m + band).then_some(Traversability::Uncertain)
     } else if confirmed && clearance_m > profile.max_step_m + band && clearance_m < profile.height_m - band {
         Some(Traversability::Blocked)
     } else {
@@ -337,33 +348,45 @@ mod tests {
         let p = RobotProfile::default();
         // A board 0.30 m over the ground, known to 1 cm: blocked; 0.44 m: within 2 sigma of 0.46 m, uncertain.
         assert_eq!(
-            ceiling_decision(0.30, 0.01, 2.0, &p, true),
+            ceiling_decision(0.30, 0.30, 0.01, 2.0, &p, true),
             Some(Traversability::Blocked)
         );
         assert_eq!(
-            ceiling_decision(0.44, 0.01, 2.0, &p, true),
+            ceiling_decision(0.44, 0.44, 0.01, 2.0, &p, true),
             Some(Traversability::Uncertain)
         );
         // 0.50 m: the robot passes under it; 2 cm: it drives over it. Both leave the decision to the surface.
-        assert_eq!(ceiling_decision(0.50, 0.01, 2.0, &p, true), None);
-        assert_eq!(ceiling_decision(0.02, 0.005, 2.0, &p, true), None);
+        assert_eq!(ceiling_decision(0.50, 0.50, 0.01, 2.0, &p, true), None);
+        assert_eq!(ceiling_decision(0.02, 0.02, 0.005, 2.0, &p, true), None);
         // 3.5 cm known to 5 mm: cannot tell whether it is a step.
         assert_eq!(
-            ceiling_decision(0.035, 0.005, 2.0, &p, true),
+            ceiling_decision(0.035, 0.035, 0.005, 2.0, &p, true),
             Some(Traversability::Uncertain)
         );
         // Without an uncertain band (kappa 0) the thresholds are sharp.
         assert_eq!(
-            ceiling_decision(0.459, 0.01, 0.0, &p, true),
+            ceiling_decision(0.459, 0.459, 0.01, 0.0, &p, true),
             Some(Traversability::Blocked)
         );
-        assert_eq!(ceiling_decision(0.461, 0.01, 0.0, &p, true), None);
+        assert_eq!(ceiling_decision(0.461, 0.461, 0.01, 0.0, &p, true), None);
         // Seen less surely than one sure hit (a far stereo pixel), it may not be there: uncertain, not blocked.
         assert_eq!(
-            ceiling_decision(0.30, 0.01, 2.0, &p, false),
+            ceiling_decision(0.30, 0.30, 0.01, 2.0, &p, false),
             Some(Traversability::Uncertain)
         );
-        assert_eq!(ceiling_decision(0.50, 0.01, 2.0, &p, false), None);
+        assert_eq!(ceiling_decision(0.50, 0.50, 0.01, 2.0, &p, false), None);
+        // Hits 0.48 m up where no beam passed under it higher than 0.42 m (a board's face met by a rising
+        // ring): its underside may hang anywhere from 0.42 to 0.48 m, the robot's 0.46 m among them.
+        assert_eq!(
+            ceiling_decision(0.48, 0.42, 0.005, 2.0, &p, true),
+            Some(Traversability::Uncertain)
+        );
+        assert_eq!(
+            ceiling_decision(0.48, f32::NEG_INFINITY, 0.005, 2.0, &p, true),
+            Some(Traversability::Uncertain)
+        );
+        // A beam passed under it at 0.475 m: the robot passes under it.
+        assert_eq!(ceiling_decision(0.48, 0.475, 0.005, 2.0, &p, true), None);
         // The more restrictive decision wins.
         let (b, u, t) = (
             Traversability::Blocked,

@@ -725,6 +725,53 @@ fn a_person_over_the_ground_is_a_ceiling_that_beams_through_it_clear() {
     assert_ne!(map.traversability(c, &p, rule), Traversability::Blocked);
 }
 
+/// A scan of laser beams from `origin` onto each of `targets`, each range known to 5 mm.
+fn beams(map: &mut Map, origin: Point3<f64>, targets: &[(f64, f64, f64)]) {
+    let mut scan = Scan::new(origin, SensorModel::laser());
+    for &(x, y, z) in targets {
+        let v = Point3::new(x, y, z) - origin;
+        scan.rays.push(Ray::hit(v.cast()).with_range_sigma_m(0.005));
+    }
+    map.integrate(&scan).expect("integrated");
+}
+
+#[test]
+fn a_structure_hit_over_the_robot_is_passed_under_only_where_a_beam_passed_under_it_as_high() {
+    let profile = RobotProfile::default();
+    let rule = oeg::MapPreset::Robust.traversability();
+    let lidar = Point3::new(0.025, 0.025, 0.45);
+    let ground = |map: &mut Map| {
+        for _ in 0..3 {
+            beams(map, lidar, &[(2.025, 0.025, 0.0), (2.125, 0.025, 0.0)]);
+        }
+    };
+    let c = CellIndex::new(40, 0);
+    // A board's face met by a ring rising onto it at 0.48 m, while the beams under it pass at 0.42 m at most (a
+    // lower ring, on to the ground 30 m away): its underside may hang anywhere from 0.42 to 0.48 m.
+    let mut face = map_with(0.05, oeg::MapPreset::Robust.model(&profile));
+    ground(&mut face);
+    for _ in 0..5 {
+        beams(&mut face, lidar, &[(2.03, 0.025, 0.48), (30.4, 0.025, 0.0)]);
+    }
+    let ceiling = face.ceiling(c).expect("the face");
+    assert!(ceiling.clear_m < 0.43, "{ceiling:?}");
+    assert_eq!(face.traversability(c, &profile, rule), Traversability::Uncertain);
+    // A flat underside 0.50 m up: the ring meets it in this cell, then, a little nearer, passes just under it on
+    // its way to the underside further on.
+    let mut underside = map_with(0.05, oeg::MapPreset::Robust.model(&profile));
+    ground(&mut underside);
+    beams(&mut underside, lidar, &[(2.03, 0.025, 0.50)]);
+    for _ in 0..3 {
+        beams(&mut underside, lidar, &[(2.125, 0.025, 0.50)]);
+    }
+    let ceiling = underside.ceiling(c).expect("the underside");
+    assert!(ceiling.clear_m > 0.49, "{ceiling:?}");
+    assert_eq!(
+        underside.traversability(c, &profile, rule),
+        Traversability::Traversable
+    );
+}
+
 /// One frame of a camera that puts a ray on `(x, y, z)` for each `z` of `heights`, straight down from 1 m above
 /// the ground, each range known to 5 mm.
 fn frame_from_above(map: &mut Map, x: f64, y: f64, heights: &[f64]) {

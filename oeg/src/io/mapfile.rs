@@ -1,22 +1,25 @@
-//! The map file format (`.oeg`), versions 1 and 2, in the framed container of [`super::container`].
+//! The map file format (`.oeg`), versions 1 to 3, in the framed container of [`super::container`].
 //! Little-endian throughout:
 //!
 //! ```text
 //! offset  size  what
 //! 0       8     magic "OEGMAP\r\n" (the CR LF catches text-mode transfers)
-//! 8       4     u32 format version (1)
+//! 8       4     u32 format version (1 without a ceiling layer, 3 with one)
 //! 12      4     u32 length H of the header
 //! 16      H     header, UTF-8 JSON: see MapFileHeader (resolution, tile size, tile count, model options, ...)
 //! 16+H    ...   num_tiles times: i32 tile column, i32 tile row, then 64 x 64 cells row-major from the tile's
 //!               min-x, min-y cell, each cell three f32: log-odds, elevation mean (m), elevation variance (m^2)
-//! ...     ...   version 2 only, num_ceiling_tiles times: i32 tile column, i32 tile row, then 64 x 64 ceilings
-//!               in the same order, each three f32: height (m), variance (m^2), log-odds (NaN: none), then
-//!               one u8: the side the beams came from, 0 above (a top), 1 below (an underside), 2 both
+//! ...     ...   versions 2 and 3, num_ceiling_tiles times: i32 tile column, i32 tile row, then 64 x 64
+//!               ceilings in the same order, each three f32: height (m), variance (m^2), log-odds (NaN: none),
+//!               then one u8: the side the beams came from, 0 above (a top), 1 below (an underside), 2 both,
+//!               then (version 3 only) one f32: the highest point a beam passed under it (m, -inf: none)
 //! end-8   8     u64 FNV-1a-64 checksum of every byte before it
 //! ```
 //!
 //! A map without a ceiling layer ([`crate::OverheadHits::Ceiling`]) is written as version 1, byte for byte
-//! as before the layer existed; a map with one as version 2, whose header adds `num_ceiling_tiles`.
+//! as before the layer existed; a map with one as version 3, whose header adds `num_ceiling_tiles`. Version 2
+//! files (ceilings without the clear height, before it was kept) are read with none (`-inf`): their
+//! structures above the robot's height are judged `uncertain` ([`crate::Ceiling::clear_m`]).
 //!
 //! A never-observed cell has NaN log-odds; a cell without an elevation estimate has an infinite variance (see
 //! [`crate::Cell`]). Tile `(ti, tj)` holds cells `(64 ti .. 64 ti + 63, 64 tj .. 64 tj + 63)`.
@@ -34,12 +37,21 @@ use crate::storage::{TILE_CELLS, TILE_SIZE, TileIndex};
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"OEGMAP\r\n";
 /// The format version of a map with a ceiling layer; one without is written as [`FORMAT_VERSION_NO_CEILINGS`].
-/// This crate reads both.
-pub const FORMAT_VERSION: u32 = 2;
+/// This crate reads both, and [`FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR`].
+pub const FORMAT_VERSION: u32 = 3;
 /// The format version of a map without a ceiling layer (the format before the layer existed).
 pub const FORMAT_VERSION_NO_CEILINGS: u32 = 1;
+/// The format version of a ceiling layer without [`Ceiling::clear_m`]: read, no longer written.
+pub const FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR: u32 = 2;
 const TILE_RECORD_BYTES: usize = 8 + TILE_CELLS * 12;
-const CEILING_RECORD_BYTES: usize = 8 + TILE_CELLS * 13;
+/// A ceiling tile record's bytes in `version`.
+const fn ceiling_record_bytes(version: u32) -> usize {
+    if version == FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR {
+        8 + TILE_CELLS * 13
+    } else {
+        8 + TILE_CELLS * 17
+    }
+}
 
 /// The JSON header of a map file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,10 +72,15 @@ pub struct MapFileHeader {
     pub totals: IntegrationStats,
     /// The program that wrote the file.
     pub written_by: String,
+    /// The format version of the file the header was read from (not in the JSON: it is the file's prefix);
+    /// [`MapFileHeader::format_version`] for a header about to be written.
+    #[serde(skip)]
+    pub file_version: u32,
 }
 
 impl MapFileHeader {
-    /// The format version a file with this header has: 2 with a ceiling layer, 1 without.
+    /// The format version a file with this header has when this crate writes it: 3 with a ceiling layer, 1
+    /// without.
     pub fn format_version(&self) -> u32 {
         if self.num_ceiling_tiles == 0 {
             FORMAT_VERSION_NO_CEILINGS
@@ -89,11 +106,14 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
         num_scans: map.num_scans(),
         totals: map.totals(),
         written_by: format!("oeg {}", env!("CARGO_PKG_VERSION")),
+        file_version: 0,
     };
     // A plain struct of numbers and strings always serialises.
     let json = serde_json::to_vec(&header).unwrap_or_default();
     let mut out = container::prefix_bytes(MAGIC, header.format_version(), &json);
-    out.reserve(tiles.len() * TILE_RECORD_BYTES + ceiling_tiles.len() * CEILING_RECORD_BYTES + 8);
+    out.reserve(
+        tiles.len() * TILE_RECORD_BYTES + ceiling_tiles.len() * ceiling_record_bytes(FORMAT_VERSION) + 8,
+    );
     for (tile, cells) in tiles {
         out.extend_from_slice(&tile.ti.to_le_bytes());
         out.extend_from_slice(&tile.tj.to_le_bytes());
@@ -111,6 +131,7 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
                 out.extend_from_slice(&v.to_le_bytes());
             }
             out.push(c.seen_from as u8);
+            out.extend_from_slice(&c.clear_m.to_le_bytes());
         }
     }
     container::seal(&mut out);
@@ -173,13 +194,20 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         path,
         data,
         MAGIC,
-        &[FORMAT_VERSION_NO_CEILINGS, FORMAT_VERSION],
+        &[
+            FORMAT_VERSION_NO_CEILINGS,
+            FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR,
+            FORMAT_VERSION,
+        ],
         "an OEG map file",
     )?;
     let mut r = ByteReader::new(path, data);
     r.take(prefix.body_start, "the header")?;
-    let header: MapFileHeader = serde_json::from_slice(prefix.header)
-        .map_err(|e| r.error_at(16, format!("malformed header: {e}")))?;
+    let header = MapFileHeader {
+        file_version: prefix.version,
+        ..serde_json::from_slice(prefix.header)
+            .map_err(|e| r.error_at(16, format!("malformed header: {e}")))?
+    };
     if header.tile_size as usize != TILE_SIZE {
         return Err(r.error_at(
             16,
@@ -193,7 +221,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         return Err(r.error_at(
             16,
             format!(
-                "a version 1 header declares {} ceiling tiles (expected none: the ceiling layer is version 2)",
+                "a version 1 header declares {} ceiling tiles (expected none: the ceiling layer is version 2 or 3)",
                 header.num_ceiling_tiles
             ),
         ));
@@ -205,7 +233,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
             .saturating_add(
                 header
                     .num_ceiling_tiles
-                    .saturating_mul(CEILING_RECORD_BYTES as u64),
+                    .saturating_mul(ceiling_record_bytes(prefix.version) as u64),
             )
             .saturating_add(8),
     );
@@ -242,7 +270,11 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         header.num_ceiling_tiles,
         "ceiling tile",
         Ceiling::NONE,
-        read_ceiling,
+        if prefix.version == FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR {
+            read_ceiling_without_clear
+        } else {
+            read_ceiling
+        },
         |tile, ceilings| map.insert_ceiling_tile(tile, ceilings),
     )?;
     map.restore_counters(header.num_scans, header.totals);
@@ -314,6 +346,15 @@ fn read_cell(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Cell> {
 
 /// One ceiling of a ceiling tile record (`what`, cell `k`), refused with its place if no map holds it.
 fn read_ceiling(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Ceiling> {
+    read_ceiling_fields(r, what, k, true)
+}
+
+/// [`read_ceiling`] for version 2, which has no clear height.
+fn read_ceiling_without_clear(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Ceiling> {
+    read_ceiling_fields(r, what, k, false)
+}
+
+fn read_ceiling_fields(r: &mut ByteReader<'_>, what: &str, k: usize, with_clear: bool) -> Result<Ceiling> {
     let at = r.pos();
     let (z_m, var_m2, log_odds) = (r.f32(what)?, r.f32(what)?, r.f32(what)?);
     let side = r.take(1, what)?[0];
@@ -323,11 +364,17 @@ fn read_ceiling(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Ceiling>
             format!("{what}, cell {k}: side {side} is not 0 (above), 1 (below) or 2 (both)"),
         )
     })?;
+    let clear_m = if with_clear {
+        r.f32(what)?
+    } else {
+        f32::NEG_INFINITY
+    };
     let c = Ceiling {
         z_m,
         var_m2,
         log_odds,
         seen_from,
+        clear_m,
     };
     match ceiling_problem(&c) {
         Some(problem) => Err(r.error_at(at, format!("{what}, cell {k}: {problem}"))),
@@ -354,6 +401,12 @@ fn ceiling_problem(c: &Ceiling) -> Option<String> {
         return Some(format!(
             "ceiling variance {} m^2 is not a finite variance of 0 or more",
             c.var_m2
+        ));
+    }
+    if !(c.clear_m.is_finite() || c.clear_m == f32::NEG_INFINITY) {
+        return Some(format!(
+            "ceiling clear height {} m is not a finite number or -inf",
+            c.clear_m
         ));
     }
     None
@@ -476,6 +529,7 @@ mod tests {
             num_scans: 1,
             totals: IntegrationStats::default(),
             written_by: "a test".into(),
+            file_version: 0,
         };
         let json = serde_json::to_vec(&header).expect("json");
         let mut out = container::prefix_bytes(MAGIC, FORMAT_VERSION, &json);
@@ -601,10 +655,10 @@ mod tests {
     }
 
     #[test]
-    fn a_map_with_a_ceiling_layer_is_version_2_and_loads_back_identically() {
+    fn a_map_with_a_ceiling_layer_is_version_3_and_loads_back_identically() {
         let map = map_with_a_ceiling();
         let bytes = to_bytes(&map);
-        assert_eq!(bytes[8..12], 2u32.to_le_bytes());
+        assert_eq!(bytes[8..12], 3u32.to_le_bytes());
         let p = Path::new("ceiling.oeg");
         let back = map_from_bytes(p, &bytes, crate::DEFAULT_MEMORY_LIMIT_BYTES).expect("loaded");
         let c = map.geometry().cell_of(2.025, 0.025).expect("cell");
@@ -615,9 +669,10 @@ mod tests {
         assert_eq!(to_bytes(&small_map())[8..12], 1u32.to_le_bytes());
 
         // Where the one ceiling's record starts.
-        let prefix = container::read_prefix(p, &bytes, MAGIC, &[2], "a map").expect("prefix");
+        let prefix = container::read_prefix(p, &bytes, MAGIC, &[3], "a map").expect("prefix");
         let k = crate::storage::offset_in_tile(c);
-        let at = prefix.body_start + map.tiles().count() * TILE_RECORD_BYTES + 8 + k * 13;
+        let ceilings_start = prefix.body_start + map.tiles().count() * TILE_RECORD_BYTES;
+        let at = ceilings_start + 8 + k * 17;
         let forge = |offset: usize, value: &[u8]| {
             let mut b = bytes[..bytes.len() - 8].to_vec();
             b[offset..offset + value.len()].copy_from_slice(value);
@@ -632,6 +687,11 @@ mod tests {
                 at + 8,
                 f32::INFINITY.to_le_bytes().to_vec(),
                 "ceiling log-odds inf",
+            ),
+            (
+                at + 13,
+                f32::NAN.to_le_bytes().to_vec(),
+                "ceiling clear height NaN",
             ),
         ] {
             let err = map_from_bytes(p, &forge(offset, &value), 1 << 30)
@@ -652,5 +712,22 @@ mod tests {
             .expect_err("truncated")
             .to_string();
         assert!(err.contains("1 ceiling tiles"), "{err}");
+
+        // The same map as version 2 wrote it (no clear height): read, with none.
+        let mut v2 = bytes[..ceilings_start].to_vec();
+        v2[8..12].copy_from_slice(&2u32.to_le_bytes());
+        v2.extend_from_slice(&bytes[ceilings_start..ceilings_start + 8]);
+        for record in bytes[ceilings_start + 8..bytes.len() - 8].chunks(17) {
+            v2.extend_from_slice(&record[..13]);
+        }
+        container::seal(&mut v2);
+        let old = map_from_bytes(p, &v2, 1 << 30).expect("version 2 loads");
+        assert_eq!(parse(p, &v2, None).expect("header").0.file_version, 2);
+        assert_eq!(parse(p, &bytes, None).expect("header").0.file_version, 3);
+        let expected = map.ceiling(c).map(|c| Ceiling {
+            clear_m: f32::NEG_INFINITY,
+            ..c
+        });
+        assert_eq!(old.ceiling(c), expected);
     }
 }

@@ -254,10 +254,15 @@ pub struct CeilingHit {
 ///   after 1 when a single hit made it.
 ///
 /// Hits win over contradictions in the same scan, as occupied samples win over free ones in a cell (OctoMap).
+///
+/// `clear_m` is the highest point at which one of the scan's beams passed freely under the prior ceiling's band
+/// ([`ceiling_passed_under`]; `-inf`: none). The ceiling keeps the highest such point over the scans
+/// (`Ceiling::clear_m`); a structure seen afresh starts with none.
 pub fn update_ceiling(
     prior: Ceiling,
     hit: Option<CeilingHit>,
     contradicted: bool,
+    clear_m: f32,
     opts: &ModelOptions,
     occupied_log_odds: f32,
 ) -> Ceiling {
@@ -267,7 +272,9 @@ pub fn update_ceiling(
         var_m2: h.var_m2,
         log_odds: evidence(0.0, h.p),
         seen_from: h.seen_from,
+        clear_m: f32::NEG_INFINITY,
     };
+    let clear_m = prior.clear_m.max(clear_m);
     match (prior.height(), hit) {
         (None, Some(h)) => fresh(h),
         (Some(c), Some(h)) => match surface_level(c, h.z_m, h.var_m2, opts.surface_band_sigmas) {
@@ -284,21 +291,27 @@ pub fn update_ceiling(
                     ),
                     log_odds: evidence(prior.log_odds, h.p),
                     seen_from: prior.seen_from.and(h.seen_from),
+                    clear_m,
                 }
             }
             Level::Below => fresh(h),
             Level::Above if contradicted => fresh(h),
-            Level::Above => prior,
+            Level::Above => Ceiling { clear_m, ..prior },
         },
         (Some(_), None) if contradicted => {
             let l = evidence(prior.log_odds, 1.0 - opts.p_max);
             if l <= occupied_log_odds {
                 Ceiling::NONE
             } else {
-                Ceiling { log_odds: l, ..prior }
+                Ceiling {
+                    log_odds: l,
+                    clear_m,
+                    ..prior
+                }
             }
         }
-        _ => prior,
+        (Some(_), None) => Ceiling { clear_m, ..prior },
+        (None, None) => prior,
     }
 }
 
@@ -322,13 +335,26 @@ pub fn ceiling_confirmed(log_odds_value: f32, p_max: f32) -> bool {
 /// as wide as the structure's hits spread ([`spread_variance`]): a person's front, hit from the ankles up,
 /// is contradicted by any beam through where they stood.
 pub fn ceiling_contradicts(ceiling: &Ceiling, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
+    let (lo, hi) = ceiling_band(ceiling, band_sigmas);
+    z_lo_m <= hi && z_hi_m >= lo
+}
+
+/// [`crate::OverheadHits::Ceiling`]: whether a beam whose highest point in a cell is `z_top_m` passed wholly under
+/// the structure's side of its band ([`ceiling_contradicts`]): the space it crossed, up to `z_top_m`, is clear
+/// under the structure (`Ceiling::clear_m`).
+pub fn ceiling_passed_under(ceiling: &Ceiling, z_top_m: f32, band_sigmas: f32) -> bool {
+    z_top_m < ceiling_band(ceiling, band_sigmas).0
+}
+
+/// The structure's side of a ceiling's band, `(lo, hi)`: `[z - k sigma, z]` for a top seen from above,
+/// `[z, z + k sigma]` for an underside seen from below, the whole band for one seen from both sides.
+fn ceiling_band(ceiling: &Ceiling, band_sigmas: f32) -> (f32, f32) {
     let half = band_sigmas * ceiling.var_m2.sqrt();
-    let (lo, hi) = match ceiling.seen_from {
+    match ceiling.seen_from {
         SeenFrom::Above => (ceiling.z_m - half, ceiling.z_m),
         SeenFrom::Below => (ceiling.z_m, ceiling.z_m + half),
         SeenFrom::Both => (ceiling.z_m - half, ceiling.z_m + half),
-    };
-    z_lo_m <= hi && z_hi_m >= lo
+    }
 }
 
 /// [`ScanHitElevation::MeanWithSpread`]: the variance of a scan's measurement of a cell, the inverse-variance
@@ -623,11 +649,18 @@ mod tests {
             seen_from: SeenFrom::Above,
         };
         // A first hit makes a ceiling with one hit's evidence (log-odds of 0.9 = 2.2).
-        let board = update_ceiling(Ceiling::NONE, Some(hit(0.34)), false, &opts, occupied);
+        let board = update_ceiling(
+            Ceiling::NONE,
+            Some(hit(0.34)),
+            false,
+            f32::NEG_INFINITY,
+            &opts,
+            occupied,
+        );
         assert_eq!((board.z_m, board.var_m2), (0.34, 1e-4));
         assert!((board.log_odds - log_odds(0.9)).abs() < 1e-6);
         // The same structure again: fused, and its evidence grows to the clamp.
-        let again = update_ceiling(board, Some(hit(0.35)), false, &opts, occupied);
+        let again = update_ceiling(board, Some(hit(0.35)), false, f32::NEG_INFINITY, &opts, occupied);
         assert_eq!(
             Elevation {
                 mean_m: again.z_m,
@@ -637,20 +670,20 @@ mod tests {
         );
         assert_eq!(again.log_odds, opts.log_odds_max);
         // A lower structure sets the clearance: it replaces the ceiling.
-        let lower = update_ceiling(again, Some(hit(0.20)), false, &opts, occupied);
+        let lower = update_ceiling(again, Some(hit(0.20)), false, f32::NEG_INFINITY, &opts, occupied);
         assert_eq!(lower.z_m, 0.20);
         // A higher hit alone is a higher part of the structure; with a contradiction, the lower part has gone.
         assert_eq!(
-            update_ceiling(lower, Some(hit(0.40)), false, &opts, occupied),
+            update_ceiling(lower, Some(hit(0.40)), false, f32::NEG_INFINITY, &opts, occupied),
             lower
         );
         assert_eq!(
-            update_ceiling(lower, Some(hit(0.40)), true, &opts, occupied).z_m,
+            update_ceiling(lower, Some(hit(0.40)), true, f32::NEG_INFINITY, &opts, occupied).z_m,
             0.40
         );
         // A hit wins over a contradiction in the same scan.
         assert_eq!(
-            update_ceiling(board, Some(hit(0.345)), true, &opts, occupied).log_odds,
+            update_ceiling(board, Some(hit(0.345)), true, f32::NEG_INFINITY, &opts, occupied).log_odds,
             opts.log_odds_max
         );
         // One sure hit confirms a structure, one weak hit (a far stereo pixel) does not.
@@ -659,19 +692,39 @@ mod tests {
             Ceiling::NONE,
             Some(CeilingHit { p: 0.6, ..hit(0.34) }),
             false,
+            f32::NEG_INFINITY,
             &opts,
             occupied,
         );
         assert!(weak.is_some() && !ceiling_confirmed(weak.log_odds, opts.p_max));
         // Nothing said: unchanged.
-        assert_eq!(update_ceiling(board, None, false, &opts, occupied), board);
-        assert!(!update_ceiling(Ceiling::NONE, None, true, &opts, occupied).is_some());
+        assert_eq!(
+            update_ceiling(board, None, false, f32::NEG_INFINITY, &opts, occupied),
+            board
+        );
+        assert!(!update_ceiling(Ceiling::NONE, None, true, f32::NEG_INFINITY, &opts, occupied).is_some());
         // Contradictions alone, each as strong as the surest hit (logit of 1 - p_max = -2.2): from the clamp's
         // top (3.5), gone after exactly 2 scans; from one hit, after 1.
-        let once = update_ceiling(again, None, true, &opts, occupied);
+        let once = update_ceiling(again, None, true, f32::NEG_INFINITY, &opts, occupied);
         assert!((once.log_odds - (3.5 - log_odds(0.9))).abs() < 1e-5, "{once:?}");
-        assert!(!update_ceiling(once, None, true, &opts, occupied).is_some());
-        assert!(!update_ceiling(board, None, true, &opts, occupied).is_some());
+        assert!(!update_ceiling(once, None, true, f32::NEG_INFINITY, &opts, occupied).is_some());
+        assert!(!update_ceiling(board, None, true, f32::NEG_INFINITY, &opts, occupied).is_some());
+        // The highest beam under it is kept across scans, whatever else the scans say; a structure seen afresh
+        // (a lower hit) starts with none.
+        let passed = update_ceiling(board, None, false, 0.25, &opts, occupied);
+        assert_eq!(passed.clear_m, 0.25);
+        assert_eq!(
+            update_ceiling(passed, Some(hit(0.345)), false, 0.20, &opts, occupied).clear_m,
+            0.25
+        );
+        assert_eq!(
+            update_ceiling(passed, Some(hit(0.345)), false, 0.30, &opts, occupied).clear_m,
+            0.30
+        );
+        assert_eq!(
+            update_ceiling(passed, Some(hit(0.20)), false, 0.30, &opts, occupied).clear_m,
+            f32::NEG_INFINITY
+        );
     }
 
     #[test]
@@ -682,8 +735,11 @@ mod tests {
             var_m2: 1e-4,
             log_odds: 2.0,
             seen_from: SeenFrom::Above,
+            clear_m: f32::NEG_INFINITY,
         };
         assert!(ceiling_contradicts(&top, 0.33, 0.335, 3.0), "through the board");
+        assert!(ceiling_passed_under(&top, 0.30, 3.0), "under the board: clear");
+        assert!(!ceiling_passed_under(&top, 0.33, 3.0), "in the board's band");
         assert!(
             ceiling_contradicts(&top, 0.30, 0.40, 3.0),
             "a steep beam across it"
@@ -711,6 +767,8 @@ mod tests {
             !ceiling_contradicts(&underside, 0.40, 0.45, 3.0),
             "over the board"
         );
+        assert!(ceiling_passed_under(&underside, 0.299, 3.0));
+        assert!(!ceiling_passed_under(&underside, 0.40, 3.0), "over it");
         // Seen from both sides: either side of it.
         let front = Ceiling {
             seen_from: SeenFrom::Both,
