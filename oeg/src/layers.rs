@@ -150,15 +150,22 @@ impl Map {
             .cell(cell)
             .elevation()
             .or_else(|| self.ground_within(cell, profile.contact_distance_m(), kappa));
+        let structure = Elevation {
+            mean_m: ceiling.z_m,
+            var_m2: ceiling.var_m2,
+        };
         let over_ceiling = match ground {
-            Some(g) => ceiling_decision(
-                ceiling.z_m - g.mean_m,
-                ceiling.clear_m - g.mean_m,
-                (ceiling.var_m2 + g.var_m2).sqrt(),
-                kappa,
-                profile,
-                confirmed,
-            ),
+            Some(g) => {
+                let (clearance, sigma) = rise_over(structure, g);
+                ceiling_decision(
+                    clearance,
+                    ceiling.clear_m - g.mean_m,
+                    sigma,
+                    kappa,
+                    profile,
+                    confirmed,
+                )
+            }
             None => Some(Traversability::Uncertain),
         };
         more_restrictive(surface, over_ceiling)

@@ -270,10 +270,13 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         header.num_ceiling_tiles,
         "ceiling tile",
         Ceiling::NONE,
-        if prefix.version == FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR {
-            read_ceiling_without_clear
-        } else {
-            read_ceiling
+        |r, what, k| {
+            read_ceiling(
+                r,
+                what,
+                k,
+                prefix.version != FORMAT_VERSION_CEILINGS_WITHOUT_CLEAR,
+            )
         },
         |tile, ceilings| map.insert_ceiling_tile(tile, ceilings),
     )?;
@@ -312,7 +315,7 @@ fn read_tiles<T: Copy>(
     count: u64,
     kind: &str,
     fill: T,
-    read: fn(&mut ByteReader<'_>, &str, usize) -> Result<T>,
+    read: impl Fn(&mut ByteReader<'_>, &str, usize) -> Result<T>,
     mut insert: impl FnMut(TileIndex, Box<[T; TILE_CELLS]>) -> Result<()>,
 ) -> Result<()> {
     for t in 0..count {
@@ -344,17 +347,9 @@ fn read_cell(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Cell> {
     }
 }
 
-/// One ceiling of a ceiling tile record (`what`, cell `k`), refused with its place if no map holds it.
-fn read_ceiling(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Ceiling> {
-    read_ceiling_fields(r, what, k, true)
-}
-
-/// [`read_ceiling`] for version 2, which has no clear height.
-fn read_ceiling_without_clear(r: &mut ByteReader<'_>, what: &str, k: usize) -> Result<Ceiling> {
-    read_ceiling_fields(r, what, k, false)
-}
-
-fn read_ceiling_fields(r: &mut ByteReader<'_>, what: &str, k: usize, with_clear: bool) -> Result<Ceiling> {
+/// One ceiling of a ceiling tile record (`what`, cell `k`), refused with its place if no map holds it; its clear
+/// height is read `with_clear` (version 3), and is none in version 2.
+fn read_ceiling(r: &mut ByteReader<'_>, what: &str, k: usize, with_clear: bool) -> Result<Ceiling> {
     let at = r.pos();
     let (z_m, var_m2, log_odds) = (r.f32(what)?, r.f32(what)?, r.f32(what)?);
     let side = r.take(1, what)?[0];
