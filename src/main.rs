@@ -165,10 +165,14 @@ enum SweepCommand {
         #[arg(long)]
         no_compare: bool,
     },
-    /// Write summary.csv (means and 95 % intervals) and plots of a sweep's output folder.
+    /// Write summary.csv (means and 95 % intervals) and plots of a sweep's output folder; refuses a folder
+    /// that does not cover the whole plan (a shard, an unfinished run) unless --partial.
     Report {
         /// A folder written by `oeg sweep run` or `oeg sweep merge`.
         dir: PathBuf,
+        /// Summarise the finished runs of an incomplete study; every plot's title says "partial: N of M runs".
+        #[arg(long)]
+        partial: bool,
     },
 }
 
@@ -259,8 +263,20 @@ fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
                 say!("{line}");
             }
         }
-        SweepCommand::Report { dir } => {
-            for f in eval::sweep::report::report(&dir)? {
+        SweepCommand::Report { dir, partial } => {
+            let report = eval::sweep::report::report(&dir, partial)?;
+            say!(
+                "{}: {} of the plan's {} runs{}",
+                dir.display(),
+                report.num_covered,
+                report.num_planned,
+                if report.num_covered < report.num_planned {
+                    " (a partial study)"
+                } else {
+                    ""
+                }
+            );
+            for f in report.files {
                 say!("wrote {}", f.display());
             }
         }

@@ -8,6 +8,7 @@ pub mod demo;
 pub mod error;
 pub mod evaluation;
 pub mod inspect;
+pub mod lock;
 pub mod mapping;
 pub mod metrics;
 pub mod obstacles;

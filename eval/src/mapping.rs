@@ -248,6 +248,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         });
     }
     job.profile.validate()?;
+    let staged = Staged::begin(&job.out_dir)?;
     let mut map = Map::new(job.config)?;
     let read_start = Instant::now();
     let scans = read_inputs(job)?;
@@ -264,7 +265,6 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let integrate_wall_time_s = start.elapsed().as_secs_f64();
     progress.finish();
 
-    let staged = Staged::begin(&job.out_dir)?;
     let stage = staged.dir();
     let mut files = Vec::new();
     if job.keep_inputs {

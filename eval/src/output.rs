@@ -6,9 +6,13 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
+use crate::lock::LockFile;
 
 /// The name of the file that marks a folder as a job's output, which the next job writing there may replace.
 pub const OUTPUT_MARKER: &str = ".oeg-output";
+
+/// The prefix of a job's staging inside a mount point (see [`Staged`]), and of what it sets aside there.
+const MOUNT_STAGING: &str = ".oeg-staging.";
 
 /// A job's output folder, written all or nothing.
 ///
@@ -20,24 +24,36 @@ pub const OUTPUT_MARKER: &str = ".oeg-output";
 /// before it starts. A job that fails or is dropped removes its staging folder; the staging of killed jobs
 /// (whose process no longer runs) is removed by the next job that writes beside them.
 ///
+/// A mount point (a container's volume: another file system than its parent's) cannot be renamed. There the
+/// job stages inside it (`.oeg-staging.<pid>.<n>`) and [`Staged::commit`] moves the previous output's entries
+/// aside and the new ones in, each with one rename: every file is whole, but a job killed during the commit
+/// can leave the folder with part of the old and part of the new entries (the next job writing there replaces
+/// them).
+///
 /// Only folders that a job wrote (they hold [`OUTPUT_MARKER`], or, written by an earlier version, the pair of
-/// files their job always writes) or empty folders are replaced: a folder of someone else's files is an error,
-/// before any work is done. Two jobs committing the same folder take turns (a lock file beside it, taken over
-/// from a killed job), so each leaves it whole and the last one's results stay.
+/// files their job always wrote and nothing that job does not write) or empty folders are replaced: a folder of
+/// someone else's files is an error, before any work is done. Two jobs committing the same folder take turns (a
+/// lock file, [`crate::lock`]), so each leaves it whole and the last one's results stay.
 #[derive(Debug)]
 pub struct Staged {
     target: PathBuf,
     staging: PathBuf,
+    in_place: bool,
 }
 
 impl Staged {
     /// Starts a job that writes the folder `target`: checks that `target` may be replaced, removes stale
-    /// staging of killed jobs beside it and creates this job's staging folder (and `target`'s parents).
+    /// staging of killed jobs beside it and creates this job's staging folder (and `target`'s parents). Jobs
+    /// call it before their work, so a folder they may not write costs nothing.
     ///
     /// # Errors
     /// [`EvalError::Io`] naming `target` when it is a file or a folder that no job wrote, or when a folder
     /// cannot be created.
     pub fn begin(target: &Path) -> Result<Self> {
+        Self::begin_as(target, is_mount_point(target))
+    }
+
+    fn begin_as(target: &Path, in_place: bool) -> Result<Self> {
         check_replaceable(target)?;
         let name = target
             .file_name()
@@ -48,24 +64,31 @@ impl Staged {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        create_dir(&parent)?;
-        // A job killed between the two renames of its swap left no output folder and the previous one aside:
-        // put it back, so the previous results stay whatever this job does.
-        let mut set_aside = oeg::io::stale_owners(&parent, &format!(".{name}.old."), "");
-        set_aside.sort();
-        if !target.exists()
-            && let Some(previous) = set_aside.pop()
-        {
-            let _ = restore(&parent.join(previous), target);
-        }
-        for stale in
-            set_aside
-                .into_iter()
-                .chain(oeg::io::stale_owners(&parent, &format!(".{name}.staging."), ""))
-        {
-            let _ = std::fs::remove_dir_all(parent.join(stale));
-        }
-        let staging = parent.join(format!(".{name}.staging.{}", oeg::io::unique_suffix()));
+        let staging = if in_place {
+            for stale in oeg::io::stale_owners(target, MOUNT_STAGING, "") {
+                let _ = std::fs::remove_dir_all(target.join(stale));
+            }
+            target.join(format!("{MOUNT_STAGING}{}", oeg::io::unique_suffix()))
+        } else {
+            create_dir(&parent)?;
+            // A job killed between the two renames of its swap left no output folder and the previous one
+            // aside: put it back, so the previous results stay whatever this job does.
+            let mut set_aside = oeg::io::stale_owners(&parent, &format!(".{name}.old."), "");
+            set_aside.sort();
+            if !target.exists()
+                && let Some(previous) = set_aside.pop()
+            {
+                let _ = restore(&parent.join(previous), target);
+            }
+            for stale in
+                set_aside
+                    .into_iter()
+                    .chain(oeg::io::stale_owners(&parent, &format!(".{name}.staging."), ""))
+            {
+                let _ = std::fs::remove_dir_all(parent.join(stale));
+            }
+            parent.join(format!(".{name}.staging.{}", oeg::io::unique_suffix()))
+        };
         create_dir(&staging)?;
         let marker = format!(
             "written by oeg {}; the next job writing this folder replaces it as a whole\n",
@@ -75,6 +98,7 @@ impl Staged {
         Ok(Self {
             target: target.to_path_buf(),
             staging,
+            in_place,
         })
     }
 
@@ -106,7 +130,13 @@ impl Staged {
         reason = "this is the one place a finished folder is moved into place"
     )]
     pub fn commit(self) -> Result<PathBuf> {
-        let _lock = commit_lock(&self.target)?;
+        if self.in_place {
+            return self.commit_in_place();
+        }
+        let _lock = commit_lock(&self.target.with_file_name(format!(
+            ".{}.lock",
+            self.target.file_name().unwrap_or_default().to_string_lossy()
+        )))?;
         check_replaceable(&self.target)?;
         let aside = self.target.exists().then(|| {
             let name = self.target.file_name().unwrap_or_default().to_string_lossy();
@@ -128,73 +158,73 @@ impl Staged {
         }
         Ok(self.target.clone())
     }
-}
 
-/// A lock file holding its owner's process id, removed when dropped: `.<name>.lock` beside an output folder
-/// while a job swaps it in ([`Staged::commit`]), and a sweep folder's `.lock` while a sweep works in it.
-pub(crate) struct PidLock {
-    path: PathBuf,
-}
-
-impl PidLock {
-    /// Tries once to take the lock at `path`. `Ok(Err(Some(pid)))`: the process `pid` holds it and runs (it may
-    /// be this one); `Ok(Err(None))`: the file names no process (being written, or corrupt). A lock whose
-    /// process is gone ([`oeg::io::process_is_gone`]) is taken over.
-    pub(crate) fn try_take(path: &Path) -> Result<std::result::Result<Self, Option<u32>>> {
-        use std::io::Write as _;
-        for _ in 0..2 {
-            match std::fs::File::options().write(true).create_new(true).open(path) {
-                Ok(mut f) => {
-                    let _ = writeln!(f, "{}", std::process::id());
-                    return Ok(Ok(Self {
-                        path: path.to_path_buf(),
-                    }));
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = std::fs::read_to_string(path).unwrap_or_default();
-                    match holder.trim().parse::<u32>() {
-                        Ok(pid) if pid != std::process::id() && oeg::io::process_is_gone(pid) => {
-                            let _ = std::fs::remove_file(path);
-                        }
-                        Ok(pid) => return Ok(Err(Some(pid))),
-                        Err(_) => return Ok(Err(None)),
-                    }
-                }
-                Err(source) => {
-                    return Err(EvalError::Io {
-                        path: path.to_path_buf(),
-                        source,
-                    });
-                }
+    /// [`Staged::commit`] inside a mount point: the previous entries aside, the new ones in, one rename each.
+    #[expect(
+        clippy::disallowed_methods,
+        reason = "moving a job's own entries inside its output folder"
+    )]
+    fn commit_in_place(self) -> Result<PathBuf> {
+        let io = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| EvalError::Io { path, source }
+        };
+        let _lock = commit_lock(&self.target.join(format!("{MOUNT_STAGING}lock")))?;
+        check_replaceable(&self.target)?;
+        let aside = self
+            .target
+            .join(format!("{MOUNT_STAGING}{}.old", oeg::io::unique_suffix()));
+        create_dir(&aside)?;
+        for entry in std::fs::read_dir(&self.target).map_err(io(&self.target))? {
+            let name = entry.map_err(io(&self.target))?.file_name();
+            if !name.to_string_lossy().starts_with(MOUNT_STAGING) {
+                let from = self.target.join(&name);
+                std::fs::rename(&from, aside.join(&name)).map_err(io(&from))?;
             }
         }
-        Ok(Err(None))
+        for entry in std::fs::read_dir(&self.staging).map_err(io(&self.staging))? {
+            let name = entry.map_err(io(&self.staging))?.file_name();
+            let to = self.target.join(&name);
+            std::fs::rename(self.staging.join(&name), &to).map_err(io(&to))?;
+        }
+        let _ = std::fs::remove_dir_all(&aside);
+        Ok(self.target.clone())
     }
 }
 
-impl Drop for PidLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
+/// Whether `dir` is a mount point: a folder on another file system than its parent's, which cannot be
+/// renamed (`EBUSY`).
+fn is_mount_point(dir: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt as _;
+    let Ok(meta) = std::fs::symlink_metadata(dir) else {
+        return false;
+    };
+    let parent = std::fs::canonicalize(dir)
+        .ok()
+        .and_then(|d| d.parent().map(Path::to_path_buf));
+    meta.is_dir()
+        && parent
+            .and_then(|p| std::fs::metadata(p).ok())
+            .is_some_and(|p| p.dev() != meta.dev())
 }
 
 /// How long a job waits for another job's swap of the same folder (two renames) before it gives up.
 const COMMIT_PATIENCE: std::time::Duration = std::time::Duration::from_secs(60);
 
-/// Takes `.<name>.lock` beside `target`, waiting while another job swaps the same folder, so two jobs never
-/// interleave their renames.
-fn commit_lock(target: &Path) -> Result<PidLock> {
-    let name = target.file_name().unwrap_or_default().to_string_lossy();
-    let path = target.with_file_name(format!(".{name}.lock"));
+/// Takes the lock file `path` (`.<name>.lock` beside the output folder), waiting while another job swaps the
+/// same folder, so two jobs never interleave their renames.
+fn commit_lock(path: &Path) -> Result<LockFile> {
     let started = std::time::Instant::now();
     loop {
-        match PidLock::try_take(&path)? {
+        match LockFile::try_take(path)? {
             Ok(lock) => return Ok(lock),
-            Err(_) if started.elapsed() > COMMIT_PATIENCE => {
+            Err(busy) if started.elapsed() > COMMIT_PATIENCE => {
                 return Err(io_error(
-                    &path,
-                    "another job has been putting its results in place for a minute; remove this lock if no \
-                     job is running",
+                    path,
+                    &format!(
+                        "another job has been putting its results in place for a minute: {}",
+                        busy.describe(path)
+                    ),
                 ));
             }
             Err(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
@@ -225,15 +255,95 @@ fn io_error(path: &Path, message: &str) -> EvalError {
     }
 }
 
-/// Pairs of files that mark a folder written by a job of an earlier version, before [`OUTPUT_MARKER`]: `oeg
-/// run`, `map`, `suite`, `plan` and `preview`.
-const LEGACY_OUTPUTS: [[&str; 2]; 5] = [
-    ["metrics.json", "timing.json"],
-    ["map.oeg", "summary.json"],
-    ["suite.csv", "suite.json"],
-    ["plan.json", "path.csv"],
-    ["preview_elevation.png", "preview_decisions.png"],
+/// A job of an earlier version, before [`OUTPUT_MARKER`]: the pair of files it always wrote, every file it
+/// could write, and whether its sub-folders are earlier outputs of `oeg run` (the compared model of a run,
+/// each scenario of a suite).
+struct EarlierJob {
+    marks: [&'static str; 2],
+    files: &'static [&'static str],
+    run_folders: bool,
+}
+
+/// The files of `oeg run` (and of its compared model's sub-folder).
+const RUN_FILES: &[&str] = &[
+    "metrics.json",
+    "timing.json",
+    "map.oeg",
+    "obstacles.csv",
+    "wrong_cells.csv",
+    "plan.csv",
+    "comparison.csv",
+    "decisions_comparison.png",
+    "decisions.png",
+    "elevation.png",
+    "elevation_error.png",
+    "occupancy.png",
+    "traversability.png",
+    "truth_elevation.png",
+    "variance.png",
 ];
+
+/// `oeg run`, `map`, `suite`, `plan` and `preview` of earlier versions.
+const EARLIER_JOBS: [EarlierJob; 5] = [
+    EarlierJob {
+        marks: ["metrics.json", "timing.json"],
+        files: RUN_FILES,
+        run_folders: true,
+    },
+    EarlierJob {
+        marks: ["map.oeg", "summary.json"],
+        files: &[
+            "map.oeg",
+            "summary.json",
+            "timing.json",
+            "elevation.png",
+            "occupancy.png",
+            "traversability.png",
+            "variance.png",
+            "demo.graph",
+        ],
+        run_folders: false,
+    },
+    EarlierJob {
+        marks: ["suite.csv", "suite.json"],
+        files: &["suite.csv", "suite.json"],
+        run_folders: true,
+    },
+    EarlierJob {
+        marks: ["plan.json", "path.csv"],
+        files: &["plan.json", "path.csv", "plan.png"],
+        run_folders: false,
+    },
+    EarlierJob {
+        marks: ["preview_elevation.png", "preview_decisions.png"],
+        files: &["preview_elevation.png", "preview_decisions.png"],
+        run_folders: false,
+    },
+];
+
+/// Whether `dir` is the output of a job of an earlier version: it holds the pair of files the job always
+/// wrote, and every entry in it is one that job writes (a folder with anything else in it, a `thesis.tex`
+/// beside a `metrics.json` and a `timing.json`, is someone's, and is never replaced).
+fn is_earlier_output(dir: &Path, jobs: &[EarlierJob]) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    let entries: Vec<(std::ffi::OsString, Option<std::fs::FileType>)> = entries
+        .filter_map(|e| e.ok().map(|e| (e.file_name(), e.file_type().ok())))
+        .collect();
+    jobs.iter().any(|job| {
+        job.marks
+            .iter()
+            .all(|m| std::fs::symlink_metadata(dir.join(m)).is_ok_and(|meta| meta.is_file()))
+            && entries.iter().all(|(name, kind)| match kind {
+                Some(k) if k.is_file() => job.files.iter().any(|f| name == *f),
+                Some(k) if k.is_dir() => {
+                    job.run_folders && is_earlier_output(&dir.join(name), &EARLIER_JOBS[..1])
+                }
+                _ => false,
+            })
+    })
+}
 
 /// Whether a job may replace `target`: absent, an empty folder, or a folder a job wrote.
 fn check_replaceable(target: &Path) -> Result<()> {
@@ -252,23 +362,20 @@ fn check_replaceable(target: &Path) -> Result<()> {
             "is a file, not a folder; the output must be a folder (give a new or empty one)",
         ));
     }
-    if target.join(OUTPUT_MARKER).is_file() {
-        return Ok(());
-    }
-    // Folders written before the marker existed are recognised by the pair of files each job wrote.
-    if LEGACY_OUTPUTS
-        .iter()
-        .any(|pair| pair.iter().all(|f| target.join(f).is_file()))
+    if std::fs::symlink_metadata(target.join(OUTPUT_MARKER)).is_ok_and(|m| m.is_file())
+        || is_earlier_output(target, &EARLIER_JOBS)
     {
         return Ok(());
     }
-    let empty = std::fs::read_dir(target)
-        .map_err(|source| EvalError::Io {
-            path: target.to_path_buf(),
-            source,
-        })?
-        .next()
-        .is_none();
+    let mut entries = std::fs::read_dir(target).map_err(|source| EvalError::Io {
+        path: target.to_path_buf(),
+        source,
+    })?;
+    // A mount point's own staging (a job killed there) does not make it someone's.
+    let empty = entries.all(|e| {
+        e.ok()
+            .is_some_and(|e| e.file_name().to_string_lossy().starts_with(MOUNT_STAGING))
+    });
     if empty {
         Ok(())
     } else {
@@ -452,6 +559,92 @@ mod tests {
             "the previous results are back"
         );
         assert!(!aside.exists());
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn a_folder_is_an_earlier_output_only_if_every_entry_is_one_its_job_writes() {
+        let dir = std::env::temp_dir().join(format!("oeg-output-earlier-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let folder = |name: &str, files: &[&str]| {
+            let d = dir.join(name);
+            for f in files {
+                let path = d.join(f);
+                std::fs::create_dir_all(path.parent().expect("parent")).expect("dir");
+                write_bytes(&path, b"x").expect("file");
+            }
+            d
+        };
+        for ok in [
+            folder(
+                "run",
+                &[
+                    "metrics.json",
+                    "timing.json",
+                    "decisions.png",
+                    "robust/metrics.json",
+                    "robust/timing.json",
+                ],
+            ),
+            folder("plan", &["plan.json", "path.csv", "plan.png"]),
+            folder(
+                "suite",
+                &[
+                    "suite.csv",
+                    "suite.json",
+                    "default/metrics.json",
+                    "default/timing.json",
+                ],
+            ),
+        ] {
+            assert!(check_replaceable(&ok).is_ok(), "{}", ok.display());
+        }
+        // A machine-learning experiment and a thesis: the job's pair, and files it never writes.
+        for refused in [
+            folder("experiment", &["metrics.json", "timing.json", "thesis.tex"]),
+            folder("with_src", &["metrics.json", "timing.json", "src/main.rs"]),
+            folder("plan_and_notes", &["plan.json", "path.csv", "notes.md"]),
+            folder("suite_of_theirs", &["suite.csv", "suite.json", "data/raw.csv"]),
+        ] {
+            let staged = Staged::begin(&refused);
+            let err = staged.expect_err("someone's folder").to_string();
+            assert!(err.contains("no oeg job wrote"), "{err}");
+        }
+        assert!(dir.join("experiment/thesis.tex").is_file());
+        assert!(dir.join("with_src/src/main.rs").is_file());
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn a_mount_point_is_written_in_place() {
+        assert!(is_mount_point(Path::new("/proc")), "/proc is a mount point");
+        assert!(!is_mount_point(&std::env::temp_dir().join("oeg-no-such-folder")));
+        let dir = std::env::temp_dir().join(format!("oeg-output-mount-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let target = dir.join("volume");
+        std::fs::create_dir_all(&target).expect("dir");
+        assert!(!is_mount_point(&target));
+        for (round, content) in [b"first".as_slice(), b"second"].into_iter().enumerate() {
+            let staged = Staged::begin_as(&target, true).expect("begins");
+            assert!(staged.dir().starts_with(&target), "staged inside the mount point");
+            write_bytes(&staged.dir().join("metrics.json"), content).expect("file");
+            if round == 0 {
+                write_bytes(&staged.dir().join("only_first.csv"), b"x").expect("file");
+            }
+            let done = staged.commit().expect("committed");
+            assert_eq!(done, target);
+            assert_eq!(std::fs::read(target.join("metrics.json")).expect("read"), content);
+        }
+        let mut names: Vec<String> = std::fs::read_dir(&target)
+            .expect("list")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            [OUTPUT_MARKER, "metrics.json"],
+            "the previous output went whole"
+        );
         std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 

@@ -202,6 +202,7 @@ pub struct PlanSummary {
 /// # Errors
 /// The map cannot be read, a point is not finite, the options are invalid, or a write fails.
 pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
+    let staged = crate::output::Staged::begin(&job.out_dir)?;
     let map = oeg::io::mapfile::load_map(&job.map)?;
     let geometry = *map.geometry();
     let point_error = |what: &str, (x, y): (f64, f64)| EvalError::Input {
@@ -245,7 +246,6 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         unknown: job.options.unknown,
         max_step_m: job.profile.max_step_m,
     };
-    let staged = crate::output::Staged::begin(&job.out_dir)?;
     let mut files = Vec::new();
     let path_csv = staged.dir().join("path.csv");
     crate::output::write_csv(

@@ -70,6 +70,7 @@ pub const TRUTH_CLASSES: [(TruthClass, &str, Rgb); 5] = [
 pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let loaded = validate(path)?;
     let s = &loaded.scenario;
+    let staged = Staged::begin(out_dir)?;
     let world = World::new(&loaded)?;
     let geometry = GridGeometry::new(s.map.resolution_m)?;
     let region = geometry.region_covering(
@@ -109,7 +110,6 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let title = format!("{}: true elevation (drive red, sensors yellow)", s.name);
     let mut fig = crate::report_images::truth_elevation_figure(&truth, &title);
     overlay(&mut fig);
-    let staged = Staged::begin(out_dir)?;
     let elevation_path = staged.dir().join("preview_elevation.png");
     write_bytes(&elevation_path, &fig.to_png())?;
 

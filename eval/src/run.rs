@@ -81,10 +81,7 @@ pub struct RunReport {
 /// A bad override, or a scenario that (after the overrides) is invalid.
 pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
     let path = &options.scenario;
-    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
-        path: path.clone(),
-        source,
-    })?;
+    let text = oeg::io::read_text(path)?;
     // The file alone first, so that its own errors name its lines; then the overrides, each named if it breaks
     // the scenario.
     let mut loaded = scenario::load_str(path, &text)?;
@@ -279,6 +276,9 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
         .out_dir
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&s.name));
+    // The output folder is checked (and its staging made) before the work: a folder this job may not write
+    // costs nothing.
+    let staged = Staged::begin(&out_dir)?;
     // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]` keys,
     // such as height thresholding, still apply), through the same door as `--set map.preset=<preset>`.
     let compared: Option<(oeg::MapPreset, scenario::Scenario)> = match options.compare {
@@ -307,7 +307,6 @@ pub fn run(options: &RunOptions, progress: &Progress) -> Result<RunReport> {
     let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
     let evaluation = evaluate(s, &map, &truth, simulation.obstacle_returns())?;
 
-    let staged = Staged::begin(&out_dir)?;
     let stage = staged.dir();
     let mut files = write_report(stage, s, &map, &truth, &evaluation)?;
     let mut compared_metrics = None;

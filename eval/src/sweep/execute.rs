@@ -16,10 +16,10 @@ use std::time::Instant;
 
 use serde_json::Value as Json;
 
+use super::folder::SweepFolder;
 use super::plan::{Plan, Run};
 use super::rows::{Outcome, lead_columns, metric_columns, obstacle_rows, round3, row_path, write_tables};
 use crate::error::{EvalError, Result};
-use crate::output::{PidLock, create_dir, write_bytes, write_json};
 use crate::progress::Progress;
 
 /// How to run a plan.
@@ -123,26 +123,26 @@ pub fn shard_from_env(
 pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<RunSummary> {
     use rayon::prelude::*;
     let out = &options.out_dir;
-    create_dir(&out.join("runs"))?;
-    let _lock = FolderLock::take(out)?;
+    let folder = SweepFolder::claim(out)?;
+    folder.create_dir(&out.join("runs"))?;
     check_same_plan(plan, out)?;
     let plan_path = out.join("plan.json");
-    write_json(&plan_path, &plan.listing())?;
+    folder.write_json(&plan_path, &plan.listing())?;
     let selected: Vec<&Run> = match options.shard {
         Some((i, n)) => plan.shard(i, n),
         None => plan.runs.iter().collect(),
     };
-    let pending: Vec<&Run> = selected
-        .iter()
-        .copied()
-        .filter(|r| !row_path(out, &r.id).is_file())
-        .collect();
+    // Every finished row is checked before any work: one that is not its run's is an error now, not after
+    // the other runs.
+    let mut pending: Vec<&Run> = Vec::new();
+    for r in &selected {
+        if super::rows::read_record(&row_path(out, &r.id), &r.id)?.is_none() {
+            pending.push(r);
+        }
+    }
     // A pending run's folder holds no finished row: whatever a killed invocation left there goes.
     for r in &pending {
-        let dir = out.join("runs").join(&r.id);
-        if dir.exists() {
-            std::fs::remove_dir_all(&dir).map_err(|source| EvalError::Io { path: dir, source })?;
-        }
+        folder.remove_dir(&out.join("runs").join(&r.id))?;
     }
     // Groups in plan order; each is one simulation.
     let mut groups: Vec<(String, Vec<&Run>)> = Vec::new();
@@ -166,14 +166,14 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
             .par_iter()
             .with_max_len(1)
             .map(|(_, runs)| {
-                let n = run_group(runs, out)?;
+                let n = run_group(runs, &folder)?;
                 progress.inc(runs.len() as u64);
                 Ok(n)
             })
             .collect::<Result<Vec<usize>>>()
     })?;
     progress.finish();
-    let files = write_tables(plan, &selected, out)?;
+    let files = write_tables(plan, &selected, &folder)?;
     Ok(RunSummary {
         num_selected: selected.len(),
         num_already_done: selected.len() - pending.len(),
@@ -184,50 +184,13 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
     })
 }
 
-/// `DIR/.lock`, holding the process id, while an invocation works in a folder: two at once would clear each
-/// other's unfinished runs. A lock whose process is gone (killed) is taken over.
-struct FolderLock {
-    _held: PidLock,
-}
-
-impl FolderLock {
-    fn take(dir: &Path) -> Result<Self> {
-        let path = dir.join(".lock");
-        for _ in 0..2 {
-            match PidLock::try_take(&path)? {
-                Ok(lock) => return Ok(Self { _held: lock }),
-                Err(Some(pid)) if pid != std::process::id() => {
-                    return Err(EvalError::Input {
-                        path: dir.to_path_buf(),
-                        message: format!(
-                            "another `oeg sweep run` (process {pid}) works in this folder; give each shard its \
-                             own --out"
-                        ),
-                    });
-                }
-                // Left by this process, or a lock that names no process: left by a killed invocation.
-                Err(_) => {
-                    let _ = std::fs::remove_file(&path);
-                }
-            }
-        }
-        Err(EvalError::Input {
-            path: dir.to_path_buf(),
-            message: "cannot take the folder's lock (.lock)".into(),
-        })
-    }
-}
-
 /// Refuses a folder that holds another plan's runs: its rows would be mixed with this plan's.
 fn check_same_plan(plan: &Plan, out: &Path) -> Result<()> {
     let path = out.join("plan.json");
-    let Ok(bytes) = std::fs::read(&path) else {
+    if !path.exists() {
         return Ok(());
-    };
-    let old: Json = serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
-        path: path.clone(),
-        message: format!("not a plan written by `oeg sweep run`: {e}"),
-    })?;
+    }
+    let old = super::rows::read_plan(out)?;
     if super::merge::plan_ids(&old) != super::merge::plan_ids(&plan.listing()) {
         return Err(EvalError::Input {
             path,
@@ -241,7 +204,8 @@ fn check_same_plan(plan: &Plan, out: &Path) -> Result<()> {
 }
 
 /// One simulation, mapped once per run; writes each run's files, `row.json` last. Returns the error rows.
-fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
+fn run_group(runs: &[&Run], folder: &SweepFolder) -> Result<usize> {
+    let out = folder.root();
     let start = Instant::now();
     let loaded: Vec<std::result::Result<sim::LoadedScenario, String>> =
         runs.iter().map(|r| r.load().map_err(|e| e.to_string())).collect();
@@ -259,12 +223,13 @@ fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
     let mut num_errors = 0;
     for (run, result) in runs.iter().zip(results) {
         let dir = out.join("runs").join(&run.id);
-        create_dir(&dir)?;
-        write_bytes(&dir.join("scenario.toml"), run.scenario_text().as_bytes())?;
+        folder.create_dir(&dir)?;
+        folder.write_bytes(&dir.join("scenario.toml"), run.scenario_text().as_bytes())?;
         let mut row = lead_columns(run);
         let obstacles = match result {
             Ok(o) => {
-                write_json(&dir.join("metrics.json"), &o.evaluation.metrics)?;
+                folder.write_json(&dir.join("metrics.json"), &o.evaluation.metrics)?;
+                folder.check(&dir.join("obstacles.csv"))?;
                 crate::output::write_table(&dir.join("obstacles.csv"), &o.evaluation.obstacles)?;
                 row.insert("status".into(), Json::from("ok"));
                 row.insert("error".into(), Json::from(""));
@@ -284,7 +249,7 @@ fn run_group(runs: &[&Run], out: &Path) -> Result<usize> {
             Json::from(round3(shared_s / runs.len() as f64)),
         );
         let record = serde_json::json!({ "row": row, "obstacles": obstacles });
-        write_json(&row_path(out, &run.id), &record)?;
+        folder.write_json(&row_path(out, &run.id), &record)?;
     }
     Ok(num_errors)
 }

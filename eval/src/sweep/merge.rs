@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value as Json;
 
-use super::rows::{read_record, row_path, write_row_tables};
+use super::rows::{read_plan, read_record, row_path, write_row_tables};
 use crate::error::{EvalError, Result};
 use crate::output::{Staged, write_bytes};
 
@@ -15,18 +15,6 @@ pub struct MergeSummary {
     pub num_runs: usize,
     /// Files written.
     pub files: Vec<PathBuf>,
-}
-
-fn read_plan(dir: &Path) -> Result<Json> {
-    let path = dir.join("plan.json");
-    let bytes = std::fs::read(&path).map_err(|source| EvalError::Io {
-        path: path.clone(),
-        source,
-    })?;
-    serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
-        path,
-        message: format!("not a plan written by `oeg sweep run`: {e}"),
-    })
 }
 
 /// The run ids of a `plan.json`, in plan order.
@@ -81,7 +69,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     for id in &ids {
         let mut found: Vec<(&PathBuf, (Json, Vec<Json>))> = Vec::new();
         for d in dirs {
-            if let Some(record) = read_record(&row_path(d, id))? {
+            if let Some(record) = read_record(&row_path(d, id), id)? {
                 found.push((d, record));
             }
         }
@@ -129,7 +117,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     bytes.push(b'\n');
     write_bytes(&plan_path, &bytes)?;
     let mut files = vec![plan_path];
-    files.extend(write_row_tables(&plan_axes(&plan), &rows, staged.dir())?);
+    let folder = super::folder::SweepFolder::fresh(staged.dir())?;
+    files.extend(write_row_tables(&plan_axes(&plan), &rows, &folder)?);
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(MergeSummary {

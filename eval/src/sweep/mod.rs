@@ -5,6 +5,7 @@
 //! * [`presets`]: named model presets;
 //! * [`generate`]: randomized scenes;
 //! * [`plan`]: every run resolved, with its id, its shard and the simulation it shares;
+//! * [`folder`]: whose output folder it is, its lock, writes that never leave it;
 //! * [`execute`]: running, resuming, sharding; [`rows`]: the rows and tables it writes;
 //! * [`merge`]: shards back into one set of rows;
 //! * [`stats`] and [`report`]: means with confidence intervals, `summary.csv` and plots;
@@ -12,6 +13,7 @@
 
 pub mod bench;
 pub mod execute;
+pub mod folder;
 pub mod generate;
 pub mod merge;
 pub mod plan;

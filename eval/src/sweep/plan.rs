@@ -135,8 +135,8 @@ impl Plan {
             } else {
                 vec![K("scenarios"), I(k)]
             };
-            let text = std::fs::read_to_string(base)
-                .map_err(|e| sweep.error(&at_base, format!("cannot read {}: {e}", base.display())))?;
+            let text = oeg::io::read_text(base)
+                .map_err(|e| sweep.error(&at_base, format!("cannot read the base scenario: {e}")))?;
             let base_doc: Table = toml::from_str(&text).map_err(|e| {
                 sweep.error(
                     &at_base,

@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value as Json;
 
+use super::folder::SweepFolder;
 use super::stats::{Summary, mean_interval, rate_interval};
 use crate::error::{EvalError, Result};
-use crate::output::{create_dir, write_bytes};
 use crate::render::chart::{Chart, Point, Series};
 
 /// The metrics summarized: `(column, label with units, is a rate)`.
@@ -88,22 +88,9 @@ struct Axis {
     values: Vec<Json>,
 }
 
-fn read_json(path: &Path) -> Result<Json> {
-    let bytes = std::fs::read(path).map_err(|source| EvalError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
-        path: path.to_path_buf(),
-        message: format!("not JSON written by `oeg sweep`: {e}"),
-    })
-}
-
 fn read_rows(path: &Path) -> Result<Vec<Json>> {
-    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = oeg::io::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
+    let text = String::from_utf8_lossy(&bytes);
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
@@ -149,15 +136,81 @@ fn number(v: &Json) -> f64 {
     }
 }
 
+/// What a report covers and wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportSummary {
+    /// Runs of the plan with a row (finished, `ok` or `error`).
+    pub num_covered: usize,
+    /// Runs in the plan.
+    pub num_planned: usize,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+/// Checks the rows against the plan: every row a run of the plan, once. Returns how many runs they cover.
+fn check_coverage(dir: &Path, plan: &Json, rows: &[Json]) -> Result<usize> {
+    let ids = super::merge::plan_ids(plan);
+    let plan_path = dir.join("plan.json");
+    if ids.is_empty() {
+        return Err(EvalError::Input {
+            path: plan_path,
+            message: "the plan lists no runs; expected the plan.json of `oeg sweep run` or `oeg sweep merge`"
+                .into(),
+        });
+    }
+    let planned: std::collections::BTreeSet<&str> = ids.iter().map(String::as_str).collect();
+    let mut seen = std::collections::BTreeSet::new();
+    let rows_path = dir.join("runs.jsonl");
+    for (k, row) in rows.iter().enumerate() {
+        let at = |message: String| EvalError::Input {
+            path: rows_path.clone(),
+            message: format!("row {}: {message}", k + 1),
+        };
+        let id = row["id"]
+            .as_str()
+            .ok_or_else(|| at("expected a row of `oeg sweep` with its run `id`".into()))?;
+        if !planned.contains(id) {
+            return Err(at(format!(
+                "run {id} is not in {} (the folder mixes two plans); run the sweep again into a new folder",
+                plan_path.display()
+            )));
+        }
+        if !seen.insert(id) {
+            return Err(at(format!("run {id} appears twice")));
+        }
+    }
+    Ok(seen.len())
+}
+
 /// Writes `summary.csv` and the plots of a sweep's output folder (from `oeg sweep run` or `oeg sweep merge`).
+/// A folder whose rows do not cover the whole plan (a shard, an unfinished run) is refused unless `partial`;
+/// then every plot's title says which part of the plan it shows.
 ///
 /// # Errors
-/// Missing or malformed `plan.json`, `runs.jsonl` or `obstacles.csv`, or a failed write.
-pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
-    let plan = read_json(&dir.join("plan.json"))?;
+/// Not a sweep's folder ([`SweepFolder::open`]), missing or malformed `plan.json`, `runs.jsonl` or
+/// `obstacles.csv`, a plan with no runs, rows of another plan, an incomplete study without `partial`, or a
+/// failed write.
+pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
+    let folder = SweepFolder::open(dir)?;
+    let plan = super::rows::read_plan(dir)?;
     let rows: Vec<Json> = read_rows(&dir.join("runs.jsonl"))?;
+    let num_planned = super::merge::plan_ids(&plan).len();
+    let num_covered = check_coverage(dir, &plan, &rows)?;
+    if num_covered < num_planned && !partial {
+        return Err(EvalError::Input {
+            path: dir.to_path_buf(),
+            message: format!(
+                "covers {num_covered} of the plan's {num_planned} runs: finish it (`oeg sweep run` again with the \
+                 same file and --out), merge every shard (`oeg sweep merge`), or give --partial to summarise the \
+                 finished runs as a partial study"
+            ),
+        });
+    }
     let obstacles = read_obstacles(&dir.join("obstacles.csv"))?;
-    let sweep_name = plan["sweep"].as_str().unwrap_or("sweep").to_string();
+    let mut sweep_name = plan["sweep"].as_str().unwrap_or("sweep").to_string();
+    if num_covered < num_planned {
+        sweep_name = format!("{sweep_name} (partial: {num_covered} of {num_planned} runs)");
+    }
     let mut axes: Vec<Axis> = plan["axes"]
         .as_array()
         .map(|a| {
@@ -199,7 +252,7 @@ pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut summary = Vec::new();
     let mut files = Vec::new();
     let plots = dir.join("plots");
-    create_dir(&plots)?;
+    folder.create_dir(&plots)?;
     let points_along = |axis: Option<&Axis>| -> BTreeMap<(String, String), Vec<&Json>> {
         let mut by: BTreeMap<(String, String), Vec<&Json>> = BTreeMap::new();
         for r in &ok {
@@ -266,7 +319,7 @@ pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
                     },
                 };
                 let path = plots.join(format!("{metric}_vs_{}.png", file_safe(&a.key)));
-                write_bytes(&path, &chart.to_png())?;
+                folder.write_bytes(&path, &chart.to_png())?;
                 files.push(path);
             }
         }
@@ -335,13 +388,18 @@ pub fn report(dir: &Path) -> Result<Vec<PathBuf>> {
             note: "band: 95 % Wilson interval".into(),
         };
         let path = plots.join(format!("psychometric_{decides}.png"));
-        write_bytes(&path, &chart.to_png())?;
+        folder.write_bytes(&path, &chart.to_png())?;
         files.push(path);
     }
     let path = dir.join("summary.csv");
+    folder.check(&path)?;
     crate::output::write_table(&path, &summary)?;
     files.insert(0, path);
-    Ok(files)
+    Ok(ReportSummary {
+        num_covered,
+        num_planned,
+        files,
+    })
 }
 
 fn finite(v: f64) -> Option<f64> {

@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Map as JsonMap, Value as Json};
 
+use super::folder::SweepFolder;
 use super::plan::{Plan, Run, to_json};
 use crate::error::{EvalError, Result};
-use crate::output::write_bytes;
 
 /// What one run of a shared simulation produced.
 #[derive(Debug, Clone)]
@@ -126,56 +126,129 @@ pub fn obstacle_rows(run: &Run, o: &Outcome) -> Vec<Json> {
 /// The finished rows of `runs`, in their order: `(row, obstacle rows)`.
 ///
 /// # Errors
-/// A `row.json` that cannot be read.
+/// A `row.json` that cannot be read or is not its run's ([`read_record`]).
 pub fn read_rows(out: &Path, runs: &[&Run]) -> Result<Vec<(Json, Vec<Json>)>> {
     let mut rows = Vec::new();
     for r in runs {
-        let path = row_path(out, &r.id);
-        if let Some(record) = read_record(&path)? {
+        if let Some(record) = read_record(&row_path(out, &r.id), &r.id)? {
             rows.push(record);
         }
     }
     Ok(rows)
 }
 
-/// A `row.json`: `None` when it does not exist.
+/// The largest table or plan a sweep folder's files are read up to (`plan.json`, `runs.jsonl`): 100,000 runs
+/// take a few hundred megabytes.
+pub const MAX_TABLE_BYTES: u64 = 1 << 30;
+
+/// A sweep folder's `plan.json`.
 ///
 /// # Errors
-/// A file that is not a row.
-pub fn read_record(path: &Path) -> Result<Option<(Json, Vec<Json>)>> {
-    let bytes = match std::fs::read(path) {
+/// A missing or unreadable file, over [`MAX_TABLE_BYTES`], or not a JSON object.
+pub fn read_plan(dir: &Path) -> Result<Json> {
+    let path = dir.join("plan.json");
+    let bytes = oeg::io::read_bounded(&path, MAX_TABLE_BYTES)?;
+    match serde_json::from_slice(&bytes) {
+        Ok(plan @ Json::Object(_)) => Ok(plan),
+        Ok(_) => Err(EvalError::Input {
+            path,
+            message: "not a plan written by `oeg sweep run`: expected a JSON object".into(),
+        }),
+        Err(e) => Err(EvalError::Input {
+            path,
+            message: format!("not a plan written by `oeg sweep run`: {e}"),
+        }),
+    }
+}
+
+/// The largest `row.json` read (a run's row and its obstacles take a few kilobytes; 10,000 obstacles about
+/// 10 MB).
+pub const MAX_ROW_BYTES: u64 = 64 << 20;
+
+/// A run's `row.json` (`runs/<id>/row.json`): `None` when it does not exist.
+///
+/// # Errors
+/// A file that is not the row of run `id`: not JSON, not an object with a `row` object (whose `id` is `id` and
+/// whose `status` is `ok` or `error`) and an `obstacles` list of objects; a copied row names another run.
+pub fn read_record(path: &Path, id: &str) -> Result<Option<(Json, Vec<Json>)>> {
+    let bytes = match oeg::io::read_bounded(path, MAX_ROW_BYTES) {
         Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => {
-            return Err(EvalError::Io {
-                path: path.to_path_buf(),
-                source,
-            });
+        Err(oeg::Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+            return Ok(None);
         }
+        Err(e) => return Err(e.into()),
     };
-    let mut record: Json = serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
+    let record: Json = serde_json::from_slice(&bytes).map_err(|e| EvalError::Input {
         path: path.to_path_buf(),
         message: format!("not a run's row: {e}"),
     })?;
-    let obstacles = record["obstacles"].as_array().cloned().unwrap_or_default();
-    let row = record["row"].take();
-    if !row.is_object() {
-        return Err(EvalError::Input {
+    parse_record(&record, id)
+        .map(Some)
+        .map_err(|message| EvalError::Input {
             path: path.to_path_buf(),
-            message: "not a run's row: no `row` object".into(),
-        });
+            message: format!(
+                "{message}; this run's folder was changed by hand: remove {} to run it again",
+                path.parent().unwrap_or(path).display()
+            ),
+        })
+}
+
+/// The checks of [`read_record`] on parsed JSON.
+///
+/// # Errors
+/// What is wrong, as text.
+pub fn parse_record(record: &Json, id: &str) -> std::result::Result<(Json, Vec<Json>), String> {
+    let Json::Object(record) = record else {
+        return Err(format!(
+            "expected a run's row, an object with `row` and `obstacles`, got {}",
+            kind_of(record)
+        ));
+    };
+    let row = match record.get("row") {
+        Some(row @ Json::Object(_)) => row.clone(),
+        Some(other) => return Err(format!("`row`: expected an object, got {}", kind_of(other))),
+        None => return Err("not a run's row: no `row`".into()),
+    };
+    match row.get("id") {
+        Some(Json::String(found)) if found == id => {}
+        Some(Json::String(found)) => {
+            return Err(format!(
+                "holds the row of run {found}, not of run {id} (a copied row)"
+            ));
+        }
+        _ => return Err("`row.id`: expected the run's id".into()),
     }
-    Ok(Some((row, obstacles)))
+    match row.get("status").and_then(Json::as_str) {
+        Some("ok" | "error") => {}
+        _ => return Err("`row.status`: expected \"ok\" or \"error\"".into()),
+    }
+    let obstacles = match record.get("obstacles") {
+        None => Vec::new(),
+        Some(Json::Array(list)) if list.iter().all(Json::is_object) => list.clone(),
+        Some(_) => return Err("`obstacles`: expected a list of objects".into()),
+    };
+    Ok((row, obstacles))
+}
+
+fn kind_of(v: &Json) -> &'static str {
+    match v {
+        Json::Null => "null",
+        Json::Bool(_) => "a boolean",
+        Json::Number(_) => "a number",
+        Json::String(_) => "a string",
+        Json::Array(_) => "a list",
+        Json::Object(_) => "an object",
+    }
 }
 
 /// Writes `runs.csv`, `runs.jsonl` and `obstacles.csv` of the finished `runs` into `out`.
 ///
 /// # Errors
 /// A row that cannot be read, or a failed write.
-pub fn write_tables(plan: &Plan, runs: &[&Run], out: &Path) -> Result<Vec<PathBuf>> {
-    let rows = read_rows(out, runs)?;
+pub fn write_tables(plan: &Plan, runs: &[&Run], folder: &SweepFolder) -> Result<Vec<PathBuf>> {
+    let rows = read_rows(folder.root(), runs)?;
     let axis_keys: Vec<String> = plan.sweep.axes.iter().map(|a| a.key.clone()).collect();
-    write_row_tables(&axis_keys, &rows, out)
+    write_row_tables(&axis_keys, &rows, folder)
 }
 
 /// Writes the tables of `rows` (from [`read_rows`]) into `out`.
@@ -185,8 +258,9 @@ pub fn write_tables(plan: &Plan, runs: &[&Run], out: &Path) -> Result<Vec<PathBu
 pub fn write_row_tables(
     axis_keys: &[String],
     rows: &[(Json, Vec<Json>)],
-    out: &Path,
+    folder: &SweepFolder,
 ) -> Result<Vec<PathBuf>> {
+    let out = folder.root();
     let lead: Vec<String> = ["id", "scenario", "replicate", "seed"]
         .iter()
         .map(|s| (*s).to_string())
@@ -199,6 +273,7 @@ pub fn write_row_tables(
     }
     let runs_csv = out.join("runs.csv");
     write_json_rows(
+        folder,
         &runs_csv,
         rows.iter().map(|(r, _)| r),
         &lead,
@@ -206,7 +281,7 @@ pub fn write_row_tables(
         &["wall_time_s"],
     )?;
     let runs_jsonl = out.join("runs.jsonl");
-    write_bytes(&runs_jsonl, &jsonl)?;
+    folder.write_bytes(&runs_jsonl, &jsonl)?;
     let obstacles_csv = out.join("obstacles.csv");
     let mut obstacle_lead = lead.clone();
     obstacle_lead.extend(
@@ -215,6 +290,7 @@ pub fn write_row_tables(
             .map(|s| (*s).to_string()),
     );
     write_json_rows(
+        folder,
         &obstacles_csv,
         rows.iter().flat_map(|(_, o)| o.iter()),
         &obstacle_lead,
@@ -227,6 +303,7 @@ pub fn write_row_tables(
 /// Writes JSON objects as a CSV table at `path`: `lead` columns first, then `then`, the rest sorted, `last` at
 /// the end. Null is an empty cell; nested values are written as JSON.
 fn write_json_rows<'a>(
+    folder: &SweepFolder,
     path: &Path,
     rows: impl Iterator<Item = &'a Json> + Clone,
     lead: &[String],
@@ -259,5 +336,5 @@ fn write_json_rows<'a>(
             })
             .collect::<Vec<String>>()
     });
-    crate::output::write_csv(path, &columns, records)
+    folder.write_csv(path, &columns, records)
 }

@@ -152,10 +152,7 @@ impl Sweep {
     /// [`EvalError::At`] with file, line and column: syntax, an unknown key, a value of the wrong type, an
     /// empty axis, a range with step 0, a generator range with min above max, an unknown preset.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = oeg::io::read_text(path)?;
         Self::from_str(path, &text)
     }
 

@@ -239,6 +239,65 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
+/// The largest text input the programs read: a scenario, a sweep file, a sweep's base scenario, a robot's
+/// URDF. The largest shipped one is a few kilobytes; 16 MiB holds hundreds of thousands of waypoints.
+pub const MAX_TEXT_INPUT_BYTES: u64 = 16 << 20;
+
+/// Reads a whole file of at most `limit` bytes. A larger regular file is refused from its size before a
+/// byte is read; a device or a pipe (`/dev/zero`), whose size is unknown, as soon as it passes `limit`.
+///
+/// # Errors
+/// [`Error::Io`] naming the file: it cannot be read, or it is larger than `limit` (kind
+/// [`std::io::ErrorKind::FileTooLarge`]).
+pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    use std::io::Read as _;
+    let too_large = |size: String| {
+        Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::FileTooLarge,
+                format!("is {size}, over the limit of {limit} bytes for this input; is it the right file?"),
+            ),
+        )
+    };
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let meta = file.metadata().map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a folder, not a file"),
+        ));
+    }
+    if meta.is_file() && meta.len() > limit {
+        return Err(too_large(format!("{} bytes", meta.len())));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large("longer than that (a device or a pipe)".into()));
+    }
+    Ok(bytes)
+}
+
+/// [`read_bounded`] of a UTF-8 text of at most [`MAX_TEXT_INPUT_BYTES`].
+///
+/// # Errors
+/// As [`read_bounded`], and a file that is not UTF-8 text (naming the byte).
+pub fn read_text(path: &Path) -> Result<String> {
+    let bytes = read_bounded(path, MAX_TEXT_INPUT_BYTES)?;
+    String::from_utf8(bytes).map_err(|e| {
+        Error::parse(
+            path,
+            format!(
+                "byte {}: not UTF-8 text; expected a text file",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
 /// A little-endian reader over a file's bytes that names the file and byte offset in its errors.
 pub(crate) struct ByteReader<'a> {
     path: &'a Path,
@@ -345,6 +404,34 @@ impl Default for Fnv1a64 {
 #[allow(clippy::disallowed_methods, reason = "tests write their inputs directly")]
 mod tests {
     use super::*;
+
+    #[test]
+    fn text_inputs_over_the_limit_are_refused_before_they_are_read() {
+        let dir = scratch_dir("bounded");
+        let path = dir.join("big.toml");
+        std::fs::write(&path, vec![b'#'; 100]).expect("write");
+        assert_eq!(read_bounded(&path, 100).expect("fits").len(), 100);
+        let e = read_bounded(&path, 99).expect_err("over").to_string();
+        assert!(
+            e.contains("big.toml") && e.contains("100 bytes, over the limit of 99"),
+            "{e}"
+        );
+        // A device of endless bytes stops at the limit, not at the end of memory.
+        let e = read_bounded(Path::new("/dev/zero"), 1 << 20)
+            .expect_err("endless")
+            .to_string();
+        assert!(e.contains("/dev/zero") && e.contains("over the limit"), "{e}");
+        std::fs::write(&path, b"name = \"\xff\"").expect("write");
+        let e = read_text(&path).expect_err("not UTF-8").to_string();
+        assert!(e.contains("byte 8: not UTF-8"), "{e}");
+        assert!(
+            read_text(&dir)
+                .expect_err("a folder")
+                .to_string()
+                .contains("folder")
+        );
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
 
     #[test]
     fn fnv1a64_matches_the_reference_values() {
