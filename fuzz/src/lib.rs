@@ -2,8 +2,9 @@
 //! (an error is fine) without panicking, hanging or allocating past its bound.
 //!
 //! The targets read from memory through the same code as the files: the scan graph, the PCD cloud (ascii,
-//! binary and binary_compressed), the sensor log, the map file, the scenario TOML, the terrain PNG and the
-//! robot's URDF.
+//! binary and binary_compressed), the sensor log, the map file, the scenario TOML, the terrain PNG, the
+//! robot's URDF, the sweep file (read, checked and planned against the shipped base scenarios) and a sweep
+//! run's `row.json`.
 
 use std::path::{Path, PathBuf};
 
@@ -24,10 +25,14 @@ pub enum Target {
     Png,
     /// Robot descriptions (`.urdf`).
     Urdf,
+    /// Sweep files (`.toml`), then their plan.
+    Sweep,
+    /// A sweep run's `row.json`.
+    Row,
 }
 
 /// Every target, in the order of the corpus folders.
-pub const TARGETS: [Target; 7] = [
+pub const TARGETS: [Target; 9] = [
     Target::Graph,
     Target::Pcd,
     Target::Log,
@@ -35,7 +40,13 @@ pub const TARGETS: [Target; 7] = [
     Target::Scenario,
     Target::Png,
     Target::Urdf,
+    Target::Sweep,
+    Target::Row,
 ];
+
+/// The most runs the sweep target plans: a larger plan loads every run's scenario, which takes longer than
+/// the fuzzer's time limit (it is bounded by `eval::sweep::spec::MAX_RUNS`, not a hang).
+pub const SWEEP_MAX_PLANNED_RUNS: usize = 64;
 
 /// The memory bound the map target loads under: small, so the fuzzer finds allocations that ignore it.
 pub const MAP_LIMIT_BYTES: u64 = 256 << 20;
@@ -51,6 +62,8 @@ impl Target {
             Self::Scenario => "scenario",
             Self::Png => "png",
             Self::Urdf => "urdf",
+            Self::Sweep => "sweep",
+            Self::Row => "row",
         }
     }
 
@@ -95,5 +108,18 @@ pub fn run(target: Target, data: &[u8]) -> bool {
         Target::Png => sim::terrain::decode_greyscale_png(path, data).is_ok(),
         Target::Urdf => std::str::from_utf8(data)
             .is_ok_and(|text| sim::robot::RobotModel::from_urdf_text(path, text, "base_link").is_ok()),
+        Target::Sweep => std::str::from_utf8(data).is_ok_and(|text| {
+            // Beside the shipped sweeps, so `bases/smoke.toml` resolves as it does for them.
+            let at = Path::new(env!("CARGO_MANIFEST_DIR")).join("../sweeps/fuzz-input.toml");
+            match eval::sweep::Sweep::from_str(&at, text) {
+                Ok(sweep) if sweep.num_planned_runs() <= SWEEP_MAX_PLANNED_RUNS as u128 => {
+                    eval::sweep::Plan::new(sweep).is_ok()
+                }
+                Ok(_) => true,
+                Err(_) => false,
+            }
+        }),
+        Target::Row => serde_json::from_slice(data)
+            .is_ok_and(|json| eval::sweep::rows::parse_record(&json, "0123456789abcdef").is_ok()),
     }
 }

@@ -110,16 +110,7 @@ impl Plan {
         };
         // The size is counted before anything is built: five axes of 10,000 values must be an error, not an
         // exhausted machine.
-        let num_combos = match spec.combine {
-            Combine::Zip => sweep.axes.first().map_or(1, |a| a.values.len() as u128),
-            Combine::Product => sweep
-                .axes
-                .iter()
-                .fold(1u128, |n, a| n.saturating_mul(a.values.len() as u128)),
-        };
-        let total = (bases.len() as u128)
-            .saturating_mul(num_combos)
-            .saturating_mul(u128::from(spec.seeds));
+        let total = sweep.num_planned_runs();
         if total > MAX_RUNS as u128 {
             return Err(sweep.error(
                 &[K("axes")],

@@ -363,6 +363,23 @@ impl Sweep {
         Ok(axes)
     }
 
+    /// How many runs the plan will have: base scenarios x combinations of axis values x replicates (saturating,
+    /// so an absurd file is counted without overflow).
+    pub fn num_planned_runs(&self) -> u128 {
+        let s = &self.spec;
+        let num_combos = match s.combine {
+            Combine::Zip => self.axes.first().map_or(1, |a| a.values.len() as u128),
+            Combine::Product => self
+                .axes
+                .iter()
+                .fold(1u128, |n, a| n.saturating_mul(a.values.len() as u128)),
+        };
+        let num_bases = if s.generate.is_some() { 1 } else { s.scenarios.len() };
+        (num_bases as u128)
+            .saturating_mul(num_combos)
+            .saturating_mul(u128::from(s.seeds))
+    }
+
     /// The overrides of a preset by name: the file's own, or a built-in one.
     pub fn preset(&self, name: &str) -> Option<Vec<(String, Option<Value>)>> {
         if let Some(p) = self.spec.presets.get(name) {
