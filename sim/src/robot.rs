@@ -117,7 +117,7 @@ impl RobotModel {
     /// [`SimError::Io`] for a missing file, [`SimError::Urdf`] for malformed XML, a missing base link, a link
     /// not connected to the base, a mesh collision (not supported: use primitives), or a non-positive size.
     pub fn load(path: &Path, base_link: &str) -> Result<Self> {
-        let text = oeg::io::read_text(path)?;
+        let text = crate::error::read_text(path)?;
         Self::from_urdf_text(path, &text, base_link)
     }
 

@@ -268,3 +268,24 @@ fn every_size_and_rate_is_bounded_so_a_valid_scenario_always_finishes() {
         assert_eq!(position.map(|p| p.line), Some(line), "{name}: {message}");
     }
 }
+
+#[test]
+fn fixed_length_lists_with_extra_elements_are_errors_at_their_place() {
+    let base = common::scenario_text("");
+    for (name, from, to) in [
+        (
+            "corner",
+            "min_xy_m = [-2.0, -4.0]",
+            "min_xy_m = [-2.0, -4.0, 5.0]",
+        ),
+        ("waypoint", "[4.0, 0.0]]", "[4.0, 0.0, 1.0]]"),
+    ] {
+        assert!(base.contains(from), "{name}: the test scenario has `{from}`");
+        let (message, position) = error_of(name, &base.replacen(from, to, 1));
+        assert!(
+            message.contains("expected a list of 2 values, got 3"),
+            "{name}: {message}"
+        );
+        assert!(position.is_some(), "{name}: {message}");
+    }
+}

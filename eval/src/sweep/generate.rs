@@ -93,18 +93,23 @@ fn d_settle() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct Curbs {
     /// How many.
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub count: Count,
     /// Height, metres (default 2 to 5 cm, around the 3.5 cm step).
     #[serde(default = "d_curb_h")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub height_m: Range,
     /// Length across the drive, metres.
     #[serde(default = "d_curb_len")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub length_m: Range,
     /// Depth along the drive, metres.
     #[serde(default = "d_curb_depth")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub depth_m: Range,
     /// Yaw to the drive, degrees (0: the face square to the drive).
     #[serde(default = "d_curb_yaw")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub yaw_deg: Range,
 }
 fn d_curb_h() -> Range {
@@ -125,21 +130,27 @@ fn d_curb_yaw() -> Range {
 #[serde(deny_unknown_fields)]
 pub struct Boards {
     /// How many.
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub count: Count,
     /// Free gap under the board, metres (default 0.38 to 0.54: around the robot's 0.46 m).
     #[serde(default = "d_board_clear")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub clearance_m: Range,
     /// Length, metres.
     #[serde(default = "d_board_len")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub length_m: Range,
     /// Width, metres.
     #[serde(default = "d_board_width")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub width_m: Range,
     /// Thickness, metres.
     #[serde(default = "d_board_thick")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub thickness_m: Range,
     /// Yaw, degrees.
     #[serde(default = "d_any_yaw")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub yaw_deg: Range,
 }
 fn d_board_clear() -> Range {
@@ -163,18 +174,23 @@ fn d_any_yaw() -> Range {
 #[serde(deny_unknown_fields)]
 pub struct Walls {
     /// How many.
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub count: Count,
     /// Height, metres (default 0.1 to 1.2: some below the sensors).
     #[serde(default = "d_wall_h")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub height_m: Range,
     /// Length, metres.
     #[serde(default = "d_wall_len")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub length_m: Range,
     /// Thickness, metres.
     #[serde(default = "d_wall_thick")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub thickness_m: Range,
     /// Yaw, degrees.
     #[serde(default = "d_any_yaw")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub yaw_deg: Range,
 }
 fn d_wall_h() -> Range {
@@ -192,12 +208,15 @@ fn d_wall_thick() -> Range {
 #[serde(deny_unknown_fields)]
 pub struct Bushes {
     /// How many.
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub count: Count,
     /// Radius, metres.
     #[serde(default = "d_bush_r")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub radius_m: Range,
     /// Height, metres.
     #[serde(default = "d_bush_h")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub height_m: Range,
 }
 fn d_bush_r() -> Range {
@@ -212,18 +231,23 @@ fn d_bush_h() -> Range {
 #[serde(deny_unknown_fields)]
 pub struct Ramps {
     /// How many.
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub count: Count,
     /// Height at the high end, metres.
     #[serde(default = "d_ramp_h")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub height_m: Range,
     /// Length, metres.
     #[serde(default = "d_ramp_len")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub length_m: Range,
     /// Width, metres.
     #[serde(default = "d_ramp_width")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub width_m: Range,
     /// Yaw, degrees.
     #[serde(default = "d_ramp_yaw")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub yaw_deg: Range,
 }
 fn d_ramp_h() -> Range {
@@ -244,12 +268,14 @@ fn d_ramp_yaw() -> Range {
 #[serde(deny_unknown_fields)]
 pub struct People {
     /// How many.
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub count: Count,
     /// Probability that a person stands still in front of the robot (else walks through the field).
     #[serde(default = "d_half")]
     pub stand_probability: f64,
     /// How long a standing person stands, seconds.
     #[serde(default = "d_stand")]
+    #[serde(deserialize_with = "sim::scenario::exact::array")]
     pub stand_s: Range,
     /// Probability that the robot is standing (stopped at the end of its drive) when a person stands in front
     /// of it; otherwise it is still driving towards them.

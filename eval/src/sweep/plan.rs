@@ -118,6 +118,7 @@ impl Plan {
             ));
         }
         let total = total as usize;
+        let labels = scenario_labels(&bases);
         let combos = combinations(&sweep);
         let mut runs = Vec::with_capacity(total);
         for (k, (written, base)) in bases.iter().enumerate() {
@@ -128,15 +129,16 @@ impl Plan {
             };
             let text = oeg::io::read_text(base)
                 .map_err(|e| sweep.error(&at_base, format!("cannot read the base scenario: {e}")))?;
-            let base_doc: Table = toml::from_str(&text).map_err(|e| {
-                sweep.error(
-                    &at_base,
-                    format!("{} is not valid TOML: {}", base.display(), e.message().trim()),
-                )
+            // The base alone first, so that its own errors name its own lines.
+            let base_doc: Table = toml::from_str(&text).map_err(|e| EvalError::At {
+                path: base.clone(),
+                position: e.span().map(|s| sim::TextPosition::of_offset(&text, s.start)),
+                message: e.message().trim().to_string(),
             })?;
-            let label = base
-                .file_stem()
-                .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned());
+            let loaded = sim::scenario::load_str(base, &text)?;
+            crate::run::check_expectations(&loaded, &text)?;
+            let label = labels[k].clone();
+            check_set_against(&sweep, &base_doc, base)?;
             check_overrides(&sweep, &base_doc, base)?;
             check_axes_against(&sweep, &base_doc, base)?;
             for combo in &combos {
@@ -172,13 +174,17 @@ impl Plan {
     fn check_runs(&self) -> Result<()> {
         for run in &self.runs {
             run.load().map_err(|e| {
+                // The resolved scenario is a rewritten text: its lines are nobody's, so the error points at
+                // the sweep file's axes and names the base.
                 self.sweep.error(
                     &[sim::scenario::KeySeg::Key("axes")],
                     format!(
-                        "run {} ({}, seed {}): {e}",
+                        "run {} ({}, seed {}) on {}: {}",
                         run.id,
                         describe(&run.axis_values),
-                        run.seed
+                        run.seed,
+                        run.base.display(),
+                        message_of(&e)
                     ),
                 )
             })?;
@@ -300,7 +306,10 @@ impl Run {
             path: self.base.clone(),
             message: format!("cannot write the resolved scenario: {e}"),
         })?;
-        Ok(sim::scenario::load_str(&self.base, &text)?)
+        let loaded = sim::scenario::load_str(&self.base, &text)?;
+        // As `oeg validate` and `oeg run` check it, so the run's `scenario.toml` reproduces it.
+        crate::run::check_expectations(&loaded, &text)?;
+        Ok(loaded)
     }
 }
 
@@ -385,6 +394,77 @@ fn resolve(
     // The seed is the replicate's, whatever an axis said: `seeds` is how a sweep varies it.
     doc.insert("seed".into(), Value::Integer(seed as i64));
     Ok(doc)
+}
+
+/// An error's message without a place in a rewritten text.
+fn message_of(e: &EvalError) -> String {
+    match e {
+        EvalError::Sim(e) => crate::run::scenario_message(e),
+        EvalError::At { message, .. } => message.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// The `scenario` column of each base: its file name without `.toml`, or, where two bases share a name (in
+/// different folders), the path the sweep file gives, so two scenarios are never pooled into one.
+fn scenario_labels(bases: &[(PathBuf, PathBuf)]) -> Vec<String> {
+    let stem = |p: &Path| {
+        p.file_stem()
+            .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned())
+    };
+    let stems: Vec<String> = bases.iter().map(|(_, base)| stem(base)).collect();
+    bases
+        .iter()
+        .zip(&stems)
+        .map(|((written, _), s)| {
+            if stems.iter().filter(|t| *t == s).count() > 1 {
+                written.with_extension("").to_string_lossy().into_owned()
+            } else {
+                s.clone()
+            }
+        })
+        .collect()
+}
+
+/// The file's `set` entries on a base: when together they make the scenario invalid, the first after which it
+/// no longer reads is reported at its own line (keys that only make sense together, a region's two corners,
+/// are fine together).
+fn check_set_against(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()> {
+    use sim::scenario::KeySeg::Key as K;
+    let seed = replicate_seed(sweep.spec.seed, 0);
+    let mut start = base_doc.clone();
+    start.insert("seed".into(), Value::Integer(seed as i64));
+    if let Some(g) = &sweep.spec.generate {
+        g.place(seed, &mut start);
+    }
+    let check = |doc: &Table| -> std::result::Result<(), String> {
+        let text = toml::to_string(doc).map_err(|e| e.to_string())?;
+        sim::scenario::load_str(base, &text)
+            .map(|_| ())
+            .map_err(|e| crate::run::scenario_message(&e))
+    };
+    let apply =
+        |doc: &mut Table, key: &String, value: &Value| Override::new(key, value.clone()).apply_to(doc);
+    let mut all = start.clone();
+    let together = sweep
+        .spec
+        .set
+        .iter()
+        .try_for_each(|(key, value)| apply(&mut all, key, value))
+        .and_then(|()| check(&all));
+    if together.is_ok() {
+        return Ok(());
+    }
+    let mut doc = start;
+    for (key, value) in &sweep.spec.set {
+        if let Err(message) = apply(&mut doc, key, value).and_then(|()| check(&doc)) {
+            return Err(sweep.error(
+                &[K("set"), K(key)],
+                format!("`{key}` = {value} on {}: {message}", base.display()),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The command line's `--set` overrides on a base (with its first replicate's scene): one that makes the

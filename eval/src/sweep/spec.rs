@@ -17,6 +17,8 @@ pub const MAX_RUNS: usize = 100_000;
 pub const MAX_AXIS_VALUES: usize = 10_000;
 /// The most replicates.
 pub const MAX_SEEDS: u32 = 10_000;
+/// The most axes (every axis multiplies the plan; a study of more than a few is read by nobody).
+pub const MAX_AXES: usize = 64;
 
 /// A sweep file as written.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -270,12 +272,38 @@ impl Sweep {
                     .map_err(|e| self.error(&[K("presets"), K(name)], format!("`{key}`: {e}")))?;
             }
         }
+        if s.axes.len() > MAX_AXES {
+            return Err(self.error(
+                &[K("axes"), I(MAX_AXES)],
+                format!(
+                    "{} axes; at most {MAX_AXES} (each axis multiplies the runs: put fixed values in `set`)",
+                    s.axes.len()
+                ),
+            ));
+        }
         let mut axes = Vec::new();
         for (k, a) in s.axes.iter().enumerate() {
             let at = |field: &'static str| [K("axes"), I(k), K(field)];
             crate::overrides::check_key(&a.key).map_err(|e| self.error(&at("key"), e))?;
-            if axes.iter().any(|b: &Axis| b.key == a.key) || (a.key == "scenario" && s.scenarios.len() > 1) {
-                return Err(self.error(&at("key"), format!("a second axis on `{}`", a.key)));
+            if a.key == "scenario" && s.scenarios.len() > 1 {
+                return Err(self.error(
+                    &at("key"),
+                    "several `scenarios` are the axis `scenario` already; remove this axis",
+                ));
+            }
+            if let Some(b) = axes.iter().find(|b: &&Axis| keys_overlap(&b.key, &a.key)) {
+                return Err(self.error(
+                    &at("key"),
+                    if b.key == a.key {
+                        format!("a second axis on `{}`", a.key)
+                    } else {
+                        format!(
+                            "axes `{}` and `{}` set some of the same values, so one would silently replace \
+                             the other; give each value one axis",
+                            b.key, a.key
+                        )
+                    },
+                ));
             }
             let given = [
                 a.values.is_some(),
@@ -374,7 +402,11 @@ impl Sweep {
                 .iter()
                 .fold(1u128, |n, a| n.saturating_mul(a.values.len() as u128)),
         };
-        let num_bases = if s.generate.is_some() { 1 } else { s.scenarios.len() };
+        let num_bases = if s.generate.is_some() {
+            1
+        } else {
+            s.scenarios.len()
+        };
         (num_bases as u128)
             .saturating_mul(num_combos)
             .saturating_mul(u128::from(s.seeds))
@@ -396,6 +428,18 @@ impl Sweep {
             .chain(self.spec.presets.keys().cloned())
             .collect()
     }
+}
+
+/// Whether two `--set` keys can name the same value: segment by segment equal or `*`, up to the shorter key
+/// (`sensors.*.x` and `sensors.0.x`; `map.model` and `map.model.p_max`). The preset axis sets keys of its own
+/// by design, before the other axes.
+fn keys_overlap(a: &str, b: &str) -> bool {
+    let preset = super::presets::PRESET_KEY;
+    a != preset
+        && b != preset
+        && a.split('.')
+            .zip(b.split('.'))
+            .all(|(x, y)| x == y || x == "*" || y == "*")
 }
 
 fn spaced(l: Spaced, log: bool) -> std::result::Result<Vec<Value>, String> {
@@ -550,5 +594,38 @@ mod tests {
         .expect_err("unequal")
         .to_string();
         assert!(err.contains("equal length"), "{err}");
+    }
+
+    #[test]
+    fn overlapping_axes_are_refused_at_the_second() {
+        for (a, b) in [
+            ("sensors.*.x", "sensors.0.x"),
+            ("sensors.0.x", "sensors.*.x"),
+            ("map.model", "map.model.p_max"),
+            ("map.resolution_m", "map.resolution_m"),
+        ] {
+            let err = load(&format!(
+                "{HEAD}[[axes]]\nkey = \"{a}\"\nvalues = [1]\n[[axes]]\nkey = \"{b}\"\nvalues = [2]\n"
+            ))
+            .expect_err(b)
+            .to_string();
+            assert!(err.starts_with("study.toml:8:7: "), "{a} {b}: {err}");
+            assert!(err.contains(&format!("`{b}`")), "{err}");
+        }
+        load(&format!(
+            "{HEAD}[[axes]]\nkey = \"sensors.0.x\"\nvalues = [1]\n[[axes]]\nkey = \"sensors.1.x\"\nvalues = [2]\n\
+             [[axes]]\nkey = \"preset\"\nvalues = [\"paper\"]\n"
+        ))
+        .expect("different sensors, and the preset axis");
+    }
+
+    #[test]
+    fn the_number_of_axes_is_bounded_before_any_is_checked() {
+        let axes: String = (0..100_000)
+            .map(|k| format!("[[axes]]\nkey = \"k{k}\"\nvalues = [1]\n"))
+            .collect();
+        let err = load(&format!("{HEAD}{axes}")).expect_err("too many").to_string();
+        assert!(err.contains(&format!("100000 axes; at most {MAX_AXES}")), "{err}");
+        assert!(err.starts_with("study.toml:"), "{err}");
     }
 }

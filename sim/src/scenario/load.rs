@@ -59,7 +59,7 @@ pub struct LoadedScenario {
 /// type or a value that makes no sense; [`SimError::Io`] for an unreadable file; [`SimError::Urdf`] for a bad
 /// robot description.
 pub fn load(path: &Path) -> Result<LoadedScenario> {
-    let text = oeg::io::read_text(path)?;
+    let text = crate::error::read_text(path)?;
     load_str(path, &text)
 }
 

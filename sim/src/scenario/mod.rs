@@ -1,5 +1,6 @@
 //! Scenario files: schema, loading and validation.
 
+pub mod exact;
 mod load;
 mod schema;
 

@@ -61,8 +61,10 @@ fn default_tick_s() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct MapSettings {
     /// Min-x, min-y corner of the region, metres.
+    #[serde(deserialize_with = "crate::scenario::exact::array")]
     pub min_xy_m: [f64; 2],
     /// Max-x, max-y corner, metres.
+    #[serde(deserialize_with = "crate::scenario::exact::array")]
     pub max_xy_m: [f64; 2],
     /// Cell size, metres.
     pub resolution_m: f64,
@@ -85,8 +87,10 @@ pub struct MapSettings {
 pub struct PlannerSettings {
     /// Where the planner starts, `[x, y]` metres; default the drive's first waypoint. The cells within the
     /// footprint radius count as drivable (see `oeg::planner::plan`).
+    #[serde(default, deserialize_with = "crate::scenario::exact::option")]
     pub start_xy_m: Option<[f64; 2]>,
     /// Where it plans to, `[x, y]` metres; default the drive's last waypoint.
+    #[serde(deserialize_with = "crate::scenario::exact::option")]
     pub goal_xy_m: Option<[f64; 2]>,
     /// The robot's centre keeps at least this far from blocked cells, metres; default
     /// `oeg::planner::DEFAULT_INFLATION_RADIUS_M` (0.25).
@@ -188,6 +192,7 @@ impl RobotSettings {
 #[serde(deny_unknown_fields)]
 pub struct Drive {
     /// Waypoints `[x, y]`, metres; the first is the start.
+    #[serde(deserialize_with = "crate::scenario::exact::each")]
     pub waypoints_xy_m: Vec<[f64; 2]>,
     /// Speed along the path, m/s.
     pub speed_m_s: f64,
@@ -250,6 +255,7 @@ pub enum Terrain {
         cell_m: f64,
         /// Where the image's min-x, min-y corner lies; default: the map's min corner.
         #[serde(default)]
+        #[serde(deserialize_with = "crate::scenario::exact::option")]
         origin_xy_m: Option<[f64; 2]>,
     },
 }
@@ -278,8 +284,10 @@ pub enum Obstacle {
         #[serde(default)]
         name: Option<String>,
         /// Centre of the footprint, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         center_xy_m: [f64; 2],
         /// Length, width, height, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         size_m: [f64; 3],
         /// Rotation about z, degrees.
         #[serde(default)]
@@ -294,6 +302,7 @@ pub enum Obstacle {
         #[serde(default)]
         name: Option<String>,
         /// Centre, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         center_xy_m: [f64; 2],
         /// Radius, metres.
         radius_m: f64,
@@ -309,6 +318,7 @@ pub enum Obstacle {
         #[serde(default)]
         name: Option<String>,
         /// Centre of the footprint, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         center_xy_m: [f64; 2],
         /// Length along local x, metres.
         length_m: f64,
@@ -326,6 +336,7 @@ pub enum Obstacle {
         #[serde(default)]
         name: Option<String>,
         /// Centre, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         center_xy_m: [f64; 2],
         /// Radius of the cluster, metres.
         radius_m: f64,
@@ -342,8 +353,10 @@ pub enum Obstacle {
         #[serde(default)]
         name: Option<String>,
         /// Centre of the footprint, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         center_xy_m: [f64; 2],
         /// Length, width, thickness, metres.
+        #[serde(deserialize_with = "crate::scenario::exact::array")]
         size_m: [f64; 3],
         /// Gap under it, metres.
         clearance_m: f64,
@@ -405,6 +418,7 @@ pub enum Actor {
         #[serde(default)]
         name: Option<String>,
         /// `[t_s, x_m, y_m]`, times strictly increasing.
+        #[serde(deserialize_with = "crate::scenario::exact::each")]
         waypoints: Vec<[f64; 3]>,
         /// Capsule radius, metres.
         #[serde(default = "default_person_radius")]

@@ -45,9 +45,11 @@ pub struct SensorMount {
     pub mount_link: String,
     /// Offset from the link, metres (link frame).
     #[serde(default)]
+    #[serde(deserialize_with = "crate::scenario::exact::array")]
     pub xyz_m: [f64; 3],
     /// Roll, pitch, yaw from the link, degrees (URDF convention: fixed axes x, then y, then z).
     #[serde(default)]
+    #[serde(deserialize_with = "crate::scenario::exact::array")]
     pub rpy_deg: [f64; 3],
     /// A named preset (see `docs/scenario-format.md`); default: the kind's first preset.
     #[serde(default)]
@@ -75,6 +77,7 @@ pub struct SensorMount {
     pub azimuth_step_deg: Option<f64>,
     /// Cameras: image width and height, pixels.
     #[serde(default)]
+    #[serde(deserialize_with = "crate::scenario::exact::option")]
     pub image_size_px: Option<[u32; 2]>,
     /// Cameras: horizontal field of view, degrees (or give `focal_px`).
     #[serde(default)]
