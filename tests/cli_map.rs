@@ -283,7 +283,7 @@ fn a_far_point_or_pose_is_refused_at_once_naming_the_file_and_the_node() {
 }
 
 #[test]
-fn a_failure_after_the_map_is_built_writes_nothing_not_even_the_map() {
+fn a_failure_after_the_map_is_built_writes_nothing_and_its_memory_error_names_the_inputs() {
     // Two small scans 2.8 km apart: the sparse map is small, but the dense images over its extent (1.6 billion
     // cells at 0.05 m) are over the memory limit. The map is built; the job fails at the images.
     let dir = temp_dir("map", "images");
@@ -302,6 +302,10 @@ fn a_failure_after_the_map_is_built_writes_nothing_not_even_the_map() {
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("memory limit"), "{err}");
+    assert!(
+        err.contains("drawing the layer images") && err.contains("apart.graph") && err.contains("out:"),
+        "the error names the inputs and the output folder: {err}"
+    );
     assert!(!out.exists(), "no map.oeg without its images");
     let left: Vec<_> = std::fs::read_dir(&dir)
         .expect("dir")

@@ -264,6 +264,12 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     }
     let integrate_wall_time_s = start.elapsed().as_secs_f64();
     progress.finish();
+    // What the map held while integrating (its cells and the per-scan scratch) is the summary's figure; the
+    // scratch and the scans are then given back before the outputs are drawn and written, which need memory of
+    // their own (the map file's bytes, a raster of the observed region).
+    let map_bytes = map.memory_bytes();
+    map.release_scratch();
+    drop(scans);
 
     let stage = staged.dir();
     let mut files = Vec::new();
@@ -280,10 +286,31 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         }
     }
     let map_path = stage.join("map.oeg");
-    let map_bytes = mapfile::to_bytes(&map);
-    write_bytes(&map_path, &map_bytes)?;
+    let map_file = mapfile::to_bytes(&map);
+    write_bytes(&map_path, &map_file)?;
+    let map_file_bytes = map_file.len() as u64;
+    drop(map_file);
     files.push(map_path);
-    files.extend(write_layer_images(&map, stage, &job.profile, job.rule, None)?);
+    // The images are drawn from a raster of the observed region at the map's resolution, which counts against
+    // the memory limit with the map: an error there names the images' folder and the region's size.
+    let images = write_layer_images(&map, stage, &job.profile, job.rule, None).map_err(|e| match e {
+        EvalError::Map(e @ oeg::Error::MemoryLimit { .. }) => EvalError::Input {
+            path: job.out_dir.clone(),
+            message: format!(
+                "drawing the layer images ({}) of the map of {}: {e}",
+                map.observed_region()
+                    .map(|r| format!("{} x {} cells of the observed region", r.num_x, r.num_y))
+                    .unwrap_or_default(),
+                job.inputs
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        },
+        other => other,
+    })?;
+    files.extend(images);
 
     let totals = map.totals();
     let counts = map.traversability_counts(&job.profile, job.rule);
@@ -307,8 +334,8 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         num_cells_traversable: counts.num_traversable,
         num_cells_blocked: counts.num_blocked,
         max_step_m: job.profile.max_step_m,
-        map_bytes: map.memory_bytes(),
-        map_file_bytes: map_bytes.len() as u64,
+        map_bytes,
+        map_file_bytes,
         extent_min_x_m: extent.map(|e| e.0),
         extent_min_y_m: extent.map(|e| e.1),
         extent_max_x_m: extent.map(|e| e.2),

@@ -33,7 +33,7 @@ impl Override {
         check_key(key).map_err(|e| format!("--set {text}: {e}"))?;
         Ok(Self {
             key: key.to_string(),
-            value: parse_value(raw.trim()),
+            value: parse_value(raw.trim()).map_err(|e| format!("--set {text}: {e}"))?,
             source: text.to_string(),
         })
     }
@@ -74,6 +74,13 @@ pub fn check_key(key: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Whether setting `key` (with `*` segments) can set the value at the dotted `target`: it names it, a table
+/// above it, or matches it through `*`.
+pub fn key_covers(key: &str, target: &str) -> bool {
+    let (k, t): (Vec<&str>, Vec<&str>) = (key.split('.').collect(), target.split('.').collect());
+    k.len() <= t.len() && k.iter().zip(&t).all(|(a, b)| a == b || *a == "*")
+}
+
 /// A TOML value on one line (`0.1`, `"static"`, `{ kind = "kalman" }`).
 pub fn inline_value(v: &Value) -> String {
     v.to_string()
@@ -95,11 +102,29 @@ pub fn remove(doc: &mut Table, key: &str) {
     here.remove(*last);
 }
 
-fn parse_value(raw: &str) -> Value {
-    match toml::from_str::<Table>(&format!("v = {raw}")) {
-        Ok(mut t) => t.remove("v").unwrap_or_else(|| Value::String(raw.to_string())),
-        Err(_) => Value::String(raw.to_string()),
+/// A value as the command line gives it: one TOML value and nothing after it (`0.1`, `true`, `[1.0, 2.0]`,
+/// `"text"`, `{ min = 0.9 }`), or a bare word taken as a string (`optical`, `paper`, `robots/p3at.urdf`).
+///
+/// # Errors
+/// Anything else, such as `0.1 # note`, `[1.0, 2.0] x` or `1\nb = 2`: what follows a value is never dropped.
+fn parse_value(raw: &str) -> Result<Value, String> {
+    match raw.parse::<Value>() {
+        Ok(v) => Ok(v),
+        Err(_) if is_bare_word(raw) => Ok(Value::String(raw.to_string())),
+        Err(e) => Err(format!(
+            "`{raw}` is not one value: expected a number, true or false, a \"quoted string\", a [list], an \
+             {{ inline = table }} or a bare word of letters, digits and `_-.+/:` ({})",
+            e.message().trim()
+        )),
     }
+}
+
+/// A word that is no TOML value but plainly a string: no spaces, quotes, brackets, `#`, `=` or `,`.
+fn is_bare_word(raw: &str) -> bool {
+    !raw.is_empty()
+        && raw
+            .chars()
+            .all(|c| c.is_alphanumeric() || "_-.+/:@%~".contains(c))
 }
 
 /// Sets `path[depth..]` inside `here`, which is reached by `path[..depth]`.
@@ -243,6 +268,37 @@ mod tests {
         ] {
             let err = apply(TEXT, &[o.to_string()]).expect_err(o);
             assert!(err.contains(expected) && err.contains(o), "{o}: {err}");
+        }
+    }
+
+    #[test]
+    fn junk_after_a_value_is_an_error_naming_the_override() {
+        for (text, value) in [
+            ("map.resolution_m=0.1", Value::Float(0.1)),
+            ("input.pcd_frame=optical", Value::String("optical".into())),
+            (
+                "robot.urdf=robots/p3at.urdf",
+                Value::String("robots/p3at.urdf".into()),
+            ),
+            ("map.preset=\"robust\"", Value::String("robust".into())),
+            (
+                "a=[1.0, 2.0]",
+                Value::Array(vec![Value::Float(1.0), Value::Float(2.0)]),
+            ),
+        ] {
+            assert_eq!(Override::parse(text).expect(text).value, value, "{text}");
+        }
+        for text in [
+            "map.resolution_m=0.1 # coarse",
+            "map.resolution_m=0.1#x",
+            "map.resolution_m=[1.0, 2.0] x",
+            "map.resolution_m=0.1 junk",
+            "name=1\nseed = 2",
+            "a=\"open",
+        ] {
+            let e = Override::parse(text).expect_err(text);
+            assert!(e.starts_with(&format!("--set {text}: ")), "{e}");
+            assert!(e.contains("is not one value"), "{e}");
         }
     }
 }

@@ -217,6 +217,15 @@ pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, Stri
 /// # Errors
 /// A bad resolution (named as `--resolution`) or override.
 pub fn map_settings(resolution_m: f64, overrides: &[String]) -> Result<MapSettings, String> {
+    // The cell size has one spelling on `oeg map`: two would leave the reader guessing which one won.
+    for text in overrides {
+        let o = Override::parse(text)?;
+        if crate::overrides::key_covers(&o.key, "map.resolution_m") {
+            return Err(format!(
+                "--set {text}: the cell size is `--resolution` on `oeg map`; give it there only"
+            ));
+        }
+    }
     let mut map = Table::new();
     map.insert("resolution_m".into(), toml::Value::Float(resolution_m));
     let mut base = Table::new();
@@ -283,5 +292,27 @@ mod tests {
         );
         let e = resolve::<PlanSettings>(&Table::new(), &["map.model.p_max=0.7".into()]).expect_err("plan");
         assert!(e.contains("unknown field `model`"), "{e}");
+    }
+
+    #[test]
+    fn the_documented_log_pose_spellings_read() {
+        for (o, pose) in [
+            ("input.log_pose=true", sim::sensors::PoseSource::True),
+            ("input.log_pose=\"true\"", sim::sensors::PoseSource::True),
+            ("input.log_pose=estimated", sim::sensors::PoseSource::Estimated),
+        ] {
+            let s: MapSettings = resolve(&map_base(), &[o.into()]).expect(o);
+            assert_eq!(s.input.log_pose, pose, "{o}");
+        }
+    }
+
+    #[test]
+    fn the_cell_size_is_given_once_on_oeg_map() {
+        for o in ["map.resolution_m=0.1", "map.*=0.1", "map={ resolution_m = 0.1 }"] {
+            let e = map_settings(0.5, &[o.into()]).expect_err(o);
+            assert!(e.contains("`--resolution`"), "{o}: {e}");
+        }
+        let s = map_settings(0.5, &["map.model.p_max=0.7".into()]).expect("other keys");
+        assert!((s.map.resolution_m - 0.5).abs() < 1e-12);
     }
 }

@@ -170,6 +170,13 @@ impl Map {
             + size_of::<Self>() as u64
     }
 
+    /// Gives back the per-scan scratch that [`Map::integrate`] keeps for reuse (at fine resolutions most of
+    /// [`Map::memory_bytes`]: 72 bytes a cell of every tile the largest scan touched). The map reads the same;
+    /// the next integration allocates the scratch again.
+    pub fn release_scratch(&mut self) {
+        self.scratch = TileGrid::new(ScanEvidence::NONE);
+    }
+
     /// Bytes of the cells alone: 12 per cell of every allocated tile (observed or not).
     pub fn cell_bytes(&self) -> u64 {
         (self.cells.num_tiles() * TileGrid::<Cell>::tile_bytes()) as u64

@@ -75,15 +75,38 @@ impl ObstacleReturns {
     }
 }
 
-/// Which pose a scan is placed with in the world.
+/// Which pose a scan is placed with in the world: `"estimated"` or `"true"`. The bare `true` of a TOML file or
+/// of `--set input.log_pose=true` reads as `"true"` (and `false` as `"estimated"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", try_from = "PoseSourceText")]
 pub enum PoseSource {
     /// The estimated pose (odometry drift included): what a robot's mapper gets.
     #[default]
     Estimated,
     /// The true pose.
     True,
+}
+
+/// How a [`PoseSource`] may be written.
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum PoseSourceText {
+    Word(String),
+    Flag(bool),
+}
+
+impl TryFrom<PoseSourceText> for PoseSource {
+    type Error = String;
+
+    fn try_from(text: PoseSourceText) -> Result<Self, String> {
+        match text {
+            PoseSourceText::Word(w) if w == "estimated" => Ok(Self::Estimated),
+            PoseSourceText::Word(w) if w == "true" => Ok(Self::True),
+            PoseSourceText::Flag(true) => Ok(Self::True),
+            PoseSourceText::Flag(false) => Ok(Self::Estimated),
+            PoseSourceText::Word(w) => Err(format!("unknown variant `{w}`, expected `estimated` or `true`")),
+        }
+    }
 }
 
 /// One scan of one sensor.
