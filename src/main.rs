@@ -219,7 +219,7 @@ fn run_sweep(command: SweepCommand) -> anyhow::Result<()> {
                 jobs: jobs.map_or_else(eval::suite::default_jobs, usize::from),
                 simulate_each,
             };
-            let progress = Progress::with_eta(0, "runs");
+            let progress = Progress::new(0, "runs");
             let start = std::time::Instant::now();
             let summary = execute::run(&plan, &options, &progress)?;
             say!(

@@ -1,40 +1,74 @@
-//! Progress bars on a terminal, silence otherwise.
+//! Progress of long work on standard error: a bar with the time left on a terminal, and under CI or into a
+//! log file (standard error is not a terminal) a plain line at most every [`PLAIN_INTERVAL`] with the same
+//! figures, so a 36-minute run says how far it is wherever it runs.
+
+use std::io::IsTerminal as _;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-/// A progress bar on standard error, drawn only when standard error is a terminal.
+/// How often a plain progress line is printed when standard error is not a terminal.
+pub const PLAIN_INTERVAL: Duration = Duration::from_secs(30);
+
+/// How progress is shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// A bar redrawn in place (a terminal).
+    Bar,
+    /// A line every [`PLAIN_INTERVAL`] (CI, a log file).
+    Lines,
+    /// Nothing (library callers, tests, nested work).
+    Hidden,
+}
+
+/// A progress counter of `len` steps shown on standard error (see the module).
 #[derive(Debug, Clone)]
 pub struct Progress {
     bar: ProgressBar,
+    mode: Mode,
+    unit: Arc<str>,
+    started: Instant,
+    /// Milliseconds after `started` of the last plain line.
+    last_line_ms: Arc<AtomicU64>,
 }
 
 impl Progress {
-    /// A bar of `len` steps, `unit` naming them ("scans").
+    /// A counter of `len` steps, `unit` naming them ("scans"), with the time left.
     pub fn new(len: u64, unit: &str) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-        let template = format!("{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit} {{msg}}");
-        if let Ok(style) = ProgressStyle::with_template(&template) {
-            bar.set_style(style);
-        }
-        Self { bar }
+        let mode = if std::io::stderr().is_terminal() {
+            Mode::Bar
+        } else {
+            Mode::Lines
+        };
+        Self::with_mode(len, unit, mode)
     }
 
-    /// A bar of `len` runs with the time left (a sweep).
-    pub fn with_eta(len: u64, unit: &str) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    /// A counter that never shows (for library callers and tests).
+    pub fn hidden() -> Self {
+        Self::with_mode(0, "", Mode::Hidden)
+    }
+
+    fn with_mode(len: u64, unit: &str, mode: Mode) -> Self {
+        let target = if mode == Mode::Bar {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        };
+        let bar = ProgressBar::with_draw_target(Some(len), target);
         let template = format!(
             "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit}, ETA {{eta}} {{msg}}"
         );
         if let Ok(style) = ProgressStyle::with_template(&template) {
             bar.set_style(style);
         }
-        Self { bar }
-    }
-
-    /// A bar that never draws (for library callers and tests).
-    pub fn hidden() -> Self {
         Self {
-            bar: ProgressBar::hidden(),
+            bar,
+            mode,
+            unit: unit.into(),
+            started: Instant::now(),
+            last_line_ms: Arc::new(AtomicU64::new(0)),
         }
     }
 
@@ -46,9 +80,46 @@ impl Progress {
     /// Advance by `n` steps.
     pub fn inc(&self, n: u64) {
         self.bar.inc(n);
+        if self.mode == Mode::Lines {
+            let now_ms = self.started.elapsed().as_millis() as u64;
+            let last = self.last_line_ms.load(Ordering::Relaxed);
+            let due = now_ms.saturating_sub(last) >= PLAIN_INTERVAL.as_millis() as u64;
+            // One thread prints each line, however many advance the counter at once.
+            if due
+                && self
+                    .last_line_ms
+                    .compare_exchange(last, now_ms, Ordering::Relaxed, Ordering::Relaxed)
+                    .is_ok()
+            {
+                eprintln!("{}", self.line());
+            }
+        }
     }
 
-    /// Show a short message after the bar.
+    /// The plain line: `progress: 120/400 scans (30 %), 0:01:05 elapsed, about 0:02:31 left`.
+    fn line(&self) -> String {
+        let (pos, len) = (self.bar.position(), self.bar.length().unwrap_or(0));
+        let elapsed = self.started.elapsed();
+        let left = if pos > 0 && len >= pos {
+            hms(elapsed.mul_f64((len - pos) as f64 / pos as f64))
+        } else {
+            "unknown".into()
+        };
+        let percent = if len > 0 { 100 * pos / len } else { 0 };
+        let message = self.bar.message();
+        format!(
+            "progress: {pos}/{len} {} ({percent} %), {} elapsed, about {left} left{}",
+            self.unit,
+            hms(elapsed),
+            if message.is_empty() {
+                String::new()
+            } else {
+                format!(" ({message})")
+            }
+        )
+    }
+
+    /// Show a short message after the bar (and in the plain lines).
     pub fn message(&self, msg: String) {
         self.bar.set_message(msg);
     }
@@ -56,5 +127,31 @@ impl Progress {
     /// Remove the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+}
+
+/// `h:mm:ss`.
+fn hms(d: Duration) -> String {
+    let s = d.as_secs();
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_run_says_how_far_it_is_and_the_time_left_without_a_terminal() {
+        let p = Progress::with_mode(400, "scans", Mode::Lines);
+        p.bar.set_position(100);
+        let line = p.line();
+        assert!(
+            line.starts_with("progress: 100/400 scans (25 %), 0:00:00 elapsed, about "),
+            "{line}"
+        );
+        assert!(line.ends_with(" left"), "{line}");
+        assert_eq!(hms(Duration::from_secs(2 * 3600 + 3 * 60 + 4)), "2:03:04");
+        let none = Progress::with_mode(400, "scans", Mode::Lines);
+        assert!(none.line().contains("about unknown left"), "{}", none.line());
     }
 }

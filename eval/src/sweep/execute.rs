@@ -136,7 +136,9 @@ pub fn run(plan: &Plan, options: &RunOptions, progress: &Progress) -> Result<Run
     // the other runs.
     let mut pending: Vec<&Run> = Vec::new();
     for r in &selected {
-        if super::rows::read_record(&row_path(out, &r.id), &r.id)?.is_none() {
+        let row = row_path(out, &r.id);
+        folder.check(&row)?;
+        if super::rows::read_record(&row, &r.id)?.is_none() {
             pending.push(r);
         }
     }

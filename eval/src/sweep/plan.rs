@@ -396,6 +396,14 @@ fn resolve(
     Ok(doc)
 }
 
+/// Loads a resolved scenario document as `oeg run` and `oeg validate` would (expectations included): the
+/// message of what is wrong, without a place in the rewritten text.
+fn check_resolved(base: &Path, doc: &Table) -> std::result::Result<(), String> {
+    let text = toml::to_string(doc).map_err(|e| e.to_string())?;
+    let loaded = sim::scenario::load_str(base, &text).map_err(|e| crate::run::scenario_message(&e))?;
+    crate::run::check_expectations(&loaded, &text).map_err(|e| message_of(&e))
+}
+
 /// An error's message without a place in a rewritten text.
 fn message_of(e: &EvalError) -> String {
     match e {
@@ -437,12 +445,7 @@ fn check_set_against(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()>
     if let Some(g) = &sweep.spec.generate {
         g.place(seed, &mut start);
     }
-    let check = |doc: &Table| -> std::result::Result<(), String> {
-        let text = toml::to_string(doc).map_err(|e| e.to_string())?;
-        sim::scenario::load_str(base, &text)
-            .map(|_| ())
-            .map_err(|e| crate::run::scenario_message(&e))
-    };
+    let check = |doc: &Table| check_resolved(base, doc);
     let apply =
         |doc: &mut Table, key: &String, value: &Value| Override::new(key, value.clone()).apply_to(doc);
     let mut all = start.clone();
@@ -481,13 +484,8 @@ fn check_overrides(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()> {
     };
     let doc = resolve(&bare, base_doc, &[], replicate_seed(sweep.spec.seed, 0)).map_err(input)?;
     let texts: Vec<String> = sweep.overrides.iter().map(|o| o.source.clone()).collect();
-    crate::settings::resolve_with(&doc, &texts, |d| {
-        let text = toml::to_string(d).map_err(|e| e.to_string())?;
-        sim::scenario::load_str(base, &text)
-            .map(|_| ())
-            .map_err(|e| crate::run::scenario_message(&e))
-    })
-    .map_err(|m| input(format!("{m} (on {})", base.display())))
+    crate::settings::resolve_with(&doc, &texts, |d| check_resolved(base, d))
+        .map_err(|m| input(format!("{m} (on {})", base.display())))
 }
 
 /// Each axis alone (its first and last value) on a base: an unknown key or a value the scenario rejects is
@@ -502,12 +500,7 @@ fn check_axes_against(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()
         for v in [&axis.values[0], last] {
             let combo = vec![(axis.key.clone(), v.clone())];
             let seed = replicate_seed(sweep.spec.seed, 0);
-            let checked = resolve(sweep, base_doc, &combo, seed).and_then(|doc| {
-                let text = toml::to_string(&doc).map_err(|e| e.to_string())?;
-                sim::scenario::load_str(base, &text)
-                    .map(|_| ())
-                    .map_err(|e| crate::run::scenario_message(&e))
-            });
+            let checked = resolve(sweep, base_doc, &combo, seed).and_then(|doc| check_resolved(base, &doc));
             if let Err(message) = checked {
                 return Err(sweep.error(
                     &[K("axes"), I(k), K("key")],

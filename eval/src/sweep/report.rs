@@ -192,6 +192,9 @@ fn check_coverage(dir: &Path, plan: &Json, rows: &[Json]) -> Result<usize> {
 /// failed write.
 pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
     let folder = SweepFolder::open(dir)?;
+    for file in ["plan.json", "runs.jsonl", "obstacles.csv"] {
+        folder.check(&dir.join(file))?;
+    }
     let plan = super::rows::read_plan(dir)?;
     let rows: Vec<Json> = read_rows(&dir.join("runs.jsonl"))?;
     let num_planned = super::merge::plan_ids(&plan).len();
