@@ -104,10 +104,8 @@ fn read_rows(path: &Path) -> Result<Vec<Json>> {
 }
 
 fn read_obstacles(path: &Path) -> Result<Vec<BTreeMap<String, String>>> {
-    let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::Input {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+    let bytes = oeg::io::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
+    let mut r = csv::Reader::from_reader(bytes.as_slice());
     r.deserialize()
         .map(|row| {
             row.map_err(|e| EvalError::Input {
