@@ -307,3 +307,44 @@ fn two_suites_on_one_folder_take_turns_and_each_leaves_it_whole() {
     assert_eq!(rows[0]["coverage"], metrics["coverage"]);
     assert_eq!(rows[0]["elevation_rmse_m"], metrics["elevation_rmse_m"]);
 }
+
+#[test]
+fn a_mount_point_as_out_is_written_in_place_twice() {
+    // A container's volume is a mount point, which cannot be renamed: the job stages inside it. Mounting needs
+    // privileges a test machine may not give; then the test says so and checks nothing.
+    let dir = temp_dir("outputs", "mount");
+    let volume = dir.join("volume");
+    std::fs::create_dir_all(&volume).expect("dir");
+    let mounted = std::process::Command::new("mount")
+        .args(["-t", "tmpfs", "oeg-test", volume.to_str().expect("utf8")])
+        .output();
+    if !mounted.as_ref().is_ok_and(|o| o.status.success()) {
+        eprintln!(
+            "skipped: cannot mount a tmpfs here ({mounted:?}); the in-place commit is tested in eval::output"
+        );
+        return;
+    }
+    let out = volume.to_str().expect("utf8");
+    let scenario = scene("decisions");
+    let args = short_run_args(scenario.to_str().expect("utf8"), out, "3");
+    let results: Vec<BTreeMap<PathBuf, Vec<u8>>> = (0..2)
+        .map(|_| {
+            let o = oeg(&args);
+            let e = String::from_utf8_lossy(&o.stderr).into_owned();
+            assert!(
+                !e.contains("busy") && volume.join("metrics.json").is_file(),
+                "{e}"
+            );
+            contents(&volume)
+        })
+        .collect();
+    let _ = std::process::Command::new("umount").arg(&volume).status();
+    assert_eq!(results[0], results[1], "the second run replaced the first whole");
+    assert!(
+        results[0]
+            .keys()
+            .all(|k| !k.to_string_lossy().contains(".oeg-staging")),
+        "no staging left: {:?}",
+        results[0].keys().collect::<Vec<_>>()
+    );
+}
