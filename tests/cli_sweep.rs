@@ -9,35 +9,11 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
-use common::{oeg, root, temp_dir};
+use common::{err, oeg, ok, root, s, sweep_plan_error, temp_dir};
 
 fn smoke() -> PathBuf {
     root().join("sweeps/smoke.toml")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(
-        o.status.success(),
-        "oeg failed: {}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn err(o: &Output) -> String {
-    assert!(
-        !o.status.success(),
-        "expected a failure: {}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 /// The rows of a runs.csv without the wall-time column (the only one that varies between runs).
@@ -341,7 +317,6 @@ fn a_generated_scene_is_a_plain_scenario_that_oeg_run_reproduces() {
 fn bad_sweeps_and_flags_are_clear_errors() {
     let dir = temp_dir("sweep", "bad");
     let base = root().join("sweeps/bases/smoke.toml");
-    let head = format!("name = \"b\"\nseed = 1\nscenarios = [{:?}]\n", s(&base));
     for (body, expected) in [
         (
             "[[axes]]\nkey = \"map.model.p_maxx\"\nvalues = [0.7]\n",
@@ -360,9 +335,7 @@ fn bad_sweeps_and_flags_are_clear_errors() {
             "b.toml:5:7: axis `map.model.p_max` = 2.0",
         ),
     ] {
-        let path = dir.join("b.toml");
-        std::fs::write(&path, format!("{head}{body}")).expect("write");
-        let e = err(&oeg(&["sweep", "plan", s(&path)]));
+        let e = sweep_plan_error(&dir, "b", body);
         assert!(e.contains(expected), "{body}: {e}");
     }
     let generated = format!(

@@ -11,32 +11,10 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use common::{oeg, root, temp_dir};
+use common::{err, oeg, ok, root, s, sweep_plan_error, temp_dir};
 
 fn smoke() -> PathBuf {
     root().join("sweeps/smoke.toml")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(
-        o.status.success(),
-        "oeg failed: {}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-/// The error of a failed command that did not panic (exit code 1, not 101).
-fn err(o: &Output) -> String {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(1), "expected an error, not a panic: {e}");
-    assert!(!e.contains("panicked"), "{e}");
-    e
 }
 
 /// Every file under `dir`, with its bytes.
@@ -311,7 +289,6 @@ fn bases_of_one_name_in_two_folders_stay_two_scenarios() {
 fn sweep_errors_point_at_the_sweep_files_own_lines() {
     let dir = temp_dir("safety", "lines");
     let base = root().join("sweeps/bases/smoke.toml");
-    let head = format!("name = \"e\"\nseed = 1\nscenarios = [{:?}]\n", s(&base));
     for (body, expected) in [
         // Expectations are checked as `oeg validate` checks them.
         (
@@ -328,9 +305,7 @@ fn sweep_errors_point_at_the_sweep_files_own_lines() {
             "e.toml:8:7: axes `sensors.*.x` and `sensors.0.x`",
         ),
     ] {
-        let path = dir.join("e.toml");
-        std::fs::write(&path, format!("{head}{body}")).expect("write");
-        let e = err(&oeg(&["sweep", "plan", s(&path)]));
+        let e = sweep_plan_error(&dir, "e", body);
         assert!(e.contains(expected), "{body}: {e}");
         let places_in_base = e
             .match_indices("smoke.toml:")

@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs `oeg` with `args`.
@@ -31,4 +31,43 @@ pub fn temp_dir(group: &str, name: &str) -> PathBuf {
 /// The repository root.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A path as a command-line argument.
+pub fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+/// The standard output of a command that succeeded; a failure panics with both outputs.
+pub fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "oeg failed: {}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// The error of a command that failed with an error, not a panic (a panic exits with 101).
+pub fn err(o: &Output) -> String {
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        !o.status.success(),
+        "expected a failure: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert_ne!(o.status.code(), Some(101), "expected an error, not a panic: {e}");
+    assert!(!e.contains("panicked"), "{e}");
+    e
+}
+
+/// The error of `oeg sweep plan` on the sweep file `dir/NAME.toml`: `name = "NAME"`, `seed = 1`, the shipped
+/// smoke base as its one scenario (lines 1 to 3), then `body` from line 4.
+pub fn sweep_plan_error(dir: &Path, name: &str, body: &str) -> String {
+    let base = root().join("sweeps/bases/smoke.toml");
+    let path = dir.join(format!("{name}.toml"));
+    let head = format!("name = \"{name}\"\nseed = 1\nscenarios = [{:?}]\n", s(&base));
+    std::fs::write(&path, format!("{head}{body}")).expect("write");
+    err(&oeg(&["sweep", "plan", s(&path)]))
 }
