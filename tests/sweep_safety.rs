@@ -312,6 +312,25 @@ fn sweep_errors_point_at_the_sweep_files_own_lines() {
             .any(|(k, m)| e[k + m.len()..].starts_with(|c: char| c.is_ascii_digit()));
         assert!(!places_in_base, "no place in the rewritten base: {e}");
     }
+    // A base scenario's own error points at the base's own line.
+    let text = std::fs::read_to_string(root().join("sweeps/bases/field_lasers.toml")).expect("base");
+    let urdf = root().join("scenarios/robots/pioneer3at.urdf");
+    let broken = text
+        .replace("../../scenarios/robots/pioneer3at.urdf", s(&urdf))
+        .replacen("duration_s = 10.0", "duration_s = -1.0", 1);
+    let line = broken
+        .lines()
+        .position(|l| l.starts_with("duration_s"))
+        .expect("duration_s")
+        + 1;
+    std::fs::write(dir.join("broken.toml"), broken).expect("write");
+    std::fs::write(
+        dir.join("uses_broken.toml"),
+        "name = \"u\"\nseed = 1\nscenarios = [\"broken.toml\"]\n",
+    )
+    .expect("write");
+    let e = err(&oeg(&["sweep", "plan", s(&dir.join("uses_broken.toml"))]));
+    assert!(e.contains(&format!("broken.toml:{line}:")), "{e}");
     let generated = format!(
         "name = \"g\"\nseed = 1\n[generate]\nbase = {:?}\ncurbs = {{ count = [1, 2, 3] }}\n",
         s(&base)

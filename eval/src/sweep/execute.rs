@@ -231,8 +231,7 @@ fn run_group(runs: &[&Run], folder: &SweepFolder) -> Result<usize> {
         let obstacles = match result {
             Ok(o) => {
                 folder.write_json(&dir.join("metrics.json"), &o.evaluation.metrics)?;
-                folder.check(&dir.join("obstacles.csv"))?;
-                crate::output::write_table(&dir.join("obstacles.csv"), &o.evaluation.obstacles)?;
+                folder.write_table(&dir.join("obstacles.csv"), &o.evaluation.obstacles)?;
                 row.insert("status".into(), Json::from("ok"));
                 row.insert("error".into(), Json::from(""));
                 metric_columns(&mut row, &o);

@@ -194,6 +194,19 @@ impl SweepFolder {
         crate::output::write_csv(path, columns, rows)
     }
 
+    /// [`crate::output::write_table`] inside.
+    ///
+    /// # Errors
+    /// As [`SweepFolder::write_bytes`].
+    pub fn write_table<'a, T: crate::output::CsvRow + 'a>(
+        &self,
+        path: &Path,
+        rows: impl IntoIterator<Item = &'a T>,
+    ) -> Result<()> {
+        self.check(path)?;
+        crate::output::write_table(path, rows)
+    }
+
     /// Removes a folder inside (a killed run's leftovers); a link there is removed, never followed.
     ///
     /// # Errors

@@ -129,18 +129,16 @@ impl Plan {
             };
             let text = oeg::io::read_text(base)
                 .map_err(|e| sweep.error(&at_base, format!("cannot read the base scenario: {e}")))?;
-            // The base alone first, so that its own errors name its own lines.
             let base_doc: Table = toml::from_str(&text).map_err(|e| EvalError::At {
                 path: base.clone(),
                 position: e.span().map(|s| sim::TextPosition::of_offset(&text, s.start)),
                 message: e.message().trim().to_string(),
             })?;
-            let loaded = sim::scenario::load_str(base, &text)?;
-            crate::run::check_expectations(&loaded, &text)?;
             let label = labels[k].clone();
-            check_set_against(&sweep, &base_doc, base)?;
-            check_overrides(&sweep, &base_doc, base)?;
-            check_axes_against(&sweep, &base_doc, base)?;
+            check_set_against(&sweep, &base_doc, base)
+                .and_then(|()| check_overrides(&sweep, &base_doc, base))
+                .and_then(|()| check_axes_against(&sweep, &base_doc, base))
+                .map_err(|e| base_error(&sweep, base, &text).unwrap_or(e))?;
             for combo in &combos {
                 for r in 0..spec.seeds {
                     let seed = replicate_seed(spec.seed, r);
@@ -174,6 +172,12 @@ impl Plan {
     fn check_runs(&self) -> Result<()> {
         for run in &self.runs {
             run.load().map_err(|e| {
+                if let Some(own) = oeg::io::read_text(&run.base)
+                    .ok()
+                    .and_then(|text| base_error(&self.sweep, &run.base, &text))
+                {
+                    return own;
+                }
                 // The resolved scenario is a rewritten text: its lines are nobody's, so the error points at
                 // the sweep file's axes and names the base.
                 self.sweep.error(
@@ -306,10 +310,7 @@ impl Run {
             path: self.base.clone(),
             message: format!("cannot write the resolved scenario: {e}"),
         })?;
-        let loaded = sim::scenario::load_str(&self.base, &text)?;
-        // As `oeg validate` and `oeg run` check it, so the run's `scenario.toml` reproduces it.
-        crate::run::check_expectations(&loaded, &text)?;
-        Ok(loaded)
+        load_resolved(&self.base, &text)
     }
 }
 
@@ -396,12 +397,29 @@ fn resolve(
     Ok(doc)
 }
 
-/// Loads a resolved scenario document as `oeg run` and `oeg validate` would (expectations included): the
-/// message of what is wrong, without a place in the rewritten text.
+/// Loads a scenario text as `oeg run` and `oeg validate` do: the file's checks, then its expectations (so a
+/// run's `scenario.toml` reproduces it).
+fn load_resolved(base: &Path, text: &str) -> Result<sim::LoadedScenario> {
+    let loaded = sim::scenario::load_str(base, text)?;
+    crate::run::check_expectations(&loaded, text)?;
+    Ok(loaded)
+}
+
+/// [`load_resolved`] of a resolved document: the message of what is wrong, without a place in the rewritten
+/// text.
 fn check_resolved(base: &Path, doc: &Table) -> std::result::Result<(), String> {
     let text = toml::to_string(doc).map_err(|e| e.to_string())?;
-    let loaded = sim::scenario::load_str(base, &text).map_err(|e| crate::run::scenario_message(&e))?;
-    crate::run::check_expectations(&loaded, &text).map_err(|e| message_of(&e))
+    load_resolved(base, &text).map(|_| ()).map_err(|e| message_of(&e))
+}
+
+/// When a resolved run fails, the base scenario's own error, if the base alone (as its file says, with its
+/// own lines) fails too. A generator's base is not judged alone: its drive, planner, region and duration are
+/// replaced.
+fn base_error(sweep: &Sweep, base: &Path, text: &str) -> Option<EvalError> {
+    if sweep.spec.generate.is_some() {
+        return None;
+    }
+    load_resolved(base, text).err()
 }
 
 /// An error's message without a place in a rewritten text.

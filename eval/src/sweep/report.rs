@@ -393,8 +393,7 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
         files.push(path);
     }
     let path = dir.join("summary.csv");
-    folder.check(&path)?;
-    crate::output::write_table(&path, &summary)?;
+    folder.write_table(&path, &summary)?;
     files.insert(0, path);
     Ok(ReportSummary {
         num_covered,
