@@ -294,7 +294,7 @@ mod tests {
             format!("{}\n", std::process::id()),
             "host=elsewhere pid=1 boot=x start=5\n".to_string(),
         ] {
-            std::fs::write(&path, &record).expect("write");
+            crate::output::write_bytes(&path, record.as_bytes()).expect("write");
             let lock = LockFile::try_take(&path).expect("io");
             assert!(lock.is_ok(), "{record:?}: {lock:?}");
         }

@@ -105,7 +105,7 @@ impl Progress {
         } else {
             "unknown".into()
         };
-        let percent = if len > 0 { 100 * pos / len } else { 0 };
+        let percent = (100 * pos).checked_div(len).unwrap_or(0);
         let message = self.bar.message();
         format!(
             "progress: {pos}/{len} {} ({percent} %), {} elapsed, about {left} left{}",

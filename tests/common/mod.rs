@@ -64,6 +64,7 @@ pub fn err(o: &Output) -> String {
 
 /// The error of `oeg sweep plan` on the sweep file `dir/NAME.toml`: `name = "NAME"`, `seed = 1`, the shipped
 /// smoke base as its one scenario (lines 1 to 3), then `body` from line 4.
+#[expect(clippy::disallowed_methods, reason = "a test writes its input directly")]
 pub fn sweep_plan_error(dir: &Path, name: &str, body: &str) -> String {
     let base = root().join("sweeps/bases/smoke.toml");
     let path = dir.join(format!("{name}.toml"));

@@ -355,7 +355,7 @@ mod tests {
         drop(SweepFolder::claim(&new).expect("its own folder again"));
         let theirs = dir.join("theirs");
         std::fs::create_dir_all(&theirs).expect("dir");
-        std::fs::write(theirs.join("runs.csv"), "their data").expect("write");
+        crate::output::write_bytes(&theirs.join("runs.csv"), b"their data").expect("write");
         let e = SweepFolder::claim(&theirs)
             .expect_err("someone's folder")
             .to_string();
@@ -366,13 +366,13 @@ mod tests {
         let run = dir.join("run_output");
         std::fs::create_dir_all(&run).expect("dir");
         for f in [crate::output::OUTPUT_MARKER, "metrics.json", "obstacles.csv"] {
-            std::fs::write(run.join(f), "x").expect("write");
+            crate::output::write_bytes(&run.join(f), b"x").expect("write");
         }
         assert!(SweepFolder::claim(&run).is_err(), "an `oeg run` folder");
         assert!(SweepFolder::open(&run).is_err(), "report refuses it too");
         let old = dir.join("earlier_version");
         std::fs::create_dir_all(old.join("runs")).expect("dir");
-        std::fs::write(old.join("plan.json"), "{}").expect("write");
+        crate::output::write_bytes(&old.join("plan.json"), b"{}").expect("write");
         drop(SweepFolder::claim(&old).expect("an earlier version's sweep folder"));
         assert_eq!(
             std::fs::read(theirs.join("runs.csv")).expect("read"),
@@ -394,7 +394,7 @@ mod tests {
         let dir = scratch("links");
         let outside = dir.join("outside");
         std::fs::create_dir_all(&outside).expect("dir");
-        std::fs::write(outside.join("precious.csv"), "keep").expect("write");
+        crate::output::write_bytes(&outside.join("precious.csv"), b"keep").expect("write");
         let sweep = dir.join("sweep");
         let folder = SweepFolder::claim(&sweep).expect("claimed");
         std::os::unix::fs::symlink(outside.join("precious.csv"), sweep.join("runs.csv")).expect("link");

@@ -5,7 +5,7 @@
 //! sweep files is read through these functions instead (`#[serde(deserialize_with = "...")]`): a list of
 //! another length is an error at its place in the file.
 
-use serde::de::{Deserialize, Deserializer, Error as _};
+use serde::de::{Deserialize, Deserializer};
 
 fn exact<T, E: serde::de::Error, const N: usize>(v: Vec<T>, what: &str) -> Result<[T; N], E> {
     let len = v.len();
@@ -26,7 +26,7 @@ pub fn array<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
 /// `Option<[T; N]>` (give the field `#[serde(default)]` too).
 ///
 /// # Errors
-/// As [`array`].
+/// As [`array()`].
 pub fn option<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
     d: D,
 ) -> Result<Option<[T; N]>, D::Error> {
@@ -38,7 +38,7 @@ pub fn option<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
 /// `Vec<[T; N]>`, each entry at its exact length.
 ///
 /// # Errors
-/// As [`array`], naming the entry (from 0).
+/// As [`array()`], naming the entry (from 0).
 pub fn each<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
     d: D,
 ) -> Result<Vec<[T; N]>, D::Error> {
@@ -46,8 +46,7 @@ pub fn each<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
         .into_iter()
         .enumerate()
         .map(|(k, v)| exact(v, &format!("entry {k}: ")))
-        .collect::<Result<Vec<_>, D::Error>>()
-        .map_err(|e| D::Error::custom(e))
+        .collect()
 }
 
 #[cfg(test)]
@@ -72,6 +71,7 @@ mod tests {
         let ok = read("xy = [1.0, 2.0]\nmaybe = [3, 4]\npoints = [[1.0, 2.0, 3.0]]\n").expect("exact");
         assert_eq!(ok.xy, [1.0, 2.0]);
         assert_eq!(ok.maybe, Some([3, 4]));
+        assert_eq!(ok.points, vec![[1.0, 2.0, 3.0]]);
         assert!(read("xy = [1.0, 2.0]\n").expect("defaults").maybe.is_none());
         for (text, expected) in [
             ("xy = [1.0, 2.0, 5.0]\n", "expected a list of 2 values, got 3"),
