@@ -111,10 +111,17 @@ impl Busy {
     pub fn describe(&self, lock: &Path) -> String {
         match self {
             Self::Locked(Some(h)) => format!(
-                "{h} holds the lock {} (the operating system's lock on it is held, so that process runs)",
+                "{h} holds the lock {} (the operating system's lock on it is held, so a process holds it; if no \
+                 job of yours runs there, a network file system may have kept the lock of a crashed node: it \
+                 may be stale, and removing {} frees the folder)",
+                lock.display(),
                 lock.display()
             ),
-            Self::Locked(None) => format!("another process holds the lock {}", lock.display()),
+            Self::Locked(None) => format!(
+                "another process holds the lock {} (if no job of yours runs, it may be stale: remove {})",
+                lock.display(),
+                lock.display()
+            ),
             Self::Recorded(h) => format!(
                 "{h} holds the lock {} according to the file (this file system has no locks to check it); \
                  the lock may be stale: if no job of that process runs any more, remove {}",

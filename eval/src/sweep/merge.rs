@@ -60,7 +60,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
         if plan_ids(&read_plan(d)?) != ids {
             return Err(EvalError::Input {
                 path: d.join("plan.json"),
-                message: format!("holds another plan than {}", first.join("plan.json").display()),
+                message: format!(
+                    "holds another plan than {}: the shards of one study are run from the same sweep file with the \
+                     same --set; merge only those",
+                    first.join("plan.json").display()
+                ),
             });
         }
     }
