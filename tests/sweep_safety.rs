@@ -249,6 +249,13 @@ fn a_report_says_how_much_of_the_plan_it_covers_and_refuses_a_partial_study() {
     let whole = finished(&dir, "whole");
     let out = ok(&oeg(&["sweep", "report", s(&whole)]));
     assert!(out.contains("8 of the plan's 8 runs\n"), "{out}");
+    // From inside the study: the current folder is a sweep's, so the report may write there.
+    let inside = std::process::Command::new(env!("CARGO_BIN_EXE_oeg"))
+        .args(["sweep", "report", "."])
+        .current_dir(&whole)
+        .output()
+        .expect("runs");
+    assert!(ok(&inside).contains("8 of the plan's 8 runs"));
     // Another plan's plan.json over these rows, and a plan with no runs.
     let plan = std::fs::read_to_string(whole.join("plan.json")).expect("plan");
     let other: String = plan.replace("\"id\": \"", "\"id\": \"x");

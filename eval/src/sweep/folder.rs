@@ -71,7 +71,10 @@ impl SweepFolder {
     /// # Errors
     /// As [`SweepFolder::claim`], and a folder that does not exist or is empty.
     pub fn open(dir: &Path) -> Result<Self> {
-        refuse_special(dir)?;
+        // The current folder is fine here when it is a sweep's (`oeg sweep report .` from inside the study).
+        if !(dir.join(SWEEP_MARKER).is_file() && is_current_folder(dir)) {
+            refuse_special(dir)?;
+        }
         if !dir.is_dir() {
             return Err(input(
                 dir,
@@ -238,6 +241,17 @@ fn input(path: &Path, message: &str) -> EvalError {
     EvalError::Input {
         path: path.to_path_buf(),
         message: message.to_string(),
+    }
+}
+
+/// Whether `dir` is the current folder.
+fn is_current_folder(dir: &Path) -> bool {
+    match (
+        std::fs::canonicalize(dir),
+        std::env::current_dir().and_then(std::fs::canonicalize),
+    ) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
     }
 }
 
