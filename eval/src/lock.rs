@@ -223,12 +223,19 @@ fn read_holder(file: &mut std::fs::File) -> Option<Holder> {
 }
 
 /// Whether `path` still names the open `file` (its holder may have removed it since it was opened).
+#[cfg(unix)]
 fn same_file(path: &Path, file: &std::fs::File) -> bool {
     use std::os::unix::fs::MetadataExt as _;
     match (std::fs::symlink_metadata(path), file.metadata()) {
         (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
         _ => false,
     }
+}
+
+/// Elsewhere an open file cannot be removed, so the path names it.
+#[cfg(not(unix))]
+fn same_file(_path: &Path, _file: &std::fs::File) -> bool {
+    true
 }
 
 fn first_line(path: &str) -> String {

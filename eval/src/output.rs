@@ -193,7 +193,15 @@ impl Staged {
 }
 
 /// Whether `dir` is a mount point: a folder on another file system than its parent's, which cannot be
+/// renamed (`EBUSY`). Told by the device numbers, so only on Unix; elsewhere no folder is one.
+#[cfg(not(unix))]
+fn is_mount_point(_dir: &Path) -> bool {
+    false
+}
+
+/// Whether `dir` is a mount point: a folder on another file system than its parent's, which cannot be
 /// renamed (`EBUSY`).
+#[cfg(unix)]
 fn is_mount_point(dir: &Path) -> bool {
     use std::os::unix::fs::MetadataExt as _;
     let Ok(meta) = std::fs::symlink_metadata(dir) else {
