@@ -217,6 +217,14 @@ fn a_text_input_of_endless_bytes_is_refused_before_it_is_read() {
             "{args:?}: {e}"
         );
     }
+    // A data input of endless bytes, whatever its name says.
+    let zero = dir.join("zero.graph");
+    std::os::unix::fs::symlink("/dev/zero", &zero).expect("link");
+    let e = err(&oeg(&["map", s(&zero), "--resolution", "0.1", "--out", s(&o)]));
+    assert!(
+        e.contains("zero.graph") && e.contains("not a regular file"),
+        "{e}"
+    );
     let sweep = dir.join("zero_base.toml");
     std::fs::write(&sweep, "name = \"z\"\nseed = 1\nscenarios = [\"/dev/zero\"]\n").expect("write");
     let e = err(&oeg(&["sweep", "plan", s(&sweep)]));

@@ -184,12 +184,21 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
         .collect::<Result<Vec<_>>>()?;
     let mut held = 0_u64;
     for (path, format) in job.inputs.iter().zip(&formats) {
-        let bytes = std::fs::metadata(path)
-            .map_err(|source| EvalError::Io {
+        let meta = std::fs::metadata(path).map_err(|source| EvalError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        // A device or a pipe has no size to check (`/dev/zero` would be read until memory runs out).
+        if !meta.is_file() {
+            return Err(EvalError::Input {
                 path: path.clone(),
-                source,
-            })?
-            .len();
+                message:
+                    "is not a regular file (a folder, a device or a pipe); `oeg map` checks each input's \
+                          size against the memory limit before reading it, so save the data to a file first"
+                        .into(),
+            });
+        }
+        let bytes = meta.len();
         let factor = format.memory_factor();
         held = held.saturating_add(bytes.saturating_mul(factor));
         if held > limit {
