@@ -439,11 +439,15 @@ fn scenario_labels(bases: &[(PathBuf, PathBuf)]) -> Vec<String> {
             .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned())
     };
     let stems: Vec<String> = bases.iter().map(|(_, base)| stem(base)).collect();
+    let mut uses: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+    for s in &stems {
+        *uses.entry(s).or_default() += 1;
+    }
     bases
         .iter()
         .zip(&stems)
         .map(|((written, _), s)| {
-            if stems.iter().filter(|t| *t == s).count() > 1 {
+            if uses[s.as_str()] > 1 {
                 written.with_extension("").to_string_lossy().into_owned()
             } else {
                 s.clone()
