@@ -24,8 +24,7 @@ pub const MAX_OBJECTS: usize = 10_000;
 pub const MAX_PARTS: usize = 100_000;
 /// The most rays a run may cast, all sensors together (rate x duration x rays per scan): 2 billion. The
 /// simulation casts a few million rays a second and the map integrates about a million on the reference
-/// machine, so the worst valid scenario finishes, in hours rather than never (README, "Bad input, bounds and
-/// outputs").
+/// machine, so the worst valid scenario finishes, in hours rather than never (`docs/guarantees.md`).
 pub const MAX_RAYS_PER_RUN: f64 = 2e9;
 /// The most cells a run's rays may cross, all sensors together (rays x their longest range / the cell size):
 /// 10^12. The map walks 65-84 million cells a second on one core of the reference machine (README, "Bad
