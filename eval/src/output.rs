@@ -521,18 +521,22 @@ mod tests {
         );
     }
 
+    /// `dir/name` holding `files` (paths inside it, sub-folders made), each `x`.
+    fn make_folder(dir: &Path, name: &str, files: &[&str]) -> PathBuf {
+        let d = dir.join(name);
+        create_dir(&d).expect("dir");
+        for f in files {
+            let path = d.join(f);
+            create_dir(path.parent().expect("parent")).expect("dir");
+            write_bytes(&path, b"x").expect("file");
+        }
+        d
+    }
+
     #[test]
     fn only_empty_folders_and_folders_a_job_wrote_are_replaced() {
-        let dir = std::env::temp_dir().join(format!("oeg-output-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let folder = |name: &str, files: &[&str]| {
-            let d = dir.join(name);
-            std::fs::create_dir_all(&d).expect("dir");
-            for f in files {
-                write_bytes(&d.join(f), b"x").expect("file");
-            }
-            d
-        };
+        let dir = crate::test_support::scratch_dir("output", "replaced");
+        let folder = |name: &str, files: &[&str]| make_folder(&dir, name, files);
         for ok in [
             folder("empty", &[]),
             folder("marked", &[OUTPUT_MARKER, "notes.txt"]),
@@ -572,17 +576,8 @@ mod tests {
 
     #[test]
     fn a_folder_is_an_earlier_output_only_if_every_entry_is_one_its_job_writes() {
-        let dir = std::env::temp_dir().join(format!("oeg-output-earlier-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let folder = |name: &str, files: &[&str]| {
-            let d = dir.join(name);
-            for f in files {
-                let path = d.join(f);
-                std::fs::create_dir_all(path.parent().expect("parent")).expect("dir");
-                write_bytes(&path, b"x").expect("file");
-            }
-            d
-        };
+        let dir = crate::test_support::scratch_dir("output", "earlier");
+        let folder = |name: &str, files: &[&str]| make_folder(&dir, name, files);
         for ok in [
             folder(
                 "run",
@@ -627,10 +622,8 @@ mod tests {
     fn a_mount_point_is_written_in_place() {
         assert!(is_mount_point(Path::new("/proc")), "/proc is a mount point");
         assert!(!is_mount_point(&std::env::temp_dir().join("oeg-no-such-folder")));
-        let dir = std::env::temp_dir().join(format!("oeg-output-mount-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let target = dir.join("volume");
-        std::fs::create_dir_all(&target).expect("dir");
+        let dir = crate::test_support::scratch_dir("output", "mount");
+        let target = make_folder(&dir, "volume", &[]);
         assert!(!is_mount_point(&target));
         for (round, content) in [b"first".as_slice(), b"second"].into_iter().enumerate() {
             let staged = Staged::begin_as(&target, true).expect("begins");

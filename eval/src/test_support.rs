@@ -1,4 +1,5 @@
-//! Fixtures shared by the unit tests of the metrics, the planner check and the CSV tables.
+//! Fixtures shared by the unit tests: truth cells and rasters (the metrics, the planner check, the CSV tables)
+//! and scratch folders (the output, lock and sweep-folder rules).
 
 use oeg::{CellRegion, RobotProfile};
 use sim::truth::{CellTruth, TruthRaster};
@@ -44,4 +45,13 @@ pub(crate) fn wrong_cell() -> crate::wrong_cells::WrongCell {
         true_step_blocked: true,
         true_structure_gap_m: None,
     }
+}
+
+/// A fresh, empty folder under the system's temporary folder for one test, named by `group`, `name` and this
+/// process.
+pub(crate) fn scratch_dir(group: &str, name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("oeg-{group}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    crate::output::create_dir(&dir).expect("scratch folder");
+    dir
 }
