@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The architecture's layering (ARCHITECTURE.md), checked: the map crate `oeg` knows nothing of the simulation or
-# the evaluation, and Rapier's types (rapier3d, parry3d) appear in `sim` only.
+# the evaluation, and Rapier's types (rapier3d, parry3d) appear in `sim` only; no job of `oeg_eval` (eval/src/jobs/) imports another.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 status=0
@@ -23,5 +23,22 @@ for package in oeg-eval oeg-testbed oeg-fuzz; do
         status=1
     fi
 done
-[ "$status" -eq 0 ] && echo "layering: oeg stands alone; Rapier stays in sim"
+# A job is a file or folder directly under eval/src/jobs/; it may use the shared wings, never another job.
+jobs_dir=eval/src/jobs
+for entry in "$jobs_dir"/*; do
+    job=$(basename "$entry" .rs)
+    [ "$job" = mod ] && continue
+    for other in "$jobs_dir"/*; do
+        name=$(basename "$other" .rs)
+        [ "$name" = mod ] || [ "$name" = "$job" ] && continue
+        # From a job's file `super::` is the jobs folder; from a job's folder it is `super::super::`.
+        if [ -d "$entry" ]; then up='super::super'; else up='super'; fi
+        if hits=$(grep -rnHE "(crate::jobs|$up)::$name\b" "$entry" | grep -vE "^[^:]*:[0-9]+:\s*//"); then
+            echo "layering: the job $job imports the job $name:" >&2
+            echo "$hits" >&2
+            status=1
+        fi
+    done
+done
+[ "$status" -eq 0 ] && echo "layering: oeg stands alone; Rapier stays in sim; no job imports another"
 exit "$status"

@@ -320,7 +320,7 @@ fn a_mount_point_as_out_is_written_in_place_twice() {
         .output();
     if !mounted.as_ref().is_ok_and(|o| o.status.success()) {
         eprintln!(
-            "skipped: cannot mount a tmpfs here ({mounted:?}); the in-place commit is tested in eval::output"
+            "skipped: cannot mount a tmpfs here ({mounted:?}); the in-place commit is tested in oeg_eval::output"
         );
         return;
     }

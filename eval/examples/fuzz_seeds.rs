@@ -70,7 +70,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     loaded.scenario.duration_s = 0.2;
     loaded.scenario.sensors.truncate(1);
     let mut simulation = sim::Simulation::new(&loaded)?;
-    let header = eval::record::log_header(&loaded, &simulation);
+    let header = oeg_eval::jobs::record::log_header(&loaded, &simulation);
     let mut writer = sim::log::LogWriter::create(&dir("log")?.join("seed_short.oeglog"), &header)?;
     for _ in 0..2 {
         if let Some(scan) = simulation.next_scan() {

@@ -1,32 +1,30 @@
 //! Runs OEG experiments end to end: scenario runs and suites (`oeg run`, `oeg suite`), studies over many runs
 //! (`oeg sweep`), maps from recorded data (`oeg map`), plans on saved maps (`oeg plan`), inspection of saved
-//! maps (`oeg inspect`), scenario checks and previews (`oeg validate`, `oeg preview`), reports and images.
-//! Every job's settings go through one resolver ([`settings`]). It ties the map crate (`oeg`) to the outside
-//! world; the command-line program is a thin layer over it.
+//! maps (`oeg inspect`), scenario checks and previews (`oeg validate`, `oeg preview`), reports and images. It
+//! ties the map crate (`oeg`) to the simulation (`sim`); the command-line program is a thin layer over it.
+//!
+//! The crate is built in wings, each depending only on the ones listed before it:
+//!
+//! | Wing | What it holds |
+//! |---|---|
+//! | [`error`], [`output`], [`lock`], [`progress`] | errors, atomic outputs and staged folders, locks, progress |
+//! | [`settings`] | `--set key=value` overrides and every job's settings table |
+//! | [`judge`] | the verdict raster and what reads it: metrics, obstacles, wrong cells, the plan check |
+//! | [`figures`] | the rasteriser and every figure |
+//! | [`pipeline`], [`report`] | simulate, map, truth, judge; the run's report files |
+//! | [`jobs`] | one module per command; no job calls another |
 
-pub mod demo;
 pub mod error;
-pub mod evaluation;
-pub mod inspect;
+pub mod figures;
+pub mod jobs;
+pub mod judge;
 pub mod lock;
-pub mod mapping;
-pub mod metrics;
-pub mod obstacles;
 pub mod output;
-pub mod overrides;
-pub mod plan;
-pub mod preview;
+pub mod pipeline;
 pub mod progress;
-pub mod record;
-pub mod render;
-pub mod report_images;
-pub mod run;
+pub mod report;
 pub mod settings;
-pub mod suite;
-pub mod sweep;
 #[cfg(test)]
 mod test_support;
-pub mod verdict;
-pub mod wrong_cells;
 
 pub use error::{EvalError, Result};

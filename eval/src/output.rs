@@ -651,7 +651,7 @@ mod tests {
 
     #[test]
     fn every_tables_columns_are_its_fields_in_order_and_an_empty_table_keeps_its_header() {
-        check(&crate::suite::SuiteRow {
+        check(&crate::jobs::suite::SuiteRow {
             scenario: "s".into(),
             file: "f".into(),
             status: "error".into(),
@@ -666,7 +666,7 @@ mod tests {
             wall_time_s: 1.0,
             problems: String::new(),
         });
-        check(&crate::run::ComparisonRow {
+        check(&crate::report::ComparisonRow {
             model: "paper".into(),
             unsafe_cells: 1,
             overcautious_cells: 2,
@@ -677,7 +677,7 @@ mod tests {
             elevation_within_2sigma: 0.9,
             elevation_rmse_m: 0.01,
         });
-        check(&crate::obstacles::ObstacleDecision {
+        check(&crate::judge::obstacles::ObstacleDecision {
             index: 0,
             name: "curb".into(),
             kind: "box".into(),
@@ -697,7 +697,7 @@ mod tests {
             decision: "right",
             decision_right: true,
         });
-        check(&crate::sweep::report::SummaryRow {
+        check(&crate::jobs::sweep::report::SummaryRow {
             axis: "a".into(),
             value: "v".into(),
             line: "all".into(),
@@ -709,7 +709,7 @@ mod tests {
             ci95_low: None,
             ci95_high: None,
         });
-        check(&crate::plan::PlanRow {
+        check(&crate::judge::plan_check::PlanRow {
             path: "map",
             step: 0,
             x_m: 0.0,

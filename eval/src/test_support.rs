@@ -30,8 +30,8 @@ pub(crate) fn truth_raster(region: CellRegion, cells: Vec<CellTruth>) -> TruthRa
 }
 
 /// A row of `wrong_cells.csv` with a missing elevation and structure gap.
-pub(crate) fn wrong_cell() -> crate::wrong_cells::WrongCell {
-    crate::wrong_cells::WrongCell {
+pub(crate) fn wrong_cell() -> crate::judge::wrong_cells::WrongCell {
+    crate::judge::wrong_cells::WrongCell {
         x_m: 1.0,
         y_m: 2.0,
         error: "unsafe",

@@ -45,7 +45,7 @@ pub const TARGETS: [Target; 9] = [
 ];
 
 /// The most runs the sweep target plans: a larger plan loads every run's scenario, which takes longer than
-/// the fuzzer's time limit (it is bounded by `eval::sweep::spec::MAX_RUNS`, not a hang).
+/// the fuzzer's time limit (it is bounded by `oeg_eval::jobs::sweep::spec::MAX_RUNS`, not a hang).
 pub const SWEEP_MAX_PLANNED_RUNS: usize = 64;
 
 /// The memory bound the map target loads under: small, so the fuzzer finds allocations that ignore it.
@@ -111,15 +111,15 @@ pub fn run(target: Target, data: &[u8]) -> bool {
         Target::Sweep => std::str::from_utf8(data).is_ok_and(|text| {
             // Beside the shipped sweeps, so `bases/smoke.toml` resolves as it does for them.
             let at = Path::new(env!("CARGO_MANIFEST_DIR")).join("../sweeps/fuzz-input.toml");
-            match eval::sweep::Sweep::from_str(&at, text) {
+            match oeg_eval::jobs::sweep::Sweep::from_str(&at, text) {
                 Ok(sweep) if sweep.num_planned_runs() <= SWEEP_MAX_PLANNED_RUNS as u128 => {
-                    eval::sweep::Plan::new(sweep).is_ok()
+                    oeg_eval::jobs::sweep::SweepPlan::new(sweep).is_ok()
                 }
                 Ok(_) => true,
                 Err(_) => false,
             }
         }),
         Target::Row => serde_json::from_slice(data)
-            .is_ok_and(|json| eval::sweep::rows::parse_record(&json, "0123456789abcdef").is_ok()),
+            .is_ok_and(|json| oeg_eval::jobs::sweep::rows::parse_record(&json, "0123456789abcdef").is_ok()),
     }
 }

@@ -114,7 +114,7 @@ impl TruthRaster {
 
     /// Whether the robot truly cannot enter the cell at raster offset `k`: a step it cannot climb, or a
     /// structure over it lower than the robot. Cells off the terrain are not blocked. This is the one
-    /// definition of "truly blocked"; every metric, file and image reads it (through `eval::verdict`).
+    /// definition of "truly blocked"; every metric, file and image reads it (through `oeg_eval::judge::verdict`).
     pub fn truly_blocked(&self, k: usize) -> bool {
         let t = &self.cells[k];
         t.step_blocked || t.clearance_passable(&self.profile) == Some(false)

@@ -1,0 +1,196 @@
+//! The run's comparison images: the true elevation, the elevation error, and the decisions.
+
+use std::path::{Path, PathBuf};
+
+use oeg::Map;
+use sim::scenario::Scenario;
+use sim::truth::TruthRaster;
+
+use crate::error::Result;
+use crate::figures::{Colormap, DRIVE, Figure, Legend, NO_DATA, PLAN, Rgb, finite_range};
+use crate::judge::Evaluation;
+use crate::judge::verdict::Verdict;
+use crate::output::write_bytes;
+
+/// The verdicts of `decisions.png`, in legend order, with their legend text and colour.
+pub const DECISION_CLASSES: [(Verdict, &str, Rgb); 6] = [
+    (Verdict::NotScored, "not observed", NO_DATA),
+    (Verdict::RightDrivable, "right, drivable", [255, 255, 255]),
+    (Verdict::RightBlocked, "right, blocked", [110, 110, 110]),
+    (Verdict::Unsafe, "UNSAFE (mapped drivable)", [220, 20, 20]),
+    (
+        Verdict::OverCautious,
+        "over-cautious (mapped blocked)",
+        [255, 160, 30],
+    ),
+    (
+        Verdict::Uncertain,
+        "uncertain (the map cannot tell)",
+        [70, 170, 230],
+    ),
+];
+
+/// The colour of a verdict on `decisions.png`.
+pub fn verdict_color(v: Verdict) -> Rgb {
+    DECISION_CLASSES
+        .iter()
+        .find(|(c, ..)| *c == v)
+        .map_or(NO_DATA, |(_, _, rgb)| *rgb)
+}
+
+/// Obstacle footprints and names on `decisions.png`.
+const OUTLINE: Rgb = [0, 0, 0];
+
+/// The scenario's drive as a polyline of world points.
+pub fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
+    s.robot
+        .drive
+        .waypoints_xy_m
+        .iter()
+        .map(|w| (w[0], w[1]))
+        .collect()
+}
+
+/// The true elevation of every cell, with a colour bar over its range.
+pub fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
+    let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
+    let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
+    let legend = Legend::ColorBar {
+        colormap: Colormap::Viridis,
+        min: lo,
+        max: hi,
+        label: "elevation [m]".into(),
+    };
+    Figure::new(
+        truth.region,
+        truth.resolution_m,
+        title,
+        |c| match truth.get(c) {
+            Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
+            _ => NO_DATA,
+        },
+        &legend,
+    )
+}
+
+/// Writes `truth_elevation.png`, `elevation_error.png` and `decisions.png`.
+///
+/// # Errors
+/// A failed write.
+pub fn write(
+    out_dir: &Path,
+    s: &Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    evaluation: &Evaluation,
+) -> Result<Vec<PathBuf>> {
+    let metrics = &evaluation.metrics;
+    let region = truth.region;
+    let res = truth.resolution_m;
+    let drive = drive_polyline(s);
+    let with_drive = |mut fig: Figure| {
+        fig.polyline(&drive, DRIVE);
+        fig
+    };
+    let mut files = Vec::new();
+
+    let fig = truth_elevation_figure(truth, &format!("{}: true elevation (drive in blue)", s.name));
+    let path = out_dir.join("truth_elevation.png");
+    write_bytes(&path, &with_drive(fig).to_png())?;
+    files.push(path);
+
+    let error_of = |c: oeg::CellIndex| -> Option<f32> {
+        let t = truth.get(c)?;
+        let e = map.cell(c).elevation()?;
+        t.elevation_m.is_finite().then_some(e.mean_m - t.elevation_m)
+    };
+    let span = if metrics.elevation_p95_abs_err_m.is_finite() {
+        (metrics.elevation_p95_abs_err_m as f32 * 1.5).max(0.02)
+    } else {
+        0.1
+    };
+    let legend = Legend::ColorBar {
+        colormap: Colormap::Diverging,
+        min: -span,
+        max: span,
+        label: "map - truth [m]".into(),
+    };
+    let fig = Figure::new(
+        region,
+        res,
+        &format!(
+            "{}: elevation error (RMSE {:.3} m)",
+            s.name, metrics.elevation_rmse_m
+        ),
+        |c| error_of(c).map_or(NO_DATA, |e| Colormap::Diverging.color((e + span) / (2.0 * span))),
+        &legend,
+    );
+    let path = out_dir.join("elevation_error.png");
+    write_bytes(&path, &with_drive(fig).to_png())?;
+    files.push(path);
+
+    let fig = decisions_figure(s, map.geometry(), evaluation, &s.name);
+    let path = out_dir.join("decisions.png");
+    write_bytes(&path, &fig.to_png())?;
+    files.push(path);
+    Ok(files)
+}
+
+/// `decisions.png`: every cell's verdict, the drive, the obstacles' footprints and names, and the path planned
+/// on the map; titled `title` with the counts.
+pub fn decisions_figure(
+    s: &Scenario,
+    geometry: &oeg::GridGeometry,
+    evaluation: &Evaluation,
+    title: &str,
+) -> Figure {
+    let (metrics, plan, verdicts) = (&evaluation.metrics, &evaluation.plan, &evaluation.verdicts);
+    let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
+        .iter()
+        .map(|(_, n, c)| ((*n).to_string(), *c))
+        .collect();
+    classes.push(("drive".into(), DRIVE));
+    classes.push(("obstacle footprint".into(), OUTLINE));
+    classes.push((
+        if plan.map_plan.is_some() {
+            "path planned on the map".into()
+        } else {
+            "no path on the map".into()
+        },
+        PLAN,
+    ));
+    let legend = Legend::Classes(classes);
+    let fig = Figure::new(
+        verdicts.region,
+        verdicts.resolution_m,
+        &format!(
+            "{title}: {} unsafe, {} over-cautious, {} uncertain cells",
+            metrics.unsafe_cells, metrics.overcautious_cells, metrics.uncertain_cells
+        ),
+        |c| {
+            verdicts
+                .offset(c)
+                .map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k]))
+        },
+        &legend,
+    );
+    let mut fig = fig;
+    fig.polyline(&drive_polyline(s), DRIVE);
+    // The scene under the decisions: every obstacle's footprint, and the names of the named ones.
+    for o in &s.obstacles {
+        let outline = crate::judge::obstacles::footprint_outline(o);
+        fig.polyline(&outline, OUTLINE);
+        if let Some(name) = o.name() {
+            let (x, y) = outline
+                .iter()
+                .fold((f64::NEG_INFINITY, f64::NEG_INFINITY), |(x, y), p| {
+                    (x.max(p.0), y.max(p.1))
+                });
+            fig.label(x, y, name, OUTLINE);
+        }
+    }
+    if let Some(p) = &plan.map_plan {
+        fig.polyline(&crate::judge::plan_check::polyline(p, geometry), PLAN);
+    }
+    fig
+}

@@ -1,0 +1,138 @@
+//! Figures of the map's layers.
+
+use std::path::{Path, PathBuf};
+
+use oeg::{Layer, LayerKind, Map, Raster, RobotProfile, Traversability, TraversabilityRule};
+
+use super::canvas::Rgb;
+use super::colormap::Colormap;
+use super::figure::{Figure, Legend, NO_DATA, finite_range};
+use crate::error::Result;
+use crate::output::write_bytes;
+
+/// A continuous layer: NaN cells in [`NO_DATA`] grey, the rest coloured over `range` (default: the data's).
+pub fn scalar_figure(
+    layer: &Layer,
+    title: &str,
+    label: &str,
+    colormap: Colormap,
+    range: Option<(f32, f32)>,
+) -> Figure {
+    let (min, max) = range
+        .or_else(|| finite_range(&layer.values))
+        .unwrap_or((0.0, 1.0));
+    let legend = Legend::ColorBar {
+        colormap,
+        min,
+        max,
+        label: label.to_string(),
+    };
+    Figure::new(
+        layer.region,
+        layer.resolution_m,
+        title,
+        |c| match layer.get(c) {
+            Some(v) if v.is_finite() => colormap.color((v - min) / (max - min)),
+            _ => NO_DATA,
+        },
+        &legend,
+    )
+}
+
+/// The colour of each traversability class.
+pub fn traversability_color(t: Traversability) -> Rgb {
+    match t {
+        Traversability::Unknown => NO_DATA,
+        Traversability::Free => [255, 255, 255],
+        Traversability::Traversable => [120, 190, 90],
+        Traversability::Blocked => [200, 40, 40],
+        Traversability::Uncertain => [240, 200, 40],
+    }
+}
+
+/// The traversability classes in legend order.
+pub const TRAVERSABILITY_CLASSES: [(Traversability, &str); 5] = [
+    (Traversability::Unknown, "unknown"),
+    (Traversability::Free, "free"),
+    (Traversability::Traversable, "traversable (step ok)"),
+    (Traversability::Blocked, "blocked"),
+    (Traversability::Uncertain, "uncertain"),
+];
+
+/// The traversability layer with a class legend.
+pub fn traversability_figure(layer: &Raster<Traversability>, title: &str) -> Figure {
+    let legend = Legend::Classes(
+        TRAVERSABILITY_CLASSES
+            .iter()
+            .map(|(t, name)| (name.to_string(), traversability_color(*t)))
+            .collect(),
+    );
+    Figure::new(
+        layer.region,
+        layer.resolution_m,
+        title,
+        |c| traversability_color(layer.get(c).unwrap_or(Traversability::Unknown)),
+        &legend,
+    )
+}
+
+/// Writes `occupancy.png`, `elevation.png`, `variance.png` and `traversability.png` over `region` (default: the
+/// observed region). An empty map with no region given gets no images.
+///
+/// # Errors
+/// A failed write, or a region over the map's memory limit.
+pub fn write_layer_images(
+    map: &Map,
+    out_dir: &Path,
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+    region: Option<oeg::CellRegion>,
+) -> Result<Vec<PathBuf>> {
+    let Some(region) = region.or_else(|| map.observed_region()) else {
+        return Ok(Vec::new());
+    };
+    let res = map.geometry().resolution_m();
+    let mut files = Vec::new();
+    let layers = [
+        (
+            "occupancy.png",
+            LayerKind::OccupancyProbability,
+            "Occupancy probability",
+            "P(occupied)",
+            Colormap::GreysReversed,
+            Some((0.0, 1.0)),
+        ),
+        (
+            "elevation.png",
+            LayerKind::ElevationM,
+            "Elevation mean",
+            "elevation [m]",
+            Colormap::Viridis,
+            None,
+        ),
+        (
+            "variance.png",
+            LayerKind::VarianceM2,
+            "Elevation variance",
+            "variance [m^2]",
+            Colormap::Inferno,
+            None,
+        ),
+    ];
+    for (name, kind, title, label, colormap, range) in layers {
+        let layer = map.layer(kind, region)?;
+        let title = format!("{title} ({res} m cells)");
+        let path = out_dir.join(name);
+        write_bytes(
+            &path,
+            &scalar_figure(&layer, &title, label, colormap, range).to_png(),
+        )?;
+        files.push(path);
+    }
+    let classes = map.traversability_layer(region, profile, rule)?;
+    let title = format!("Traversability (max step {} m)", profile.max_step_m);
+    let path = out_dir.join("traversability.png");
+    write_bytes(&path, &traversability_figure(&classes, &title).to_png())?;
+    files.push(path);
+    Ok(files)
+}

@@ -1,0 +1,403 @@
+//! `oeg map`: build a map from recorded range data (OctoMap scan graphs, PCD files) and write the map, its
+//! layer images, `summary.json` and `timing.json`.
+
+pub mod demo;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use oeg::io::{graph, mapfile, pcd};
+use oeg::{Map, MapConfig, RobotProfile, Scan, SensorModel, TraversabilityRule};
+use serde::Serialize;
+
+use crate::error::{EvalError, Result};
+use crate::figures::write_layer_images;
+use crate::output::{Staged, write_bytes, write_json};
+use crate::progress::Progress;
+
+/// The kinds of input `oeg map` reads, by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputFormat {
+    /// `.graph`: OctoMap scan graph, one scan per node.
+    Graph,
+    /// `.pcd`: one point cloud, one scan.
+    Pcd,
+    /// `.oeglog`: a recorded sensor log (`oeg record`), one scan per record.
+    Log,
+}
+
+impl InputFormat {
+    /// How many times its size a file of this format takes in memory while it is mapped, at most: its bytes,
+    /// its records as read and the scans made of them (24 bytes a ray). A graph's point is 24 bytes in the file,
+    /// a log's ray 17, a binary PCD point 12 (ascii more).
+    pub fn memory_factor(self) -> u64 {
+        match self {
+            Self::Graph => 3,
+            Self::Log => 4,
+            Self::Pcd => 5,
+        }
+    }
+
+    /// The format of `path`, from its extension.
+    ///
+    /// # Errors
+    /// [`EvalError::Input`] for any other extension.
+    pub fn of(path: &Path) -> Result<Self> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("graph") => Ok(Self::Graph),
+            Some("pcd") => Ok(Self::Pcd),
+            Some("oeglog") => Ok(Self::Log),
+            _ => Err(EvalError::Input {
+                path: path.to_path_buf(),
+                message:
+                    "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd) \
+                          or a sensor log (.oeglog)"
+                        .into(),
+            }),
+        }
+    }
+}
+
+/// Everything `oeg map` needs.
+#[derive(Debug, Clone)]
+pub struct MapJob {
+    /// The input files.
+    pub inputs: Vec<PathBuf>,
+    /// Where the outputs go (created if needed).
+    pub out_dir: PathBuf,
+    /// The map's resolution and model.
+    pub config: MapConfig,
+    /// The sensor model of scan-graph scans.
+    pub graph_sensor: SensorModel,
+    /// How PCD files become scans (includes their sensor model).
+    pub pcd: pcd::PcdOptions,
+    /// Which pose sensor-log scans are placed with.
+    pub log_pose: sim::sensors::PoseSource,
+    /// The robot for the traversability layer.
+    pub profile: RobotProfile,
+    /// The traversability rule.
+    pub rule: TraversabilityRule,
+    /// Copy the input files into the output folder beside the map (the demo keeps its scans there).
+    pub keep_inputs: bool,
+}
+
+/// `summary.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
+/// inputs and settings.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MapSummary {
+    /// Number of input files.
+    pub num_inputs: u64,
+    /// Scans integrated.
+    pub num_scans: u64,
+    /// Rays integrated (hits and no-returns).
+    pub num_rays: u64,
+    /// Cell visits by rays.
+    pub num_cell_visits: u64,
+    /// Cell size.
+    pub resolution_m: f64,
+    /// Eq. 12's free-space rule.
+    pub free_space_elevation: oeg::FreeSpaceElevation,
+    /// Height threshold, if any.
+    pub max_height_m: Option<f32>,
+    /// Cells observed at least once.
+    pub num_cells_observed: u64,
+    /// Observed cells with `P > occupied_threshold`.
+    pub num_cells_occupied: u64,
+    /// Observed, not occupied.
+    pub num_cells_free: u64,
+    /// Occupied and low enough for the robot.
+    pub num_cells_traversable: u64,
+    /// Occupied and too high (or of unknown height).
+    pub num_cells_blocked: u64,
+    /// The robot's step limit used for the classes.
+    pub max_step_m: f32,
+    /// Bytes the map holds ([`Map::memory_bytes`]).
+    pub map_bytes: u64,
+    /// Bytes of the saved map file.
+    pub map_file_bytes: u64,
+    /// Observed extent: min x.
+    pub extent_min_x_m: Option<f64>,
+    /// Observed extent: min y.
+    pub extent_min_y_m: Option<f64>,
+    /// Observed extent: max x.
+    pub extent_max_x_m: Option<f64>,
+    /// Observed extent: max y.
+    pub extent_max_y_m: Option<f64>,
+}
+
+/// `timing.json`: wall times, kept apart from the summary because they vary from run to run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MapTiming {
+    /// Reading and decoding the inputs.
+    pub read_wall_time_s: f64,
+    /// Integrating every scan (the map-building time).
+    pub integrate_wall_time_s: f64,
+    /// Rays integrated per second of integration.
+    pub integrate_rays_per_s: f64,
+    /// Cell visits per second of integration.
+    pub integrate_cell_visits_per_s: f64,
+    /// Threads used for integration.
+    pub integrate_threads: u32,
+}
+
+/// What a map job produced.
+#[derive(Debug, Clone)]
+pub struct MapReport {
+    /// The summary written to `summary.json`.
+    pub summary: MapSummary,
+    /// The timing written to `timing.json`.
+    pub timing: MapTiming,
+    /// Every file written, in order.
+    pub files: Vec<PathBuf>,
+}
+
+/// Where a scan came from: its file and its place in it, for errors while it is integrated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanSource {
+    /// The input file.
+    pub file: PathBuf,
+    /// The scan's place in the file: `node 3 (id 17)`, `the cloud`, `scan 5 of sensor lidar at 1.20 s`.
+    pub place: String,
+}
+
+/// Reads every input into scans, each with its [`ScanSource`], before anything is written, so a bad input
+/// leaves no partial output.
+///
+/// # Errors
+/// The first unreadable or malformed input, named, and inputs that would not fit the memory limit.
+pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
+    let mut scans = Vec::new();
+    let source = |path: &Path, place: String| ScanSource {
+        file: path.to_path_buf(),
+        place,
+    };
+    // Every scan is held until the map is built: a few times the inputs' bytes (`InputFormat::memory_factor`).
+    // Refused before anything is read when that is over the memory limit.
+    let limit = job.config.memory_limit_bytes;
+    let formats = job
+        .inputs
+        .iter()
+        .map(|path| InputFormat::of(path))
+        .collect::<Result<Vec<_>>>()?;
+    let mut held = 0_u64;
+    for (path, format) in job.inputs.iter().zip(&formats) {
+        let meta = std::fs::metadata(path).map_err(|source| EvalError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        // A device or a pipe has no size to check (`/dev/zero` would be read until memory runs out).
+        if !meta.is_file() {
+            return Err(EvalError::Input {
+                path: path.clone(),
+                message:
+                    "is not a regular file (a folder, a device or a pipe); `oeg map` checks each input's \
+                          size against the memory limit before reading it, so save the data to a file first"
+                        .into(),
+            });
+        }
+        let bytes = meta.len();
+        let factor = format.memory_factor();
+        held = held.saturating_add(bytes.saturating_mul(factor));
+        if held > limit {
+            return Err(EvalError::Input {
+                path: path.clone(),
+                message: format!(
+                    "the inputs up to this one would take about {held} bytes in memory (this one {factor} times \
+                     its size), over the memory limit of {limit} bytes; map fewer files at once or raise \
+                     --memory-limit-mib"
+                ),
+            });
+        }
+    }
+    for (path, format) in job.inputs.iter().zip(formats) {
+        match format {
+            InputFormat::Graph => scans.extend(graph::read_graph(path)?.iter().enumerate().map(|(k, n)| {
+                (
+                    source(path, format!("node {k} (id {})", n.id)),
+                    n.to_scan(job.graph_sensor),
+                )
+            })),
+            InputFormat::Pcd => scans.push((
+                source(path, "the cloud".into()),
+                pcd::read_pcd_scan_within(path, &job.pcd, job.config.memory_limit_bytes)?,
+            )),
+            InputFormat::Log => {
+                let log = sim::log::read_log(path)?;
+                scans.extend(log.scans.iter().map(|s| {
+                    let sensor = &log.header.sensors[s.sensor_index];
+                    (
+                        source(
+                            path,
+                            format!(
+                                "scan {} of sensor {} at {:.3} s",
+                                s.scan_index, sensor.name, s.stamp_s
+                            ),
+                        ),
+                        s.to_scan(job.log_pose, sensor.map_model),
+                    )
+                }));
+            }
+        }
+    }
+    Ok(scans)
+}
+
+/// Runs the job: reads, integrates, writes `map.oeg`, the layer images, `summary.json` and `timing.json`.
+///
+/// # Errors
+/// Bad inputs or settings (before any output is written), or a failed write.
+pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
+    if job.inputs.is_empty() {
+        return Err(EvalError::Input {
+            path: PathBuf::from("(command line)"),
+            message: "no input files".into(),
+        });
+    }
+    job.profile.validate()?;
+    let staged = Staged::begin(&job.out_dir)?;
+    let mut map = Map::new(job.config)?;
+    let read_start = Instant::now();
+    let scans = read_inputs(job)?;
+    let read_wall_time_s = read_start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    for (source, scan) in &scans {
+        map.integrate(scan).map_err(|e| EvalError::Input {
+            path: source.file.clone(),
+            message: format!("{}: {e}", source.place),
+        })?;
+        progress.inc(1);
+    }
+    let integrate_wall_time_s = start.elapsed().as_secs_f64();
+    progress.finish();
+    // What the map held while integrating (its cells and the per-scan scratch) is the summary's figure; the
+    // scratch and the scans are then given back before the outputs are drawn and written, which need memory of
+    // their own (the map file's bytes, a raster of the observed region).
+    let map_bytes = map.memory_bytes();
+    map.release_scratch();
+    drop(scans);
+
+    let stage = staged.dir();
+    let mut files = Vec::new();
+    if job.keep_inputs {
+        for input in &job.inputs {
+            let name = input.file_name().unwrap_or_default();
+            let bytes = std::fs::read(input).map_err(|source| EvalError::Io {
+                path: input.clone(),
+                source,
+            })?;
+            let kept = stage.join(name);
+            write_bytes(&kept, &bytes)?;
+            files.push(kept);
+        }
+    }
+    let map_path = stage.join("map.oeg");
+    let map_file = mapfile::to_bytes(&map);
+    write_bytes(&map_path, &map_file)?;
+    let map_file_bytes = map_file.len() as u64;
+    drop(map_file);
+    files.push(map_path);
+    // The images are drawn from a raster of the observed region at the map's resolution, which counts against
+    // the memory limit with the map: an error there names the images' folder and the region's size.
+    let images = write_layer_images(&map, stage, &job.profile, job.rule, None).map_err(|e| match e {
+        EvalError::Map(e @ oeg::Error::MemoryLimit { .. }) => EvalError::Input {
+            path: job.out_dir.clone(),
+            message: format!(
+                "drawing the layer images ({}) of the map of {}: {e}",
+                map.observed_region()
+                    .map(|r| format!("{} x {} cells of the observed region", r.num_x, r.num_y))
+                    .unwrap_or_default(),
+                job.inputs
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        },
+        other => other,
+    })?;
+    files.extend(images);
+
+    let totals = map.totals();
+    let counts = map.traversability_counts(&job.profile, job.rule);
+    let extent = map.observed_region().map(|r| {
+        let (x0, y0) = map.geometry().cell_min_corner(r.min);
+        let (x1, y1) = map.geometry().cell_min_corner(r.max());
+        let res = map.geometry().resolution_m();
+        (x0, y0, x1 + res, y1 + res)
+    });
+    let summary = MapSummary {
+        num_inputs: job.inputs.len() as u64,
+        num_scans: map.num_scans(),
+        num_rays: totals.num_rays,
+        num_cell_visits: totals.num_cell_visits,
+        resolution_m: map.geometry().resolution_m(),
+        free_space_elevation: job.config.model.free_space_elevation,
+        max_height_m: job.config.model.max_height_m,
+        num_cells_observed: map.num_observed_cells(),
+        num_cells_occupied: counts.num_occupied(),
+        num_cells_free: counts.num_free,
+        num_cells_traversable: counts.num_traversable,
+        num_cells_blocked: counts.num_blocked,
+        max_step_m: job.profile.max_step_m,
+        map_bytes,
+        map_file_bytes,
+        extent_min_x_m: extent.map(|e| e.0),
+        extent_min_y_m: extent.map(|e| e.1),
+        extent_max_x_m: extent.map(|e| e.2),
+        extent_max_y_m: extent.map(|e| e.3),
+    };
+    let per_s = |n: u64| {
+        if integrate_wall_time_s > 0.0 {
+            n as f64 / integrate_wall_time_s
+        } else {
+            0.0
+        }
+    };
+    let timing = MapTiming {
+        read_wall_time_s,
+        integrate_wall_time_s,
+        integrate_rays_per_s: per_s(totals.num_rays),
+        integrate_cell_visits_per_s: per_s(totals.num_cell_visits),
+        integrate_threads: 1,
+    };
+    let summary_path = stage.join("summary.json");
+    write_json(&summary_path, &summary)?;
+    files.push(summary_path);
+    let timing_path = stage.join("timing.json");
+    write_json(&timing_path, &timing)?;
+    files.push(timing_path);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
+    Ok(MapReport {
+        summary,
+        timing,
+        files,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_come_from_the_extension() {
+        assert_eq!(
+            InputFormat::of(Path::new("a/b.graph")).expect("graph"),
+            InputFormat::Graph
+        );
+        assert_eq!(
+            InputFormat::of(Path::new("B.PCD")).expect("pcd"),
+            InputFormat::Pcd
+        );
+        let err = InputFormat::of(Path::new("scan.bt"))
+            .expect_err("unknown")
+            .to_string();
+        assert!(err.contains("scan.bt") && err.contains(".graph"), "{err}");
+    }
+}

@@ -1,0 +1,138 @@
+//! `oeg plan`: a path on a saved map (real data or a run's `map.oeg`), written as `plan.json`, `path.csv` and
+//! `plan.png`.
+
+use std::path::PathBuf;
+
+use oeg::planner::{self, PlannerOptions, UnknownCells};
+use oeg::{CellIndex, CellRegion, RobotProfile, TraversabilityRule};
+use serde::Serialize;
+
+use crate::error::{EvalError, Result};
+use crate::judge::plan_check::polyline;
+
+/// `oeg plan`: a path on a saved map (real data or a run's `map.oeg`).
+#[derive(Debug, Clone)]
+pub struct PlanJob {
+    /// The map file.
+    pub map: PathBuf,
+    /// Start, world x and y, metres.
+    pub from_xy_m: (f64, f64),
+    /// Goal, world x and y, metres.
+    pub to_xy_m: (f64, f64),
+    /// Output folder.
+    pub out_dir: PathBuf,
+    /// How the planner reads the map.
+    pub options: PlannerOptions,
+    /// The robot, for the decisions.
+    pub profile: RobotProfile,
+    /// The step rule.
+    pub rule: TraversabilityRule,
+}
+
+/// `plan.json` of `oeg plan`: one flat object.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanSummary {
+    /// Whether a path was found.
+    pub plan_found: bool,
+    /// Its length through the cell centres, metres (null when there is none).
+    pub plan_length_m: f64,
+    /// Cells of the path.
+    pub num_path_cells: u64,
+    /// Start, world x, metres.
+    pub from_x_m: f64,
+    /// Start, world y, metres.
+    pub from_y_m: f64,
+    /// Goal, world x, metres.
+    pub to_x_m: f64,
+    /// Goal, world y, metres.
+    pub to_y_m: f64,
+    /// The planner's inflation radius, metres.
+    pub inflation_radius_m: f64,
+    /// The planner's rule for unknown cells.
+    pub unknown: UnknownCells,
+    /// The robot's step limit, metres.
+    pub max_step_m: f32,
+}
+
+/// Plans on a saved map and writes `plan.json`, `path.csv` (one row per path cell: `step,x_m,y_m`) and
+/// `plan.png` (the traversability classes with the path, the start and the goal) into the output folder. The
+/// planning region is the map's observed region, grown to hold the start and the goal.
+///
+/// # Errors
+/// The map cannot be read, a point is not finite, the options are invalid, or a write fails.
+pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
+    let staged = crate::output::Staged::begin(&job.out_dir)?;
+    let map = oeg::io::mapfile::load_map(&job.map)?;
+    let geometry = *map.geometry();
+    let point_error = |what: &str, (x, y): (f64, f64)| EvalError::Input {
+        path: job.map.clone(),
+        message: format!("the {what} ({x}, {y}) m is not a finite point on the map's grid"),
+    };
+    let start = geometry
+        .cell_of(job.from_xy_m.0, job.from_xy_m.1)
+        .ok_or_else(|| point_error("start", job.from_xy_m))?;
+    let goal = geometry
+        .cell_of(job.to_xy_m.0, job.to_xy_m.1)
+        .ok_or_else(|| point_error("goal", job.to_xy_m))?;
+    let ends = CellRegion::from_corners(
+        CellIndex::new(start.i.min(goal.i), start.j.min(goal.j)),
+        CellIndex::new(start.i.max(goal.i), start.j.max(goal.j)),
+    )
+    .ok_or_else(|| point_error("start", job.from_xy_m))?;
+    let region = map.observed_region().map_or(ends, |r| r.union(&ends));
+    let classes = map.traversability_layer(region, &job.profile, job.rule)?;
+    let plan = planner::plan(
+        &region,
+        geometry.resolution_m(),
+        &classes.values,
+        start,
+        goal,
+        &job.options,
+    )
+    .map_err(|e| EvalError::Input {
+        path: job.map.clone(),
+        message: format!("planner: {e}"),
+    })?;
+    let summary = PlanSummary {
+        plan_found: plan.is_some(),
+        plan_length_m: plan.as_ref().map_or(f64::NAN, |p| p.length_m),
+        num_path_cells: plan.as_ref().map_or(0, |p| p.cells.len() as u64),
+        from_x_m: job.from_xy_m.0,
+        from_y_m: job.from_xy_m.1,
+        to_x_m: job.to_xy_m.0,
+        to_y_m: job.to_xy_m.1,
+        inflation_radius_m: job.options.inflation_radius_m,
+        unknown: job.options.unknown,
+        max_step_m: job.profile.max_step_m,
+    };
+    let mut files = Vec::new();
+    let path_csv = staged.dir().join("path.csv");
+    crate::output::write_csv(
+        &path_csv,
+        &["step", "x_m", "y_m"],
+        plan.iter()
+            .flat_map(|p| polyline(p, &geometry))
+            .enumerate()
+            .map(|(step, (x, y))| (step, x, y)),
+    )?;
+    files.push(path_csv);
+    let title = match &plan {
+        Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
+        None => "No path on the map".to_string(),
+    };
+    let mut fig = crate::figures::traversability_figure(&classes, &title);
+    if let Some(p) = &plan {
+        fig.polyline(&polyline(p, &geometry), crate::figures::PLAN);
+    }
+    fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::figures::DRIVE);
+    fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::figures::PLAN);
+    let png = staged.dir().join("plan.png");
+    crate::output::write_bytes(&png, &fig.to_png())?;
+    files.push(png);
+    let json = staged.dir().join("plan.json");
+    crate::output::write_json(&json, &summary)?;
+    files.push(json);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
+    Ok((summary, files))
+}

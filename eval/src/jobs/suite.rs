@@ -1,0 +1,258 @@
+//! `oeg suite`: run many scenarios, print a table, write `suite.csv` and `suite.json`, and fail if any
+//! scenario fails its expectations. Several scenarios run at once (`jobs`): a run's ray casts and truth use
+//! every thread, but its map integration is one thread, so a second scenario fills the idle cores. A scenario's
+//! results do not depend on it (the same bytes on any thread count).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::{EvalError, Result};
+use crate::output::{CsvRow, Staged, write_json, write_table};
+use crate::pipeline::{RunOptions, run_scenario};
+use crate::progress::Progress;
+
+/// One row of the suite's table (`suite.csv`, `suite.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SuiteRow {
+    /// Scenario name (or the file, if it could not be read).
+    pub scenario: String,
+    /// The scenario file.
+    pub file: String,
+    /// `pass`, `fail` (expectations) or `error` (the run could not complete).
+    pub status: String,
+    /// Coverage of the map region. The metrics are empty for a row with status `error`: the run measured
+    /// nothing (an empty CSV field, `null` in JSON).
+    pub coverage: Option<f64>,
+    /// Elevation RMSE, metres.
+    pub elevation_rmse_m: Option<f64>,
+    /// Unsafe step cells.
+    pub unsafe_step_cells: Option<u64>,
+    /// Over-cautious step cells.
+    pub overcautious_step_cells: Option<u64>,
+    /// Unsafe clearance cells.
+    pub unsafe_clearance_cells: Option<u64>,
+    /// Over-cautious clearance cells.
+    pub overcautious_clearance_cells: Option<u64>,
+    /// The planner check: the map's path length over the truth's (1 = no detour; empty when the map or the
+    /// truth has no path, or the run failed).
+    pub plan_length_ratio: Option<f64>,
+    /// Cells of the map's path near a true obstacle.
+    pub plan_unsafe_cells: Option<u64>,
+    /// Wall time of the run, seconds.
+    pub wall_time_s: f64,
+    /// Failed expectations, or the error, `; `-separated.
+    pub problems: String,
+}
+
+impl CsvRow for SuiteRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "scenario",
+        "file",
+        "status",
+        "coverage",
+        "elevation_rmse_m",
+        "unsafe_step_cells",
+        "overcautious_step_cells",
+        "unsafe_clearance_cells",
+        "overcautious_clearance_cells",
+        "plan_length_ratio",
+        "plan_unsafe_cells",
+        "wall_time_s",
+        "problems",
+    ];
+}
+
+/// The scenario files named by `paths`: files as given, folders' `*.toml` files sorted by name. A file named
+/// twice (by the same path or another, or through a folder) runs once, where it was first named.
+///
+/// # Errors
+/// A path that does not exist or a folder that cannot be read, and two different files with the same name
+/// (their outputs would share `<out>/<name>/`).
+pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let mut files: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|source| EvalError::Io {
+                    path: p.clone(),
+                    source,
+                })?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| f.extension().is_some_and(|e| e == "toml"))
+                .collect();
+            files.sort();
+            out.extend(files);
+        } else if p.is_file() {
+            out.push(p.clone());
+        } else {
+            return Err(EvalError::Input {
+                path: p.clone(),
+                message: "no such scenario file or folder".into(),
+            });
+        }
+    }
+    if out.is_empty() {
+        return Err(EvalError::Input {
+            path: PathBuf::from("(command line)"),
+            message: "no scenario files found".into(),
+        });
+    }
+    // Each file once, as first named, with its canonical path.
+    let mut unique: Vec<(PathBuf, PathBuf)> = Vec::new();
+    for file in out {
+        let real = std::fs::canonicalize(&file).map_err(|source| EvalError::Io {
+            path: file.clone(),
+            source,
+        })?;
+        if unique.iter().any(|(r, _)| *r == real) {
+            continue;
+        }
+        if let Some((_, first)) = unique.iter().find(|(_, f)| f.file_stem() == file.file_stem()) {
+            return Err(EvalError::Input {
+                path: file.clone(),
+                message: format!(
+                    "has the same name as {}, and each scenario's results go to <out>/{}/: rename one",
+                    first.display(),
+                    file.file_stem().unwrap_or_default().to_string_lossy()
+                ),
+            });
+        }
+        unique.push((real, file));
+    }
+    Ok(unique.into_iter().map(|(_, file)| file).collect())
+}
+
+/// Runs every scenario into `out_dir/<name>/`, up to `jobs` at once on a pool of `jobs` threads (1: one
+/// after another on the current threads), and writes `suite.csv` and `suite.json` into `out_dir`, rows in the
+/// order of the files.
+///
+/// # Errors
+/// Bad paths, a thread pool that cannot start, or a failed write; a scenario that fails or errors is a row,
+/// not an error.
+pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usize) -> Result<Vec<SuiteRow>> {
+    use rayon::prelude::*;
+    let files = expand(paths)?;
+    let staged = Staged::begin(out_dir)?;
+    let stage = staged.dir();
+    let rows: Vec<SuiteRow> = if jobs <= 1 {
+        files.iter().map(|f| run_one(f, stage, overrides)).collect()
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(jobs)
+            .build()
+            .map_err(|e| EvalError::Input {
+                path: PathBuf::from("(command line)"),
+                message: format!("cannot start {jobs} threads for --jobs: {e}"),
+            })?;
+        pool.install(|| {
+            files
+                .par_iter()
+                .with_max_len(1)
+                .map(|f| run_one(f, stage, overrides))
+                .collect()
+        })
+    };
+    write_table(&stage.join("suite.csv"), &rows)?;
+    write_json(&stage.join("suite.json"), &rows)?;
+    staged.commit()?;
+    Ok(rows)
+}
+
+/// Runs one scenario of the suite into `out_dir/<file stem>/` and prints its table line as it finishes.
+fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
+    let start = Instant::now();
+    let stem = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let options = RunOptions {
+        scenario: file.to_path_buf(),
+        out_dir: Some(out_dir.join(&stem)),
+        seed: None,
+        overrides: overrides.to_vec(),
+        compare: None,
+    };
+    let row = match run_scenario(&options, &Progress::hidden()) {
+        Ok(r) => SuiteRow {
+            scenario: r.metrics.scenario.clone(),
+            file: file.display().to_string(),
+            status: if r.failed.is_empty() { "pass" } else { "fail" }.into(),
+            coverage: Some(r.metrics.coverage),
+            elevation_rmse_m: Some(r.metrics.elevation_rmse_m),
+            unsafe_step_cells: Some(r.metrics.unsafe_step_cells),
+            overcautious_step_cells: Some(r.metrics.overcautious_step_cells),
+            unsafe_clearance_cells: Some(r.metrics.unsafe_clearance_cells),
+            overcautious_clearance_cells: Some(r.metrics.overcautious_clearance_cells),
+            plan_length_ratio: Some(r.metrics.plan_length_ratio).filter(|v| v.is_finite()),
+            plan_unsafe_cells: Some(r.metrics.plan_unsafe_cells),
+            wall_time_s: start.elapsed().as_secs_f64(),
+            problems: r
+                .failed
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join("; "),
+        },
+        Err(e) => SuiteRow {
+            scenario: stem,
+            file: file.display().to_string(),
+            status: "error".into(),
+            coverage: None,
+            elevation_rmse_m: None,
+            unsafe_step_cells: None,
+            overcautious_step_cells: None,
+            unsafe_clearance_cells: None,
+            overcautious_clearance_cells: None,
+            plan_length_ratio: None,
+            plan_unsafe_cells: None,
+            wall_time_s: start.elapsed().as_secs_f64(),
+            problems: e.to_string(),
+        },
+    };
+    eprintln!("{}", table_line(&row));
+    row
+}
+
+/// The table's header.
+pub fn table_header() -> String {
+    format!(
+        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8}",
+        "scenario",
+        "status",
+        "coverage",
+        "rmse [m]",
+        "unsafe",
+        "cautious",
+        "unsafe-c",
+        "caut.-c",
+        "path",
+        "time [s]"
+    )
+}
+
+/// One row of the table; `-` where a failed run measured nothing.
+pub fn table_line(r: &SuiteRow) -> String {
+    let real = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v:.3}"));
+    let count = |v: Option<u64>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+    let path = if r.status == "error" {
+        "-".to_string()
+    } else {
+        r.plan_length_ratio
+            .map_or_else(|| "none".to_string(), |v| format!("{v:.2}"))
+    };
+    format!(
+        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8.1}",
+        r.scenario,
+        r.status,
+        real(r.coverage),
+        real(r.elevation_rmse_m),
+        count(r.unsafe_step_cells),
+        count(r.overcautious_step_cells),
+        count(r.unsafe_clearance_cells),
+        count(r.overcautious_clearance_cells),
+        path,
+        r.wall_time_s
+    )
+}

@@ -1,0 +1,451 @@
+//! `oeg sweep report`: `summary.csv` (each metric's mean and 95 % interval per axis value and line) and plots
+//! (each metric against each numeric axis, one line per preset or categorical value; the psychometric curves
+//! of the obstacle decisions).
+//!
+//! Intervals: Student's t over the runs (replicates) for means of counts and errors; Wilson's score interval
+//! for rates (`plan_found`, the pooled obstacle decision error of the psychometric curves). Where the runs of
+//! one point also differ in another numeric axis, the point pools them (a marginal mean).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value as Json;
+
+use super::folder::SweepFolder;
+use super::stats::{Summary, mean_interval, rate_interval};
+use crate::error::{EvalError, Result};
+use crate::figures::chart::{Chart, Point, Series};
+
+/// The metrics summarized: `(column, label with units, is a rate)`.
+pub const METRICS: [(&str, &str, bool); 10] = [
+    ("unsafe_step_cells", "unsafe step cells", false),
+    ("unsafe_clearance_cells", "unsafe clearance cells", false),
+    ("overcautious_step_cells", "over-cautious step cells", false),
+    (
+        "overcautious_clearance_cells",
+        "over-cautious clearance cells",
+        false,
+    ),
+    ("plan_unsafe_cells", "unsafe cells on the planned path", false),
+    ("plan_found", "rate of runs with a path found", true),
+    ("elevation_rmse_m", "elevation RMSE [m]", false),
+    (
+        "elevation_within_2sigma",
+        "fraction of cells within 2 sigma",
+        false,
+    ),
+    (
+        "obstacle_decision_error_rate",
+        "per-obstacle decision error rate",
+        false,
+    ),
+    ("coverage", "coverage of the region", false),
+];
+
+/// One row of `summary.csv`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SummaryRow {
+    /// The axis along which the point lies (`all` without axes).
+    pub axis: String,
+    /// The axis value.
+    pub value: String,
+    /// The line: the values of the categorical axes (presets, scenarios), or `all`.
+    pub line: String,
+    /// The metric.
+    pub metric: String,
+    /// `student_t` or `wilson`.
+    pub interval: &'static str,
+    /// Runs (or obstacles) in the point.
+    pub n: usize,
+    /// Mean, or rate.
+    pub mean: Option<f64>,
+    /// Sample standard deviation.
+    pub std: Option<f64>,
+    /// Lower end of the 95 % interval.
+    pub ci95_low: Option<f64>,
+    /// Upper end.
+    pub ci95_high: Option<f64>,
+}
+
+impl crate::output::CsvRow for SummaryRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "axis",
+        "value",
+        "line",
+        "metric",
+        "interval",
+        "n",
+        "mean",
+        "std",
+        "ci95_low",
+        "ci95_high",
+    ];
+}
+
+struct Axis {
+    key: String,
+    numeric: bool,
+    values: Vec<Json>,
+}
+
+fn read_rows(path: &Path) -> Result<Vec<Json>> {
+    let bytes = oeg::io::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
+    let text = String::from_utf8_lossy(&bytes);
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(k, l)| {
+            serde_json::from_str(l).map_err(|e| EvalError::Input {
+                path: path.to_path_buf(),
+                message: format!("line {}: not a row: {e}", k + 1),
+            })
+        })
+        .collect()
+}
+
+fn read_obstacles(path: &Path) -> Result<Vec<BTreeMap<String, String>>> {
+    let bytes = oeg::io::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
+    let mut r = csv::Reader::from_reader(bytes.as_slice());
+    r.deserialize()
+        .map(|row| {
+            row.map_err(|e| EvalError::Input {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })
+        })
+        .collect()
+}
+
+/// A cell as text: strings bare, everything else as JSON.
+fn text(v: &Json) -> String {
+    match v {
+        Json::String(s) => s.clone(),
+        Json::Null => String::new(),
+        other => other.to_string(),
+    }
+}
+
+fn number(v: &Json) -> f64 {
+    match v {
+        Json::Number(n) => n.as_f64().unwrap_or(f64::NAN),
+        Json::Bool(b) => f64::from(u8::from(*b)),
+        Json::String(s) => s.parse().unwrap_or(f64::NAN),
+        _ => f64::NAN,
+    }
+}
+
+/// What a report covers and wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportSummary {
+    /// Runs of the plan with a row (finished, `ok` or `error`).
+    pub num_covered: usize,
+    /// Runs in the plan.
+    pub num_planned: usize,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+/// Checks the rows against the plan: every row a run of the plan, once. Returns how many runs they cover.
+fn check_coverage(dir: &Path, plan: &Json, rows: &[Json]) -> Result<usize> {
+    let ids = super::merge::plan_ids(plan);
+    let plan_path = dir.join("plan.json");
+    if ids.is_empty() {
+        return Err(EvalError::Input {
+            path: plan_path,
+            message: "the plan lists no runs; expected the plan.json of `oeg sweep run` or `oeg sweep merge`"
+                .into(),
+        });
+    }
+    let planned: std::collections::BTreeSet<&str> = ids.iter().map(String::as_str).collect();
+    let mut seen = std::collections::BTreeSet::new();
+    let rows_path = dir.join("runs.jsonl");
+    for (k, row) in rows.iter().enumerate() {
+        let at = |message: String| EvalError::Input {
+            path: rows_path.clone(),
+            message: format!("row {}: {message}", k + 1),
+        };
+        let id = row["id"]
+            .as_str()
+            .ok_or_else(|| at("expected a row of `oeg sweep` with its run `id`".into()))?;
+        if !planned.contains(id) {
+            return Err(at(format!(
+                "run {id} is not in {} (the folder mixes two plans); run the sweep again into a new folder",
+                plan_path.display()
+            )));
+        }
+        if !seen.insert(id) {
+            return Err(at(format!("run {id} appears twice")));
+        }
+    }
+    Ok(seen.len())
+}
+
+/// Writes `summary.csv` and the plots of a sweep's output folder (from `oeg sweep run` or `oeg sweep merge`).
+/// A folder whose rows do not cover the whole plan (a shard, an unfinished run) is refused unless `partial`;
+/// then every plot's title says which part of the plan it shows.
+///
+/// # Errors
+/// Not a sweep's folder ([`SweepFolder::open`]), missing or malformed `plan.json`, `runs.jsonl` or
+/// `obstacles.csv`, a plan with no runs, rows of another plan, an incomplete study without `partial`, or a
+/// failed write.
+pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
+    let folder = SweepFolder::open(dir)?;
+    for file in ["plan.json", "runs.jsonl", "obstacles.csv"] {
+        folder.check(&dir.join(file))?;
+    }
+    let plan = super::rows::read_plan(dir)?;
+    let rows: Vec<Json> = read_rows(&dir.join("runs.jsonl"))?;
+    let num_planned = super::merge::plan_ids(&plan).len();
+    let num_covered = check_coverage(dir, &plan, &rows)?;
+    if num_covered < num_planned && !partial {
+        return Err(EvalError::Input {
+            path: dir.to_path_buf(),
+            message: format!(
+                "covers {num_covered} of the plan's {num_planned} runs: finish it (`oeg sweep run` again with the \
+                 same file and --out), merge every shard (`oeg sweep merge`), or give --partial to summarise the \
+                 finished runs as a partial study"
+            ),
+        });
+    }
+    let obstacles = read_obstacles(&dir.join("obstacles.csv"))?;
+    let mut sweep_name = plan["sweep"].as_str().unwrap_or("sweep").to_string();
+    if num_covered < num_planned {
+        sweep_name = format!("{sweep_name} (partial: {num_covered} of {num_planned} runs)");
+    }
+    let mut axes: Vec<Axis> = plan["axes"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|x| Axis {
+                    key: x["key"].as_str().unwrap_or_default().to_string(),
+                    numeric: x["numeric"].as_bool().unwrap_or(false),
+                    values: x["values"].as_array().cloned().unwrap_or_default(),
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    // Several base scenarios are a categorical axis of their own.
+    let mut scenarios: Vec<Json> = rows.iter().map(|r| r["scenario"].clone()).collect();
+    scenarios.dedup();
+    scenarios.sort_by_key(text);
+    scenarios.dedup();
+    if scenarios.len() > 1 {
+        axes.push(Axis {
+            key: "scenario".into(),
+            numeric: false,
+            values: scenarios,
+        });
+    }
+    let ok: Vec<&Json> = rows.iter().filter(|r| r["status"] == "ok").collect();
+    let categorical: Vec<&Axis> = axes.iter().filter(|a| !a.numeric).collect();
+    let line_of = |get: &dyn Fn(&str) -> String, except: &str| -> String {
+        let parts: Vec<String> = categorical
+            .iter()
+            .filter(|a| a.key != except)
+            .map(|a| format!("{}={}", a.key, get(&a.key)))
+            .collect();
+        if parts.is_empty() {
+            "all".into()
+        } else {
+            parts.join(", ")
+        }
+    };
+    let mut summary = Vec::new();
+    let mut files = Vec::new();
+    let plots = dir.join("plots");
+    folder.create_dir(&plots)?;
+    let points_along = |axis: Option<&Axis>| -> BTreeMap<(String, String), Vec<&Json>> {
+        let mut by: BTreeMap<(String, String), Vec<&Json>> = BTreeMap::new();
+        for r in &ok {
+            let value = axis.map_or_else(|| "all".to_string(), |a| text(&r[&a.key]));
+            let line = line_of(&|k| text(&r[k]), axis.map_or("", |a| a.key.as_str()));
+            by.entry((line, value)).or_default().push(r);
+        }
+        by
+    };
+    let axis_list: Vec<Option<&Axis>> = if axes.is_empty() {
+        vec![None]
+    } else {
+        axes.iter().map(Some).collect()
+    };
+    for axis in axis_list {
+        let groups = points_along(axis);
+        for (metric, label, is_rate) in METRICS {
+            let mut lines: BTreeMap<String, Vec<Point>> = BTreeMap::new();
+            for ((line, value), runs) in &groups {
+                let s = summarize(runs, metric, is_rate);
+                summary.push(SummaryRow {
+                    axis: axis.map_or_else(|| "all".into(), |a| a.key.clone()),
+                    value: value.clone(),
+                    line: line.clone(),
+                    metric: metric.into(),
+                    interval: if is_rate { "wilson" } else { "student_t" },
+                    n: s.n,
+                    mean: finite(s.mean),
+                    std: finite(s.std),
+                    ci95_low: finite(s.low),
+                    ci95_high: finite(s.high),
+                });
+                if let Some(a) = axis.filter(|a| a.numeric) {
+                    let x = a
+                        .values
+                        .iter()
+                        .find(|v| text(v) == *value)
+                        .map_or(f64::NAN, number);
+                    lines.entry(line.clone()).or_default().push(Point {
+                        x,
+                        y: s.mean,
+                        low: s.low,
+                        high: s.high,
+                    });
+                }
+            }
+            if let Some(a) = axis.filter(|a| a.numeric) {
+                let series = lines
+                    .into_iter()
+                    .map(|(label, mut points)| {
+                        points.sort_by(|p, q| p.x.total_cmp(&q.x));
+                        Series { label, points }
+                    })
+                    .collect();
+                let chart = Chart {
+                    title: format!("{sweep_name}: {label}"),
+                    x_label: with_unit(&a.key),
+                    y_label: label.into(),
+                    series,
+                    note: if is_rate {
+                        "band: 95 % Wilson interval".into()
+                    } else {
+                        "band: 95 % t interval over runs".into()
+                    },
+                };
+                let path = plots.join(format!("{metric}_vs_{}.png", file_safe(&a.key)));
+                folder.write_bytes(&path, &chart.to_png())?;
+                files.push(path);
+            }
+        }
+    }
+    for (decides, threshold, bin_m) in [
+        ("step", "height - max step", 0.005),
+        ("clearance", "clearance - robot height", 0.01),
+    ] {
+        let chosen: Vec<&BTreeMap<String, String>> = obstacles
+            .iter()
+            .filter(|o| {
+                o.get("decides").is_some_and(|d| d == decides)
+                    && o.get("decision").is_some_and(|d| d != "unseen")
+            })
+            .collect();
+        if chosen.is_empty() {
+            continue;
+        }
+        let mut lines: BTreeMap<String, BTreeMap<i64, (usize, usize)>> = BTreeMap::new();
+        for o in &chosen {
+            let d: f64 = o
+                .get("threshold_distance_m")
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(f64::NAN);
+            if !d.is_finite() {
+                continue;
+            }
+            let line = line_of(&|k| o.get(k).cloned().unwrap_or_default(), "");
+            let bin = (d / bin_m).round() as i64;
+            let e = lines.entry(line).or_default().entry(bin).or_default();
+            e.0 += usize::from(o.get("decision").is_some_and(|v| v != "right"));
+            e.1 += 1;
+        }
+        let mut series = Vec::new();
+        for (line, bins) in lines {
+            let mut points = Vec::new();
+            for (bin, (wrong, n)) in bins {
+                let s = rate_interval(wrong, n);
+                let x_cm = bin as f64 * bin_m * 100.0;
+                summary.push(SummaryRow {
+                    axis: format!("{decides}_threshold_distance_cm"),
+                    value: format!("{x_cm:.1}"),
+                    line: line.clone(),
+                    metric: "obstacle_decision_error".into(),
+                    interval: "wilson",
+                    n,
+                    mean: finite(s.mean),
+                    std: finite(s.std),
+                    ci95_low: finite(s.low),
+                    ci95_high: finite(s.high),
+                });
+                points.push(Point {
+                    x: x_cm,
+                    y: s.mean,
+                    low: s.low,
+                    high: s.high,
+                });
+            }
+            series.push(Series { label: line, points });
+        }
+        let chart = Chart {
+            title: format!("{sweep_name}: {decides} decisions"),
+            x_label: format!("{threshold} [cm] (bins of {:.1} cm)", bin_m * 100.0),
+            y_label: "decision error rate".into(),
+            series,
+            note: "band: 95 % Wilson interval".into(),
+        };
+        let path = plots.join(format!("psychometric_{decides}.png"));
+        folder.write_bytes(&path, &chart.to_png())?;
+        files.push(path);
+    }
+    let path = dir.join("summary.csv");
+    folder.write_table(&path, &summary)?;
+    files.insert(0, path);
+    Ok(ReportSummary {
+        num_covered,
+        num_planned,
+        files,
+    })
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+fn summarize(runs: &[&Json], metric: &str, is_rate: bool) -> Summary {
+    let values: Vec<f64> = runs.iter().map(|r| number(&r[metric])).collect();
+    if is_rate {
+        let known: Vec<f64> = values.into_iter().filter(|v| v.is_finite()).collect();
+        let hits = known.iter().filter(|v| **v > 0.5).count();
+        rate_interval(hits, known.len())
+    } else {
+        mean_interval(&values)
+    }
+}
+
+/// An axis label with the unit its key's suffix names (`..._m` metres, `..._px` pixels, ...).
+fn with_unit(key: &str) -> String {
+    const UNITS: [(&str, &str); 9] = [
+        ("_m_per_sqrt_m", "m per sqrt(m)"),
+        ("_deg_per_sqrt_m", "deg per sqrt(m)"),
+        ("_m_s", "m/s"),
+        ("_s", "s"),
+        ("_m2", "m^2"),
+        ("_px", "px"),
+        ("_deg", "deg"),
+        ("_hz", "Hz"),
+        ("_m", "m"),
+    ];
+    UNITS
+        .iter()
+        .find(|(suffix, _)| key.ends_with(suffix))
+        .map_or_else(|| key.to_string(), |(_, unit)| format!("{key} [{unit}]"))
+}
+
+/// A key as a file name part: `sensors.*.noise.range_sigma_m` -> `sensors_all_noise_range_sigma_m`.
+fn file_safe(key: &str) -> String {
+    key.replace('*', "all")
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

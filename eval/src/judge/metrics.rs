@@ -1,0 +1,476 @@
+//! Metrics of a map against the truth (`docs/metrics.md` defines every key), and the check of a scenario's
+//! expectations. Pure functions of the map and the truth raster.
+
+use std::collections::BTreeMap;
+
+use oeg::Map;
+use serde::Serialize;
+use sim::truth::TruthRaster;
+
+use crate::judge::verdict::Verdicts;
+
+/// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
+/// scenario and seed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Metrics {
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Cells in the scenario's map region.
+    pub num_cells: u64,
+    /// Region cells the map observed.
+    pub num_observed_cells: u64,
+    /// `num_observed_cells / num_cells`.
+    pub coverage: f64,
+    /// Observed region cells with an elevation estimate and a true elevation: the elevation metrics' cells.
+    pub num_elevation_cells: u64,
+    /// Root mean square of `mu - true elevation`, metres.
+    pub elevation_rmse_m: f64,
+    /// Mean absolute error, metres.
+    pub elevation_mae_m: f64,
+    /// Mean error (positive: the map is too high), metres.
+    pub elevation_bias_m: f64,
+    /// 95th percentile of the absolute error, metres.
+    pub elevation_p95_abs_err_m: f64,
+    /// Fraction of cells whose true elevation lies within 2 sigma of `mu` (0.95 for a calibrated map).
+    pub elevation_within_2sigma: f64,
+    /// Mean of `(P(occupied) - truly blocked)^2` over the scored cells.
+    pub occupancy_brier: f64,
+    /// Observed cells on the terrain: the decision metrics' cells (`oeg_eval::verdict`). The six counts below
+    /// partition them.
+    pub num_scored_cells: u64,
+    /// Truly drivable, mapped drivable (free or traversable).
+    pub right_drivable_cells: u64,
+    /// Truly blocked (a step, or a structure lower than the robot), mapped blocked.
+    pub right_blocked_cells: u64,
+    /// Truly a step, mapped drivable: where the robot would drive into something. Must be zero.
+    pub unsafe_step_cells: u64,
+    /// Under a structure lower than the robot, mapped drivable. Must be zero.
+    pub unsafe_clearance_cells: u64,
+    /// Truly drivable, mapped blocked: where the robot would refuse a drivable cell.
+    pub overcautious_step_cells: u64,
+    /// Under a structure the robot passes under, mapped blocked.
+    pub overcautious_clearance_cells: u64,
+    /// Mapped uncertain: the map says it cannot tell (a step or clearance within `kappa` sigma of its
+    /// threshold). The planner treats them as blocked by default.
+    pub uncertain_cells: u64,
+    /// `unsafe_step_cells + unsafe_clearance_cells`.
+    pub unsafe_cells: u64,
+    /// `overcautious_step_cells + overcautious_clearance_cells`.
+    pub overcautious_cells: u64,
+    /// Of the uncertain cells, those truly blocked.
+    pub uncertain_truly_blocked_cells: u64,
+    /// Scored cells under a structure (a gap higher than a step within 3 m above the ground).
+    pub num_clearance_cells: u64,
+    /// Bytes the map holds.
+    pub map_bytes: u64,
+    /// Scans integrated.
+    pub num_scans: u64,
+    /// Rays integrated.
+    pub num_rays: u64,
+    /// Whether the planner found a path on the map from its start to its goal (by default the drive's first and
+    /// last waypoints).
+    pub plan_found: bool,
+    /// Length of the map's path, metres (null when there is none).
+    pub plan_length_m: f64,
+    /// Cells of the map's path within the planner's inflation radius of a truly blocked cell: where the robot
+    /// would touch an obstacle. The number that must be zero.
+    pub plan_unsafe_cells: u64,
+    /// Whether a path exists on the truth.
+    pub truth_plan_found: bool,
+    /// Length of the truth's path, metres (null when there is none).
+    pub truth_plan_length_m: f64,
+    /// `plan_length_m / truth_plan_length_m`: the detour the map's decisions cost (1 = none; null when either
+    /// path is missing).
+    pub plan_length_ratio: f64,
+    /// Whether every expectation of the scenario holds.
+    pub expectations_passed: bool,
+    /// Number of expectations that failed.
+    pub num_expectations_failed: u64,
+}
+
+/// Computes every metric except the expectation and plan fields: the elevation against the truth, and the
+/// decisions from the verdict raster.
+pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Metrics {
+    let (mut observed, mut brier_sum, mut num_brier) = (0u64, 0.0f64, 0u64);
+    let mut errors: Vec<f64> = Vec::new();
+    let mut within = 0u64;
+    for (k, cell) in truth.region.cells().enumerate() {
+        let t = &truth.cells[k];
+        let c = map.cell(cell);
+        if !c.is_observed() {
+            continue;
+        }
+        observed += 1;
+        if t.elevation_m.is_nan() {
+            continue;
+        }
+        let p = f64::from(oeg::model::probability_from_log_odds(c.log_odds));
+        let o = if verdicts.truth[k].is_blocked() { 1.0 } else { 0.0 };
+        brier_sum += (p - o) * (p - o);
+        num_brier += 1;
+        if let Some(e) = c.elevation() {
+            let err = f64::from(e.mean_m) - f64::from(t.elevation_m);
+            errors.push(err);
+            if err.abs() <= 2.0 * f64::from(e.var_m2).sqrt() {
+                within += 1;
+            }
+        }
+    }
+    let counts = verdicts.counts();
+    let n = errors.len() as f64;
+    let (rmse, mae, bias, p95, within_2sigma) = if errors.is_empty() {
+        (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
+    } else {
+        let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        (
+            (errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+            abs.iter().sum::<f64>() / n,
+            errors.iter().sum::<f64>() / n,
+            percentile(&abs, 0.95),
+            within as f64 / n,
+        )
+    };
+    let num_cells = truth.region.num_cells();
+    Metrics {
+        scenario: scenario.to_string(),
+        seed,
+        num_cells,
+        num_observed_cells: observed,
+        coverage: if num_cells > 0 {
+            observed as f64 / num_cells as f64
+        } else {
+            0.0
+        },
+        num_elevation_cells: errors.len() as u64,
+        elevation_rmse_m: rmse,
+        elevation_mae_m: mae,
+        elevation_bias_m: bias,
+        elevation_p95_abs_err_m: p95,
+        elevation_within_2sigma: within_2sigma,
+        occupancy_brier: if num_brier > 0 {
+            brier_sum / num_brier as f64
+        } else {
+            f64::NAN
+        },
+        num_scored_cells: counts.num_scored_cells,
+        right_drivable_cells: counts.right_drivable_cells,
+        right_blocked_cells: counts.right_blocked_cells,
+        unsafe_step_cells: counts.unsafe_step_cells,
+        unsafe_clearance_cells: counts.unsafe_clearance_cells,
+        overcautious_step_cells: counts.overcautious_step_cells,
+        overcautious_clearance_cells: counts.overcautious_clearance_cells,
+        uncertain_cells: counts.uncertain_cells,
+        unsafe_cells: counts.unsafe_cells(),
+        overcautious_cells: counts.overcautious_cells(),
+        uncertain_truly_blocked_cells: counts.uncertain_truly_blocked_cells,
+        num_clearance_cells: counts.num_clearance_cells,
+        map_bytes: map.memory_bytes(),
+        num_scans: map.num_scans(),
+        num_rays: map.totals().num_rays,
+        plan_found: false,
+        plan_length_m: f64::NAN,
+        plan_unsafe_cells: 0,
+        truth_plan_found: false,
+        truth_plan_length_m: f64::NAN,
+        plan_length_ratio: f64::NAN,
+        expectations_passed: true,
+        num_expectations_failed: 0,
+    }
+}
+
+/// The value at fraction `q` of sorted values (nearest rank).
+pub fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
+
+/// The metrics as name -> number (booleans as 0 / 1), for expectations.
+pub fn numeric(metrics: &Metrics) -> BTreeMap<String, f64> {
+    let value = serde_json::to_value(metrics).unwrap_or_default();
+    let mut out = BTreeMap::new();
+    if let Some(obj) = value.as_object() {
+        for (k, v) in obj {
+            if let Some(x) = v.as_f64() {
+                out.insert(k.clone(), x);
+            } else if let Some(b) = v.as_bool() {
+                out.insert(k.clone(), f64::from(u8::from(b)));
+            } else if v.is_null() {
+                out.insert(k.clone(), f64::NAN);
+            }
+        }
+    }
+    out
+}
+
+/// One failed expectation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailedExpectation {
+    /// Metric name.
+    pub metric: String,
+    /// Measured value.
+    pub measured: f64,
+    /// What was required, as text (`>= 0.9`, `<= 0`).
+    pub required: String,
+}
+
+impl std::fmt::Display for FailedExpectation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} = {} (required {})",
+            self.metric, self.measured, self.required
+        )
+    }
+}
+
+/// The values a metric can take: fractions and flags lie in [0, 1], the elevation bias is any number, every
+/// other metric (counts, errors, lengths, ratios) is at least 0.
+pub fn metric_domain(name: &str) -> (f64, f64) {
+    match name {
+        "coverage"
+        | "elevation_within_2sigma"
+        | "occupancy_brier"
+        | "plan_found"
+        | "truth_plan_found"
+        | "expectations_passed" => (0.0, 1.0),
+        "elevation_bias_m" => (f64::NEG_INFINITY, f64::INFINITY),
+        _ => (0.0, f64::INFINITY),
+    }
+}
+
+/// What is wrong with a scenario's `[expectations]`, as `(metric, message)`: a name that is no metric, or a
+/// range the metric can never meet (outside [`metric_domain`]). `oeg validate` and `oeg run` both ask.
+pub fn expectation_problem(
+    expectations: &BTreeMap<String, sim::scenario::Expectation>,
+) -> Option<(String, String)> {
+    let known = metric_names();
+    for (name, e) in expectations {
+        if !known.contains(name) {
+            return Some((
+                name.clone(),
+                format!("`{name}` is not a metric; metrics: {}", known.join(", ")),
+            ));
+        }
+        let (lo, hi) = metric_domain(name);
+        let impossible = e.min.is_some_and(|m| m > hi) || e.max.is_some_and(|m| m < lo);
+        if impossible {
+            let range = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+            return Some((
+                name.clone(),
+                format!(
+                    "`{name}` takes values in [{lo}, {hi}], so [{}, {}] can never be met",
+                    range(e.min),
+                    range(e.max)
+                ),
+            ));
+        }
+    }
+    None
+}
+
+/// The names of every metric an expectation may name.
+pub fn metric_names() -> Vec<String> {
+    numeric(&compute_empty()).into_keys().collect()
+}
+
+fn compute_empty() -> Metrics {
+    Metrics {
+        scenario: String::new(),
+        seed: 0,
+        num_cells: 0,
+        num_observed_cells: 0,
+        coverage: 0.0,
+        num_elevation_cells: 0,
+        elevation_rmse_m: 0.0,
+        elevation_mae_m: 0.0,
+        elevation_bias_m: 0.0,
+        elevation_p95_abs_err_m: 0.0,
+        elevation_within_2sigma: 0.0,
+        occupancy_brier: 0.0,
+        num_scored_cells: 0,
+        right_drivable_cells: 0,
+        right_blocked_cells: 0,
+        unsafe_step_cells: 0,
+        unsafe_clearance_cells: 0,
+        overcautious_step_cells: 0,
+        overcautious_clearance_cells: 0,
+        uncertain_cells: 0,
+        unsafe_cells: 0,
+        overcautious_cells: 0,
+        uncertain_truly_blocked_cells: 0,
+        num_clearance_cells: 0,
+        map_bytes: 0,
+        num_scans: 0,
+        num_rays: 0,
+        plan_found: false,
+        plan_length_m: 0.0,
+        plan_unsafe_cells: 0,
+        truth_plan_found: false,
+        truth_plan_length_m: 0.0,
+        plan_length_ratio: 0.0,
+        expectations_passed: true,
+        num_expectations_failed: 0,
+    }
+}
+
+/// Checks `expectations` against the metrics, records the outcome in them, and returns the failures. A NaN
+/// metric (nothing to measure) fails any threshold.
+pub fn check_expectations(
+    metrics: &mut Metrics,
+    expectations: &BTreeMap<String, sim::scenario::Expectation>,
+) -> Vec<FailedExpectation> {
+    let values = numeric(metrics);
+    let mut failed = Vec::new();
+    for (name, e) in expectations {
+        let measured = values.get(name).copied().unwrap_or(f64::NAN);
+        // NaN compares as neither: it fails both kinds of threshold.
+        if let Some(min) = e.min
+            && measured
+                .partial_cmp(&min)
+                .is_none_or(|o| o == std::cmp::Ordering::Less)
+        {
+            failed.push(FailedExpectation {
+                metric: name.clone(),
+                measured,
+                required: format!(">= {min}"),
+            });
+        }
+        if let Some(max) = e.max
+            && measured
+                .partial_cmp(&max)
+                .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
+            failed.push(FailedExpectation {
+                metric: name.clone(),
+                measured,
+                required: format!("<= {max}"),
+            });
+        }
+    }
+    metrics.num_expectations_failed = failed.len() as u64;
+    metrics.expectations_passed = failed.is_empty();
+    failed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{truth_cell, truth_raster};
+    use nalgebra::Point3;
+    use oeg::{CellIndex, CellRegion, MapConfig, Scan, SensorModel, TraversabilityRule};
+
+    /// Four 1 m cells: ground seen at 0 (truly flat), a 0.2 m block seen at 0.2, a 0.1 m block seen at 0.01
+    /// (unsafe), and one cell never observed; the third lies under a 0.3 m structure.
+    fn tiny() -> (Map, TruthRaster) {
+        let mut map = Map::new(MapConfig::new(1.0)).expect("valid");
+        for (x, z) in [(0.5, 0.0), (1.5, 0.2), (2.5, 0.01)] {
+            for _ in 0..2 {
+                let mut scan = Scan::new(Point3::new(x, 0.5, 2.0), SensorModel::laser());
+                scan.push_hit(Point3::new(x, 0.5, z));
+                map.integrate(&scan).expect("integrated");
+            }
+        }
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(3, 0)).expect("region");
+        let truth = truth_raster(
+            region,
+            vec![
+                truth_cell(0.0, false, f32::NAN),
+                truth_cell(0.2, true, f32::NAN),
+                truth_cell(0.1, true, 0.3),
+                truth_cell(0.0, false, f32::NAN),
+            ],
+        );
+        (map, truth)
+    }
+
+    #[test]
+    fn metrics_match_hand_computed_values() {
+        let (map, truth) = tiny();
+        let verdicts = Verdicts::new(&map, &truth, TraversabilityRule::Absolute).expect("verdicts");
+        let m = compute("tiny", 3, &map, &truth, &verdicts);
+        assert_eq!((m.num_cells, m.num_observed_cells), (4, 3));
+        assert!((m.coverage - 0.75).abs() < 1e-12);
+        // Errors 0, 0, -0.09 (to f32 precision).
+        assert_eq!(m.num_elevation_cells, 3);
+        assert!(
+            (m.elevation_rmse_m - (0.0081f64 / 3.0).sqrt()).abs() < 1e-5,
+            "{}",
+            m.elevation_rmse_m
+        );
+        assert!((m.elevation_mae_m - 0.03).abs() < 1e-5);
+        assert!((m.elevation_bias_m + 0.03).abs() < 1e-5);
+        assert!((m.elevation_p95_abs_err_m - 0.09).abs() < 1e-5);
+        assert!(
+            (m.elevation_within_2sigma - 2.0 / 3.0).abs() < 1e-12,
+            "the 9 cm miss is far outside 2 sigma"
+        );
+        // The ground right and drivable, the 0.2 m block right and blocked, the 0.1 m block under a 0.3 m
+        // structure mapped drivable: unsafe, counted as clearance (the classes partition the cells).
+        assert_eq!(m.num_scored_cells, 3);
+        assert_eq!((m.right_drivable_cells, m.right_blocked_cells), (1, 1));
+        assert_eq!((m.unsafe_step_cells, m.overcautious_step_cells), (0, 0));
+        assert_eq!(
+            (m.unsafe_cells, m.overcautious_cells, m.uncertain_cells),
+            (1, 0, 0)
+        );
+        assert_eq!(
+            (
+                m.num_clearance_cells,
+                m.unsafe_clearance_cells,
+                m.overcautious_clearance_cells
+            ),
+            (1, 1, 0)
+        );
+        // Brier: every observed cell occupied with P = 0.9707 (two confident hits reach L_max = 3.5);
+        // outcomes 0, 1, 1: ((P - 0)^2 + 2 (1 - P)^2) / 3.
+        let p = f64::from(oeg::model::probability_from_log_odds(3.5));
+        assert!(
+            (m.occupancy_brier - (p * p + 2.0 * (1.0 - p) * (1.0 - p)) / 3.0).abs() < 1e-6,
+            "{}",
+            m.occupancy_brier
+        );
+        assert_eq!((m.num_scans, m.num_rays), (6, 6));
+    }
+
+    #[test]
+    fn expectations_pass_and_fail_with_the_measured_and_required_values() {
+        let (map, truth) = tiny();
+        let verdicts = Verdicts::new(&map, &truth, TraversabilityRule::Absolute).expect("verdicts");
+        let mut m = compute("tiny", 3, &map, &truth, &verdicts);
+        let mut e = BTreeMap::new();
+        e.insert(
+            "coverage".to_string(),
+            sim::scenario::Expectation {
+                min: Some(0.5),
+                max: None,
+            },
+        );
+        assert!(check_expectations(&mut m, &e).is_empty());
+        assert!(m.expectations_passed);
+        e.insert(
+            "unsafe_cells".to_string(),
+            sim::scenario::Expectation {
+                min: None,
+                max: Some(0.0),
+            },
+        );
+        let failed = check_expectations(&mut m, &e);
+        assert_eq!(failed.len(), 1);
+        assert_eq!(failed[0].to_string(), "unsafe_cells = 1 (required <= 0)");
+        assert!(!m.expectations_passed && m.num_expectations_failed == 1);
+        assert!(metric_names().contains(&"elevation_rmse_m".to_string()));
+    }
+
+    #[test]
+    fn percentiles_use_the_nearest_rank() {
+        assert_eq!(percentile(&[1.0, 2.0, 3.0, 4.0], 0.5), 2.0);
+        assert_eq!(percentile(&[1.0, 2.0, 3.0, 4.0], 0.95), 4.0);
+        assert!(percentile(&[], 0.5).is_nan());
+    }
+}

@@ -1,0 +1,73 @@
+//! A map judged against the truth: the verdict raster, and everything read from it (the metrics, the planner
+//! check, the per-obstacle decisions, the expectations).
+//!
+//! The modules depend one way: [`verdict`] <- [`metrics`], [`plan_check`], [`obstacles`], [`wrong_cells`] <-
+//! [`Evaluation`] <- the figures and the report.
+
+pub mod metrics;
+pub mod obstacles;
+pub mod plan_check;
+pub mod verdict;
+pub mod wrong_cells;
+
+use oeg::Map;
+use sim::scenario;
+use sim::sensors::ObstacleReturns;
+use sim::truth::TruthRaster;
+
+use crate::error::Result;
+use crate::judge::verdict::Verdicts;
+use metrics::{FailedExpectation, Metrics};
+
+/// A map judged against the truth: metrics (with the planner check and the expectations), per-obstacle
+/// decisions.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// The metrics.
+    pub metrics: Metrics,
+    /// Expectations that failed.
+    pub failed: Vec<FailedExpectation>,
+    /// The planner check.
+    pub plan: plan_check::PlanCheck,
+    /// Per-obstacle decisions.
+    pub obstacles: Vec<obstacles::ObstacleDecision>,
+    /// The verdict raster every one of the above was read from.
+    pub verdicts: Verdicts,
+}
+
+/// Judges `map` against `truth` under the scenario's decisions; `returns` are the readings each obstacle gave
+/// the sensors (whether it was seen at all).
+///
+/// # Errors
+/// A planner check that cannot run (a start or goal outside the region).
+pub fn evaluate(
+    s: &scenario::Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    returns: &ObstacleReturns,
+) -> Result<Evaluation> {
+    let verdicts = Verdicts::new(map, truth, s.map.traversability)?;
+    let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &verdicts);
+    let plan = plan_check::check(s, map.geometry(), &verdicts)?;
+    record_plan(&mut metrics, &plan);
+    let failed = metrics::check_expectations(&mut metrics, &s.expectations);
+    let obstacles = obstacles::decisions(s, map, truth, &verdicts, returns);
+    Ok(Evaluation {
+        metrics,
+        failed,
+        plan,
+        obstacles,
+        verdicts,
+    })
+}
+
+/// Records the planner check in the metrics (the `plan_*` keys).
+pub fn record_plan(metrics: &mut Metrics, check: &plan_check::PlanCheck) {
+    let length = |p: &Option<oeg::Plan>| p.as_ref().map_or(f64::NAN, |p| p.length_m);
+    metrics.plan_found = check.map_plan.is_some();
+    metrics.plan_length_m = length(&check.map_plan);
+    metrics.plan_unsafe_cells = check.unsafe_cells.len() as u64;
+    metrics.truth_plan_found = check.truth_plan.is_some();
+    metrics.truth_plan_length_m = length(&check.truth_plan);
+    metrics.plan_length_ratio = metrics.plan_length_m / metrics.truth_plan_length_m;
+}

@@ -1,0 +1,220 @@
+//! The planner check (`plan.csv` and the `plan_*` metrics): would a planner using this map send the robot
+//! somewhere it cannot go, or refuse a way that is open? The run plans from the drive's first waypoint to its
+//! last (or the scenario's `[planner]` start and goal) on the final map, checks every cell of that path
+//! against the truth, and plans on the truth too, for the path the robot could have had.
+
+use oeg::planner::{self, Plan, PlannerOptions, UnknownCells};
+
+use oeg::{CellIndex, CellRegion, Traversability};
+use serde::Serialize;
+use sim::scenario::Scenario;
+
+use crate::error::{EvalError, Result};
+use crate::judge::verdict::Verdicts;
+
+/// The outcome of the planner check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanCheck {
+    /// The path planned on the map, if there is one.
+    pub map_plan: Option<Plan>,
+    /// The path planned on the truth (every cell known), if there is one.
+    pub truth_plan: Option<Plan>,
+    /// Cells of the map's path whose centre lies within the inflation radius of a truly blocked cell: where
+    /// the robot following the map's path would touch an obstacle.
+    pub unsafe_cells: Vec<CellIndex>,
+}
+
+/// Plans on the map and on the truth from the drive's first waypoint to its last.
+///
+/// # Errors
+/// A planner input the scenario's validation should have caught (a waypoint outside the region, bad
+/// options), reported against the scenario.
+pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) -> Result<PlanCheck> {
+    let region = verdicts.region;
+    let res = geometry.resolution_m();
+    let missing = || EvalError::Input {
+        path: s.name.clone().into(),
+        message: "the planner needs a start and a goal inside the map region (the drive's first and last \
+                  waypoints, or [planner] start_xy_m and goal_xy_m)"
+            .into(),
+    };
+    let (from, to) = s
+        .planner
+        .ends(&s.robot.drive.waypoints_xy_m)
+        .ok_or_else(missing)?;
+    // A point on the region's max edge (valid in a scenario) lies in the cell just outside: take the edge cell.
+    let (lo, hi) = (region.min, region.max());
+    let cell_of = |[x, y]: [f64; 2]| {
+        geometry
+            .cell_of(x, y)
+            .map(|c| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
+            .ok_or_else(missing)
+    };
+    let (start, goal) = (cell_of(from)?, cell_of(to)?);
+    let planner_error = |e: oeg::Error| EvalError::Input {
+        path: s.name.clone().into(),
+        message: format!("planner: {e}"),
+    };
+    let options = s.planner.options();
+    let map_plan =
+        planner::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
+    let truly = verdicts.truth_decisions();
+    let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
+    let unsafe_cells = match &map_plan {
+        Some(p) => unsafe_path_cells(p, &region, res, &truly, &options).map_err(planner_error)?,
+        None => Vec::new(),
+    };
+    Ok(PlanCheck {
+        map_plan,
+        truth_plan,
+        unsafe_cells,
+    })
+}
+
+/// The cells of `plan` whose centre lies within the inflation radius of a blocked cell of the truth's
+/// decisions `truly` (row-major over `region`): where the robot following the path would touch an obstacle.
+///
+/// # Errors
+/// As [`planner::forbidden_mask`].
+pub fn unsafe_path_cells(
+    plan: &Plan,
+    region: &CellRegion,
+    resolution_m: f64,
+    truly: &[Traversability],
+    options: &PlannerOptions,
+) -> oeg::Result<Vec<CellIndex>> {
+    let forbidden = planner::forbidden_mask(
+        region,
+        resolution_m,
+        truly,
+        &PlannerOptions {
+            unknown: UnknownCells::Drivable,
+            ..*options
+        },
+    )?;
+    Ok(plan
+        .cells
+        .iter()
+        .filter(|c| region.offset(**c).is_some_and(|k| forbidden[k]))
+        .copied()
+        .collect())
+}
+
+impl crate::output::CsvRow for PlanRow {
+    const COLUMNS: &'static [&'static str] = &["path", "step", "x_m", "y_m", "unsafe_cell"];
+}
+
+/// One row of `plan.csv`: a cell of a planned path.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanRow {
+    /// `map` (planned on the map) or `truth` (planned on the truth).
+    pub path: &'static str,
+    /// Position along the path, 0 at the start.
+    pub step: u64,
+    /// Cell centre, world x, metres.
+    pub x_m: f64,
+    /// Cell centre, world y, metres.
+    pub y_m: f64,
+    /// Whether the cell lies within the inflation radius of a truly blocked cell (always false on the truth's
+    /// path).
+    pub unsafe_cell: bool,
+}
+
+/// The rows of `plan.csv`: the map's path, then the truth's.
+pub fn rows(check: &PlanCheck, geometry: &oeg::GridGeometry) -> Vec<PlanRow> {
+    let mut rows = Vec::new();
+    for (name, plan) in [("map", &check.map_plan), ("truth", &check.truth_plan)] {
+        let Some(plan) = plan else { continue };
+        for (step, (c, (x_m, y_m))) in plan.cells.iter().zip(polyline(plan, geometry)).enumerate() {
+            rows.push(PlanRow {
+                path: name,
+                step: step as u64,
+                x_m,
+                y_m,
+                unsafe_cell: name == "map" && check.unsafe_cells.contains(c),
+            });
+        }
+    }
+    rows
+}
+
+/// The path's cell centres as world points, rounded to the micrometre (`crate::output::round_m`): the
+/// images' polyline and the CSV files' rows.
+pub fn polyline(plan: &Plan, geometry: &oeg::GridGeometry) -> Vec<(f64, f64)> {
+    plan.cells
+        .iter()
+        .map(|c| {
+            let (x, y) = geometry.cell_center(*c);
+            (crate::output::round_m(x), crate::output::round_m(y))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{truth_cell, truth_raster};
+    use oeg::{Map, MapConfig, RobotProfile, TraversabilityRule};
+
+    #[test]
+    fn a_path_through_a_wall_the_map_missed_is_unsafe_and_the_truth_goes_around() {
+        // 1 m cells, 7 x 5; the truth has a wall at x = 3 m from y = 0 to 3 m, the map (all free) misses it.
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(6, 4)).expect("region");
+        let truth = truth_raster(
+            region,
+            region
+                .cells()
+                .map(|c| {
+                    let wall = c.i == 3 && c.j <= 3;
+                    truth_cell(if wall { 0.2 } else { 0.0 }, wall, f32::NAN)
+                })
+                .collect(),
+        );
+        let truly = Verdicts::from_classes(&truth, vec![Traversability::Unknown; truth.cells.len()])
+            .truth_decisions();
+        let options = PlannerOptions {
+            inflation_radius_m: 0.0,
+            unknown: UnknownCells::Drivable,
+            ..PlannerOptions::default()
+        };
+        let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
+        let truth_plan = planner::plan(&region, 1.0, &truly, s, g, &options)
+            .expect("valid")
+            .expect("around the wall");
+        assert!(
+            truth_plan.cells.contains(&CellIndex::new(3, 4)),
+            "over the top of the wall"
+        );
+        // The map: nothing observed; with unknown cells drivable it goes straight through the wall.
+        let map = Map::new(MapConfig::new(1.0)).expect("map");
+        let mapped = map
+            .traversability_layer(region, &RobotProfile::default(), TraversabilityRule::Absolute)
+            .expect("raster")
+            .values;
+        assert!(mapped.iter().all(|t| *t == Traversability::Unknown));
+        let straight = planner::plan(&region, 1.0, &mapped, s, g, &options)
+            .expect("valid")
+            .expect("straight");
+        assert!((straight.length_m - 6.0).abs() < 1e-9);
+        let unsafe_cells = unsafe_path_cells(&straight, &region, 1.0, &truly, &options).expect("valid");
+        assert_eq!(unsafe_cells, [CellIndex::new(3, 0)]);
+        assert_eq!(
+            unsafe_path_cells(&truth_plan, &region, 1.0, &truly, &options).expect("valid"),
+            [],
+            "the truth's own path is safe"
+        );
+        let check = PlanCheck {
+            map_plan: Some(straight),
+            truth_plan: Some(truth_plan),
+            unsafe_cells,
+        };
+        let geometry = oeg::GridGeometry::new(1.0).expect("geometry");
+        let csv = String::from_utf8(crate::output::csv_table(&rows(&check, &geometry)).expect("csv"))
+            .expect("utf8");
+        let mut lines = csv.lines();
+        assert_eq!(lines.next(), Some("path,step,x_m,y_m,unsafe_cell"));
+        assert_eq!(lines.next(), Some("map,0,0.5,0.5,false"));
+        assert!(csv.contains("map,3,3.5,0.5,true\n"), "{csv}");
+        assert!(csv.lines().any(|l| l.starts_with("truth,0,")));
+    }
+}

@@ -1,0 +1,136 @@
+//! A scenario run's report, written into its (staged) output folder: the map, its layer images, the comparison
+//! images, `plan.csv`, `obstacles.csv`, `wrong_cells.csv`, `metrics.json`, and with a compared model
+//! `comparison.csv` and `decisions_comparison.png`.
+
+use std::path::{Path, PathBuf};
+
+use oeg::{GridGeometry, Map};
+use serde::Serialize;
+use sim::scenario;
+use sim::truth::TruthRaster;
+
+use crate::error::Result;
+use crate::figures::{comparison, write_layer_images};
+use crate::judge::Evaluation;
+use crate::output::{write_bytes, write_json, write_table};
+
+/// Writes one map's report into `out_dir`: the map, its layer images, the comparison images, `plan.csv`,
+/// `obstacles.csv`, `wrong_cells.csv` and `metrics.json` (last).
+///
+/// # Errors
+/// A failed write.
+pub fn write_report(
+    out_dir: &Path,
+    s: &scenario::Scenario,
+    map: &Map,
+    truth: &TruthRaster,
+    evaluation: &Evaluation,
+) -> Result<Vec<PathBuf>> {
+    let profile = truth.profile;
+    let geometry = *map.geometry();
+    let mut files = Vec::new();
+    let map_path = out_dir.join("map.oeg");
+    write_bytes(&map_path, &oeg::io::mapfile::to_bytes(map))?;
+    files.push(map_path);
+    files.extend(write_layer_images(
+        map,
+        out_dir,
+        &profile,
+        s.map.traversability,
+        Some(truth.region),
+    )?);
+    files.extend(comparison::write(out_dir, s, map, truth, evaluation)?);
+    let plan_path = out_dir.join("plan.csv");
+    write_table(
+        &plan_path,
+        &crate::judge::plan_check::rows(&evaluation.plan, &geometry),
+    )?;
+    files.push(plan_path);
+    let obstacles_path = out_dir.join("obstacles.csv");
+    write_table(&obstacles_path, &evaluation.obstacles)?;
+    files.push(obstacles_path);
+    let wrong = crate::judge::wrong_cells::wrong_cells(map, truth, &evaluation.verdicts);
+    let wrong_path = out_dir.join("wrong_cells.csv");
+    write_table(&wrong_path, &wrong)?;
+    files.push(wrong_path);
+    let metrics_path = out_dir.join("metrics.json");
+    write_json(&metrics_path, &evaluation.metrics)?;
+    files.push(metrics_path);
+    Ok(files)
+}
+
+impl crate::output::CsvRow for ComparisonRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "model",
+        "unsafe_cells",
+        "overcautious_cells",
+        "uncertain_cells",
+        "plan_found",
+        "plan_unsafe_cells",
+        "plan_length_ratio",
+        "elevation_within_2sigma",
+        "elevation_rmse_m",
+    ];
+}
+
+/// One row of `comparison.csv`: one model's decisions on the same sensor log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ComparisonRow {
+    /// The model: the preset, with the scenario's own `[map.model]` keys over it.
+    pub model: String,
+    /// Unsafe cells (step and clearance).
+    pub unsafe_cells: u64,
+    /// Over-cautious cells.
+    pub overcautious_cells: u64,
+    /// Uncertain cells.
+    pub uncertain_cells: u64,
+    /// Whether the planner found a path on the map.
+    pub plan_found: bool,
+    /// Path cells within the inflation radius of a truly blocked cell.
+    pub plan_unsafe_cells: u64,
+    /// The map's path length over the truth's (null when either is missing).
+    pub plan_length_ratio: Option<f64>,
+    /// Fraction of cells whose true elevation lies within 2 sigma.
+    pub elevation_within_2sigma: f64,
+    /// Elevation RMSE, metres.
+    pub elevation_rmse_m: f64,
+}
+
+/// `comparison.csv` and `decisions_comparison.png`: the two models' decisions side by side.
+pub fn write_comparison(
+    out_dir: &Path,
+    runs: [(&scenario::Scenario, &Evaluation); 2],
+    geometry: &GridGeometry,
+) -> Result<Vec<PathBuf>> {
+    let rows: Vec<ComparisonRow> = runs
+        .iter()
+        .map(|(s, e)| {
+            let m = &e.metrics;
+            ComparisonRow {
+                model: s.map.preset.name().to_string(),
+                unsafe_cells: m.unsafe_cells,
+                overcautious_cells: m.overcautious_cells,
+                uncertain_cells: m.uncertain_cells,
+                plan_found: m.plan_found,
+                plan_unsafe_cells: m.plan_unsafe_cells,
+                plan_length_ratio: m.plan_length_ratio.is_finite().then_some(m.plan_length_ratio),
+                elevation_within_2sigma: m.elevation_within_2sigma,
+                elevation_rmse_m: m.elevation_rmse_m,
+            }
+        })
+        .collect();
+    let csv_path = out_dir.join("comparison.csv");
+    write_table(&csv_path, &rows)?;
+    let figures: Vec<crate::figures::Figure> = runs
+        .iter()
+        .zip(&rows)
+        .map(|((s, e), r)| comparison::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model)))
+        .collect();
+    let canvases: Vec<&crate::figures::Canvas> = figures.iter().map(|f| f.canvas()).collect();
+    let png_path = out_dir.join("decisions_comparison.png");
+    write_bytes(
+        &png_path,
+        &crate::figures::Canvas::side_by_side(&canvases, 24).to_png(),
+    )?;
+    Ok(vec![csv_path, png_path])
+}

@@ -1,0 +1,320 @@
+//! One door for settings: every job that takes settings (`oeg run`, `oeg suite`, `oeg map`, `oeg plan`,
+//! `oeg sweep`) takes them as `--set key=value` ([`crate::settings::overrides`]), resolved here against one table of
+//! keys. The keys are the scenario file's (`docs/scenario-format.md`): `map.model.p_max` means the same
+//! thing in a scenario, on `oeg run --set`, on `oeg map --set` and in a sweep's axis. Jobs without a scenario
+//! take the part of the table they use:
+//!
+//! | key | `run`, `suite`, `sweep` | `map` | `plan` |
+//! |---|---|---|---|
+//! | `map.resolution_m`, `map.model.*` | yes | yes | no (the map file has them) |
+//! | `map.traversability` | yes | yes | yes |
+//! | `robot.max_step_m`, `robot.height_m` | yes | yes | yes |
+//! | `planner.inflation_radius_m`, `planner.footprint_radius_m`, `planner.unknown`, `planner.uncertain` | yes | no | yes |
+//! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose` | no | yes | no |
+//! | every other scenario key | yes | no | no |
+//!
+//! An override that makes the settings invalid is named in the error (`--set map.model.p_max=2: ...`), by
+//! [`resolve_with`], which `oeg run` and `oeg suite` use too, with the scenario check as the reader.
+
+pub mod overrides;
+
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+use toml::Table;
+
+use crate::settings::overrides::Override;
+
+/// A range-error model of rays read from files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RangeModel {
+    /// Laser scanner, 12 mm range error (SICK class).
+    Laser,
+    /// Stereo camera, 0.032 l^2 range error (the paper's Fig. 4).
+    Stereo,
+}
+
+impl RangeModel {
+    /// The map crate's sensor model.
+    pub fn model(self) -> oeg::SensorModel {
+        match self {
+            Self::Laser => oeg::SensorModel::laser(),
+            Self::Stereo => oeg::SensorModel {
+                noise: oeg::RangeNoiseModel::stereo(),
+                ..oeg::SensorModel::stereo()
+            },
+        }
+    }
+}
+
+/// `[input]` of `oeg map`: how files become scans.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InputSettings {
+    /// Range-error model of scan-graph rays (`laser`).
+    pub graph_sensor: RangeModel,
+    /// Range-error model of PCD rays (`stereo`).
+    pub pcd_sensor: RangeModel,
+    /// Frame of PCD points: `as_is`, or `optical` (x right, y down, z forward).
+    pub pcd_frame: oeg::io::pcd::PcdFrame,
+    /// NaN points of an organized PCD: `drop`, or `no_return` rays along their pixel.
+    pub pcd_invalid: oeg::io::pcd::InvalidPoints,
+    /// Pose of sensor-log scans: `estimated` or `true`.
+    pub log_pose: sim::sensors::PoseSource,
+}
+
+impl Default for InputSettings {
+    fn default() -> Self {
+        Self {
+            graph_sensor: RangeModel::Laser,
+            pcd_sensor: RangeModel::Stereo,
+            pcd_frame: oeg::io::pcd::PcdFrame::default(),
+            pcd_invalid: oeg::io::pcd::InvalidPoints::default(),
+            log_pose: sim::sensors::PoseSource::Estimated,
+        }
+    }
+}
+
+/// `[map]` of `oeg map`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapPart {
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// The named model the options start from (expanded into `model` and `traversability` before reading).
+    #[serde(default)]
+    pub preset: oeg::MapPreset,
+    /// The model.
+    #[serde(default)]
+    pub model: oeg::ModelOptions,
+    /// The step rule of the traversability image.
+    #[serde(default)]
+    pub traversability: oeg::TraversabilityRule,
+}
+
+/// Everything `oeg map` can be told.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapJobSettings {
+    /// Resolution and model.
+    pub map: MapPart,
+    /// Decision limits.
+    #[serde(default)]
+    pub robot: oeg::RobotProfile,
+    /// How files become scans.
+    #[serde(default)]
+    pub input: InputSettings,
+}
+
+/// `[map]` of `oeg plan`: only the rule (the map file holds its model).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanMapPart {
+    /// The named model whose step rule applies unless `traversability` is given.
+    pub preset: oeg::MapPreset,
+    /// The step rule.
+    pub traversability: oeg::TraversabilityRule,
+}
+
+/// Everything `oeg plan` can be told.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanJobSettings {
+    /// The step rule.
+    pub map: PlanMapPart,
+    /// Decision limits.
+    pub robot: oeg::RobotProfile,
+    /// The planner, with the scenario's `[planner]` keys.
+    pub planner: oeg::PlannerOptions,
+}
+
+/// Settings that can check themselves for sense.
+pub trait Checked: DeserializeOwned {
+    /// What makes no sense, if anything.
+    ///
+    /// # Errors
+    /// The first value that makes no sense.
+    fn check(&self) -> Result<(), String>;
+}
+
+impl Checked for MapJobSettings {
+    fn check(&self) -> Result<(), String> {
+        let r = self.map.resolution_m;
+        if !(r.is_finite() && (0.001..=100.0).contains(&r)) {
+            return Err(format!(
+                "map.resolution_m: expected a cell size in [0.001, 100] m, got {r}"
+            ));
+        }
+        self.map.model.validate().map_err(|e| e.to_string())?;
+        self.map.traversability.validate().map_err(|e| e.to_string())?;
+        self.robot.validate().map_err(|e| e.to_string())
+    }
+}
+
+impl Checked for PlanJobSettings {
+    fn check(&self) -> Result<(), String> {
+        self.planner.validate().map_err(|e| match e {
+            oeg::Error::InvalidSetting { name, message } => format!("planner.{name}: {message}"),
+            other => other.to_string(),
+        })?;
+        self.map.traversability.validate().map_err(|e| e.to_string())?;
+        self.robot.validate().map_err(|e| e.to_string())
+    }
+}
+
+fn read<T: Checked>(doc: &Table) -> Result<T, String> {
+    let mut doc = doc.clone();
+    sim::scenario::expand_map_preset(&mut doc)?;
+    let text = toml::to_string(&doc).map_err(|e| e.to_string())?;
+    let value: T = toml::from_str(&text).map_err(|e| e.message().trim().to_string())?;
+    value.check()?;
+    Ok(value)
+}
+
+/// Resolves `overrides` (`key=value` each) over `base`, in order, and reads the result with `read`. When the
+/// result does not read, the error names the first override after which it no longer does.
+///
+/// # Errors
+/// A malformed override, or one that makes the settings invalid: `--set KEY=VALUE: what is wrong`.
+pub fn resolve_with<T>(
+    base: &Table,
+    overrides: &[String],
+    read: impl Fn(&Table) -> Result<T, String>,
+) -> Result<T, String> {
+    let parsed = overrides
+        .iter()
+        .map(|t| Override::parse(t))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut doc = base.clone();
+    for o in &parsed {
+        o.apply_to(&mut doc)?;
+    }
+    let full = match read(&doc) {
+        Ok(v) => return Ok(v),
+        Err(e) => e,
+    };
+    // Keys that only make sense together (a region's two corners) are applied together above; the blame goes
+    // to the first override after which the settings no longer read.
+    let mut doc = base.clone();
+    for o in &parsed {
+        o.apply_to(&mut doc)?;
+        if let Err(e) = read(&doc) {
+            return Err(format!("--set {}: {e}", o.source));
+        }
+    }
+    Err(full)
+}
+
+/// [`resolve_with`] for settings that check themselves; the defaults are checked first.
+///
+/// # Errors
+/// As [`resolve_with`], and bad defaults (`the defaults: ...`).
+pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, String> {
+    read::<T>(base).map_err(|e| format!("the defaults: {e}"))?;
+    resolve_with(base, overrides, read::<T>)
+}
+
+/// `oeg map`'s settings: `--resolution` and the overrides.
+///
+/// # Errors
+/// A bad resolution (named as `--resolution`) or override.
+pub fn map_settings(resolution_m: f64, overrides: &[String]) -> Result<MapJobSettings, String> {
+    // The cell size has one spelling on `oeg map`: two would leave the reader guessing which one won.
+    for text in overrides {
+        let o = Override::parse(text)?;
+        if overrides::key_covers(&o.key, "map.resolution_m") {
+            return Err(format!(
+                "--set {text}: the cell size is `--resolution` on `oeg map`; give it there only"
+            ));
+        }
+    }
+    let mut map = Table::new();
+    map.insert("resolution_m".into(), toml::Value::Float(resolution_m));
+    let mut base = Table::new();
+    base.insert("map".into(), toml::Value::Table(map));
+    resolve(&base, overrides).map_err(|e| e.replace("the defaults: ", "--resolution: "))
+}
+
+/// `oeg plan`'s settings from the overrides.
+///
+/// # Errors
+/// A bad override.
+pub fn plan_settings(overrides: &[String]) -> Result<PlanJobSettings, String> {
+    resolve(&Table::new(), overrides)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map_base() -> Table {
+        toml::from_str("[map]\nresolution_m = 0.05\n").expect("toml")
+    }
+
+    #[test]
+    fn map_settings_take_the_scenario_keys() {
+        let s: MapJobSettings = resolve(
+            &map_base(),
+            &[
+                "map.model.p_max=0.7".into(),
+                "map.model.max_height_m=0.5".into(),
+                "input.pcd_frame=optical".into(),
+                "robot.max_step_m=0.05".into(),
+            ],
+        )
+        .expect("valid");
+        assert!((s.map.model.p_max - 0.7).abs() < 1e-6);
+        assert_eq!(s.map.model.max_height_m, Some(0.5));
+        assert_eq!(s.input.pcd_frame, oeg::io::pcd::PcdFrame::Optical);
+        assert!((s.robot.max_step_m - 0.05).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_bad_override_is_named() {
+        for (o, expected) in [
+            ("map.model.p_max=2", "--set map.model.p_max=2: "),
+            (
+                "map.model.p_maxx=0.7",
+                "--set map.model.p_maxx=0.7: unknown field `p_maxx`",
+            ),
+            (
+                "input.log_pose=maybe",
+                "--set input.log_pose=maybe: unknown variant `maybe`",
+            ),
+            ("map.resolution_m=0", "--set map.resolution_m=0: map.resolution_m"),
+        ] {
+            let e = resolve::<MapJobSettings>(&map_base(), &[o.into()]).expect_err(o);
+            assert!(e.starts_with(expected), "{o}: {e}");
+        }
+        let e = resolve::<PlanJobSettings>(&Table::new(), &["planner.unknown=sometimes".into()])
+            .expect_err("plan");
+        assert!(
+            e.starts_with("--set planner.unknown=sometimes: unknown variant"),
+            "{e}"
+        );
+        let e = resolve::<PlanJobSettings>(&Table::new(), &["map.model.p_max=0.7".into()]).expect_err("plan");
+        assert!(e.contains("unknown field `model`"), "{e}");
+    }
+
+    #[test]
+    fn the_documented_log_pose_spellings_read() {
+        for (o, pose) in [
+            ("input.log_pose=true", sim::sensors::PoseSource::True),
+            ("input.log_pose=\"true\"", sim::sensors::PoseSource::True),
+            ("input.log_pose=estimated", sim::sensors::PoseSource::Estimated),
+        ] {
+            let s: MapJobSettings = resolve(&map_base(), &[o.into()]).expect(o);
+            assert_eq!(s.input.log_pose, pose, "{o}");
+        }
+    }
+
+    #[test]
+    fn the_cell_size_is_given_once_on_oeg_map() {
+        for o in ["map.resolution_m=0.1", "map.*=0.1", "map={ resolution_m = 0.1 }"] {
+            let e = map_settings(0.5, &[o.into()]).expect_err(o);
+            assert!(e.contains("`--resolution`"), "{o}: {e}");
+        }
+        let s = map_settings(0.5, &["map.model.p_max=0.7".into()]).expect("other keys");
+        assert!((s.map.resolution_m - 0.5).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,88 @@
+//! `oeg map`: a map from recorded range data.
+
+use std::path::PathBuf;
+
+use oeg::MapConfig;
+use oeg::io::pcd::PcdOptions;
+use oeg_eval::jobs::map::{MapJob, MapReport};
+use oeg_eval::progress::Progress;
+
+/// `oeg map`'s arguments.
+#[derive(clap::Args, Debug)]
+pub struct MapArgs {
+    /// Input files: .graph (OctoMap scan graph), .pcd (ascii, binary or binary_compressed), .oeglog (a
+    /// sensor log of `oeg record`).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Cell size in metres (the setting map.resolution_m).
+    #[arg(long)]
+    pub resolution: f64,
+    /// Output folder (created if needed).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A setting by its scenario key (repeatable), e.g. --set map.model.max_height_m=0.5 or
+    /// --set input.pcd_frame=optical: map.model.* (every model option), map.traversability, robot.max_step_m,
+    /// robot.height_m, input.graph_sensor (laser|stereo), input.pcd_sensor (laser|stereo), input.pcd_frame
+    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true). README, "Settings".
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
+    /// Memory limit of the map in MiB.
+    #[arg(long, default_value_t = oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20)]
+    pub memory_limit_mib: u64,
+}
+
+impl MapArgs {
+    /// The job these arguments ask for, its settings resolved.
+    pub fn job(&self) -> anyhow::Result<MapJob> {
+        let settings =
+            oeg_eval::settings::map_settings(self.resolution, &self.overrides).map_err(anyhow::Error::msg)?;
+        Ok(MapJob {
+            inputs: self.inputs.clone(),
+            out_dir: self.out.clone(),
+            config: MapConfig {
+                resolution_m: settings.map.resolution_m,
+                model: settings.map.model,
+                memory_limit_bytes: self.memory_limit_mib.saturating_mul(1 << 20),
+            },
+            graph_sensor: settings.input.graph_sensor.model(),
+            pcd: PcdOptions {
+                frame: settings.input.pcd_frame,
+                invalid_points: settings.input.pcd_invalid,
+                sensor: settings.input.pcd_sensor.model(),
+            },
+            log_pose: settings.input.log_pose,
+            profile: settings.robot,
+            rule: settings.map.traversability,
+            keep_inputs: false,
+        })
+    }
+}
+
+/// One line on the map and one per file written.
+pub fn print_report(report: &MapReport) {
+    let s = &report.summary;
+    say!(
+        "mapped {} scans, {} rays at {} m: {} cells observed ({} free, {} traversable, {} blocked), {} bytes; \
+         integration {:.3} s ({:.2} M rays/s)",
+        s.num_scans,
+        s.num_rays,
+        s.resolution_m,
+        s.num_cells_observed,
+        s.num_cells_free,
+        s.num_cells_traversable,
+        s.num_cells_blocked,
+        s.map_bytes,
+        report.timing.integrate_wall_time_s,
+        report.timing.integrate_rays_per_s / 1e6
+    );
+    for f in &report.files {
+        say!("wrote {}", f.display());
+    }
+}
+
+/// Maps the inputs and says what was written.
+pub fn run(args: &MapArgs) -> anyhow::Result<()> {
+    let report = oeg_eval::jobs::map::run(&args.job()?, &Progress::new(0, "scans"))?;
+    print_report(&report);
+    Ok(())
+}

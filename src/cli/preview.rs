@@ -1,0 +1,21 @@
+//! `oeg preview`: a scenario's truth, drive and sensors, drawn before running it.
+
+use std::path::PathBuf;
+
+/// `oeg preview`'s arguments.
+#[derive(clap::Args, Debug)]
+pub struct PreviewArgs {
+    /// A scenario file (.toml).
+    scenario: PathBuf,
+    /// Output folder.
+    #[arg(long, default_value = "out/preview")]
+    out: PathBuf,
+}
+
+/// Draws the preview and names the files written.
+pub fn run(args: &PreviewArgs) -> anyhow::Result<()> {
+    for f in oeg_eval::jobs::preview::preview(&args.scenario, &args.out)? {
+        say!("wrote {}", f.display());
+    }
+    Ok(())
+}

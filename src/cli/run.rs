@@ -1,0 +1,69 @@
+//! `oeg run`: one scenario end to end.
+
+use std::path::{Path, PathBuf};
+
+use oeg_eval::jobs::run::{DEFAULT_SCENARIO, summary_lines};
+use oeg_eval::pipeline::{RunOptions, run_scenario};
+use oeg_eval::progress::Progress;
+
+/// `oeg run`'s arguments.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// A scenario file (.toml).
+    scenario: PathBuf,
+    /// Output folder [default: out/<scenario name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Replace the scenario's seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Override a scenario value by its dotted key, e.g. --set map.resolution_m=0.1 or
+    /// --set sensors.0.noise.dropout_probability=0.05 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Also map the same sensor log with this model preset (`paper`, `static` or `robust`) and write its report
+    /// into OUT/PRESET/ with comparison.csv and decisions_comparison.png side by side.
+    #[arg(long, value_name = "PRESET")]
+    compare: Option<oeg::MapPreset>,
+}
+
+impl RunArgs {
+    /// What `oeg` with no arguments runs: the default scenario, with the paper's model and the recommended one
+    /// side by side.
+    pub fn default_run() -> Self {
+        Self {
+            scenario: PathBuf::from(DEFAULT_SCENARIO),
+            out: None,
+            seed: None,
+            overrides: Vec::new(),
+            compare: Some(oeg::MapPreset::Robust),
+        }
+    }
+}
+
+/// Runs the scenario, prints its summary, fails when an expectation is not met.
+pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+    if !args.scenario.exists() && args.scenario == Path::new(DEFAULT_SCENARIO) {
+        anyhow::bail!(
+            "{DEFAULT_SCENARIO} not found: run `oeg` from the repository root, or give a scenario: oeg run FILE"
+        );
+    }
+    let options = RunOptions {
+        scenario: args.scenario.clone(),
+        out_dir: args.out.clone(),
+        seed: args.seed,
+        overrides: args.overrides.clone(),
+        compare: args.compare,
+    };
+    let report = run_scenario(&options, &Progress::new(0, "scans"))?;
+    for line in summary_lines(&report) {
+        say!("{line}");
+    }
+    if !report.failed.is_empty() {
+        for f in &report.failed {
+            eprintln!("expectation failed: {f}");
+        }
+        anyhow::bail!("{} of the scenario's expectations failed", report.failed.len());
+    }
+    Ok(())
+}
