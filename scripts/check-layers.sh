@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The architecture's layering (ARCHITECTURE.md), checked: the map crate `oeg` knows nothing of the simulation or
-# the evaluation, and Rapier's types (rapier3d, parry3d) appear in `sim` only; no job of `oeg_eval` (eval/src/jobs/) imports another.
+# the evaluation, and Rapier's types (rapier3d, parry3d) appear in `sim` only; the map crate's modules are private
+# (its API is the list of re-exports in oeg/src/lib.rs); no job of `oeg_eval` (eval/src/jobs/) imports another.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 status=0
@@ -23,6 +24,11 @@ for package in oeg-eval oeg-testbed oeg-fuzz; do
         status=1
     fi
 done
+if hits=$(grep -nE '^\s*pub mod ' oeg/src/lib.rs); then
+    echo "layering: the map crate's modules are private; re-export the items instead:" >&2
+    echo "$hits" >&2
+    status=1
+fi
 # A job is a file or folder directly under eval/src/jobs/; it may use the shared wings, never another job.
 jobs_dir=eval/src/jobs
 for entry in "$jobs_dir"/*; do
@@ -40,5 +46,5 @@ for entry in "$jobs_dir"/*; do
         fi
     done
 done
-[ "$status" -eq 0 ] && echo "layering: oeg stands alone; Rapier stays in sim; no job imports another"
+[ "$status" -eq 0 ] && echo "layering: oeg stands alone with private modules; Rapier stays in sim; no job imports another"
 exit "$status"

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use nalgebra::Point3;
-use oeg::io::graph::write_graph;
+use oeg::write_graph;
 use oeg::{Scan, SensorModel};
 
 /// `oeg map INPUT --resolution 0.05 --out OUT`.

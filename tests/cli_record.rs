@@ -86,7 +86,7 @@ fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
         None,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let replayed = oeg::io::mapfile::load_map(&out.join("map.oeg")).expect("map");
+    let replayed = oeg::load_map(&out.join("map.oeg")).expect("map");
 
     // The live run: the same simulation, integrated as it goes.
     let loaded = sim::scenario::load(&scenario).expect("valid");
@@ -128,7 +128,7 @@ fn graph_export_keeps_the_hits() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("no-return rays left out of the graph"), "{text}");
-    let scans = oeg::io::graph::read_graph_scans(&graph, oeg::SensorModel::laser()).expect("a valid graph");
+    let scans = oeg::read_graph_scans(&graph, oeg::SensorModel::laser()).expect("a valid graph");
     assert_eq!(scans.len(), 61 + 226, "3 s of a laser at 20 Hz and one at 75 Hz");
     assert!(scans.iter().all(|s| s.num_hits() == s.rays.len()));
 }

@@ -145,7 +145,7 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
     );
     assert!(plan.lines().any(|l| l.starts_with("truth,")), "{plan}");
 
-    let map = oeg::io::mapfile::load_map(&out.join("map.oeg")).expect("map");
+    let map = oeg::load_map(&out.join("map.oeg")).expect("map");
     let curb_3cm = blocked_fraction(&map, (3.3, -1.4), (3.7, -0.6));
     let curb_5cm = blocked_fraction(&map, (3.3, 0.6), (3.7, 1.4));
     let board = blocked_fraction(&map, (4.3, -1.05), (4.7, -0.45));
@@ -168,7 +168,7 @@ fn the_person_who_crossed_and_left_is_gone_from_the_map() {
         m["overcautious_step_cells"], 0,
         "cells still blocked by the person"
     );
-    let map = oeg::io::mapfile::load_map(&out.join("map.oeg")).expect("map");
+    let map = oeg::load_map(&out.join("map.oeg")).expect("map");
     // The person crossed x = 3 from y = -2 to 2 while the robot watched from 2.5 m.
     let crossing = blocked_fraction(&map, (2.7, -1.9), (3.3, 1.9));
     assert_eq!(crossing, 0.0, "the person is gone from the map");
@@ -188,7 +188,7 @@ fn the_person_who_crossed_and_left_is_gone_from_the_map() {
         !o.status.success(),
         "the scene's expectations catch the person left behind"
     );
-    let map = oeg::io::mapfile::load_map(&frozen.join("map.oeg")).expect("map");
+    let map = oeg::load_map(&frozen.join("map.oeg")).expect("map");
     let crossing = blocked_fraction(&map, (2.7, -1.9), (3.3, 1.9));
     assert!(crossing > 0.2, "{crossing}");
     let m = metrics(&frozen);

@@ -56,7 +56,7 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
     let tiny = dir.join("tiny.graph");
     let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
     scan.push_hit(Point3::new(2.0, 0.0, 0.0));
-    oeg::io::graph::write_graph(&tiny, &[scan]).expect("graph");
+    oeg::write_graph(&tiny, &[scan]).expect("graph");
     let Some(base) = baseline_kib(&tiny, &dir.join("tiny_out")) else {
         println!("skipped: `oeg map` does not run under `sh -c 'ulimit -v 4194304'` here");
         return;
@@ -71,7 +71,7 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
             scan
         })
         .collect();
-    oeg::io::graph::write_graph(&spread, &scans).expect("graph");
+    oeg::write_graph(&spread, &scans).expect("graph");
     let bound_kib = oeg::DEFAULT_MEMORY_LIMIT_BYTES / 1024;
     let limit_kib = base + bound_kib + bound_kib / 10;
     let out = dir.join("out");
@@ -93,7 +93,7 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
     let far = dir.join("far.graph");
     let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
     scan.push_hit(Point3::new(100_000.0, 0.0, 0.0));
-    oeg::io::graph::write_graph(&far, &[scan]).expect("graph");
+    oeg::write_graph(&far, &[scan]).expect("graph");
     let started = std::time::Instant::now();
     let o = map_under_ulimit(limit_kib, &far, &out);
     let stderr = String::from_utf8_lossy(&o.stderr);

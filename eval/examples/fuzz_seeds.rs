@@ -23,7 +23,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let a = f64::from(k) * 0.5;
         scan.push_hit(Point3::new(2.0 * a.cos(), 2.0 * a.sin(), 0.1 * f64::from(k % 3)));
     }
-    oeg::io::graph::write_graph(
+    oeg::write_graph(
         &dir("graph")?.join("seed_ring.graph"),
         std::slice::from_ref(&scan),
     )?;
@@ -32,26 +32,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|r| Point3::from(r.offset_in_world))
         .collect();
-    let cloud = oeg::io::pcd::PcdCloud {
+    let cloud = oeg::PcdCloud {
         width: points.len() as u32,
         height: 1,
         viewpoint: nalgebra::Isometry3::identity(),
         points,
     };
     for (name, encoding) in [
-        ("ascii", oeg::io::pcd::PcdEncoding::Ascii),
-        ("binary", oeg::io::pcd::PcdEncoding::Binary),
-        ("compressed", oeg::io::pcd::PcdEncoding::BinaryCompressed),
+        ("ascii", oeg::PcdEncoding::Ascii),
+        ("binary", oeg::PcdEncoding::Binary),
+        ("compressed", oeg::PcdEncoding::BinaryCompressed),
     ] {
-        oeg::io::pcd::write_pcd(&dir("pcd")?.join(format!("seed_{name}.pcd")), &cloud, encoding)?;
+        oeg::write_pcd(&dir("pcd")?.join(format!("seed_{name}.pcd")), &cloud, encoding)?;
     }
-    oeg::io::mapfile::save_map(
+    oeg::save_map(
         &oeg::Map::new(oeg::MapConfig::new(0.5))?,
         &dir("map")?.join("seed_empty.oeg"),
     )?;
     let mut map = oeg::Map::new(oeg::MapConfig::new(0.5))?;
     map.integrate(&scan)?;
-    oeg::io::mapfile::save_map(&map, &dir("map")?.join("seed_ring.oeg"))?;
+    oeg::save_map(&map, &dir("map")?.join("seed_ring.oeg"))?;
     // A map with a ceiling layer (version 2): the ground under a board, then the board's top over it.
     let robust = oeg::MapPreset::Robust.model(&oeg::RobotProfile::default());
     let mut map = oeg::Map::new(oeg::MapConfig {
@@ -64,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         map.integrate(&scan)?;
     }
     assert_eq!(map.num_ceilings(), 1, "the seed must hold a ceiling");
-    oeg::io::mapfile::save_map(&map, &dir("map")?.join("seed_ceiling.oeg"))?;
+    oeg::save_map(&map, &dir("map")?.join("seed_ceiling.oeg"))?;
     // A short recorded log of the smallest shipped scene.
     let mut loaded = sim::scenario::load(&root.join("scenarios/thin_pole.toml"))?;
     loaded.scenario.duration_s = 0.2;

@@ -86,7 +86,8 @@ impl Holder {
         }
         match process_start(self.pid) {
             Some(start) => start != self.start,
-            None => oeg::io::process_is_gone(self.pid),
+            // No record of its start: gone if Linux lists processes under `/proc` and not this one.
+            None => Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{}", self.pid)).exists(),
         }
     }
 }

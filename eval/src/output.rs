@@ -65,15 +65,15 @@ impl Staged {
             _ => PathBuf::from("."),
         };
         let staging = if in_place {
-            for stale in oeg::io::stale_owners(target, MOUNT_STAGING, "") {
+            for stale in oeg::stale_owners(target, MOUNT_STAGING, "") {
                 let _ = std::fs::remove_dir_all(target.join(stale));
             }
-            target.join(format!("{MOUNT_STAGING}{}", oeg::io::unique_suffix()))
+            target.join(format!("{MOUNT_STAGING}{}", oeg::unique_suffix()))
         } else {
             create_dir(&parent)?;
             // A job killed between the two renames of its swap left no output folder and the previous one
             // aside: put it back, so the previous results stay whatever this job does.
-            let mut set_aside = oeg::io::stale_owners(&parent, &format!(".{name}.old."), "");
+            let mut set_aside = oeg::stale_owners(&parent, &format!(".{name}.old."), "");
             set_aside.sort();
             if !target.exists()
                 && let Some(previous) = set_aside.pop()
@@ -83,11 +83,11 @@ impl Staged {
             for stale in
                 set_aside
                     .into_iter()
-                    .chain(oeg::io::stale_owners(&parent, &format!(".{name}.staging."), ""))
+                    .chain(oeg::stale_owners(&parent, &format!(".{name}.staging."), ""))
             {
                 let _ = std::fs::remove_dir_all(parent.join(stale));
             }
-            parent.join(format!(".{name}.staging.{}", oeg::io::unique_suffix()))
+            parent.join(format!(".{name}.staging.{}", oeg::unique_suffix()))
         };
         create_dir(&staging)?;
         let marker = format!(
@@ -141,7 +141,7 @@ impl Staged {
         let aside = self.target.exists().then(|| {
             let name = self.target.file_name().unwrap_or_default().to_string_lossy();
             self.target
-                .with_file_name(format!(".{name}.old.{}", oeg::io::unique_suffix()))
+                .with_file_name(format!(".{name}.old.{}", oeg::unique_suffix()))
         });
         if let Some(aside) = &aside {
             std::fs::rename(&self.target, aside).map_err(|source| EvalError::Io {
@@ -173,7 +173,7 @@ impl Staged {
         check_replaceable(&self.target)?;
         let aside = self
             .target
-            .join(format!("{MOUNT_STAGING}{}.old", oeg::io::unique_suffix()));
+            .join(format!("{MOUNT_STAGING}{}.old", oeg::unique_suffix()));
         create_dir(&aside)?;
         for entry in std::fs::read_dir(&self.target).map_err(io(&self.target))? {
             let name = entry.map_err(io(&self.target))?.file_name();
@@ -416,7 +416,7 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
         message: format!("cannot serialise: {e}"),
     })?;
     bytes.push(b'\n');
-    Ok(oeg::io::write_atomically(path, &bytes)?)
+    Ok(oeg::write_atomically(path, &bytes)?)
 }
 
 /// Writes bytes (an image, a map).
@@ -424,7 +424,7 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 /// # Errors
 /// As [`write_json`].
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    Ok(oeg::io::write_atomically(path, bytes)?)
+    Ok(oeg::write_atomically(path, bytes)?)
 }
 
 /// A row type of a CSV table: its columns, in the order its fields serialise. Each implementation is checked

@@ -81,7 +81,7 @@ pub struct RunReport {
 /// A bad override, or a scenario that (after the overrides) is invalid.
 pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
     let path = &options.scenario;
-    let text = oeg::io::read_text(path)?;
+    let text = oeg::read_text(path)?;
     // The file alone first, so that its own errors name its lines; then the overrides, each named if it breaks
     // the scenario.
     let mut loaded = scenario::load_str(path, &text)?;

@@ -30,7 +30,7 @@ pub fn write_report(
     let geometry = *map.geometry();
     let mut files = Vec::new();
     let map_path = out_dir.join("map.oeg");
-    write_bytes(&map_path, &oeg::io::mapfile::to_bytes(map))?;
+    write_bytes(&map_path, &oeg::map_to_bytes(map))?;
     files.push(map_path);
     files.extend(write_layer_images(
         map,

@@ -82,10 +82,10 @@ pub fn corpus_dir() -> PathBuf {
 pub fn run(target: Target, data: &[u8]) -> bool {
     let path = Path::new("fuzz-input");
     match target {
-        Target::Graph => oeg::io::graph::parse_graph(path, data).is_ok(),
-        Target::Pcd => oeg::io::pcd::parse_pcd(path, data).is_ok(),
+        Target::Graph => oeg::parse_graph(path, data).is_ok(),
+        Target::Pcd => oeg::parse_pcd(path, data).is_ok(),
         Target::Log => sim::log::parse_log(path, data).is_ok(),
-        Target::Map => match oeg::io::mapfile::map_from_bytes(path, data, MAP_LIMIT_BYTES) {
+        Target::Map => match oeg::map_from_bytes(path, data, MAP_LIMIT_BYTES) {
             Ok(map) => {
                 // A loaded map must be usable: its layers and decisions over what it observed.
                 if let Some(region) = map.observed_region() {

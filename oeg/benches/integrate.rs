@@ -16,7 +16,6 @@ use std::path::PathBuf;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Point3;
-use oeg::io::graph;
 use oeg::{Map, MapConfig, Scan, SensorModel};
 
 const RESOLUTIONS_M: [f64; 3] = [0.05, 0.1, 0.2];
@@ -46,7 +45,7 @@ fn real(c: &mut Criterion) {
         println!("skipped real/3dtk_frames: 3dtk_frames.graph is absent (set OEG_SHARED_DATA)");
         return;
     };
-    let scans = graph::read_graph_scans(&path, SensorModel::laser()).expect("readable");
+    let scans = oeg::read_graph_scans(&path, SensorModel::laser()).expect("readable");
     let num_rays: usize = scans.iter().map(|s| s.rays.len()).sum();
     let mut group = c.benchmark_group("real/3dtk_frames");
     group.throughput(Throughput::Elements(num_rays as u64));
@@ -130,9 +129,7 @@ fn options(c: &mut Criterion) {
     // The paper's rules with robust's height threshold: robust's cost without the rays it cuts.
     let paper_cut = MapConfig {
         model: oeg::ModelOptions {
-            max_height_m: Some(
-                oeg::RobotProfile::default().height_m + oeg::model::preset::ROBUST_HEIGHT_MARGIN_M,
-            ),
+            max_height_m: Some(oeg::RobotProfile::default().height_m + oeg::ROBUST_HEIGHT_MARGIN_M),
             ..oeg::ModelOptions::default()
         },
         ..MapConfig::new(0.05)

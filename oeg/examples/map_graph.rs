@@ -3,7 +3,6 @@
 
 use std::time::Instant;
 
-use oeg::io::graph;
 use oeg::{Map, MapConfig, SensorModel};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -13,7 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .next()
         .ok_or("usage: map_graph FILE.graph RESOLUTION_M")?
         .parse()?;
-    let scans = graph::read_graph_scans(path.as_ref(), SensorModel::laser())?;
+    let scans = oeg::read_graph_scans(path.as_ref(), SensorModel::laser())?;
     let mut map = Map::new(MapConfig::new(resolution_m))?;
     let start = Instant::now();
     for scan in &scans {

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-/// Index of one map cell. See the [module documentation](self) for the convention.
+/// Index of one map cell: cell `(i, j)` covers `[i r, (i + 1) r) x [j r, (j + 1) r)` for the resolution `r`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct CellIndex {
     /// Column, along +x.

@@ -1,30 +1,76 @@
 #![doc = include_str!("../README.md")]
+//!
+//! # The API
+//!
+//! Every module is private; this list is the crate's whole public API, each item under one name.
 
-pub mod cell;
-pub mod error;
-pub mod geometry;
-pub mod integrate;
-pub mod io;
-pub mod layers;
-pub mod map;
-pub mod model;
-pub mod planner;
-pub mod scan;
-pub mod sensor;
-pub mod storage;
-pub mod traversability;
-pub mod traversal;
+mod cell;
+mod error;
+mod geometry;
+mod io;
+mod map;
+mod model;
+mod planner;
+mod preset;
+mod scan;
+mod sensor;
+mod storage;
+mod traversability;
+mod traversal;
 
+// The map: its grid, cells and layers.
 pub use cell::{Ceiling, Cell, SeenFrom};
 pub use error::{Error, Result};
-pub use geometry::{CellIndex, CellRegion, GridGeometry};
-pub use layers::{Layer, LayerKind, Raster, TraversabilityCounts};
-pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Map, MapConfig};
-pub use model::{
-    Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy, HitHeight, MapPreset, ModelOptions,
-    OverheadHits, ScanHitElevation,
-};
-pub use planner::{Plan, PlannerOptions, UncertainCells, UnknownCells};
+pub use geometry::{CellIndex, CellRegion, GridGeometry, MAX_RESOLUTION_M, MIN_RESOLUTION_M};
+pub use map::{DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Layer, LayerKind, Map, MapConfig, Raster};
+
+// What goes in: scans of rays from a sensor with a range-noise model.
 pub use scan::{Ray, RayKind, Scan};
-pub use sensor::{RangeNoiseModel, SensorModel};
-pub use traversability::{RobotProfile, Traversability, TraversabilityRule};
+pub use sensor::{
+    DEFAULT_LASER_SIGMA_M, DEFAULT_MAX_RANGE_M, DEFAULT_STEREO_COEFFICIENT_PER_M, MIN_RANGE_SIGMA_M,
+    RangeNoiseModel, SensorModel,
+};
+
+// The model: the paper's equations, the rules beyond it, the options that choose them, and the named presets.
+pub use model::{
+    BEAM_SIGMA_RAD, CeilingHit, DEFAULT_ELEVATION_THRESHOLD, DEFAULT_LOG_ODDS_MAX, DEFAULT_LOG_ODDS_MIN,
+    DEFAULT_OCCUPIED_THRESHOLD, DEFAULT_P_MAX, DEFAULT_P_MIN, DEFAULT_SIGNIFICANCE_K_M,
+    DEFAULT_SURFACE_BAND_SIGMAS, Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy,
+    GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits, ScanHitElevation,
+    VERTICAL_SIGMA_FLOOR_M, band_contradicts, ceiling_confirmed, ceiling_contradicts, ceiling_passed_under,
+    clamp_probability, correlated_variance, elevation_observation, free_sample_informs, fuse_elevation,
+    fuse_top_surface, fuse_with_disagreement, inverse_sensor_model, kalman_fuse, log_odds, normal_tail,
+    overhead_significant, p_occ, probability_from_log_odds, ray_bound, spread_variance, surface_level,
+    update_ceiling, update_log_odds, vertical_variance,
+};
+pub use preset::{MapPreset, ROBUST_HEIGHT_MARGIN_M, STATIC_MAX_DEPTH_M};
+
+// The decision: where the robot can drive, and a planner that uses it.
+pub use planner::{
+    DEFAULT_FOOTPRINT_RADIUS_M, DEFAULT_INFLATION_RADIUS_M, Plan, PlannerOptions, UncertainCells,
+    UnknownCells, forbidden_mask, plan,
+};
+pub use traversability::{
+    DEFAULT_MAX_GRADE, DEFAULT_MAX_STEP_M, DEFAULT_REACH_M, DEFAULT_ROBOT_HEIGHT_M, DEFAULT_UNCERTAIN_KAPPA,
+    RobotProfile, Traversability, TraversabilityCounts, TraversabilityRule, ceiling_decision,
+    contact_decision, footprint_decision, more_restrictive, step_decision,
+};
+
+// Files: real range data in (OctoMap scan graphs, PCL point clouds), maps out and back, and the framing and
+// atomic writes the testbed's own files share.
+pub use io::container::{
+    ContainerPrefix, FramedWriter, check_container_checksum, container_prefix_bytes, read_container_prefix,
+    seal_container,
+};
+pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_graph};
+pub use io::mapfile::{
+    MapFileHeader, load_map, load_map_within, map_from_bytes, map_to_bytes, read_map_header, save_map,
+};
+pub use io::pcd::{
+    InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, parse_pcd, parse_pcd_within, read_pcd,
+    read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd,
+};
+pub use io::{
+    AtomicFile, Fnv1a64, MAX_TEXT_INPUT_BYTES, fnv1a64, output_target, read_bounded, read_text, stale_owners,
+    unique_suffix, unit_quaternion, write_atomically,
+};

@@ -1,12 +1,25 @@
-//! The Occupancy-Elevation Grid: its configuration, cells and counters. Scan integration (the paper's
-//! Algorithm 1) is in [`crate::integrate`].
+//! The Occupancy-Elevation Grid: its configuration, cells and counters, and everything a map does, found from
+//! here:
+//!
+//! * `integrate` (`map/integrate.rs`): [`Map::integrate`], the paper's Algorithm 1, over the scan scratch of
+//!   `scratch` (`map/scratch.rs`);
+//! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);
+//! * the decisions ([`Map::traversability`], [`Map::traversability_layer`], [`Map::traversability_counts`]):
+//!   `traversability/decide.rs`, beside the pure rules they apply;
+//! * saving and loading: [`crate::save_map`], [`crate::load_map`] (`io/mapfile.rs`).
+
+mod integrate;
+mod layers;
+mod scratch;
+
+pub use layers::{Layer, LayerKind, Raster};
 
 use serde::{Deserialize, Serialize};
 
+use self::scratch::ScanEvidence;
 use crate::cell::{Ceiling, Cell};
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
-use crate::integrate::ScanEvidence;
 use crate::model::{ModelOptions, log_odds};
 use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
 
@@ -68,7 +81,7 @@ impl std::ops::AddAssign for IntegrationStats {
 /// An Occupancy-Elevation Grid.
 ///
 /// Each observed cell holds its occupancy log-odds, elevation mean and elevation variance (see [`Cell`]); the
-/// storage is sparse (see [`crate::storage`]). Feed it with [`Map::integrate`]; read it cell by cell
+/// storage is sparse (64 x 64 tiles allocated on first write). Feed it with [`Map::integrate`]; read it cell by cell
 /// ([`Map::cell`]) or a whole layer at a time ([`Map::layer`], [`Map::traversability_layer`]).
 ///
 /// # Several rays in one scan

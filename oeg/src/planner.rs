@@ -7,7 +7,7 @@
 //! and ties are broken by cell offset, so the same decisions always give the same path.
 //!
 //! ```
-//! use oeg::planner::{PlannerOptions, plan};
+//! use oeg::{PlannerOptions, plan};
 //! use oeg::{CellIndex, CellRegion, Traversability};
 //!
 //! // A 10 x 5 region of 0.1 m cells with a wall across x = 0.5 m except at its top row.

@@ -5,7 +5,9 @@
 //! shifts, a bounds check and two indexings: no hashing in the hot loop. The index costs 8 bytes per tile
 //! slot (512 bytes per 409.6 m^2 at 0.05 m), which is counted in [`TileGrid::memory_bytes`].
 
-use crate::geometry::{CellIndex, CellRegion};
+use crate::geometry::CellIndex;
+#[cfg(test)]
+use crate::geometry::CellRegion;
 
 /// log2 of the tile edge in cells.
 pub const TILE_SHIFT: u32 = 6;
@@ -126,6 +128,7 @@ impl<T: Copy> TileGrid<T> {
     /// The cell's value, allocating its tile (filled with `fill`) if needed. Fails if the grid would then hold
     /// more than `limit_bytes`.
     #[inline]
+    #[cfg(test)]
     pub fn get_or_insert(&mut self, cell: CellIndex, limit_bytes: u64) -> Result<&mut T, CapacityExceeded> {
         let tile = TileIndex::of(cell);
         let slot = match self.slot(tile) {
@@ -320,6 +323,7 @@ impl<T: Copy> TileGrid<T> {
     }
 
     /// The cell region spanned by the allocated tiles, or `None` if there are none.
+    #[cfg(test)]
     pub fn tile_region(&self) -> Option<CellRegion> {
         let mut it = self.tiles().map(|(t, _)| t);
         let first = it.next()?;

@@ -388,7 +388,7 @@ proptest! {
     #[test]
     fn fusion_never_increases_variance(mu in -5.0f32..5.0, var in 1e-6f32..10.0, h in -5.0f32..5.0, s2 in 1e-6f32..10.0) {
         let prior = oeg::Elevation { mean_m: mu, var_m2: var };
-        let post = oeg::model::kalman_fuse(Some(prior), h, s2, 0.0);
+        let post = oeg::kalman_fuse(Some(prior), h, s2, 0.0);
         prop_assert!(post.var_m2 <= var && post.var_m2 <= s2 * (1.0 + 1e-6));
         prop_assert!(post.mean_m >= mu.min(h) - 1e-4 && post.mean_m <= mu.max(h) + 1e-4);
     }
@@ -398,7 +398,7 @@ proptest! {
     fn clamped_updates_stay_in_bounds(deltas in prop::collection::vec(-5.0f32..5.0, 0..50)) {
         let mut l = 0.0;
         for d in deltas {
-            l = oeg::model::update_log_odds(l, d, -2.0, 3.5);
+            l = oeg::update_log_odds(l, d, -2.0, 3.5);
             prop_assert!((-2.0..=3.5).contains(&l));
         }
     }

@@ -3,7 +3,6 @@
 
 use std::path::PathBuf;
 
-use oeg::io::{graph, pcd};
 use oeg::{Map, MapConfig, SensorModel};
 
 fn shared_file(name: &str) -> Option<PathBuf> {
@@ -27,7 +26,7 @@ fn the_3dtk_scan_graph_reads_and_maps() {
     let Some(path) = shared_file("3dtk_frames.graph") else {
         return;
     };
-    let nodes = graph::read_graph(&path).expect("readable");
+    let nodes = oeg::read_graph(&path).expect("readable");
     assert_eq!(nodes.len(), 3);
     let num_points: usize = nodes.iter().map(|n| n.points_in_sensor.len()).sum();
     assert_eq!(num_points, 233_028);
@@ -55,7 +54,7 @@ fn octomaps_spherical_scan_reads() {
     let Some(path) = shared_file("spherical_scan.graph") else {
         return;
     };
-    let scans = graph::read_graph_scans(&path, SensorModel::laser()).expect("readable");
+    let scans = oeg::read_graph_scans(&path, SensorModel::laser()).expect("readable");
     assert_eq!(scans.len(), 1);
     assert_eq!(scans[0].rays.len(), 10_201);
 }
@@ -65,13 +64,13 @@ fn the_kinect_frame_reads_in_the_optical_frame() {
     let Some(path) = shared_file("office1.pcd") else {
         return;
     };
-    let cloud = pcd::read_pcd(&path).expect("readable");
+    let cloud = oeg::read_pcd(&path).expect("readable");
     assert_eq!((cloud.width, cloud.height), (640, 480));
     assert_eq!(cloud.num_valid(), 254_456);
-    let options = pcd::PcdOptions {
-        frame: pcd::PcdFrame::Optical,
-        invalid_points: pcd::InvalidPoints::NoReturn,
-        ..pcd::PcdOptions::default()
+    let options = oeg::PcdOptions {
+        frame: oeg::PcdFrame::Optical,
+        invalid_points: oeg::InvalidPoints::NoReturn,
+        ..oeg::PcdOptions::default()
     };
     let scan = cloud.to_scan(&options).expect("pinhole fit");
     assert_eq!(scan.rays.len(), 307_200);

@@ -79,10 +79,10 @@ pub enum SimError {
 /// Short for `Result<T, SimError>`.
 pub type Result<T, E = SimError> = std::result::Result<T, E>;
 
-/// Reads a text input (a scenario, a URDF) within `oeg::io::MAX_TEXT_INPUT_BYTES`; an unreadable or oversized
+/// Reads a text input (a scenario, a URDF) within `oeg::MAX_TEXT_INPUT_BYTES`; an unreadable or oversized
 /// file is a [`SimError::Io`] naming it.
 pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
-    oeg::io::read_text(path).map_err(|e| match e {
+    oeg::read_text(path).map_err(|e| match e {
         oeg::Error::Io { path, source } => SimError::Io { path, source },
         other => other.into(),
     })

@@ -1,5 +1,5 @@
 //! Recorded sensor logs (`.oeglog`), version 1: every scan of a run, so the same data can be replayed through
-//! different map settings. The framing is the map file's ([`oeg::io::container`]). Little-endian throughout:
+//! different map settings. The framing is the map file's ([`oeg::FramedWriter`], [`oeg::read_container_prefix`]). Little-endian throughout:
 //!
 //! ```text
 //! 8    magic "OEGLOG\r\n"
@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Translation3, Vector3};
 use oeg::RayKind;
-use oeg::io::container::{self, FramedWriter};
-use oeg::io::unit_quaternion;
+use oeg::unit_quaternion;
+use oeg::{FramedWriter, check_container_checksum, read_container_prefix};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
@@ -195,7 +195,7 @@ pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
     let f64_at = |b: &[u8]| f64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
     let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
 
-    let prefix = container::read_prefix(path, data, MAGIC, &[FORMAT_VERSION], "an OEG sensor log")?;
+    let prefix = read_container_prefix(path, data, MAGIC, &[FORMAT_VERSION], "an OEG sensor log")?;
     let header: LogHeader =
         serde_json::from_slice(prefix.header).map_err(|e| fail(16, format!("malformed header: {e}")))?;
     let mut pos = prefix.body_start;
@@ -214,7 +214,7 @@ pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
                         ),
                     ));
                 }
-                container::check_checksum(path, data, pos)?;
+                check_container_checksum(path, data, pos)?;
                 return Ok(SensorLog { header, scans });
             }
             1 => {

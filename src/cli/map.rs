@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use oeg::MapConfig;
-use oeg::io::pcd::PcdOptions;
+use oeg::PcdOptions;
 use oeg_eval::jobs::map::{MapJob, MapReport};
 use oeg_eval::progress::Progress;
 

@@ -3,7 +3,6 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use oeg::io::mapfile;
 use oeg::{RobotProfile, TraversabilityRule};
 
 use crate::error::Result;
@@ -13,8 +12,8 @@ use crate::error::Result;
 /// # Errors
 /// The map file cannot be read or is malformed (named, with the byte offset).
 pub fn inspect(path: &Path) -> Result<String> {
-    let header = mapfile::read_header(path)?;
-    let map = mapfile::load_map(path)?;
+    let header = oeg::read_map_header(path)?;
+    let map = oeg::load_map(path)?;
     let profile = RobotProfile::default();
     let counts = map.traversability_counts(&profile, TraversabilityRule::Absolute);
     let mut out = String::new();

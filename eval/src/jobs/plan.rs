@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use oeg::planner::{self, PlannerOptions, UnknownCells};
 use oeg::{CellIndex, CellRegion, RobotProfile, TraversabilityRule};
+use oeg::{PlannerOptions, UnknownCells};
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
@@ -62,7 +62,7 @@ pub struct PlanSummary {
 /// The map cannot be read, a point is not finite, the options are invalid, or a write fails.
 pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     let staged = crate::output::Staged::begin(&job.out_dir)?;
-    let map = oeg::io::mapfile::load_map(&job.map)?;
+    let map = oeg::load_map(&job.map)?;
     let geometry = *map.geometry();
     let point_error = |what: &str, (x, y): (f64, f64)| EvalError::Input {
         path: job.map.clone(),
@@ -81,7 +81,7 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     .ok_or_else(|| point_error("start", job.from_xy_m))?;
     let region = map.observed_region().map_or(ends, |r| r.union(&ends));
     let classes = map.traversability_layer(region, &job.profile, job.rule)?;
-    let plan = planner::plan(
+    let plan = oeg::plan(
         &region,
         geometry.resolution_m(),
         &classes.values,

@@ -68,7 +68,7 @@ pub fn record(
     progress: &Progress,
 ) -> Result<RecordReport> {
     // Refuse an output that is not a regular file before simulating anything.
-    oeg::io::output_target(out)?;
+    oeg::output_target(out)?;
     let mut loaded = scenario::load(path)?;
     if let Some(seed) = seed {
         loaded.scenario.seed = seed;
@@ -98,7 +98,7 @@ pub fn record(
                 scans.push(scan.to_scan(PoseSource::Estimated, header.sensors[scan.sensor_index].map_model));
                 progress.inc(1);
             }
-            let left_out = oeg::io::graph::write_graph(out, &scans)?;
+            let left_out = oeg::write_graph(out, &scans)?;
             (scans.len() as u64, left_out)
         }
     };

@@ -106,7 +106,7 @@ pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdic
         if t.elevation_m.is_nan() {
             continue;
         }
-        let p = f64::from(oeg::model::probability_from_log_odds(c.log_odds));
+        let p = f64::from(oeg::probability_from_log_odds(c.log_odds));
         let o = if verdicts.truth[k].is_blocked() { 1.0 } else { 0.0 };
         brier_sum += (p - o) * (p - o);
         num_brier += 1;
@@ -429,7 +429,7 @@ mod tests {
         );
         // Brier: every observed cell occupied with P = 0.9707 (two confident hits reach L_max = 3.5);
         // outcomes 0, 1, 1: ((P - 0)^2 + 2 (1 - P)^2) / 3.
-        let p = f64::from(oeg::model::probability_from_log_odds(3.5));
+        let p = f64::from(oeg::probability_from_log_odds(3.5));
         assert!(
             (m.occupancy_brier - (p * p + 2.0 * (1.0 - p) * (1.0 - p)) / 3.0).abs() < 1e-6,
             "{}",

@@ -3,7 +3,7 @@
 //! last (or the scenario's `[planner]` start and goal) on the final map, checks every cell of that path
 //! against the truth, and plans on the truth too, for the path the robot could have had.
 
-use oeg::planner::{self, Plan, PlannerOptions, UnknownCells};
+use oeg::{Plan, PlannerOptions, UnknownCells};
 
 use oeg::{CellIndex, CellRegion, Traversability};
 use serde::Serialize;
@@ -56,10 +56,9 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
         message: format!("planner: {e}"),
     };
     let options = s.planner.options();
-    let map_plan =
-        planner::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
+    let map_plan = oeg::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
     let truly = verdicts.truth_decisions();
-    let truth_plan = planner::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
+    let truth_plan = oeg::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
     let unsafe_cells = match &map_plan {
         Some(p) => unsafe_path_cells(p, &region, res, &truly, &options).map_err(planner_error)?,
         None => Vec::new(),
@@ -75,7 +74,7 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
 /// decisions `truly` (row-major over `region`): where the robot following the path would touch an obstacle.
 ///
 /// # Errors
-/// As [`planner::forbidden_mask`].
+/// As [`oeg::forbidden_mask`].
 pub fn unsafe_path_cells(
     plan: &Plan,
     region: &CellRegion,
@@ -83,7 +82,7 @@ pub fn unsafe_path_cells(
     truly: &[Traversability],
     options: &PlannerOptions,
 ) -> oeg::Result<Vec<CellIndex>> {
-    let forbidden = planner::forbidden_mask(
+    let forbidden = oeg::forbidden_mask(
         region,
         resolution_m,
         truly,
@@ -178,7 +177,7 @@ mod tests {
             ..PlannerOptions::default()
         };
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
-        let truth_plan = planner::plan(&region, 1.0, &truly, s, g, &options)
+        let truth_plan = oeg::plan(&region, 1.0, &truly, s, g, &options)
             .expect("valid")
             .expect("around the wall");
         assert!(
@@ -192,7 +191,7 @@ mod tests {
             .expect("raster")
             .values;
         assert!(mapped.iter().all(|t| *t == Traversability::Unknown));
-        let straight = planner::plan(&region, 1.0, &mapped, s, g, &options)
+        let straight = oeg::plan(&region, 1.0, &mapped, s, g, &options)
             .expect("valid")
             .expect("straight");
         assert!((straight.length_m - 6.0).abs() < 1e-9);

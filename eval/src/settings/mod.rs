@@ -56,9 +56,9 @@ pub struct InputSettings {
     /// Range-error model of PCD rays (`stereo`).
     pub pcd_sensor: RangeModel,
     /// Frame of PCD points: `as_is`, or `optical` (x right, y down, z forward).
-    pub pcd_frame: oeg::io::pcd::PcdFrame,
+    pub pcd_frame: oeg::PcdFrame,
     /// NaN points of an organized PCD: `drop`, or `no_return` rays along their pixel.
-    pub pcd_invalid: oeg::io::pcd::InvalidPoints,
+    pub pcd_invalid: oeg::InvalidPoints,
     /// Pose of sensor-log scans: `estimated` or `true`.
     pub log_pose: sim::sensors::PoseSource,
 }
@@ -68,8 +68,8 @@ impl Default for InputSettings {
         Self {
             graph_sensor: RangeModel::Laser,
             pcd_sensor: RangeModel::Stereo,
-            pcd_frame: oeg::io::pcd::PcdFrame::default(),
-            pcd_invalid: oeg::io::pcd::InvalidPoints::default(),
+            pcd_frame: oeg::PcdFrame::default(),
+            pcd_invalid: oeg::InvalidPoints::default(),
             log_pose: sim::sensors::PoseSource::Estimated,
         }
     }
@@ -265,7 +265,7 @@ mod tests {
         .expect("valid");
         assert!((s.map.model.p_max - 0.7).abs() < 1e-6);
         assert_eq!(s.map.model.max_height_m, Some(0.5));
-        assert_eq!(s.input.pcd_frame, oeg::io::pcd::PcdFrame::Optical);
+        assert_eq!(s.input.pcd_frame, oeg::PcdFrame::Optical);
         assert!((s.robot.max_step_m - 0.05).abs() < 1e-12);
     }
 

@@ -21,7 +21,7 @@ use crate::error::Result;
 
 /// A container's prefix as read: the header's JSON and where the body starts.
 #[derive(Debug)]
-pub struct Prefix<'a> {
+pub struct ContainerPrefix<'a> {
     /// The header's bytes (JSON).
     pub header: &'a [u8],
     /// Byte offset of the body.
@@ -35,13 +35,13 @@ pub struct Prefix<'a> {
 /// # Errors
 /// [`crate::Error::Parse`] naming the file and byte: a wrong magic number, another version, or a header
 /// that runs past the end of the file.
-pub fn read_prefix<'a>(
+pub fn read_container_prefix<'a>(
     path: &'a Path,
     data: &'a [u8],
     magic: &[u8; 8],
     versions: &[u32],
     format: &str,
-) -> Result<Prefix<'a>> {
+) -> Result<ContainerPrefix<'a>> {
     let mut r = ByteReader::new(path, data);
     if r.take(8, "the magic number")? != magic {
         return Err(r.error_at(0, format!("not {format} (wrong magic number)")));
@@ -59,7 +59,7 @@ pub fn read_prefix<'a>(
     }
     let header_len = r.u32("the header length")? as usize;
     let header = r.take(header_len, "the header")?;
-    Ok(Prefix {
+    Ok(ContainerPrefix {
         header,
         body_start: r.pos(),
         version: found,
@@ -71,7 +71,7 @@ pub fn read_prefix<'a>(
 /// # Errors
 /// [`crate::Error::Parse`] naming the file and byte: a missing or short checksum, bytes after it, or a
 /// mismatch.
-pub fn check_checksum(path: &Path, data: &[u8], body_end: usize) -> Result<()> {
+pub fn check_container_checksum(path: &Path, data: &[u8], body_end: usize) -> Result<()> {
     let mut r = ByteReader::new(path, data);
     r.take(body_end, "the body")?;
     let stored = u64::from_le_bytes(r.array("the checksum")?);
@@ -85,7 +85,7 @@ pub fn check_checksum(path: &Path, data: &[u8], body_end: usize) -> Result<()> {
 }
 
 /// The prefix of a container: magic, version, header length and header.
-pub fn prefix_bytes(magic: &[u8; 8], version: u32, header_json: &[u8]) -> Vec<u8> {
+pub fn container_prefix_bytes(magic: &[u8; 8], version: u32, header_json: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(16 + header_json.len());
     out.extend_from_slice(magic);
     out.extend_from_slice(&version.to_le_bytes());
@@ -95,7 +95,7 @@ pub fn prefix_bytes(magic: &[u8; 8], version: u32, header_json: &[u8]) -> Vec<u8
 }
 
 /// Appends the checksum of everything in `bytes` to it: the container is complete.
-pub fn seal(bytes: &mut Vec<u8>) {
+pub fn seal_container(bytes: &mut Vec<u8>) {
     let checksum = super::fnv1a64(bytes);
     bytes.extend_from_slice(&checksum.to_le_bytes());
 }
@@ -118,7 +118,7 @@ impl FramedWriter {
             file: AtomicFile::create(path)?,
             hash: Fnv1a64::new(),
         };
-        w.write(&prefix_bytes(magic, version, header_json))?;
+        w.write(&container_prefix_bytes(magic, version, header_json))?;
         Ok(w)
     }
 

@@ -95,7 +95,7 @@ fn is_zero(n: &u64) -> bool {
 }
 
 /// Serialises the map into the bytes of a map file.
-pub fn to_bytes(map: &Map) -> Vec<u8> {
+pub fn map_to_bytes(map: &Map) -> Vec<u8> {
     let tiles: Vec<_> = map.tiles().collect();
     let ceiling_tiles: Vec<_> = map.ceiling_tiles().collect();
     let header = MapFileHeader {
@@ -110,7 +110,7 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
     };
     // A plain struct of numbers and strings always serialises.
     let json = serde_json::to_vec(&header).unwrap_or_default();
-    let mut out = container::prefix_bytes(MAGIC, header.format_version(), &json);
+    let mut out = container::container_prefix_bytes(MAGIC, header.format_version(), &json);
     out.reserve(
         tiles.len() * TILE_RECORD_BYTES + ceiling_tiles.len() * ceiling_record_bytes(FORMAT_VERSION) + 8,
     );
@@ -134,7 +134,7 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
             out.extend_from_slice(&c.clear_m.to_le_bytes());
         }
     }
-    container::seal(&mut out);
+    container::seal_container(&mut out);
     out
 }
 
@@ -143,14 +143,14 @@ pub fn to_bytes(map: &Map) -> Vec<u8> {
 /// # Errors
 /// [`Error::Io`] naming the file.
 pub fn save_map(map: &Map, path: &Path) -> Result<()> {
-    write_atomically(path, &to_bytes(map))
+    write_atomically(path, &map_to_bytes(map))
 }
 
 /// Reads only the header of a map file (and checks magic, version and checksum).
 ///
 /// # Errors
 /// As [`load_map`].
-pub fn read_header(path: &Path) -> Result<MapFileHeader> {
+pub fn read_map_header(path: &Path) -> Result<MapFileHeader> {
     let data = read_file(path)?;
     parse(path, &data, None).map(|(h, _)| h)
 }
@@ -190,7 +190,7 @@ pub fn map_from_bytes(path: &Path, data: &[u8], limit_bytes: u64) -> Result<Map>
 const TILE_COORD_RANGE: std::ops::RangeInclusive<i32> = (i32::MIN >> 6)..=(i32::MAX >> 6);
 
 fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader, Option<Map>)> {
-    let prefix = container::read_prefix(
+    let prefix = container::read_container_prefix(
         path,
         data,
         MAGIC,
@@ -246,7 +246,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
             data.len()
         )));
     }
-    container::check_checksum(path, data, data.len() - 8)?;
+    container::check_container_checksum(path, data, data.len() - 8)?;
     let Some(limit_bytes) = build else {
         return Ok((header, None));
     };
@@ -472,16 +472,16 @@ mod tests {
         }
         assert!(!back.cell(CellIndex::new(1000, 1000)).is_observed());
         // Same map, same bytes.
-        assert_eq!(to_bytes(&back), to_bytes(&map));
+        assert_eq!(map_to_bytes(&back), map_to_bytes(&map));
         assert_eq!(
-            read_header(&path).expect("header").num_tiles,
+            read_map_header(&path).expect("header").num_tiles,
             map.tiles().count() as u64
         );
     }
 
     #[test]
     fn truncated_and_corrupt_files_are_errors() {
-        let bytes = to_bytes(&small_map());
+        let bytes = map_to_bytes(&small_map());
         let p = Path::new("m.oeg");
         for cut in [0, 7, 12, 20, 100, bytes.len() / 2, bytes.len() - 1] {
             let err = parse(p, &bytes[..cut], Some(1 << 30))
@@ -527,7 +527,7 @@ mod tests {
             file_version: 0,
         };
         let json = serde_json::to_vec(&header).expect("json");
-        let mut out = container::prefix_bytes(MAGIC, FORMAT_VERSION, &json);
+        let mut out = container::container_prefix_bytes(MAGIC, FORMAT_VERSION, &json);
         for (ti, tj, cell) in tiles {
             out.extend_from_slice(&ti.to_le_bytes());
             out.extend_from_slice(&tj.to_le_bytes());
@@ -537,7 +537,7 @@ mod tests {
                 }
             }
         }
-        container::seal(&mut out);
+        container::seal_container(&mut out);
         out
     }
 
@@ -652,26 +652,26 @@ mod tests {
     #[test]
     fn a_map_with_a_ceiling_layer_is_version_3_and_loads_back_identically() {
         let map = map_with_a_ceiling();
-        let bytes = to_bytes(&map);
+        let bytes = map_to_bytes(&map);
         assert_eq!(bytes[8..12], 3u32.to_le_bytes());
         let p = Path::new("ceiling.oeg");
         let back = map_from_bytes(p, &bytes, crate::DEFAULT_MEMORY_LIMIT_BYTES).expect("loaded");
         let c = map.geometry().cell_of(2.025, 0.025).expect("cell");
         assert_eq!(back.ceiling(c), map.ceiling(c));
         assert!(back.ceiling(c).is_some_and(|c| c.seen_from == SeenFrom::Above));
-        assert!(to_bytes(&back) == bytes, "same map, same bytes");
+        assert!(map_to_bytes(&back) == bytes, "same map, same bytes");
         // Without a ceiling the file is version 1, as before the layer existed.
-        assert_eq!(to_bytes(&small_map())[8..12], 1u32.to_le_bytes());
+        assert_eq!(map_to_bytes(&small_map())[8..12], 1u32.to_le_bytes());
 
         // Where the one ceiling's record starts.
-        let prefix = container::read_prefix(p, &bytes, MAGIC, &[3], "a map").expect("prefix");
+        let prefix = container::read_container_prefix(p, &bytes, MAGIC, &[3], "a map").expect("prefix");
         let k = crate::storage::offset_in_tile(c);
         let ceilings_start = prefix.body_start + map.tiles().count() * TILE_RECORD_BYTES;
         let at = ceilings_start + 8 + k * 17;
         let forge = |offset: usize, value: &[u8]| {
             let mut b = bytes[..bytes.len() - 8].to_vec();
             b[offset..offset + value.len()].copy_from_slice(value);
-            container::seal(&mut b);
+            container::seal_container(&mut b);
             b
         };
         for (offset, value, expected) in [
@@ -715,7 +715,7 @@ mod tests {
         for record in bytes[ceilings_start + 8..bytes.len() - 8].chunks(17) {
             v2.extend_from_slice(&record[..13]);
         }
-        container::seal(&mut v2);
+        container::seal_container(&mut v2);
         let old = map_from_bytes(p, &v2, 1 << 30).expect("version 2 loads");
         assert_eq!(parse(p, &v2, None).expect("header").0.file_version, 2);
         assert_eq!(parse(p, &bytes, None).expect("header").0.file_version, 3);

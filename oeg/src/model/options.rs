@@ -289,6 +289,12 @@ impl Default for ModelOptions {
 }
 
 impl ModelOptions {
+    /// The options that describe the robot and its sensors rather than the update rules (by their names in
+    /// files). A preset sets every other option and leaves these as the scenario sets them.
+    pub const SCENE_OPTIONS: [&'static str; 3] = ["max_height_m", "max_range_m", "no_return_clear_range_m"];
+}
+
+impl ModelOptions {
     /// Checks every option for sense.
     ///
     /// # Errors

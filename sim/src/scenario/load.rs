@@ -164,9 +164,9 @@ pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), Strin
         }
     };
     let profile = oeg::RobotProfile {
-        max_step_m: number("max_step_m", oeg::traversability::DEFAULT_MAX_STEP_M)?,
-        height_m: number("height_m", oeg::traversability::DEFAULT_ROBOT_HEIGHT_M)?,
-        max_grade: number("max_grade", oeg::traversability::DEFAULT_MAX_GRADE)?,
+        max_step_m: number("max_step_m", oeg::DEFAULT_MAX_STEP_M)?,
+        height_m: number("height_m", oeg::DEFAULT_ROBOT_HEIGHT_M)?,
+        max_grade: number("max_grade", oeg::DEFAULT_MAX_GRADE)?,
     };
     let mut model = toml::Table::try_from(preset.model(&profile)).map_err(|e| e.to_string())?;
     if let Some(given) = map.get("model").and_then(toml::Value::as_table) {

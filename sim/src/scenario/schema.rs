@@ -86,17 +86,17 @@ pub struct MapSettings {
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerSettings {
     /// Where the planner starts, `[x, y]` metres; default the drive's first waypoint. The cells within the
-    /// footprint radius count as drivable (see `oeg::planner::plan`).
+    /// footprint radius count as drivable (see `oeg::plan`).
     #[serde(default, deserialize_with = "crate::scenario::exact::option")]
     pub start_xy_m: Option<[f64; 2]>,
     /// Where it plans to, `[x, y]` metres; default the drive's last waypoint.
     #[serde(deserialize_with = "crate::scenario::exact::option")]
     pub goal_xy_m: Option<[f64; 2]>,
     /// The robot's centre keeps at least this far from blocked cells, metres; default
-    /// `oeg::planner::DEFAULT_INFLATION_RADIUS_M` (0.25).
+    /// `oeg::DEFAULT_INFLATION_RADIUS_M` (0.25).
     pub inflation_radius_m: Option<f64>,
     /// The robot's own radius, metres: the cells under it at the start count as drivable; default
-    /// `oeg::planner::DEFAULT_FOOTPRINT_RADIUS_M` (0.25).
+    /// `oeg::DEFAULT_FOOTPRINT_RADIUS_M` (0.25).
     pub footprint_radius_m: Option<f64>,
     /// Cells the map never observed; default `avoid`.
     pub unknown: oeg::UnknownCells,
@@ -108,12 +108,8 @@ impl PlannerSettings {
     /// The planner's options.
     pub fn options(&self) -> oeg::PlannerOptions {
         oeg::PlannerOptions {
-            inflation_radius_m: self
-                .inflation_radius_m
-                .unwrap_or(oeg::planner::DEFAULT_INFLATION_RADIUS_M),
-            footprint_radius_m: self
-                .footprint_radius_m
-                .unwrap_or(oeg::planner::DEFAULT_FOOTPRINT_RADIUS_M),
+            inflation_radius_m: self.inflation_radius_m.unwrap_or(oeg::DEFAULT_INFLATION_RADIUS_M),
+            footprint_radius_m: self.footprint_radius_m.unwrap_or(oeg::DEFAULT_FOOTPRINT_RADIUS_M),
             unknown: self.unknown,
             uncertain: self.uncertain,
         }
@@ -172,7 +168,7 @@ fn default_height() -> f64 {
 }
 
 fn default_max_grade() -> f64 {
-    f64::from(oeg::traversability::DEFAULT_MAX_GRADE)
+    f64::from(oeg::DEFAULT_MAX_GRADE)
 }
 
 impl RobotSettings {

@@ -125,7 +125,7 @@ pub fn demo_scans() -> Vec<Scan> {
 /// # Errors
 /// The file cannot be written.
 pub fn write_demo_graph(path: &Path) -> Result<()> {
-    oeg::io::graph::write_graph(path, &demo_scans())?;
+    oeg::write_graph(path, &demo_scans())?;
     Ok(())
 }
 

@@ -6,7 +6,6 @@ pub mod demo;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use oeg::io::{graph, mapfile, pcd};
 use oeg::{Map, MapConfig, RobotProfile, Scan, SensorModel, TraversabilityRule};
 use serde::Serialize;
 
@@ -75,7 +74,7 @@ pub struct MapJob {
     /// The sensor model of scan-graph scans.
     pub graph_sensor: SensorModel,
     /// How PCD files become scans (includes their sensor model).
-    pub pcd: pcd::PcdOptions,
+    pub pcd: oeg::PcdOptions,
     /// Which pose sensor-log scans are placed with.
     pub log_pose: sim::sensors::PoseSource,
     /// The robot for the traversability layer.
@@ -216,7 +215,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
     }
     for (path, format) in job.inputs.iter().zip(formats) {
         match format {
-            InputFormat::Graph => scans.extend(graph::read_graph(path)?.iter().enumerate().map(|(k, n)| {
+            InputFormat::Graph => scans.extend(oeg::read_graph(path)?.iter().enumerate().map(|(k, n)| {
                 (
                     source(path, format!("node {k} (id {})", n.id)),
                     n.to_scan(job.graph_sensor),
@@ -224,7 +223,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
             })),
             InputFormat::Pcd => scans.push((
                 source(path, "the cloud".into()),
-                pcd::read_pcd_scan_within(path, &job.pcd, job.config.memory_limit_bytes)?,
+                oeg::read_pcd_scan_within(path, &job.pcd, job.config.memory_limit_bytes)?,
             )),
             InputFormat::Log => {
                 let log = sim::log::read_log(path)?;
@@ -297,7 +296,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         }
     }
     let map_path = stage.join("map.oeg");
-    let map_file = mapfile::to_bytes(&map);
+    let map_file = oeg::map_to_bytes(&map);
     write_bytes(&map_path, &map_file)?;
     let map_file_bytes = map_file.len() as u64;
     drop(map_file);

@@ -1,119 +1,136 @@
-//! Named model presets: sets of `--set` overrides a sweep's `preset` axis applies (`docs/sweep-format.md`).
+//! A sweep's `preset` axis: each value is a named model of the map crate ([`oeg::MapPreset`], the one list of
+//! presets), applied as `--set` overrides (`docs/sweep-format.md`).
 //!
-//! * `paper`: the update rules as published (every rule option back to its default). The height threshold,
-//!   the range limit and the no-return clearing range stay as the scenario sets them: they describe the
-//!   robot and its sensors, not the rules.
-//! * `static`: the README's static settings (a beam passing above or far below a cell's surface says nothing
-//!   about it; a much higher hit replaces the estimate), for scenes without moving people.
-//! * `robust`: the map crate's recommended preset (`[map] preset = "robust"`, `oeg::MapPreset::Robust`): every
-//!   rule option and the step rule from it, the scenario's height threshold and ranges over it.
+//! Every value first returns every update-rule option to its default (the model options except
+//! [`oeg::ModelOptions::SCENE_OPTIONS`], which describe the robot and its sensors and stay as the scenario sets
+//! them). Then:
+//! * `paper`: nothing more: the update rules as published.
+//! * `static`: the options where the preset differs from the paper, written out as keys (its model does not
+//!   depend on the robot, so the resolved scenario, and with it every run's id, holds the options themselves).
+//! * `robust`: `map.preset = "robust"` with the scenario's step rule removed: the preset's model follows the
+//!   robot's height, so the loader expands it for the scenario's robot.
 
+use oeg::{MapPreset, ModelOptions};
 use toml::Value;
 
 /// The axis key that selects presets.
 pub const PRESET_KEY: &str = "preset";
 
-/// The built-in presets and what they are.
-pub const BUILT_IN: [(&str, &str); 3] = [
-    ("paper", "the paper's update rules as published"),
-    ("robust", "oeg's recommended preset (map.preset = robust)"),
-    (
-        "static",
-        "the static settings: free_space_occupancy = below_elevation, free_space_max_depth_m = 0.01, highest_surface fusion",
-    ),
-];
+/// Every model option that is an update rule, by its `--set` key, with `map.preset`: the keys a preset sets.
+fn rule_keys() -> Vec<String> {
+    // Every option serialized: the optional ones set, and the ones left out at the paper's value given.
+    let all = ModelOptions {
+        free_space_max_depth_m: Some(0.01),
+        max_height_m: Some(0.5),
+        max_range_m: Some(10.0),
+        no_return_clear_range_m: Some(5.0),
+        ..MapPreset::Robust.model(&oeg::RobotProfile::default())
+    };
+    let mut keys = vec!["map.preset".to_string()];
+    if let Ok(Value::Table(table)) = Value::try_from(all) {
+        keys.extend(
+            table
+                .keys()
+                .filter(|k| !ModelOptions::SCENE_OPTIONS.contains(&k.as_str()))
+                .map(|k| format!("map.model.{k}")),
+        );
+    }
+    keys
+}
 
-/// The model options that are update rules; `paper` returns each to its default.
-const RULE_KEYS: [&str; 19] = [
-    "map.preset",
-    "map.model.log_odds_min",
-    "map.model.log_odds_max",
-    "map.model.occupied_threshold",
-    "map.model.significance_k_m",
-    "map.model.p_min",
-    "map.model.p_max",
-    "map.model.elevation_threshold",
-    "map.model.free_space_elevation",
-    "map.model.free_space_occupancy",
-    "map.model.free_space_max_depth_m",
-    "map.model.hit_height",
-    "map.model.scan_hit_elevation",
-    "map.model.overhead_hits",
-    "map.model.elevation_fusion",
-    "map.model.process_noise_var_m2",
-    "map.model.surface_band_sigmas",
-    "map.model.measurement_correlation",
-    "map.model.vertical_variance",
-];
+/// A model value as a file writes it: the options are `f32`, and a float is given by its shortest `f32`
+/// decimal (`0.0001`, not the `f64` `0.00009999999747378752` the same number widens to).
+fn as_written(value: Value) -> Value {
+    match value {
+        Value::Float(f) => Value::Float(format!("{}", f as f32).parse().unwrap_or(f)),
+        Value::Table(t) => Value::Table(t.into_iter().map(|(k, v)| (k, as_written(v))).collect()),
+        Value::Array(a) => Value::Array(a.into_iter().map(as_written).collect()),
+        other => other,
+    }
+}
 
 /// A built-in preset's overrides in order: `(key, Some(value))` sets, `(key, None)` removes (the default).
+/// `None` for a name that is no preset.
 pub fn built_in(name: &str) -> Option<Vec<(String, Option<Value>)>> {
-    let paper = || {
-        RULE_KEYS
-            .iter()
-            .map(|k| ((*k).to_string(), None))
-            .collect::<Vec<_>>()
-    };
-    match name {
-        "paper" => Some(paper()),
-        "robust" => {
-            let mut o = paper();
+    let preset: MapPreset = name.parse().ok()?;
+    let mut o: Vec<(String, Option<Value>)> = rule_keys().into_iter().map(|k| (k, None)).collect();
+    match preset {
+        MapPreset::Paper => {}
+        MapPreset::Static => {
+            let paper = Value::try_from(MapPreset::Paper.model(&oeg::RobotProfile::default())).ok()?;
+            let Value::Table(model) =
+                Value::try_from(MapPreset::Static.model(&oeg::RobotProfile::default())).ok()?
+            else {
+                return None;
+            };
+            for (key, value) in model {
+                if paper.get(&key) != Some(&value) {
+                    o.push((format!("map.model.{key}"), Some(as_written(value))));
+                }
+            }
+        }
+        MapPreset::Robust => {
             o.push(("map.traversability".into(), None));
             o.push(("map.preset".into(), Some(Value::String("robust".into()))));
-            Some(o)
         }
-        "static" => {
-            let mut o = paper();
-            let fusion: toml::Table = toml::from_str(
-                "kind = \"highest_surface\"\nmahalanobis_threshold = 3.0\nlower_threshold = 1.0\n\
-                 multi_height_noise_m2 = 0.0001\n",
-            )
-            .ok()?;
-            o.push((
-                "map.model.free_space_occupancy".into(),
-                Some(Value::String("below_elevation".into())),
-            ));
-            o.push((
-                "map.model.free_space_max_depth_m".into(),
-                Some(Value::Float(0.01)),
-            ));
-            o.push(("map.model.elevation_fusion".into(), Some(Value::Table(fusion))));
-            Some(o)
-        }
-        _ => None,
     }
+    Some(o)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The model options that describe the robot and its sensors, which `paper` leaves as the scenario sets them.
-    const SCENE_KEYS: [&str; 3] = ["max_height_m", "max_range_m", "no_return_clear_range_m"];
-
     #[test]
     fn every_model_option_is_a_rule_or_a_scene_setting() {
-        // Every option serialized, the optional ones and those left out at the paper's value included.
-        let all = oeg::ModelOptions {
+        let keys = rule_keys();
+        let json = serde_json::to_value(ModelOptions {
             free_space_max_depth_m: Some(0.01),
             max_height_m: Some(0.5),
             max_range_m: Some(10.0),
             no_return_clear_range_m: Some(5.0),
-            ..oeg::MapPreset::Robust.model(&oeg::RobotProfile::default())
-        };
-        let json = serde_json::to_value(all).expect("serializes");
+            ..MapPreset::Robust.model(&oeg::RobotProfile::default())
+        })
+        .expect("serializes");
         let fields = json.as_object().expect("an object");
         for key in fields.keys() {
-            let in_rules = RULE_KEYS.contains(&format!("map.model.{key}").as_str());
+            let in_rules = keys.contains(&format!("map.model.{key}"));
             assert!(
-                in_rules != SCENE_KEYS.contains(&key.as_str()),
-                "`{key}` must be in exactly one of RULE_KEYS and SCENE_KEYS"
+                in_rules != ModelOptions::SCENE_OPTIONS.contains(&key.as_str()),
+                "`{key}` must be a rule or a scene option, not both"
             );
         }
+        assert_eq!(fields.len() + 1, keys.len() + ModelOptions::SCENE_OPTIONS.len());
+    }
+
+    #[test]
+    fn static_sets_the_options_where_it_differs_from_the_paper() {
+        let o = built_in("static").expect("a preset");
+        let set: Vec<&str> = o
+            .iter()
+            .filter(|(_, v)| v.is_some())
+            .map(|(k, _)| k.as_str())
+            .collect();
         assert_eq!(
-            fields.len() + 1,
-            RULE_KEYS.len() + SCENE_KEYS.len(),
-            "RULE_KEYS lists a removed option"
+            set,
+            [
+                "map.model.elevation_fusion",
+                "map.model.free_space_max_depth_m",
+                "map.model.free_space_occupancy"
+            ]
         );
+        let value = |key: &str| {
+            o.iter()
+                .find(|(k, v)| k == key && v.is_some())
+                .and_then(|(_, v)| v.clone())
+        };
+        assert_eq!(
+            value("map.model.free_space_occupancy"),
+            Some(Value::String("below_elevation".into()))
+        );
+        assert!(built_in("fast").is_none());
+        for preset in MapPreset::ALL {
+            assert!(built_in(preset.name()).is_some(), "{}", preset.name());
+        }
     }
 }

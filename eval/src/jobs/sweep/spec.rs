@@ -154,7 +154,7 @@ impl Sweep {
     /// [`EvalError::At`] with file, line and column: syntax, an unknown key, a value of the wrong type, an
     /// empty axis, a range with step 0, a generator range with min above max, an unknown preset.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = oeg::io::read_text(path)?;
+        let text = oeg::read_text(path)?;
         Self::from_str(path, &text)
     }
 
@@ -262,7 +262,7 @@ impl Sweep {
                 .map_err(|e| self.error(&[K("set")], format!("`{key}`: {e}")))?;
         }
         for (name, preset) in &s.presets {
-            if super::presets::BUILT_IN.iter().any(|(n, _)| n == name) {
+            if oeg::MapPreset::ALL.iter().any(|p| p.name() == name) {
                 return Err(self.error(
                     &[K("presets"), K(name)],
                     format!("`{name}` is a built-in preset; give yours another name"),
@@ -423,9 +423,9 @@ impl Sweep {
 
     /// Every preset name the file may use.
     pub fn preset_names(&self) -> Vec<String> {
-        super::presets::BUILT_IN
+        oeg::MapPreset::ALL
             .iter()
-            .map(|(n, _)| (*n).to_string())
+            .map(|p| p.name().to_string())
             .chain(self.spec.presets.keys().cloned())
             .collect()
     }

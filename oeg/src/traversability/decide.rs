@@ -1,132 +1,23 @@
-//! Whole-layer access: dense rasters of one quantity over a region, for analysis and images.
-//!
-//! An analysis is then one line over two slices (`error = estimate - truth`). Rasters are row-major from the
-//! region's min-x, min-y cell (see [`crate::geometry`]).
+//! The part of the traversability decision that reads the map: a cell's surface, the grounds around it and
+//! the structure over it, judged by the pure rules of [`super::rules`].
 
 use serde::{Deserialize, Serialize};
 
-use crate::cell::Cell;
-use crate::error::{Error, Result};
-use crate::geometry::{CellIndex, CellRegion};
-use crate::map::Map;
-use crate::model::{Elevation, Level, ceiling_confirmed, probability_from_log_odds, surface_level};
-use crate::traversability::{
+use super::rules::{
     RobotProfile, Traversability, TraversabilityRule, ceiling_decision, contact_decision, footprint_decision,
     more_restrictive, step_decision,
 };
+use crate::error::Result;
+use crate::geometry::{CellIndex, CellRegion};
+use crate::map::{Map, Raster};
+use crate::model::{Elevation, Level, ceiling_confirmed, surface_level};
 
 /// How far `top` lies above `ground`, metres, with the standard deviation of the difference.
 fn rise_over(top: Elevation, ground: Elevation) -> (f32, f32) {
     (top.mean_m - ground.mean_m, (top.var_m2 + ground.var_m2).sqrt())
 }
 
-/// A per-cell quantity of the map.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LayerKind {
-    /// Occupancy probability (eq. 3), NaN where never observed.
-    OccupancyProbability,
-    /// Occupancy log-odds, NaN where never observed.
-    LogOdds,
-    /// Elevation mean, metres, NaN where there is no estimate.
-    ElevationM,
-    /// Elevation variance, m^2, NaN where there is no estimate.
-    VarianceM2,
-    /// Elevation standard deviation, metres, NaN where there is no estimate.
-    StdDevM,
-}
-
-impl LayerKind {
-    /// Every kind, in a fixed order.
-    pub const ALL: [LayerKind; 5] = [
-        Self::OccupancyProbability,
-        Self::LogOdds,
-        Self::ElevationM,
-        Self::VarianceM2,
-        Self::StdDevM,
-    ];
-
-    /// The snake_case name used in files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::OccupancyProbability => "occupancy_probability",
-            Self::LogOdds => "log_odds",
-            Self::ElevationM => "elevation_m",
-            Self::VarianceM2 => "variance_m2",
-            Self::StdDevM => "std_dev_m",
-        }
-    }
-
-    /// The value of this quantity for one cell.
-    pub fn value(self, cell: &Cell) -> f32 {
-        if !cell.is_observed() {
-            return f32::NAN;
-        }
-        let elevation = cell.elevation();
-        match self {
-            Self::OccupancyProbability => probability_from_log_odds(cell.log_odds),
-            Self::LogOdds => cell.log_odds,
-            Self::ElevationM => elevation.map_or(f32::NAN, |e| e.mean_m),
-            Self::VarianceM2 => elevation.map_or(f32::NAN, |e| e.var_m2),
-            Self::StdDevM => elevation.map_or(f32::NAN, |e| e.var_m2.sqrt()),
-        }
-    }
-}
-
-/// A dense raster over a region.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Raster<T> {
-    /// The cells covered.
-    pub region: CellRegion,
-    /// Cell size, metres.
-    pub resolution_m: f64,
-    /// One value per cell, row-major from the region's min corner.
-    pub values: Vec<T>,
-}
-
-impl<T: Copy> Raster<T> {
-    /// The value at `cell`, or `None` outside the region.
-    pub fn get(&self, cell: CellIndex) -> Option<T> {
-        self.region.offset(cell).map(|k| self.values[k])
-    }
-}
-
-/// A raster of one [`LayerKind`], NaN where the quantity is undefined.
-pub type Layer = Raster<f32>;
-
 impl Map {
-    /// Checks a raster of `region` against the memory limit, counted with the map itself (one budget), and
-    /// returns its number of cells.
-    fn check_raster_size(&self, region: &CellRegion, bytes_per_cell: u64) -> Result<usize> {
-        let bytes = region
-            .num_cells()
-            .saturating_mul(bytes_per_cell)
-            .saturating_add(self.memory_bytes());
-        if bytes > self.config().memory_limit_bytes {
-            return Err(Error::MemoryLimit {
-                requested_bytes: bytes,
-                limit_bytes: self.config().memory_limit_bytes,
-            });
-        }
-        usize::try_from(region.num_cells())
-            .map_err(|_| Error::setting("region", "too many cells for this machine"))
-    }
-
-    /// A dense raster of `kind` over `region`.
-    ///
-    /// # Errors
-    /// [`Error::MemoryLimit`] if the raster would exceed the map's memory limit.
-    pub fn layer(&self, kind: LayerKind, region: CellRegion) -> Result<Layer> {
-        let n = self.check_raster_size(&region, 4)?;
-        let mut values = Vec::with_capacity(n);
-        values.extend(region.cells().map(|c| kind.value(&self.cell(c))));
-        Ok(Raster {
-            region,
-            resolution_m: self.geometry().resolution_m(),
-            values,
-        })
-    }
-
     /// The traversability of one cell for `profile` under `rule`: its surface's decision, or the structure's
     /// over it ([`crate::OverheadHits::Ceiling`], [`ceiling_decision`]) where that is more restrictive.
     pub fn traversability(
@@ -401,7 +292,7 @@ impl Map {
     /// A dense raster of [`Map::traversability`] over `region`.
     ///
     /// # Errors
-    /// [`Error::MemoryLimit`] if the raster would exceed the map's memory limit.
+    /// [`crate::Error::MemoryLimit`] if the raster would exceed the map's memory limit.
     pub fn traversability_layer(
         &self,
         region: CellRegion,

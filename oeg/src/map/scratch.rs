@@ -1,0 +1,259 @@
+//! The scan scratch: what one scan says about each cell it touches, gathered before any cell is updated
+//! (Algorithm 1 reads the map as it was before the scan), kept in tiles beside the map and reused scan after
+//! scan.
+
+use crate::cell::SeenFrom;
+use crate::error::{Error, Result};
+use crate::geometry::CellIndex;
+use crate::model::{
+    CeilingHit, Elevation, Level, ScanHitElevation, overhead_significant, spread_variance, surface_level,
+};
+use crate::storage::{TileGrid, TileIndex, offset_in_tile};
+
+/// What one scan says about one cell, gathered over all its rays before the cell is updated once.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ScanEvidence {
+    /// The largest inverse-sensor-model probability of any ray's sample in the cell; 0: untouched (a sample's
+    /// probability is at least `p_min` > 0).
+    pub(super) p_max: f32,
+    /// The scan's elevation measurement (eq. 12 with `p > l_occ`) from its hits as
+    /// [`ModelOptions::scan_hit_elevation`] says (the paper: the highest); -inf: none.
+    pub(super) hit_z_m: f32,
+    /// Variance of that measurement.
+    pub(super) hit_var_m2: f32,
+    /// The scan's hits in the cell as an unweighted sample: their number, mean and sum of squared deviations
+    /// (Welford), and the sum of their variances ([`crate::model::spread_variance`]).
+    pub(super) hits: HitSample,
+    /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it),
+    /// from samples more than 3 sigma before their hit (confidently free).
+    pub(super) free_z_m: f32,
+    /// The smallest measurement variance among the free samples.
+    pub(super) free_var_m2: f32,
+    /// Whether a free sample passed through the cell's surface band
+    /// ([`FreeSpaceOccupancy::SurfaceBand`]).
+    pub(super) band_contradicted: bool,
+    /// Whether a free sample passed through the band of the cell's ceiling.
+    pub(super) ceiling_contradicted: bool,
+    /// The highest point of a free sample that passed under the band of the cell's ceiling (-inf: none).
+    pub(super) ceiling_clear_m: f32,
+    /// From which side the beams of the scan's overhead hits came.
+    pub(super) ceiling_seen_from: SeenFrom,
+    /// The scan's hits above the cell's surface band ([`OverheadHits::Ceiling`]) as a sample, and their largest
+    /// probability (0: none).
+    pub(super) overhead: HitSample,
+    pub(super) ceiling_p: f32,
+    /// The largest distance of an overhead hit above the cell's surface, in standard deviations of the
+    /// difference ([`overhead_significant`]).
+    pub(super) overhead_score: f32,
+    /// The number of the scan's samples in the cell that measured a height, overhead hits included.
+    pub(super) num_heights: f32,
+}
+
+const _: () = assert!(size_of::<ScanEvidence>() == 72);
+
+impl ScanEvidence {
+    pub(crate) const NONE: Self = Self {
+        p_max: 0.0,
+        hit_z_m: f32::NEG_INFINITY,
+        hit_var_m2: f32::INFINITY,
+        hits: HitSample::NONE,
+        free_z_m: f32::INFINITY,
+        free_var_m2: f32::INFINITY,
+        band_contradicted: false,
+        ceiling_contradicted: false,
+        ceiling_clear_m: f32::NEG_INFINITY,
+        ceiling_seen_from: SeenFrom::Both,
+        overhead: HitSample::NONE,
+        ceiling_p: 0.0,
+        overhead_score: 0.0,
+        num_heights: 0.0,
+    };
+
+    /// Whether the scan said something about the cell's ceiling.
+    pub(super) fn touches_ceiling(&self) -> bool {
+        self.ceiling_contradicted || self.ceiling_p > 0.0 || self.ceiling_clear_m > f32::NEG_INFINITY
+    }
+
+    /// The scan's measurement of the cell's ceiling, if it hit one: the mean of its overhead hits, with the
+    /// variance of [`ScanHitElevation::MeanWithSpread`] (the hits' spread over their noise is the structure's
+    /// extent in the cell), the hits no better than `rho` of one ([`ModelOptions::measurement_correlation`]).
+    /// None when the overhead hits are the tail of the surface's noise among the scan's samples of the cell
+    /// ([`overhead_significant`], with the band `band_sigmas` wide).
+    pub(super) fn ceiling_hit(&self, rho: f32, band_sigmas: f32) -> Option<CeilingHit> {
+        let hits = &self.overhead;
+        let structure =
+            self.ceiling_p > 0.0 && overhead_significant(self.overhead_score, self.num_heights, band_sigmas);
+        structure.then(|| CeilingHit {
+            z_m: hits.mean_m,
+            var_m2: spread_variance(
+                (hits.mean_variance() / hits.n).max(rho * hits.mean_variance()),
+                hits.sample_variance(),
+                hits.mean_variance(),
+            ),
+            p: self.ceiling_p,
+            seen_from: self.ceiling_seen_from,
+        })
+    }
+
+    /// A hit above the cell's surface band ([`OverheadHits::Ceiling`]), by a beam from `side`, `score` standard
+    /// deviations above the surface.
+    #[inline(always)]
+    pub(super) fn add_overhead(&mut self, p: f32, z_m: f32, var_m2: f32, side: SeenFrom, score: f32) {
+        self.num_heights += 1.0;
+        self.overhead_score = self.overhead_score.max(score);
+        self.ceiling_seen_from = if self.ceiling_p > 0.0 {
+            self.ceiling_seen_from.and(side)
+        } else {
+            side
+        };
+        self.ceiling_p = self.ceiling_p.max(p);
+        self.overhead.add(z_m, var_m2);
+    }
+
+    pub(super) fn is_untouched(&self) -> bool {
+        self.p_max == 0.0
+    }
+
+    // The selects below compile to single min / max instructions: no value here is NaN, so the NaN handling
+    // of f32::min and f32::max is not needed in this, the hottest loop.
+    #[inline(always)]
+    pub(super) fn raise_p(&mut self, p: f32) {
+        self.p_max = if p > self.p_max { p } else { self.p_max };
+    }
+
+    /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12). Under
+    /// [`ScanHitElevation::HighestLevel`] a hit above the band of the hits so far starts them afresh and one
+    /// below it is left out (`band_sigmas` wide).
+    #[inline(always)]
+    pub(super) fn add_hit(
+        &mut self,
+        p: f32,
+        z_m: f32,
+        var_m2: f32,
+        rule: ScanHitElevation,
+        band_sigmas: f32,
+    ) {
+        self.raise_p(p);
+        self.num_heights += 1.0;
+        if rule == ScanHitElevation::HighestLevel && self.hits.n > 0.0 {
+            let level = Elevation {
+                mean_m: self.hits.mean_m,
+                var_m2: self.hits.mean_variance(),
+            };
+            match surface_level(level, z_m, var_m2, band_sigmas) {
+                Level::Below => return,
+                Level::Above => {
+                    self.hit_z_m = f32::NEG_INFINITY;
+                    self.hit_var_m2 = f32::INFINITY;
+                    self.hits = HitSample::NONE;
+                }
+                Level::Same => {}
+            }
+        }
+        (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
+        self.hits.add(z_m, var_m2);
+    }
+
+    /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
+    #[inline(always)]
+    pub(super) fn add_free(&mut self, p: f32, beam_top_m: f32, var_m2: f32) {
+        self.raise_p(p);
+        self.free_z_m = if beam_top_m < self.free_z_m {
+            beam_top_m
+        } else {
+            self.free_z_m
+        };
+        self.free_var_m2 = if var_m2 < self.free_var_m2 {
+            var_m2
+        } else {
+            self.free_var_m2
+        };
+    }
+}
+
+/// A scan's hits in one cell as a sample: enough to tell their spread from their noise.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct HitSample {
+    pub(super) n: f32,
+    pub(super) mean_m: f32,
+    pub(super) m2: f32,
+    pub(super) sum_var_m2: f32,
+}
+
+impl HitSample {
+    const NONE: Self = Self {
+        n: 0.0,
+        mean_m: 0.0,
+        m2: 0.0,
+        sum_var_m2: 0.0,
+    };
+
+    #[inline(always)]
+    pub(super) fn add(&mut self, z_m: f32, var_m2: f32) {
+        self.n += 1.0;
+        let d = z_m - self.mean_m;
+        self.mean_m += d / self.n;
+        self.m2 += d * (z_m - self.mean_m);
+        self.sum_var_m2 += var_m2;
+    }
+
+    /// The sample variance of the hits' heights (0 for fewer than two).
+    pub(super) fn sample_variance(&self) -> f32 {
+        if self.n < 2.0 {
+            0.0
+        } else {
+            self.m2 / (self.n - 1.0)
+        }
+    }
+
+    /// The mean of the hits' own variances.
+    pub(super) fn mean_variance(&self) -> f32 {
+        if self.n < 1.0 {
+            0.0
+        } else {
+            self.sum_var_m2 / self.n
+        }
+    }
+}
+
+/// Access to the scratch grid along a walk, re-indexing only when the walk enters another tile.
+pub(super) struct ScratchCursor<'a> {
+    pub(super) grid: &'a mut TileGrid<ScanEvidence>,
+    pub(super) limit_bytes: u64,
+    pub(super) tile: Option<TileIndex>,
+    pub(super) slot: usize,
+}
+
+impl<'a> ScratchCursor<'a> {
+    pub(super) fn new(grid: &'a mut TileGrid<ScanEvidence>, limit_bytes: u64) -> Self {
+        Self {
+            grid,
+            limit_bytes,
+            tile: None,
+            slot: 0,
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn at(&mut self, cell: CellIndex) -> Result<&mut ScanEvidence> {
+        let tile = TileIndex::of(cell);
+        if self.tile != Some(tile) {
+            self.enter(tile)?;
+        }
+        Ok(self.grid.in_slot_mut(self.slot, offset_in_tile(cell)))
+    }
+
+    #[cold]
+    #[inline(never)]
+    pub(super) fn enter(&mut self, tile: TileIndex) -> Result<()> {
+        self.slot = self
+            .grid
+            .slot_or_insert(tile, self.limit_bytes)
+            .map_err(|e| Error::MemoryLimit {
+                requested_bytes: e.requested_bytes,
+                limit_bytes: self.limit_bytes,
+            })?;
+        self.tile = Some(tile);
+        Ok(())
+    }
+}
