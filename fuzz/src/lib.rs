@@ -105,7 +105,7 @@ pub fn run(target: Target, data: &[u8]) -> bool {
             let at = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/fuzz-input.toml");
             sim::scenario::load_str(&at, text).is_ok()
         }),
-        Target::Png => sim::terrain::decode_greyscale_png(path, data).is_ok(),
+        Target::Png => sim::scenario::heightmap::decode_greyscale_png(path, data).is_ok(),
         Target::Urdf => std::str::from_utf8(data)
             .is_ok_and(|text| sim::robot::RobotModel::from_urdf_text(path, text, "base_link").is_ok()),
         Target::Sweep => std::str::from_utf8(data).is_ok_and(|text| {

@@ -10,7 +10,8 @@ mod common;
 use nalgebra::Vector3;
 use oeg::RayKind;
 use sim::Simulation;
-use sim::sensors::{BeamPattern, SensorScan, beam_directions};
+use sim::scenario::sensors::BeamPattern;
+use sim::sensors::{SensorScan, beam_directions};
 
 /// A scenario with one sensor entry (`sensor` is the body of a `[[sensors]]` table) facing a wall 5 m ahead
 /// (the robot at the origin looking along +x).

@@ -6,6 +6,8 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use oeg::{ModelOptions, TraversabilityRule};
+
+use super::sensors::SensorMount;
 use serde::Deserialize;
 
 /// A whole scenario: a place, a robot, its sensors and drive, and what the run must achieve.
@@ -432,8 +434,6 @@ fn default_person_radius() -> f64 {
 fn default_person_height() -> f64 {
     1.7
 }
-
-pub use crate::sensors::config::{NoiseSettings, SensorKind, SensorMount};
 
 /// A threshold on one metric: the run fails when the value is below `min` or above `max`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]

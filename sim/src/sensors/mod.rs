@@ -19,15 +19,13 @@
 //! Each hit carries the range error its model gives at the measured range (bias excluded: it is systematic),
 //! so the map's elevation variance matches the noise actually applied.
 
-pub mod config;
-
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use oeg::{Ray, RayKind, Scan};
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal, StandardNormal};
 use rayon::prelude::*;
 
-pub use config::{BeamPattern, Noise, RangeNoise, SensorKind, SensorSpec};
+use crate::scenario::sensors::{BeamPattern, RangeNoise, SensorKind, SensorSpec};
 
 use crate::robot::rotation_from_rpy;
 use crate::seed::{self, Stream};

@@ -1,0 +1,497 @@
+//! The check of a scenario's values for sense, after the schema has read them: every error names the file, the
+//! line and the column of the value, and what was expected.
+
+use toml::de::DeTable;
+
+use super::load::{
+    KeySeg, MAX_CELL_VISITS_PER_RUN, MAX_DURATION_S, MAX_LENGTH_M, MAX_MAP_CELLS, MAX_OBJECTS, MAX_PARTS,
+    MAX_RAYS_PER_RUN, value_offset,
+};
+use super::schema::{Actor, Obstacle, Scenario, ScenarioSource, Terrain};
+use crate::error::{Result, SimError, TextPosition};
+
+pub(super) struct Checker<'a> {
+    pub(super) source: &'a ScenarioSource,
+    pub(super) document: Option<DeTable<'a>>,
+}
+
+impl Checker<'_> {
+    /// The byte offset of the value at `path`, or of its nearest existing parent.
+    fn offset(&self, path: &[KeySeg<'_>]) -> Option<usize> {
+        value_offset(self.document.as_ref()?, path)
+    }
+
+    pub(super) fn error(&self, path: &[KeySeg<'_>], message: impl Into<String>) -> SimError {
+        let dotted: Vec<String> = path
+            .iter()
+            .map(|s| match s {
+                KeySeg::Key(k) => (*k).to_string(),
+                KeySeg::Index(i) => format!("[{i}]"),
+            })
+            .collect();
+        SimError::Scenario {
+            path: self.source.path.clone(),
+            position: self
+                .offset(path)
+                .map(|o| TextPosition::of_offset(&self.source.text, o)),
+            message: format!("`{}`: {}", dotted.join(".").replace(".[", "["), message.into()),
+        }
+    }
+
+    fn check(&self, ok: bool, path: &[KeySeg<'_>], message: impl FnOnce() -> String) -> Result<()> {
+        if ok {
+            Ok(())
+        } else {
+            Err(self.error(path, message()))
+        }
+    }
+
+    fn positive(&self, v: f64, path: &[KeySeg<'_>], what: &str) -> Result<()> {
+        self.check(v.is_finite() && v > 0.0, path, || {
+            format!("expected a positive {what}, got {v}")
+        })
+    }
+
+    /// A positive length of at most [`MAX_LENGTH_M`].
+    fn length(&self, v: f64, path: &[KeySeg<'_>], what: &str) -> Result<()> {
+        self.check(v.is_finite() && v > 0.0 && v <= MAX_LENGTH_M, path, || {
+            format!("expected a {what} in (0, {MAX_LENGTH_M}], got {v}")
+        })
+    }
+
+    fn non_negative(&self, v: f64, path: &[KeySeg<'_>], what: &str) -> Result<()> {
+        self.check(v.is_finite() && v >= 0.0, path, || {
+            format!("expected a {what} >= 0, got {v}")
+        })
+    }
+
+    fn inside(&self, s: &Scenario, xy: [f64; 2], path: &[KeySeg<'_>]) -> Result<()> {
+        let (lo, hi) = (s.map.min_xy_m, s.map.max_xy_m);
+        let ok = xy.iter().all(|v| v.is_finite())
+            && (lo[0]..=hi[0]).contains(&xy[0])
+            && (lo[1]..=hi[1]).contains(&xy[1]);
+        self.check(ok, path, || {
+            format!(
+                "point {xy:?} m lies outside the map region {lo:?} .. {hi:?} m; expected a point inside it"
+            )
+        })
+    }
+
+    /// Checks every value of the scenario for sense, section by section; the first bad one is an error at its
+    /// place in the file.
+    pub(super) fn validate(&self, s: &Scenario) -> Result<()> {
+        self.validate_run(s)?;
+        self.validate_map(s)?;
+        self.validate_robot(s)?;
+        self.validate_terrain(s)?;
+        self.validate_objects(s)?;
+        self.validate_sensors(s)?;
+        self.validate_expectations(s)
+    }
+
+    /// The name, the clock and the duration.
+    fn validate_run(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::Key as K;
+        self.check(!s.name.trim().is_empty(), &[K("name")], || {
+            "expected a non-empty name".into()
+        })?;
+        self.check(
+            s.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)),
+            &[K("name")],
+            || {
+                format!(
+                    "`{}` is used as a folder name: expected letters, digits, '-', '_' or '.'",
+                    s.name
+                )
+            },
+        )?;
+        self.check(
+            s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= MAX_DURATION_S,
+            &[K("duration_s")],
+            || {
+                format!(
+                    "expected a duration in (0, {MAX_DURATION_S}] s, got {}",
+                    s.duration_s
+                )
+            },
+        )?;
+        self.check(
+            s.tick_s.is_finite() && s.tick_s > 0.0 && s.tick_s <= s.duration_s,
+            &[K("tick_s")],
+            || format!("expected a tick in (0, duration_s] s, got {}", s.tick_s),
+        )?;
+        Ok(())
+    }
+
+    /// `[map]` and `[planner]`: the region, the resolution, the model and the rules.
+    fn validate_map(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::Key as K;
+        // The map.
+        let m = &s.map;
+        let finite = m.min_xy_m.iter().chain(&m.max_xy_m).all(|v| v.is_finite());
+        self.check(
+            finite && m.min_xy_m[0] < m.max_xy_m[0] && m.min_xy_m[1] < m.max_xy_m[1],
+            &[K("map"), K("max_xy_m")],
+            || {
+                format!(
+                    "expected max_xy_m {:?} to exceed min_xy_m {:?} on both axes",
+                    m.max_xy_m, m.min_xy_m
+                )
+            },
+        )?;
+        if let Err(e) = oeg::GridGeometry::new(m.resolution_m) {
+            return Err(self.error(&[K("map"), K("resolution_m")], e.to_string()));
+        }
+        let cells = ((m.max_xy_m[0] - m.min_xy_m[0]) / m.resolution_m).ceil()
+            * ((m.max_xy_m[1] - m.min_xy_m[1]) / m.resolution_m).ceil();
+        self.check(cells <= MAX_MAP_CELLS as f64, &[K("map"), K("resolution_m")], || {
+            format!("the region holds {cells:.0} cells at this resolution, over the limit of {MAX_MAP_CELLS}; use a coarser resolution or a smaller region")
+        })?;
+        if let Err(e) = m.model.validate() {
+            return Err(self.error(&[K("map"), K("model")], e.to_string()));
+        }
+        if let oeg::TraversabilityRule::Conservative { kappa }
+        | oeg::TraversabilityRule::Contact { kappa, .. } = m.traversability
+        {
+            self.non_negative(
+                f64::from(kappa),
+                &[K("map"), K("traversability"), K("kappa")],
+                "number of standard deviations",
+            )?;
+        }
+        if let oeg::TraversabilityRule::Contact { reach_m, .. } = m.traversability {
+            self.non_negative(
+                f64::from(reach_m),
+                &[K("map"), K("traversability"), K("reach_m")],
+                "distance in metres",
+            )?;
+        }
+
+        if let Err(e) = s.planner.options().validate() {
+            let key = match e {
+                oeg::Error::InvalidSetting { name, .. } => name,
+                _ => "inflation_radius_m",
+            };
+            return Err(self.error(&[K("planner"), K(key)], e.to_string()));
+        }
+        if let Some(xy) = s.planner.start_xy_m {
+            self.inside(s, xy, &[K("planner"), K("start_xy_m")])?;
+        }
+        if let Some(xy) = s.planner.goal_xy_m {
+            self.inside(s, xy, &[K("planner"), K("goal_xy_m")])?;
+        }
+        Ok(())
+    }
+
+    /// `[robot]`: its decision limits, its drive and its odometry.
+    fn validate_robot(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::{Index as I, Key as K};
+        // The robot.
+        let r = &s.robot;
+        self.positive(
+            r.max_step_m,
+            &[K("robot"), K("max_step_m")],
+            "step height in metres",
+        )?;
+        self.positive(r.height_m, &[K("robot"), K("height_m")], "robot height in metres")?;
+        if let Err(e) = r.profile().validate() {
+            return Err(self.error(&[K("robot"), K("max_grade")], e.to_string()));
+        }
+        self.positive(
+            r.drive.speed_m_s,
+            &[K("robot"), K("drive"), K("speed_m_s")],
+            "speed in m/s",
+        )?;
+        self.check(
+            !r.drive.waypoints_xy_m.is_empty(),
+            &[K("robot"), K("drive"), K("waypoints_xy_m")],
+            || "expected at least one waypoint [x, y]".into(),
+        )?;
+        for (k, w) in r.drive.waypoints_xy_m.iter().enumerate() {
+            self.inside(s, *w, &[K("robot"), K("drive"), K("waypoints_xy_m"), I(k)])?;
+        }
+        if let Some(yaw) = r.drive.start_yaw_deg {
+            self.check(
+                yaw.is_finite(),
+                &[K("robot"), K("drive"), K("start_yaw_deg")],
+                || "expected a finite angle".into(),
+            )?;
+        }
+        self.non_negative(
+            r.odometry.xy_sigma_m_per_sqrt_m,
+            &[K("robot"), K("odometry"), K("xy_sigma_m_per_sqrt_m")],
+            "noise",
+        )?;
+        self.non_negative(
+            r.odometry.yaw_sigma_deg_per_sqrt_m,
+            &[K("robot"), K("odometry"), K("yaw_sigma_deg_per_sqrt_m")],
+            "noise",
+        )?;
+        Ok(())
+    }
+
+    /// The obstacles and the actors: their number, their parts and each one's values.
+    fn validate_objects(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::{Index as I, Key as K};
+        for (key, n) in [("obstacles", s.obstacles.len()), ("actors", s.actors.len())] {
+            self.check(n <= MAX_OBJECTS, &[K(key)], || {
+                format!("{n} {key}, over the limit of {MAX_OBJECTS}")
+            })?;
+        }
+        for (k, o) in s.obstacles.iter().enumerate() {
+            self.validate_obstacle(s, k, o)?;
+        }
+        let parts: usize = s
+            .obstacles
+            .iter()
+            .map(|o| match o {
+                Obstacle::Bush { num_parts, .. } => *num_parts as usize,
+                _ => 1,
+            })
+            .sum();
+        self.check(parts <= MAX_PARTS, &[K("obstacles")], || {
+            format!("the obstacles hold {parts} solid parts (a bush counts its num_parts), over the limit of {MAX_PARTS}")
+        })?;
+        for (k, a) in s.actors.iter().enumerate() {
+            let Actor::Person {
+                waypoints,
+                radius_m,
+                height_m,
+                ..
+            } = a;
+            let at = |key| [K("actors"), I(k), K(key)];
+            self.length(*radius_m, &at("radius_m"), "radius in metres")?;
+            self.length(*height_m, &at("height_m"), "height in metres")?;
+            self.check(!waypoints.is_empty(), &at("waypoints"), || {
+                "expected at least one [t_s, x_m, y_m]".into()
+            })?;
+            for (n, w) in waypoints.iter().enumerate() {
+                let path = [K("actors"), I(k), K("waypoints"), I(n)];
+                self.check(w[0].is_finite(), &path, || {
+                    format!("time {} is not a number", w[0])
+                })?;
+                self.inside(s, [w[1], w[2]], &path)?;
+                if n > 0 {
+                    self.check(w[0] > waypoints[n - 1][0], &path, || {
+                        format!(
+                            "times must increase: {} s follows {} s",
+                            w[0],
+                            waypoints[n - 1][0]
+                        )
+                    })?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `[[sensors]]`: each entry resolved against its preset, unique names, and the run's total work.
+    fn validate_sensors(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::{Index as I, Key as K};
+        let mut names = std::collections::BTreeSet::new();
+        let (mut total_rays, mut total_cells) = (0.0_f64, 0.0_f64);
+        for (k, sensor) in s.sensors.iter().enumerate() {
+            self.check(
+                names.insert(sensor.name.as_str()),
+                &[K("sensors"), I(k), K("name")],
+                || {
+                    format!(
+                        "a sensor named `{}` already exists; names must be unique",
+                        sensor.name
+                    )
+                },
+            )?;
+            let finite = sensor.xyz_m.iter().chain(&sensor.rpy_deg).all(|v| v.is_finite());
+            self.check(finite, &[K("sensors"), I(k), K("xyz_m")], || {
+                "expected finite offsets".into()
+            })?;
+            match sensor.resolve() {
+                Err(e) => {
+                    let mut path = vec![K("sensors"), I(k)];
+                    path.extend(e.key.iter().map(|key| K(key)));
+                    return Err(self.error(&path, e.message));
+                }
+                Ok(spec) => {
+                    let rays = spec.num_scans(s.duration_s) as f64 * spec.beams.rays_per_scan() as f64;
+                    total_rays += rays;
+                    total_cells += rays * (spec.max_range_m / s.map.resolution_m).ceil();
+                }
+            }
+        }
+        self.check(total_rays <= MAX_RAYS_PER_RUN, &[K("sensors")], || {
+            format!(
+                "the sensors would cast {total_rays:.3e} rays in {} s, over the limit of {MAX_RAYS_PER_RUN:.0e} \
+                 rays per run; lower a rate, a resolution or the duration",
+                s.duration_s
+            )
+        })?;
+        self.check(total_cells <= MAX_CELL_VISITS_PER_RUN, &[K("sensors")], || {
+            format!(
+                "the sensors' rays would cross up to {total_cells:.3e} cells of {} m in {} s, over the limit of \
+                 {MAX_CELL_VISITS_PER_RUN:.0e} per run; lower a rate, a range, the duration, or use larger cells",
+                s.map.resolution_m, s.duration_s
+            )
+        })?;
+        Ok(())
+    }
+
+    /// `[expectations]`: each with a finite `min`, `max` or both.
+    fn validate_expectations(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::Key as K;
+        for (name, e) in &s.expectations {
+            let path = [K("expectations"), K(name.as_str())];
+            self.check(e.min.is_some() || e.max.is_some(), &path, || {
+                "expected `min`, `max` or both".into()
+            })?;
+            for v in [e.min, e.max].into_iter().flatten() {
+                self.check(v.is_finite(), &path, || {
+                    format!("threshold {v} is not a finite number")
+                })?;
+            }
+            if let (Some(lo), Some(hi)) = (e.min, e.max) {
+                self.check(lo <= hi, &path, || format!("min {lo} exceeds max {hi}"))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_terrain(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::Key as K;
+        let at = |key| [K("terrain"), K(key)];
+        match &s.terrain {
+            Terrain::Flat { height_m } => self.check(height_m.is_finite(), &at("height_m"), || {
+                "expected a finite height".into()
+            }),
+            Terrain::Slope {
+                height_m,
+                slope_x,
+                slope_y,
+            } => {
+                let ok = [height_m, slope_x, slope_y]
+                    .iter()
+                    .all(|v| v.is_finite() && v.abs() < 100.0);
+                self.check(ok, &at("slope_x"), || {
+                    "expected finite height and slopes (rise per metre under 100)".into()
+                })
+            }
+            Terrain::Noise {
+                amplitude_m,
+                wavelength_m,
+                cell_m,
+            } => {
+                self.non_negative(*amplitude_m, &at("amplitude_m"), "amplitude in metres")?;
+                self.positive(*wavelength_m, &at("wavelength_m"), "wavelength in metres")?;
+                self.positive(*cell_m, &at("cell_m"), "cell size in metres")?;
+                self.heightfield_size(s, *cell_m, &at("cell_m"))
+            }
+            Terrain::Image {
+                path,
+                height_scale_m,
+                cell_m,
+                origin_xy_m,
+            } => {
+                self.positive(*cell_m, &at("cell_m"), "pixel size in metres")?;
+                self.check(height_scale_m.is_finite(), &at("height_scale_m"), || {
+                    "expected a finite height".into()
+                })?;
+                if let Some(o) = origin_xy_m {
+                    self.check(o.iter().all(|v| v.is_finite()), &at("origin_xy_m"), || {
+                        "expected finite numbers".into()
+                    })?;
+                }
+                let file = self.source.resolve(path);
+                super::heightmap::read_greyscale_png(&file)
+                    .map(|_| ())
+                    .map_err(|e| self.error(&at("path"), e))
+            }
+        }
+    }
+
+    fn heightfield_size(&self, s: &Scenario, cell_m: f64, path: &[KeySeg<'_>]) -> Result<()> {
+        let n = ((s.map.max_xy_m[0] - s.map.min_xy_m[0]) / cell_m + 3.0)
+            * ((s.map.max_xy_m[1] - s.map.min_xy_m[1]) / cell_m + 3.0);
+        self.check(n <= MAX_MAP_CELLS as f64, path, || {
+            format!(
+                "the terrain would need {n:.0} heights, over the limit of {MAX_MAP_CELLS}; use a larger cell"
+            )
+        })
+    }
+
+    fn validate_obstacle(&self, s: &Scenario, k: usize, o: &Obstacle) -> Result<()> {
+        use KeySeg::{Index as I, Key as K};
+        let at = |key| [K("obstacles"), I(k), K(key)];
+        self.inside(s, o.center_xy_m(), &at("center_xy_m"))?;
+        match o {
+            Obstacle::Box {
+                size_m,
+                yaw_deg,
+                base_m,
+                ..
+            } => {
+                for v in size_m {
+                    self.length(*v, &at("size_m"), "size in metres")?;
+                }
+                self.check(yaw_deg.is_finite(), &at("yaw_deg"), || {
+                    "expected a finite angle".into()
+                })?;
+                self.non_negative(*base_m, &at("base_m"), "height above the ground in metres")
+            }
+            Obstacle::Cylinder {
+                radius_m,
+                height_m,
+                base_m,
+                ..
+            } => {
+                self.length(*radius_m, &at("radius_m"), "radius in metres")?;
+                self.length(*height_m, &at("height_m"), "height in metres")?;
+                self.non_negative(*base_m, &at("base_m"), "height above the ground in metres")
+            }
+            Obstacle::Ramp {
+                length_m,
+                width_m,
+                height_m,
+                yaw_deg,
+                ..
+            } => {
+                self.length(*length_m, &at("length_m"), "length in metres")?;
+                self.length(*width_m, &at("width_m"), "width in metres")?;
+                self.length(*height_m, &at("height_m"), "height in metres")?;
+                self.check(yaw_deg.is_finite(), &at("yaw_deg"), || {
+                    "expected a finite angle".into()
+                })
+            }
+            Obstacle::Bush {
+                radius_m,
+                height_m,
+                num_parts,
+                ..
+            } => {
+                self.length(*radius_m, &at("radius_m"), "radius in metres")?;
+                self.length(*height_m, &at("height_m"), "height in metres")?;
+                self.check((1..=1000).contains(num_parts), &at("num_parts"), || {
+                    format!("expected 1 to 1000 parts, got {num_parts}")
+                })
+            }
+            Obstacle::Overhang {
+                size_m,
+                clearance_m,
+                yaw_deg,
+                ..
+            } => {
+                for v in size_m {
+                    self.length(*v, &at("size_m"), "size in metres")?;
+                }
+                self.length(
+                    *clearance_m,
+                    &at("clearance_m"),
+                    "gap under the overhang in metres",
+                )?;
+                self.check(yaw_deg.is_finite(), &at("yaw_deg"), || {
+                    "expected a finite angle".into()
+                })
+            }
+        }
+    }
+}

@@ -1,0 +1,118 @@
+//! The clock: the robot moved along its drive (settled on the terrain) and the actors along their
+//! waypoints, and the poses of the robot and its links, true and as odometry believes.
+
+use crate::convert::to_pose;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+
+use super::{ActorTrack, World};
+
+impl ActorTrack {
+    /// Position at `t_s`, or `None` when the actor is not in the scene.
+    pub(super) fn position_at(&self, t_s: f64) -> Option<(f64, f64)> {
+        let first = self.waypoints.first()?;
+        let last = self.waypoints.last()?;
+        if t_s < first[0] || t_s > last[0] {
+            return None;
+        }
+        for w in self.waypoints.windows(2) {
+            if t_s <= w[1][0] {
+                let f = (t_s - w[0][0]) / (w[1][0] - w[0][0]);
+                return Some((
+                    w[0][1] + f * (w[1][1] - w[0][1]),
+                    w[0][2] + f * (w[1][2] - w[0][2]),
+                ));
+            }
+        }
+        Some((last[1], last[2]))
+    }
+}
+
+impl World {
+    /// Simulated time, seconds.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// Moves the clock to `t_s` (not before the current time): the robot along its drive, draped on the
+    /// terrain, its odometry drift, and the actors.
+    pub fn advance_to(&mut self, t_s: f64) {
+        let t_s = t_s.max(self.time_s);
+        self.time_s = t_s;
+        let planar = self.path.pose_at(t_s);
+        self.world_from_base = self.drape(planar.x_m, planar.y_m, planar.yaw_rad);
+        self.drift.advance(planar.distance_m);
+        self.estimated_world_from_base = self.drift.apply(&self.world_from_base);
+        if let Some(body) = self.physics.bodies.get_mut(self.robot_body) {
+            body.set_position(to_pose(&self.world_from_base), true);
+        }
+        for k in 0..self.actors.len() {
+            let track = &self.actors[k];
+            let present = track.position_at(t_s);
+            let (body, collider, half) = (track.body, track.collider, track.half_height_m);
+            if let Some((x, y)) = present {
+                let z = self.ground_z(x, y).unwrap_or(0.0) + half;
+                if let Some(b) = self.physics.bodies.get_mut(body) {
+                    b.set_position(to_pose(&Isometry3::translation(x, y, z)), true);
+                }
+            }
+            if let Some(c) = self.physics.colliders.get_mut(collider) {
+                c.set_enabled(present.is_some());
+            }
+        }
+        self.physics.detect_collisions(&(), &());
+    }
+
+    /// The base pose at `(x, y, yaw)` resting on the terrain: height from the wheel contacts, pitch from the
+    /// front and rear pairs, roll from the left and right pairs.
+    fn drape(&self, x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
+        let planar = Isometry3::from_parts(
+            Translation3::new(x, y, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+        );
+        let ground = |p: &Point3<f64>| {
+            let w = planar * p;
+            self.ground_z(w.x, w.y).unwrap_or(0.0)
+        };
+        let c = &self.wheel_contacts;
+        if c.len() != 4 {
+            let z = self.ground_z(x, y).unwrap_or(0.0);
+            return Isometry3::from_parts(
+                Translation3::new(x, y, z),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+            );
+        }
+        // Sorted front-left, front-right, rear-left, rear-right.
+        let z: Vec<f64> = c.iter().map(ground).collect();
+        let wheelbase = (c[0].x + c[1].x - c[2].x - c[3].x) / 2.0;
+        let track = (c[0].y + c[2].y - c[1].y - c[3].y) / 2.0;
+        let pitch = -(((z[0] + z[1]) - (z[2] + z[3])) / 2.0).atan2(wheelbase);
+        let roll = (((z[0] + z[2]) - (z[1] + z[3])) / 2.0).atan2(track);
+        let mean = z.iter().sum::<f64>() / 4.0;
+        Isometry3::from_parts(
+            Translation3::new(x, y, mean),
+            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+        )
+    }
+
+    /// The robot's true pose, `world_from_base`.
+    pub fn world_from_base(&self) -> Isometry3<f64> {
+        self.world_from_base
+    }
+
+    /// The robot's estimated pose (true pose plus odometry drift).
+    pub fn estimated_world_from_base(&self) -> Isometry3<f64> {
+        self.estimated_world_from_base
+    }
+
+    /// `world_from_link` of a robot link at the current time (true pose).
+    pub fn world_from_link(&self, link: &str) -> Option<Isometry3<f64>> {
+        self.robot.base_from_link(link).map(|b| self.world_from_base * b)
+    }
+
+    /// `world_from_link` from the estimated pose.
+    pub fn estimated_world_from_link(&self, link: &str) -> Option<Isometry3<f64>> {
+        self.robot
+            .base_from_link(link)
+            .map(|b| self.estimated_world_from_base * b)
+    }
+}

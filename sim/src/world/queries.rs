@@ -1,0 +1,77 @@
+//! Queries of the world at the current time: the one ray cast every sensor and the truth go through, the
+//! ground height, the robot's collider poses.
+
+use crate::convert::{from_pose, point_to_vector, to_vector};
+use nalgebra::{Isometry3, Point3, Vector3};
+use rapier3d::math::Vector;
+use rapier3d::prelude::{Collider, ColliderHandle, QueryFilter, Ray};
+
+use super::{
+    Actors, HitKind, KIND_ACTOR, KIND_OBSTACLE, KIND_ROBOT, KIND_TERRAIN, RayHit, RayStart, World, kind_of,
+};
+
+impl World {
+    /// Casts a ray from `origin` along `direction` (any length) up to `max_range_m`, ignoring the robot.
+    pub fn cast_ray(
+        &self,
+        origin: &Point3<f64>,
+        direction: &Vector3<f64>,
+        max_range_m: f64,
+        actors: Actors,
+        start: RayStart,
+    ) -> Option<RayHit> {
+        let norm = direction.norm();
+        if !norm.is_finite() || norm <= 0.0 || !origin.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let dir = direction / norm;
+        let ray = Ray::new(point_to_vector(origin), to_vector(&dir));
+        let skip_actors = |_: ColliderHandle, c: &Collider| kind_of(c) != KIND_ACTOR;
+        let mut filter = QueryFilter::default().exclude_rigid_body(self.robot_body);
+        if actors == Actors::Excluded {
+            filter = filter.predicate(&skip_actors);
+        }
+        let (handle, toi) =
+            self.physics
+                .cast_ray(&ray, max_range_m as f32, start == RayStart::InsideHits, filter)?;
+        let collider = self.physics.colliders.get(handle)?;
+        let index = (collider.user_data & 0xffff_ffff) as usize;
+        let kind = match kind_of(collider) {
+            KIND_TERRAIN => HitKind::Terrain,
+            KIND_OBSTACLE => HitKind::Obstacle { index },
+            _ => HitKind::Actor { index },
+        };
+        let distance_m = f64::from(toi);
+        Some(RayHit {
+            point_in_world: origin + dir * distance_m,
+            distance_m,
+            kind,
+        })
+    }
+
+    /// The terrain's height at `(x, y)` (obstacles and actors ignored), or `None` off the terrain.
+    pub fn ground_z(&self, x: f64, y: f64) -> Option<f64> {
+        // Start just above the terrain: Rapier works in f32, and a start far above would cost precision.
+        let from = self.terrain_top_m;
+        let ray = Ray::new(
+            point_to_vector(&Point3::new(x, y, from)),
+            Vector::new(0.0, 0.0, -1.0),
+        );
+        let only_terrain = |_: ColliderHandle, c: &Collider| kind_of(c) == KIND_TERRAIN;
+        let filter = QueryFilter::default().predicate(&only_terrain);
+        let (_, toi) = self
+            .physics
+            .cast_ray(&ray, self.terrain_span_m as f32, true, filter)?;
+        Some(from - f64::from(toi))
+    }
+
+    /// Every robot collider's world pose, for checks and drawings.
+    pub fn robot_collider_poses(&self) -> Vec<Isometry3<f64>> {
+        self.physics
+            .colliders
+            .iter()
+            .filter(|(_, c)| kind_of(c) == KIND_ROBOT)
+            .map(|(_, c)| from_pose(c.position()))
+            .collect()
+    }
+}
