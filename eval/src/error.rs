@@ -12,6 +12,15 @@ pub enum EvalError {
     /// From the simulation crate (scenario files, the robot, the world). Its message names the file and place.
     #[error(transparent)]
     Sim(#[from] sim::SimError),
+    /// A setting that cannot be used; its message names where it came from (`--set KEY=VALUE: ...`).
+    #[error(transparent)]
+    Setting(#[from] crate::settings::SettingError),
+    /// Arguments on the command line that the job cannot use (no input files, an impossible `--jobs`).
+    #[error("the command line: {message}")]
+    CommandLine {
+        /// What is wrong and what was expected.
+        message: String,
+    },
     /// An input the job cannot use.
     #[error("{}: {message}", path.display())]
     Input {

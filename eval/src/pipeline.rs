@@ -19,6 +19,7 @@ use crate::judge::{Evaluation, evaluate};
 use crate::output::{Staged, create_dir, write_json};
 use crate::progress::Progress;
 use crate::report::{write_comparison, write_report};
+use crate::settings::SettingError;
 
 /// What to run.
 #[derive(Debug, Clone, Default)]
@@ -91,12 +92,12 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
             message: format!("not valid TOML: {}", e.message()),
         })?;
         loaded = crate::settings::resolve_with(&doc, &options.overrides, |doc| {
-            let text = toml::to_string(doc).map_err(|e| e.to_string())?;
-            scenario::load_str(path, &text).map_err(|e| scenario_message(&e))
+            let text = toml::to_string(doc).map_err(|e| SettingError::invalid(e.to_string()))?;
+            scenario::load_str(path, &text).map_err(|e| SettingError::invalid(scenario_message(&e)))
         })
-        .map_err(|message| EvalError::Input {
+        .map_err(|e| EvalError::Input {
             path: path.clone(),
-            message,
+            message: e.to_string(),
         })?;
     }
     if let Some(seed) = options.seed {

@@ -34,8 +34,7 @@ pub struct MapArgs {
 impl MapArgs {
     /// The job these arguments ask for, its settings resolved.
     pub fn job(&self) -> anyhow::Result<MapJob> {
-        let settings =
-            oeg_eval::settings::map_settings(self.resolution, &self.overrides).map_err(anyhow::Error::msg)?;
+        let settings = oeg_eval::settings::map_settings(self.resolution, &self.overrides)?;
         Ok(MapJob {
             inputs: self.inputs.clone(),
             out_dir: self.out.clone(),

@@ -44,7 +44,7 @@ fn parse_xy(text: &str) -> Result<(f64, f64), String> {
 
 /// Plans, says whether a path was found and names the files written.
 pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
-    let settings = oeg_eval::settings::plan_settings(&args.overrides).map_err(anyhow::Error::msg)?;
+    let settings = oeg_eval::settings::plan_settings(&args.overrides)?;
     let job = PlanJob {
         map: args.map.clone(),
         from_xy_m: args.from,

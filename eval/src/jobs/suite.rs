@@ -94,8 +94,7 @@ pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
         }
     }
     if out.is_empty() {
-        return Err(EvalError::Input {
-            path: PathBuf::from("(command line)"),
+        return Err(EvalError::CommandLine {
             message: "no scenario files found".into(),
         });
     }
@@ -142,8 +141,7 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
             .build()
-            .map_err(|e| EvalError::Input {
-                path: PathBuf::from("(command line)"),
+            .map_err(|e| EvalError::CommandLine {
                 message: format!("cannot start {jobs} threads for --jobs: {e}"),
             })?;
         pool.install(|| {

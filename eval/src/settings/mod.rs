@@ -24,6 +24,60 @@ use toml::Table;
 
 use crate::settings::overrides::Override;
 
+/// A setting that cannot be used, named by where it came from: a `--set` on the command line (or a sweep's
+/// key, which goes through the same door), another option such as `--resolution`, or the defaults.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SettingError {
+    /// A `key=value` override that does not parse or apply, or after which the settings no longer make sense.
+    #[error("--set {text}: {message}")]
+    Override {
+        /// The override as given.
+        text: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A setting given by an option of its own (`--resolution`).
+    #[error("{option}: {message}")]
+    Option {
+        /// The option, as typed (`--resolution`).
+        option: &'static str,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// The settings without any override make no sense.
+    #[error("the defaults: {message}")]
+    Defaults {
+        /// What is wrong.
+        message: String,
+    },
+    /// The settings make no sense, and no one source is to blame (or the source is given around it).
+    #[error("{message}")]
+    Invalid {
+        /// What is wrong and what was expected.
+        message: String,
+    },
+}
+
+impl SettingError {
+    /// What is wrong, without where it came from.
+    pub fn message(&self) -> &str {
+        match self {
+            Self::Override { message, .. }
+            | Self::Option { message, .. }
+            | Self::Defaults { message }
+            | Self::Invalid { message } => message,
+        }
+    }
+
+    /// A problem with no source of its own yet.
+    pub fn invalid(message: impl Into<String>) -> Self {
+        Self::Invalid {
+            message: message.into(),
+        }
+    }
+}
+
 /// A range-error model of rays read from files.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -134,39 +188,47 @@ pub trait Checked: DeserializeOwned {
     ///
     /// # Errors
     /// The first value that makes no sense.
-    fn check(&self) -> Result<(), String>;
+    fn check(&self) -> Result<(), SettingError>;
+}
+
+/// An error of the map crate as a setting's problem.
+fn invalid(e: oeg::Error) -> SettingError {
+    SettingError::invalid(e.to_string())
 }
 
 impl Checked for MapJobSettings {
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), SettingError> {
         let r = self.map.resolution_m;
         if !(r.is_finite() && (0.001..=100.0).contains(&r)) {
-            return Err(format!(
+            return Err(SettingError::invalid(format!(
                 "map.resolution_m: expected a cell size in [0.001, 100] m, got {r}"
-            ));
+            )));
         }
-        self.map.model.validate().map_err(|e| e.to_string())?;
-        self.map.traversability.validate().map_err(|e| e.to_string())?;
-        self.robot.validate().map_err(|e| e.to_string())
+        self.map.model.validate().map_err(invalid)?;
+        self.map.traversability.validate().map_err(invalid)?;
+        self.robot.validate().map_err(invalid)
     }
 }
 
 impl Checked for PlanJobSettings {
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), SettingError> {
         self.planner.validate().map_err(|e| match e {
-            oeg::Error::InvalidSetting { name, message } => format!("planner.{name}: {message}"),
-            other => other.to_string(),
+            oeg::Error::InvalidSetting { name, message } => {
+                SettingError::invalid(format!("planner.{name}: {message}"))
+            }
+            other => invalid(other),
         })?;
-        self.map.traversability.validate().map_err(|e| e.to_string())?;
-        self.robot.validate().map_err(|e| e.to_string())
+        self.map.traversability.validate().map_err(invalid)?;
+        self.robot.validate().map_err(invalid)
     }
 }
 
-fn read<T: Checked>(doc: &Table) -> Result<T, String> {
+/// Reads settings of type `T` from a document: `[map] preset` expanded, the schema, then `T`'s own check.
+fn read<T: Checked>(doc: &Table) -> Result<T, SettingError> {
     let mut doc = doc.clone();
-    sim::scenario::expand_map_preset(&mut doc)?;
-    let text = toml::to_string(&doc).map_err(|e| e.to_string())?;
-    let value: T = toml::from_str(&text).map_err(|e| e.message().trim().to_string())?;
+    sim::scenario::expand_map_preset(&mut doc).map_err(SettingError::invalid)?;
+    let text = toml::to_string(&doc).map_err(|e| SettingError::invalid(e.to_string()))?;
+    let value: T = toml::from_str(&text).map_err(|e| SettingError::invalid(e.message().trim()))?;
     value.check()?;
     Ok(value)
 }
@@ -179,8 +241,8 @@ fn read<T: Checked>(doc: &Table) -> Result<T, String> {
 pub fn resolve_with<T>(
     base: &Table,
     overrides: &[String],
-    read: impl Fn(&Table) -> Result<T, String>,
-) -> Result<T, String> {
+    read: impl Fn(&Table) -> Result<T, SettingError>,
+) -> Result<T, SettingError> {
     let parsed = overrides
         .iter()
         .map(|t| Override::parse(t))
@@ -199,7 +261,10 @@ pub fn resolve_with<T>(
     for o in &parsed {
         o.apply_to(&mut doc)?;
         if let Err(e) = read(&doc) {
-            return Err(format!("--set {}: {e}", o.source));
+            return Err(SettingError::Override {
+                text: o.source.clone(),
+                message: e.message().to_string(),
+            });
         }
     }
     Err(full)
@@ -209,8 +274,10 @@ pub fn resolve_with<T>(
 ///
 /// # Errors
 /// As [`resolve_with`], and bad defaults (`the defaults: ...`).
-pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, String> {
-    read::<T>(base).map_err(|e| format!("the defaults: {e}"))?;
+pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, SettingError> {
+    read::<T>(base).map_err(|e| SettingError::Defaults {
+        message: e.message().to_string(),
+    })?;
     resolve_with(base, overrides, read::<T>)
 }
 
@@ -218,28 +285,35 @@ pub fn resolve<T: Checked>(base: &Table, overrides: &[String]) -> Result<T, Stri
 ///
 /// # Errors
 /// A bad resolution (named as `--resolution`) or override.
-pub fn map_settings(resolution_m: f64, overrides: &[String]) -> Result<MapJobSettings, String> {
+pub fn map_settings(resolution_m: f64, overrides: &[String]) -> Result<MapJobSettings, SettingError> {
     // The cell size has one spelling on `oeg map`: two would leave the reader guessing which one won.
     for text in overrides {
         let o = Override::parse(text)?;
         if overrides::key_covers(&o.key, "map.resolution_m") {
-            return Err(format!(
-                "--set {text}: the cell size is `--resolution` on `oeg map`; give it there only"
-            ));
+            return Err(SettingError::Override {
+                text: text.clone(),
+                message: "the cell size is `--resolution` on `oeg map`; give it there only".into(),
+            });
         }
     }
     let mut map = Table::new();
     map.insert("resolution_m".into(), toml::Value::Float(resolution_m));
     let mut base = Table::new();
     base.insert("map".into(), toml::Value::Table(map));
-    resolve(&base, overrides).map_err(|e| e.replace("the defaults: ", "--resolution: "))
+    resolve(&base, overrides).map_err(|e| match e {
+        SettingError::Defaults { message } => SettingError::Option {
+            option: "--resolution",
+            message,
+        },
+        other => other,
+    })
 }
 
 /// `oeg plan`'s settings from the overrides.
 ///
 /// # Errors
 /// A bad override.
-pub fn plan_settings(overrides: &[String]) -> Result<PlanJobSettings, String> {
+pub fn plan_settings(overrides: &[String]) -> Result<PlanJobSettings, SettingError> {
     resolve(&Table::new(), overrides)
 }
 
@@ -283,16 +357,21 @@ mod tests {
             ),
             ("map.resolution_m=0", "--set map.resolution_m=0: map.resolution_m"),
         ] {
-            let e = resolve::<MapJobSettings>(&map_base(), &[o.into()]).expect_err(o);
+            let e = resolve::<MapJobSettings>(&map_base(), &[o.into()])
+                .expect_err(o)
+                .to_string();
             assert!(e.starts_with(expected), "{o}: {e}");
         }
         let e = resolve::<PlanJobSettings>(&Table::new(), &["planner.unknown=sometimes".into()])
-            .expect_err("plan");
+            .expect_err("plan")
+            .to_string();
         assert!(
             e.starts_with("--set planner.unknown=sometimes: unknown variant"),
             "{e}"
         );
-        let e = resolve::<PlanJobSettings>(&Table::new(), &["map.model.p_max=0.7".into()]).expect_err("plan");
+        let e = resolve::<PlanJobSettings>(&Table::new(), &["map.model.p_max=0.7".into()])
+            .expect_err("plan")
+            .to_string();
         assert!(e.contains("unknown field `model`"), "{e}");
     }
 
@@ -311,7 +390,7 @@ mod tests {
     #[test]
     fn the_cell_size_is_given_once_on_oeg_map() {
         for o in ["map.resolution_m=0.1", "map.*=0.1", "map={ resolution_m = 0.1 }"] {
-            let e = map_settings(0.5, &[o.into()]).expect_err(o);
+            let e = map_settings(0.5, &[o.into()]).expect_err(o).to_string();
             assert!(e.contains("`--resolution`"), "{o}: {e}");
         }
         let s = map_settings(0.5, &["map.model.p_max=0.7".into()]).expect("other keys");

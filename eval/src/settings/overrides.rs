@@ -9,6 +9,8 @@
 
 use toml::{Table, Value};
 
+use super::SettingError;
+
 /// One `key=value` override.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Override {
@@ -25,15 +27,19 @@ impl Override {
     ///
     /// # Errors
     /// A message naming the override: no `=`, or an empty key or key segment.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, SettingError> {
+        let blame = |message: String| SettingError::Override {
+            text: text.to_string(),
+            message,
+        };
         let (key, raw) = text
             .split_once('=')
-            .ok_or_else(|| format!("--set {text}: expected key=value"))?;
+            .ok_or_else(|| blame("expected key=value".into()))?;
         let key = key.trim();
-        check_key(key).map_err(|e| format!("--set {text}: {e}"))?;
+        check_key(key).map_err(|e| blame(e.to_string()))?;
         Ok(Self {
             key: key.to_string(),
-            value: parse_value(raw.trim()).map_err(|e| format!("--set {text}: {e}"))?,
+            value: parse_value(raw.trim()).map_err(blame)?,
             source: text.to_string(),
         })
     }
@@ -52,14 +58,17 @@ impl Override {
     /// # Errors
     /// A key whose parent does not exist, an index past a list's end, a key into a value, a `*` that matches
     /// nothing; the message names the override.
-    pub fn apply_to(&self, doc: &mut Table) -> Result<(), String> {
+    pub fn apply_to(&self, doc: &mut Table) -> Result<(), SettingError> {
         let segments: Vec<&str> = self.key.split('.').collect();
         let mut root = Value::Table(std::mem::take(doc));
         let result = set_in(&mut root, &segments, 0, &self.value);
         if let Value::Table(t) = root {
             *doc = t;
         }
-        result.map_err(|e| format!("--set {}: {e}", self.source))
+        result.map_err(|message| SettingError::Override {
+            text: self.source.clone(),
+            message,
+        })
     }
 }
 
@@ -67,9 +76,11 @@ impl Override {
 ///
 /// # Errors
 /// What is wrong with it.
-pub fn check_key(key: &str) -> Result<(), String> {
+pub fn check_key(key: &str) -> Result<(), SettingError> {
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err("expected a dotted key such as map.resolution_m".into());
+        return Err(SettingError::Invalid {
+            message: "expected a dotted key such as map.resolution_m".into(),
+        });
     }
     Ok(())
 }
@@ -201,7 +212,9 @@ mod tests {
         let mut doc: Table =
             toml::from_str(text).map_err(|e| format!("the scenario is not valid TOML: {}", e.message()))?;
         for o in overrides {
-            Override::parse(o)?.apply_to(&mut doc)?;
+            Override::parse(o)
+                .and_then(|o| o.apply_to(&mut doc))
+                .map_err(|e| e.to_string())?;
         }
         toml::to_string(&doc).map_err(|e| format!("cannot write the overridden scenario: {e}"))
     }
@@ -296,7 +309,7 @@ mod tests {
             "name=1\nseed = 2",
             "a=\"open",
         ] {
-            let e = Override::parse(text).expect_err(text);
+            let e = Override::parse(text).expect_err(text).to_string();
             assert!(e.starts_with(&format!("--set {text}: ")), "{e}");
             assert!(e.contains("is not one value"), "{e}");
         }

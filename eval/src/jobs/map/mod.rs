@@ -252,8 +252,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
 /// Bad inputs or settings (before any output is written), or a failed write.
 pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     if job.inputs.is_empty() {
-        return Err(EvalError::Input {
-            path: PathBuf::from("(command line)"),
+        return Err(EvalError::CommandLine {
             message: "no input files".into(),
         });
     }

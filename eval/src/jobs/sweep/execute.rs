@@ -164,8 +164,7 @@ pub fn run(plan: &SweepPlan, options: &ExecuteOptions, progress: &Progress) -> R
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.jobs.max(1))
         .build()
-        .map_err(|e| EvalError::Input {
-            path: PathBuf::from("(command line)"),
+        .map_err(|e| EvalError::CommandLine {
             message: format!("cannot start {} threads for --jobs: {e}", options.jobs),
         })?;
     let errors: Vec<usize> = pool.install(|| {

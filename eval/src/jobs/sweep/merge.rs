@@ -49,8 +49,7 @@ pub fn plan_axes(plan: &Json) -> Vec<String> {
 /// named.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     let Some(first) = dirs.first() else {
-        return Err(EvalError::Input {
-            path: PathBuf::from("(command line)"),
+        return Err(EvalError::CommandLine {
             message: "expected at least one folder to merge".into(),
         });
     };

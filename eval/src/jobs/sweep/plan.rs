@@ -14,6 +14,7 @@ use toml::{Table, Value};
 
 use super::spec::{Combine, MAX_RUNS, Sweep};
 use crate::error::{EvalError, Result};
+use crate::settings::SettingError;
 use crate::settings::overrides::Override;
 
 /// One run of the plan.
@@ -365,7 +366,7 @@ fn resolve(
     base: &Table,
     combo: &[(String, Value)],
     seed: u64,
-) -> std::result::Result<Table, String> {
+) -> std::result::Result<Table, SettingError> {
     let mut doc = base.clone();
     doc.insert("seed".into(), Value::Integer(seed as i64));
     if let Some(g) = &sweep.spec.generate {
@@ -407,9 +408,11 @@ fn load_resolved(base: &Path, text: &str) -> Result<sim::LoadedScenario> {
 
 /// [`load_resolved`] of a resolved document: the message of what is wrong, without a place in the rewritten
 /// text.
-fn check_resolved(base: &Path, doc: &Table) -> std::result::Result<(), String> {
-    let text = toml::to_string(doc).map_err(|e| e.to_string())?;
-    load_resolved(base, &text).map(|_| ()).map_err(|e| message_of(&e))
+fn check_resolved(base: &Path, doc: &Table) -> std::result::Result<(), SettingError> {
+    let text = toml::to_string(doc).map_err(|e| SettingError::invalid(e.to_string()))?;
+    load_resolved(base, &text)
+        .map(|_| ())
+        .map_err(|e| SettingError::invalid(message_of(&e)))
 }
 
 /// When a resolved run fails, the base scenario's own error, if the base alone (as its file says, with its
@@ -500,14 +503,13 @@ fn check_overrides(sweep: &Sweep, base_doc: &Table, base: &Path) -> Result<()> {
     }
     let mut bare = sweep.clone();
     bare.overrides.clear();
-    let input = |message: String| EvalError::Input {
-        path: PathBuf::from("(command line)"),
-        message,
-    };
-    let doc = resolve(&bare, base_doc, &[], replicate_seed(sweep.spec.seed, 0)).map_err(input)?;
+    let doc = resolve(&bare, base_doc, &[], replicate_seed(sweep.spec.seed, 0))?;
     let texts: Vec<String> = sweep.overrides.iter().map(|o| o.source.clone()).collect();
-    crate::settings::resolve_with(&doc, &texts, |d| check_resolved(base, d))
-        .map_err(|m| input(format!("{m} (on {})", base.display())))
+    crate::settings::resolve_with(&doc, &texts, |d| check_resolved(base, d)).map_err(|e| {
+        EvalError::CommandLine {
+            message: format!("{e} (on {})", base.display()),
+        }
+    })
 }
 
 /// Each axis alone (its first and last value) on a base: an unknown key or a value the scenario rejects is

@@ -189,10 +189,7 @@ impl Sweep {
             .iter()
             .map(|o| crate::settings::overrides::Override::parse(o))
             .collect::<std::result::Result<_, _>>()
-            .map_err(|message| EvalError::Input {
-                path: PathBuf::from("(command line)"),
-                message,
-            })?;
+            .map_err(EvalError::Setting)?;
         Ok(self)
     }
 
@@ -285,7 +282,8 @@ impl Sweep {
         let mut axes = Vec::new();
         for (k, a) in s.axes.iter().enumerate() {
             let at = |field: &'static str| [K("axes"), I(k), K(field)];
-            crate::settings::overrides::check_key(&a.key).map_err(|e| self.error(&at("key"), e))?;
+            crate::settings::overrides::check_key(&a.key)
+                .map_err(|e| self.error(&at("key"), e.to_string()))?;
             if a.key == "scenario" && s.scenarios.len() > 1 {
                 return Err(self.error(
                     &at("key"),
