@@ -254,14 +254,23 @@ struct Header {
 /// The most bytes a PCD body may expand to (4 GiB): a bound on what a corrupt header can make us allocate.
 const MAX_BODY_BYTES: usize = 4 << 30;
 
+/// The header's lines as read so far, before `DATA` completes them.
+#[derive(Default)]
+struct HeaderLines {
+    names: Option<Vec<String>>,
+    sizes: Option<Vec<usize>>,
+    types: Option<Vec<ScalarType>>,
+    counts: Option<Vec<usize>>,
+    width: Option<usize>,
+    height: Option<usize>,
+    points: Option<usize>,
+    viewpoint: Option<Isometry3<f64>>,
+}
+
+/// Reads the header, line by line up to `DATA`; every error names the file and the line.
 fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
     let err = |line: usize, message: String| Error::parse(path, format!("line {line}: {message}"));
-    let mut names: Option<Vec<String>> = None;
-    let mut sizes: Option<Vec<usize>> = None;
-    let mut types: Option<Vec<ScalarType>> = None;
-    let mut counts: Option<Vec<usize>> = None;
-    let (mut width, mut height, mut points) = (None, None, None);
-    let mut viewpoint = Isometry3::identity();
+    let mut lines = HeaderLines::default();
     let mut pos = 0;
     let mut line_no = 0;
     while pos < data.len() {
@@ -281,137 +290,14 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
         let mut words = line.split_whitespace();
         let key = words.next().unwrap_or_default();
         let values: Vec<&str> = words.collect();
-        let numbers = |what: &str| -> Result<Vec<usize>> {
-            values
-                .iter()
-                .map(|v| {
-                    v.parse::<usize>()
-                        .map_err(|_| err(line_no, format!("{what}: expected whole numbers, got `{v}`")))
-                })
-                .collect()
-        };
-        let single = |what: &str| -> Result<usize> {
-            match numbers(what)?.as_slice() {
-                [n] => Ok(*n),
-                _ => Err(err(
-                    line_no,
-                    format!("{what}: expected one whole number, got `{}`", values.join(" ")),
-                )),
-            }
-        };
-        match key {
-            "VERSION" => {}
-            "FIELDS" | "COLUMNS" => names = Some(values.iter().map(|s| s.to_string()).collect()),
-            "SIZE" => sizes = Some(numbers("SIZE")?),
-            "TYPE" => {
-                types = Some(
-                    values
-                        .iter()
-                        .map(|t| match *t {
-                            "F" => Ok(ScalarType::F),
-                            "I" => Ok(ScalarType::I),
-                            "U" => Ok(ScalarType::U),
-                            other => Err(err(line_no, format!("TYPE: expected F, I or U, got `{other}`"))),
-                        })
-                        .collect::<Result<_>>()?,
-                );
-            }
-            "COUNT" => counts = Some(numbers("COUNT")?),
-            "WIDTH" => width = Some(single("WIDTH")?),
-            "HEIGHT" => height = Some(single("HEIGHT")?),
-            "POINTS" => points = Some(single("POINTS")?),
-            "VIEWPOINT" => {
-                let v: Vec<f64> = values
-                    .iter()
-                    .map(|s| s.parse::<f64>().ok().filter(|v| v.is_finite()))
-                    .collect::<Option<_>>()
-                    .filter(|v: &Vec<f64>| v.len() == 7)
-                    .ok_or_else(|| {
-                        err(
-                            line_no,
-                            "VIEWPOINT: expected 7 finite numbers tx ty tz qw qx qy qz".into(),
-                        )
-                    })?;
-                let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
-                    .ok_or_else(|| err(line_no, "VIEWPOINT: the rotation quaternion is zero".into()))?;
-                viewpoint = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation);
-            }
-            "DATA" => {
-                let encoding = match values.as_slice() {
-                    ["ascii"] => PcdEncoding::Ascii,
-                    ["binary"] => PcdEncoding::Binary,
-                    ["binary_compressed"] => PcdEncoding::BinaryCompressed,
-                    _ => {
-                        return Err(err(
-                            line_no,
-                            format!(
-                                "DATA: expected ascii, binary or binary_compressed, got `{}`",
-                                values.join(" ")
-                            ),
-                        ));
-                    }
-                };
-                let names = names.ok_or_else(|| err(line_no, "no FIELDS line before DATA".into()))?;
-                let sizes = sizes.ok_or_else(|| err(line_no, "no SIZE line before DATA".into()))?;
-                let types = types.ok_or_else(|| err(line_no, "no TYPE line before DATA".into()))?;
-                let counts = counts.unwrap_or_else(|| vec![1; names.len()]);
-                if sizes.len() != names.len() || types.len() != names.len() || counts.len() != names.len() {
-                    return Err(err(
-                        line_no,
-                        format!(
-                            "FIELDS, SIZE, TYPE and COUNT must list the same number of entries ({}, {}, {}, {})",
-                            names.len(),
-                            sizes.len(),
-                            types.len(),
-                            counts.len()
-                        ),
-                    ));
-                }
-                let fields: Vec<Field> = names
-                    .into_iter()
-                    .zip(sizes)
-                    .zip(types)
-                    .zip(counts)
-                    .map(|(((name, size), kind), count)| Field {
-                        name,
-                        size,
-                        kind,
-                        count,
-                    })
-                    .collect();
-                for f in &fields {
-                    if ![1, 2, 4, 8].contains(&f.size) || f.count == 0 {
-                        return Err(err(
-                            line_no,
-                            format!("field `{}` has SIZE {} and COUNT {}", f.name, f.size, f.count),
-                        ));
-                    }
-                }
-                let width = width.ok_or_else(|| err(line_no, "no WIDTH line before DATA".into()))?;
-                let height = height.unwrap_or(1);
-                let num_points = points.unwrap_or(width.saturating_mul(height));
-                if num_points != width.saturating_mul(height) {
-                    return Err(err(
-                        line_no,
-                        format!("POINTS is {num_points} but WIDTH x HEIGHT is {width} x {height}"),
-                    ));
-                }
-                let as_u32 = |v: usize, what: &str| {
-                    u32::try_from(v).map_err(|_| err(line_no, format!("{what} {v} is too large")))
-                };
-                return Ok(Header {
-                    fields,
-                    width: as_u32(width, "WIDTH")?,
-                    height: as_u32(height, "HEIGHT")?,
-                    num_points,
-                    viewpoint,
-                    encoding,
-                    body_start: pos,
-                    data_line: line_no,
-                });
-            }
-            other => return Err(err(line_no, format!("unknown header key `{other}`"))),
+        if key == "DATA" {
+            return lines
+                .finish(&values, pos, line_no)
+                .map_err(|message| err(line_no, message));
         }
+        lines
+            .read(key, &values)
+            .map_err(|message| err(line_no, message))?;
     }
     Err(Error::parse(
         path,
@@ -420,6 +306,144 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header> {
             data.len()
         ),
     ))
+}
+
+/// Whole numbers of a header line (`what` names it in the message).
+fn whole_numbers(values: &[&str], what: &str) -> std::result::Result<Vec<usize>, String> {
+    values
+        .iter()
+        .map(|v| {
+            v.parse::<usize>()
+                .map_err(|_| format!("{what}: expected whole numbers, got `{v}`"))
+        })
+        .collect()
+}
+
+/// The one whole number of a header line.
+fn whole_number(values: &[&str], what: &str) -> std::result::Result<usize, String> {
+    match whole_numbers(values, what)?.as_slice() {
+        [n] => Ok(*n),
+        _ => Err(format!(
+            "{what}: expected one whole number, got `{}`",
+            values.join(" ")
+        )),
+    }
+}
+
+impl HeaderLines {
+    /// Takes one line before `DATA`; the message says what is wrong with it.
+    fn read(&mut self, key: &str, values: &[&str]) -> std::result::Result<(), String> {
+        match key {
+            "VERSION" => {}
+            "FIELDS" | "COLUMNS" => self.names = Some(values.iter().map(|s| s.to_string()).collect()),
+            "SIZE" => self.sizes = Some(whole_numbers(values, "SIZE")?),
+            "TYPE" => {
+                self.types = Some(
+                    values
+                        .iter()
+                        .map(|t| match *t {
+                            "F" => Ok(ScalarType::F),
+                            "I" => Ok(ScalarType::I),
+                            "U" => Ok(ScalarType::U),
+                            other => Err(format!("TYPE: expected F, I or U, got `{other}`")),
+                        })
+                        .collect::<std::result::Result<_, _>>()?,
+                );
+            }
+            "COUNT" => self.counts = Some(whole_numbers(values, "COUNT")?),
+            "WIDTH" => self.width = Some(whole_number(values, "WIDTH")?),
+            "HEIGHT" => self.height = Some(whole_number(values, "HEIGHT")?),
+            "POINTS" => self.points = Some(whole_number(values, "POINTS")?),
+            "VIEWPOINT" => {
+                let v: Vec<f64> = values
+                    .iter()
+                    .map(|s| s.parse::<f64>().ok().filter(|v| v.is_finite()))
+                    .collect::<Option<_>>()
+                    .filter(|v: &Vec<f64>| v.len() == 7)
+                    .ok_or_else(|| "VIEWPOINT: expected 7 finite numbers tx ty tz qw qx qy qz".to_string())?;
+                let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
+                    .ok_or_else(|| "VIEWPOINT: the rotation quaternion is zero".to_string())?;
+                self.viewpoint = Some(Isometry3::from_parts(
+                    Translation3::new(v[0], v[1], v[2]),
+                    rotation,
+                ));
+            }
+            other => return Err(format!("unknown header key `{other}`")),
+        }
+        Ok(())
+    }
+
+    /// The header, completed by its `DATA` line (`values`), whose body starts at byte `body_start`.
+    fn finish(
+        self,
+        values: &[&str],
+        body_start: usize,
+        data_line: usize,
+    ) -> std::result::Result<Header, String> {
+        let encoding = match values {
+            ["ascii"] => PcdEncoding::Ascii,
+            ["binary"] => PcdEncoding::Binary,
+            ["binary_compressed"] => PcdEncoding::BinaryCompressed,
+            _ => {
+                return Err(format!(
+                    "DATA: expected ascii, binary or binary_compressed, got `{}`",
+                    values.join(" ")
+                ));
+            }
+        };
+        let names = self.names.ok_or("no FIELDS line before DATA")?;
+        let sizes = self.sizes.ok_or("no SIZE line before DATA")?;
+        let types = self.types.ok_or("no TYPE line before DATA")?;
+        let counts = self.counts.unwrap_or_else(|| vec![1; names.len()]);
+        if sizes.len() != names.len() || types.len() != names.len() || counts.len() != names.len() {
+            return Err(format!(
+                "FIELDS, SIZE, TYPE and COUNT must list the same number of entries ({}, {}, {}, {})",
+                names.len(),
+                sizes.len(),
+                types.len(),
+                counts.len()
+            ));
+        }
+        let fields: Vec<Field> = names
+            .into_iter()
+            .zip(sizes)
+            .zip(types)
+            .zip(counts)
+            .map(|(((name, size), kind), count)| Field {
+                name,
+                size,
+                kind,
+                count,
+            })
+            .collect();
+        for f in &fields {
+            if ![1, 2, 4, 8].contains(&f.size) || f.count == 0 {
+                return Err(format!(
+                    "field `{}` has SIZE {} and COUNT {}",
+                    f.name, f.size, f.count
+                ));
+            }
+        }
+        let width = self.width.ok_or("no WIDTH line before DATA")?;
+        let height = self.height.unwrap_or(1);
+        let num_points = self.points.unwrap_or(width.saturating_mul(height));
+        if num_points != width.saturating_mul(height) {
+            return Err(format!(
+                "POINTS is {num_points} but WIDTH x HEIGHT is {width} x {height}"
+            ));
+        }
+        let as_u32 = |v: usize, what: &str| u32::try_from(v).map_err(|_| format!("{what} {v} is too large"));
+        Ok(Header {
+            fields,
+            width: as_u32(width, "WIDTH")?,
+            height: as_u32(height, "HEIGHT")?,
+            num_points,
+            viewpoint: self.viewpoint.unwrap_or_else(Isometry3::identity),
+            encoding,
+            body_start,
+            data_line,
+        })
+    }
 }
 
 /// Reads a point cloud from its bytes (`path` names it in errors).
@@ -436,6 +460,28 @@ pub fn parse_pcd(path: &Path, data: &[u8]) -> Result<PcdCloud> {
 /// As [`read_pcd_within`].
 pub fn parse_pcd_within(path: &Path, data: &[u8], limit_bytes: u64) -> Result<PcdCloud> {
     let header = parse_header(path, data)?;
+    let (xyz, record_bytes, body_bytes) = check_layout(path, &header, limit_bytes)?;
+    let body = &data[header.body_start..];
+    let raw = match header.encoding {
+        PcdEncoding::Ascii => return parse_ascii(path, &header, body, &xyz),
+        PcdEncoding::Binary => {
+            let mut r = ByteReader::new(path, data);
+            r.take(header.body_start, "the header")?;
+            r.take(
+                body_bytes,
+                format_args!("{} points of {record_bytes} bytes", header.num_points),
+            )?;
+            body[..body_bytes].to_vec()
+        }
+        PcdEncoding::BinaryCompressed => decompress_body(path, data, &header, record_bytes, body_bytes)?,
+    };
+    let points = binary_points(path, &header, &raw, &xyz, record_bytes)?;
+    finish(header, points)
+}
+
+/// The fields `x`, `y` and `z` (floats), the bytes of a record and of the body, checked against the body
+/// limit and `limit_bytes` before anything is allocated.
+fn check_layout(path: &Path, header: &Header, limit_bytes: u64) -> Result<(Vec<usize>, usize, usize)> {
     let xyz: Vec<usize> = ["x", "y", "z"]
         .iter()
         .map(|name| {
@@ -487,50 +533,57 @@ pub fn parse_pcd_within(path: &Path, data: &[u8], limit_bytes: u64) -> Result<Pc
             ),
         ));
     }
-    let body = &data[header.body_start..];
-    let raw = match header.encoding {
-        PcdEncoding::Ascii => return parse_ascii(path, &header, body, &xyz),
-        PcdEncoding::Binary => {
-            let mut r = ByteReader::new(path, data);
-            r.take(header.body_start, "the header")?;
-            r.take(
-                body_bytes,
-                format_args!("{} points of {record_bytes} bytes", header.num_points),
-            )?;
-            body[..body_bytes].to_vec()
+    Ok((xyz, record_bytes, body_bytes))
+}
+
+/// A `binary_compressed` body: LZF-decompressed, then from field-major order (all x, then all y, ...) back to
+/// records.
+fn decompress_body(
+    path: &Path,
+    data: &[u8],
+    header: &Header,
+    record_bytes: usize,
+    body_bytes: usize,
+) -> Result<Vec<u8>> {
+    let mut r = ByteReader::new(path, data);
+    r.take(header.body_start, "the header")?;
+    let compressed = r.u32("the compressed size")? as usize;
+    let uncompressed = r.u32("the uncompressed size")? as usize;
+    if uncompressed != body_bytes {
+        return Err(r.error(format!(
+                "the uncompressed size is {uncompressed} bytes, but {} points of {record_bytes} bytes need {body_bytes}",
+                header.num_points
+            )));
+    }
+    let start = r.pos();
+    let block = r.take(compressed, "the compressed block")?;
+    let field_major = lzf::decompress(block, uncompressed)
+        .map_err(|m| r.error_at(start, format!("corrupt compressed block: {m}")))?;
+    // Field-major (all x, then all y, ...) back to records.
+    let mut records = vec![0u8; body_bytes];
+    let mut offset_in_block = 0;
+    let mut offset_in_record = 0;
+    for f in &header.fields {
+        let w = f.size * f.count;
+        for k in 0..header.num_points {
+            let src = offset_in_block + k * w;
+            let dst = k * record_bytes + offset_in_record;
+            records[dst..dst + w].copy_from_slice(&field_major[src..src + w]);
         }
-        PcdEncoding::BinaryCompressed => {
-            let mut r = ByteReader::new(path, data);
-            r.take(header.body_start, "the header")?;
-            let compressed = r.u32("the compressed size")? as usize;
-            let uncompressed = r.u32("the uncompressed size")? as usize;
-            if uncompressed != body_bytes {
-                return Err(r.error(format!(
-                    "the uncompressed size is {uncompressed} bytes, but {} points of {record_bytes} bytes need {body_bytes}",
-                    header.num_points
-                )));
-            }
-            let start = r.pos();
-            let block = r.take(compressed, "the compressed block")?;
-            let field_major = lzf::decompress(block, uncompressed)
-                .map_err(|m| r.error_at(start, format!("corrupt compressed block: {m}")))?;
-            // Field-major (all x, then all y, ...) back to records.
-            let mut records = vec![0u8; body_bytes];
-            let mut offset_in_block = 0;
-            let mut offset_in_record = 0;
-            for f in &header.fields {
-                let w = f.size * f.count;
-                for k in 0..header.num_points {
-                    let src = offset_in_block + k * w;
-                    let dst = k * record_bytes + offset_in_record;
-                    records[dst..dst + w].copy_from_slice(&field_major[src..src + w]);
-                }
-                offset_in_block += w * header.num_points;
-                offset_in_record += w;
-            }
-            records
-        }
-    };
+        offset_in_block += w * header.num_points;
+        offset_in_record += w;
+    }
+    Ok(records)
+}
+
+/// The points of a binary body's records, each checked.
+fn binary_points(
+    path: &Path,
+    header: &Header,
+    raw: &[u8],
+    xyz: &[usize],
+    record_bytes: usize,
+) -> Result<Vec<Point3<f32>>> {
     let offsets: Vec<usize> = header
         .fields
         .iter()
@@ -563,7 +616,7 @@ pub fn parse_pcd_within(path: &Path, data: &[u8], limit_bytes: u64) -> Result<Pc
             ),
         })?);
     }
-    finish(header, points)
+    Ok(points)
 }
 
 fn checked_point(path: &Path, p: [f64; 3], which: impl Fn() -> String) -> Result<Point3<f32>> {

@@ -281,75 +281,9 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     drop(scans);
 
     let stage = staged.dir();
-    let mut files = Vec::new();
-    if job.keep_inputs {
-        for input in &job.inputs {
-            let name = input.file_name().unwrap_or_default();
-            let bytes = std::fs::read(input).map_err(|source| EvalError::Io {
-                path: input.clone(),
-                source,
-            })?;
-            let kept = stage.join(name);
-            write_bytes(&kept, &bytes)?;
-            files.push(kept);
-        }
-    }
-    let map_path = stage.join("map.oeg");
-    let map_file = oeg::map_to_bytes(&map);
-    write_bytes(&map_path, &map_file)?;
-    let map_file_bytes = map_file.len() as u64;
-    drop(map_file);
-    files.push(map_path);
-    // The images are drawn from a raster of the observed region at the map's resolution, which counts against
-    // the memory limit with the map: an error there names the images' folder and the region's size.
-    let images = write_layer_images(&map, stage, &job.profile, job.rule, None).map_err(|e| match e {
-        EvalError::Map(e @ oeg::Error::MemoryLimit { .. }) => EvalError::Input {
-            path: job.out_dir.clone(),
-            message: format!(
-                "drawing the layer images ({}) of the map of {}: {e}",
-                map.observed_region()
-                    .map(|r| format!("{} x {} cells of the observed region", r.num_x, r.num_y))
-                    .unwrap_or_default(),
-                job.inputs
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        },
-        other => other,
-    })?;
-    files.extend(images);
-
+    let (mut files, map_file_bytes) = write_map_files(job, &map, stage)?;
     let totals = map.totals();
-    let counts = map.traversability_counts(&job.profile, job.rule);
-    let extent = map.observed_region().map(|r| {
-        let (x0, y0) = map.geometry().cell_min_corner(r.min);
-        let (x1, y1) = map.geometry().cell_min_corner(r.max());
-        let res = map.geometry().resolution_m();
-        (x0, y0, x1 + res, y1 + res)
-    });
-    let summary = MapSummary {
-        num_inputs: job.inputs.len() as u64,
-        num_scans: map.num_scans(),
-        num_rays: totals.num_rays,
-        num_cell_visits: totals.num_cell_visits,
-        resolution_m: map.geometry().resolution_m(),
-        free_space_elevation: job.config.model.free_space_elevation,
-        max_height_m: job.config.model.max_height_m,
-        num_cells_observed: map.num_observed_cells(),
-        num_cells_occupied: counts.num_occupied(),
-        num_cells_free: counts.num_free,
-        num_cells_traversable: counts.num_traversable,
-        num_cells_blocked: counts.num_blocked,
-        max_step_m: job.profile.max_step_m,
-        map_bytes,
-        map_file_bytes,
-        extent_min_x_m: extent.map(|e| e.0),
-        extent_min_y_m: extent.map(|e| e.1),
-        extent_max_x_m: extent.map(|e| e.2),
-        extent_max_y_m: extent.map(|e| e.3),
-    };
+    let summary = summarize(job, &map, map_bytes, map_file_bytes);
     let per_s = |n: u64| {
         if integrate_wall_time_s > 0.0 {
             n as f64 / integrate_wall_time_s
@@ -377,6 +311,86 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         timing,
         files,
     })
+}
+
+/// Writes the inputs (when kept), `map.oeg` and the layer images into `stage`; returns the files and the map
+/// file's size in bytes.
+fn write_map_files(job: &MapJob, map: &Map, stage: &Path) -> Result<(Vec<PathBuf>, u64)> {
+    let mut files = Vec::new();
+    if job.keep_inputs {
+        for input in &job.inputs {
+            let name = input.file_name().unwrap_or_default();
+            let bytes = std::fs::read(input).map_err(|source| EvalError::Io {
+                path: input.clone(),
+                source,
+            })?;
+            let kept = stage.join(name);
+            write_bytes(&kept, &bytes)?;
+            files.push(kept);
+        }
+    }
+    let map_path = stage.join("map.oeg");
+    let map_file = oeg::map_to_bytes(map);
+    write_bytes(&map_path, &map_file)?;
+    let map_file_bytes = map_file.len() as u64;
+    drop(map_file);
+    files.push(map_path);
+    // The images are drawn from a raster of the observed region at the map's resolution, which counts against
+    // the memory limit with the map: an error there names the images' folder and the region's size.
+    let images = write_layer_images(map, stage, &job.profile, job.rule, None).map_err(|e| match e {
+        EvalError::Map(e @ oeg::Error::MemoryLimit { .. }) => EvalError::Input {
+            path: job.out_dir.clone(),
+            message: format!(
+                "drawing the layer images ({}) of the map of {}: {e}",
+                map.observed_region()
+                    .map(|r| format!("{} x {} cells of the observed region", r.num_x, r.num_y))
+                    .unwrap_or_default(),
+                job.inputs
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        },
+        other => other,
+    })?;
+    files.extend(images);
+
+    Ok((files, map_file_bytes))
+}
+
+/// `summary.json`: what the map holds, with the memory it took while integrating (`map_bytes`) and its
+/// file's size.
+fn summarize(job: &MapJob, map: &Map, map_bytes: u64, map_file_bytes: u64) -> MapSummary {
+    let totals = map.totals();
+    let counts = map.traversability_counts(&job.profile, job.rule);
+    let extent = map.observed_region().map(|r| {
+        let (x0, y0) = map.geometry().cell_min_corner(r.min);
+        let (x1, y1) = map.geometry().cell_min_corner(r.max());
+        let res = map.geometry().resolution_m();
+        (x0, y0, x1 + res, y1 + res)
+    });
+    MapSummary {
+        num_inputs: job.inputs.len() as u64,
+        num_scans: map.num_scans(),
+        num_rays: totals.num_rays,
+        num_cell_visits: totals.num_cell_visits,
+        resolution_m: map.geometry().resolution_m(),
+        free_space_elevation: job.config.model.free_space_elevation,
+        max_height_m: job.config.model.max_height_m,
+        num_cells_observed: map.num_observed_cells(),
+        num_cells_occupied: counts.num_occupied(),
+        num_cells_free: counts.num_free,
+        num_cells_traversable: counts.num_traversable,
+        num_cells_blocked: counts.num_blocked,
+        max_step_m: job.profile.max_step_m,
+        map_bytes,
+        map_file_bytes,
+        extent_min_x_m: extent.map(|e| e.0),
+        extent_min_y_m: extent.map(|e| e.1),
+        extent_max_x_m: extent.map(|e| e.2),
+        extent_max_y_m: extent.map(|e| e.3),
+    }
 }
 
 #[cfg(test)]

@@ -442,6 +442,15 @@ impl GenerateSpec {
             taken: Vec::new(),
             obstacles: Vec::new(),
         };
+        self.place_obstacles(seed, &mut placer);
+        let (actors, last_s) = self.people(seed);
+        append(doc, "obstacles", placer.obstacles);
+        append(doc, "actors", actors);
+        self.set_frame(doc, last_s);
+    }
+
+    /// Curbs, boards, walls, bushes and ramps, each kind from its own random stream (`generate/<kind>`).
+    fn place_obstacles(&self, seed: u64, placer: &mut Placer<'_>) {
         if let Some(c) = &self.curbs {
             let mut rng = sim::seed::stream(seed, "generate/curbs");
             for k in 0..count(&mut rng, c.count) {
@@ -532,6 +541,11 @@ impl GenerateSpec {
                 });
             }
         }
+    }
+
+    /// The people, from the stream `generate/people`, and the time the last of them has left (at least the
+    /// end of the drive).
+    fn people(&self, seed: u64) -> (Vec<Value>, f64) {
         let drive_time_s = self.drive_length_m / self.speed_m_s;
         let mut last_s = drive_time_s;
         let mut actors = Vec::new();
@@ -584,8 +598,12 @@ impl GenerateSpec {
                 actors.push(Value::Table(t));
             }
         }
-        append(doc, "obstacles", placer.obstacles);
-        append(doc, "actors", actors);
+        (actors, last_s)
+    }
+
+    /// The map region around the field, the drive along the lane, the planner's start and goal, and the
+    /// duration: until the last person has left, and `settle_s` more.
+    fn set_frame(&self, doc: &mut Table, last_s: f64) {
         let end = self.field_end_m();
         let half = self.field_half_width_m;
         set(doc, &["map", "min_xy_m"], xy(-1.0, -half - 1.0));

@@ -190,58 +190,105 @@ fn check_coverage(dir: &Path, plan: &Json, rows: &[Json]) -> Result<usize> {
 /// failed write.
 pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
     let folder = SweepFolder::open(dir)?;
-    for file in ["plan.json", "runs.jsonl", "obstacles.csv"] {
-        folder.check(&dir.join(file))?;
-    }
-    let plan = super::rows::read_plan(dir)?;
-    let rows: Vec<Json> = read_rows(&dir.join("runs.jsonl"))?;
-    let num_planned = super::merge::plan_ids(&plan).len();
-    let num_covered = check_coverage(dir, &plan, &rows)?;
-    if num_covered < num_planned && !partial {
-        return Err(EvalError::Input {
-            path: dir.to_path_buf(),
-            message: format!(
-                "covers {num_covered} of the plan's {num_planned} runs: finish it (`oeg sweep run` again with the \
-                 same file and --out), merge every shard (`oeg sweep merge`), or give --partial to summarise the \
-                 finished runs as a partial study"
-            ),
-        });
-    }
-    let obstacles = read_obstacles(&dir.join("obstacles.csv"))?;
-    let mut sweep_name = plan["sweep"].as_str().unwrap_or("sweep").to_string();
-    if num_covered < num_planned {
-        sweep_name = format!("{sweep_name} (partial: {num_covered} of {num_planned} runs)");
-    }
-    let mut axes: Vec<Axis> = plan["axes"]
-        .as_array()
-        .map(|a| {
-            a.iter()
-                .map(|x| Axis {
-                    key: x["key"].as_str().unwrap_or_default().to_string(),
-                    numeric: x["numeric"].as_bool().unwrap_or(false),
-                    values: x["values"].as_array().cloned().unwrap_or_default(),
-                })
-                .collect()
+    let study = Study::read(&folder, dir, partial)?;
+    let plots = dir.join("plots");
+    folder.create_dir(&plots)?;
+    let mut summary = Vec::new();
+    let mut files = study.metric_plots(&folder, &plots, &mut summary)?;
+    files.extend(study.decision_plots(&folder, &plots, &mut summary)?);
+    let path = dir.join("summary.csv");
+    folder.write_table(&path, &summary)?;
+    files.insert(0, path);
+    Ok(ReportSummary {
+        num_covered: study.num_covered,
+        num_planned: study.num_planned,
+        files,
+    })
+}
+
+/// A study's rows as the report reads them.
+struct Study {
+    /// The sweep's name, with the part of the plan it covers when partial.
+    name: String,
+    /// The plan's axes, and the base scenario as a categorical axis when there are several.
+    axes: Vec<Axis>,
+    /// The rows of the runs that finished without error.
+    ok: Vec<Json>,
+    /// One row per obstacle and run.
+    obstacles: Vec<BTreeMap<String, String>>,
+    /// Runs of the plan the rows cover.
+    num_covered: usize,
+    /// Runs of the plan.
+    num_planned: usize,
+}
+
+impl Study {
+    /// Reads the plan, the rows and the obstacles, and checks that the rows cover the plan (unless
+    /// `partial`).
+    fn read(folder: &SweepFolder, dir: &Path, partial: bool) -> Result<Self> {
+        for file in ["plan.json", "runs.jsonl", "obstacles.csv"] {
+            folder.check(&dir.join(file))?;
+        }
+        let plan = super::rows::read_plan(dir)?;
+        let rows: Vec<Json> = read_rows(&dir.join("runs.jsonl"))?;
+        let num_planned = super::merge::plan_ids(&plan).len();
+        let num_covered = check_coverage(dir, &plan, &rows)?;
+        if num_covered < num_planned && !partial {
+            return Err(EvalError::Input {
+                path: dir.to_path_buf(),
+                message: format!(
+                    "covers {num_covered} of the plan's {num_planned} runs: finish it (`oeg sweep run` again with \
+                     the same file and --out), merge every shard (`oeg sweep merge`), or give --partial to \
+                     summarise the finished runs as a partial study"
+                ),
+            });
+        }
+        let obstacles = read_obstacles(&dir.join("obstacles.csv"))?;
+        let mut name = plan["sweep"].as_str().unwrap_or("sweep").to_string();
+        if num_covered < num_planned {
+            name = format!("{name} (partial: {num_covered} of {num_planned} runs)");
+        }
+        let mut axes: Vec<Axis> = plan["axes"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .map(|x| Axis {
+                        key: x["key"].as_str().unwrap_or_default().to_string(),
+                        numeric: x["numeric"].as_bool().unwrap_or(false),
+                        values: x["values"].as_array().cloned().unwrap_or_default(),
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        // Several base scenarios are a categorical axis of their own.
+        let mut scenarios: Vec<Json> = rows.iter().map(|r| r["scenario"].clone()).collect();
+        scenarios.dedup();
+        scenarios.sort_by_key(text);
+        scenarios.dedup();
+        if scenarios.len() > 1 {
+            axes.push(Axis {
+                key: "scenario".into(),
+                numeric: false,
+                values: scenarios,
+            });
+        }
+        let ok = rows.into_iter().filter(|r| r["status"] == "ok").collect();
+        Ok(Self {
+            name,
+            axes,
+            ok,
+            obstacles,
+            num_covered,
+            num_planned,
         })
-        .unwrap_or_default();
-    // Several base scenarios are a categorical axis of their own.
-    let mut scenarios: Vec<Json> = rows.iter().map(|r| r["scenario"].clone()).collect();
-    scenarios.dedup();
-    scenarios.sort_by_key(text);
-    scenarios.dedup();
-    if scenarios.len() > 1 {
-        axes.push(Axis {
-            key: "scenario".into(),
-            numeric: false,
-            values: scenarios,
-        });
     }
-    let ok: Vec<&Json> = rows.iter().filter(|r| r["status"] == "ok").collect();
-    let categorical: Vec<&Axis> = axes.iter().filter(|a| !a.numeric).collect();
-    let line_of = |get: &dyn Fn(&str) -> String, except: &str| -> String {
-        let parts: Vec<String> = categorical
+
+    /// The line a row belongs to: its value on every categorical axis but `except` (`all` without any).
+    fn line_of(&self, get: &dyn Fn(&str) -> String, except: &str) -> String {
+        let parts: Vec<String> = self
+            .axes
             .iter()
-            .filter(|a| a.key != except)
+            .filter(|a| !a.numeric && a.key != except)
             .map(|a| format!("{}={}", a.key, get(&a.key)))
             .collect();
         if parts.is_empty() {
@@ -249,87 +296,132 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
         } else {
             parts.join(", ")
         }
-    };
-    let mut summary = Vec::new();
-    let mut files = Vec::new();
-    let plots = dir.join("plots");
-    folder.create_dir(&plots)?;
-    let points_along = |axis: Option<&Axis>| -> BTreeMap<(String, String), Vec<&Json>> {
+    }
+
+    /// The finished runs grouped by (line, value on `axis`).
+    fn points_along(&self, axis: Option<&Axis>) -> BTreeMap<(String, String), Vec<&Json>> {
         let mut by: BTreeMap<(String, String), Vec<&Json>> = BTreeMap::new();
-        for r in &ok {
+        for r in &self.ok {
             let value = axis.map_or_else(|| "all".to_string(), |a| text(&r[&a.key]));
-            let line = line_of(&|k| text(&r[k]), axis.map_or("", |a| a.key.as_str()));
+            let line = self.line_of(&|k| text(&r[k]), axis.map_or("", |a| a.key.as_str()));
             by.entry((line, value)).or_default().push(r);
         }
         by
-    };
-    let axis_list: Vec<Option<&Axis>> = if axes.is_empty() {
-        vec![None]
-    } else {
-        axes.iter().map(Some).collect()
-    };
-    for axis in axis_list {
-        let groups = points_along(axis);
-        for (metric, label, is_rate) in METRICS {
-            let mut lines: BTreeMap<String, Vec<Point>> = BTreeMap::new();
-            for ((line, value), runs) in &groups {
-                let s = summarize(runs, metric, is_rate);
-                summary.push(SummaryRow {
-                    axis: axis.map_or_else(|| "all".into(), |a| a.key.clone()),
-                    value: value.clone(),
-                    line: line.clone(),
-                    metric: metric.into(),
-                    interval: if is_rate { "wilson" } else { "student_t" },
-                    n: s.n,
-                    mean: finite(s.mean),
-                    std: finite(s.std),
-                    ci95_low: finite(s.low),
-                    ci95_high: finite(s.high),
-                });
-                if let Some(a) = axis.filter(|a| a.numeric) {
-                    let x = a
-                        .values
-                        .iter()
-                        .find(|v| text(v) == *value)
-                        .map_or(f64::NAN, number);
-                    lines.entry(line.clone()).or_default().push(Point {
-                        x,
-                        y: s.mean,
-                        low: s.low,
-                        high: s.high,
+    }
+
+    /// Each metric's summary along each axis, and its plot against each numeric axis.
+    fn metric_plots(
+        &self,
+        folder: &SweepFolder,
+        plots: &Path,
+        summary: &mut Vec<SummaryRow>,
+    ) -> Result<Vec<PathBuf>> {
+        let mut files = Vec::new();
+        let axis_list: Vec<Option<&Axis>> = if self.axes.is_empty() {
+            vec![None]
+        } else {
+            self.axes.iter().map(Some).collect()
+        };
+        for axis in axis_list {
+            let groups = self.points_along(axis);
+            for (metric, label, is_rate) in METRICS {
+                let mut lines: BTreeMap<String, Vec<Point>> = BTreeMap::new();
+                for ((line, value), runs) in &groups {
+                    let s = summarize(runs, metric, is_rate);
+                    summary.push(SummaryRow {
+                        axis: axis.map_or_else(|| "all".into(), |a| a.key.clone()),
+                        value: value.clone(),
+                        line: line.clone(),
+                        metric: metric.into(),
+                        interval: if is_rate { "wilson" } else { "student_t" },
+                        n: s.n,
+                        mean: finite(s.mean),
+                        std: finite(s.std),
+                        ci95_low: finite(s.low),
+                        ci95_high: finite(s.high),
                     });
+                    if let Some(a) = axis.filter(|a| a.numeric) {
+                        let x = a
+                            .values
+                            .iter()
+                            .find(|v| text(v) == *value)
+                            .map_or(f64::NAN, number);
+                        lines.entry(line.clone()).or_default().push(Point {
+                            x,
+                            y: s.mean,
+                            low: s.low,
+                            high: s.high,
+                        });
+                    }
+                }
+                if let Some(a) = axis.filter(|a| a.numeric) {
+                    let series = lines
+                        .into_iter()
+                        .map(|(label, mut points)| {
+                            points.sort_by(|p, q| p.x.total_cmp(&q.x));
+                            Series { label, points }
+                        })
+                        .collect();
+                    let chart = Chart {
+                        title: format!("{}: {label}", self.name),
+                        x_label: with_unit(&a.key),
+                        y_label: label.into(),
+                        series,
+                        note: if is_rate {
+                            "band: 95 % Wilson interval".into()
+                        } else {
+                            "band: 95 % t interval over runs".into()
+                        },
+                    };
+                    let path = plots.join(format!("{metric}_vs_{}.png", file_safe(&a.key)));
+                    folder.write_bytes(&path, &chart.to_png())?;
+                    files.push(path);
                 }
             }
-            if let Some(a) = axis.filter(|a| a.numeric) {
-                let series = lines
-                    .into_iter()
-                    .map(|(label, mut points)| {
-                        points.sort_by(|p, q| p.x.total_cmp(&q.x));
-                        Series { label, points }
-                    })
-                    .collect();
-                let chart = Chart {
-                    title: format!("{sweep_name}: {label}"),
-                    x_label: with_unit(&a.key),
-                    y_label: label.into(),
-                    series,
-                    note: if is_rate {
-                        "band: 95 % Wilson interval".into()
-                    } else {
-                        "band: 95 % t interval over runs".into()
-                    },
-                };
-                let path = plots.join(format!("{metric}_vs_{}.png", file_safe(&a.key)));
-                folder.write_bytes(&path, &chart.to_png())?;
-                files.push(path);
-            }
         }
+        Ok(files)
     }
-    for (decides, threshold, bin_m) in [
-        ("step", "height - max step", 0.005),
-        ("clearance", "clearance - robot height", 0.01),
-    ] {
-        let chosen: Vec<&BTreeMap<String, String>> = obstacles
+
+    /// The psychometric curves of the obstacle decisions: the error rate against the distance from the
+    /// threshold, one curve per line, for steps and for clearances.
+    fn decision_plots(
+        &self,
+        folder: &SweepFolder,
+        plots: &Path,
+        summary: &mut Vec<SummaryRow>,
+    ) -> Result<Vec<PathBuf>> {
+        let mut files = Vec::new();
+        for (decides, threshold, bin_m) in [
+            ("step", "height - max step", 0.005),
+            ("clearance", "clearance - robot height", 0.01),
+        ] {
+            let Some(series) = self.decision_series(decides, bin_m, summary) else {
+                continue;
+            };
+            let chart = Chart {
+                title: format!("{}: {decides} decisions", self.name),
+                x_label: format!("{threshold} [cm] (bins of {:.1} cm)", bin_m * 100.0),
+                y_label: "decision error rate".into(),
+                series,
+                note: "band: 95 % Wilson interval".into(),
+            };
+            let path = plots.join(format!("psychometric_{decides}.png"));
+            folder.write_bytes(&path, &chart.to_png())?;
+            files.push(path);
+        }
+        Ok(files)
+    }
+
+    /// The error rate of the seen obstacles that decide `decides`, binned by their distance from the
+    /// threshold (`bin_m`), per line; `None` when no obstacle decides it.
+    fn decision_series(
+        &self,
+        decides: &str,
+        bin_m: f64,
+        summary: &mut Vec<SummaryRow>,
+    ) -> Option<Vec<Series>> {
+        let chosen: Vec<&BTreeMap<String, String>> = self
+            .obstacles
             .iter()
             .filter(|o| {
                 o.get("decides").is_some_and(|d| d == decides)
@@ -337,7 +429,7 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
             })
             .collect();
         if chosen.is_empty() {
-            continue;
+            return None;
         }
         let mut lines: BTreeMap<String, BTreeMap<i64, (usize, usize)>> = BTreeMap::new();
         for o in &chosen {
@@ -348,7 +440,7 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
             if !d.is_finite() {
                 continue;
             }
-            let line = line_of(&|k| o.get(k).cloned().unwrap_or_default(), "");
+            let line = self.line_of(&|k| o.get(k).cloned().unwrap_or_default(), "");
             let bin = (d / bin_m).round() as i64;
             let e = lines.entry(line).or_default().entry(bin).or_default();
             e.0 += usize::from(o.get("decision").is_some_and(|v| v != "right"));
@@ -381,25 +473,8 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
             }
             series.push(Series { label: line, points });
         }
-        let chart = Chart {
-            title: format!("{sweep_name}: {decides} decisions"),
-            x_label: format!("{threshold} [cm] (bins of {:.1} cm)", bin_m * 100.0),
-            y_label: "decision error rate".into(),
-            series,
-            note: "band: 95 % Wilson interval".into(),
-        };
-        let path = plots.join(format!("psychometric_{decides}.png"));
-        folder.write_bytes(&path, &chart.to_png())?;
-        files.push(path);
+        Some(series)
     }
-    let path = dir.join("summary.csv");
-    folder.write_table(&path, &summary)?;
-    files.insert(0, path);
-    Ok(ReportSummary {
-        num_covered,
-        num_planned,
-        files,
-    })
 }
 
 fn finite(v: f64) -> Option<f64> {

@@ -209,8 +209,18 @@ impl Sweep {
             .map_or_else(|| relative.to_path_buf(), |dir| dir.join(relative))
     }
 
+    /// Checks the file's values for sense, part by part, and expands its axes' values.
     fn check(&self) -> Result<Vec<Axis>> {
-        use KeySeg::{Index as I, Key as K};
+        self.check_header()?;
+        self.check_set_and_presets()?;
+        let axes = self.check_axes()?;
+        self.check_zip(&axes)?;
+        Ok(axes)
+    }
+
+    /// The name, the replicates, and where the scenarios come from.
+    fn check_header(&self) -> Result<()> {
+        use KeySeg::Key as K;
         let s = &self.spec;
         if s.name.trim().is_empty()
             || !s
@@ -254,6 +264,13 @@ impl Sweep {
                 self.error(&path, message)
             })?;
         }
+        Ok(())
+    }
+
+    /// `set` and the file's own presets: keys that parse, names that are not built in.
+    fn check_set_and_presets(&self) -> Result<()> {
+        use KeySeg::Key as K;
+        let s = &self.spec;
         for key in s.set.keys() {
             crate::settings::overrides::check_key(key)
                 .map_err(|e| self.error(&[K("set")], format!("`{key}`: {e}")))?;
@@ -270,6 +287,13 @@ impl Sweep {
                     .map_err(|e| self.error(&[K("presets"), K(name)], format!("`{key}`: {e}")))?;
             }
         }
+        Ok(())
+    }
+
+    /// Every axis in turn ([`Sweep::check_axis`]), within [`MAX_AXES`].
+    fn check_axes(&self) -> Result<Vec<Axis>> {
+        use KeySeg::{Index as I, Key as K};
+        let s = &self.spec;
         if s.axes.len() > MAX_AXES {
             return Err(self.error(
                 &[K("axes"), I(MAX_AXES)],
@@ -281,94 +305,109 @@ impl Sweep {
         }
         let mut axes = Vec::new();
         for (k, a) in s.axes.iter().enumerate() {
-            let at = |field: &'static str| [K("axes"), I(k), K(field)];
-            crate::settings::overrides::check_key(&a.key)
-                .map_err(|e| self.error(&at("key"), e.to_string()))?;
-            if a.key == "scenario" && s.scenarios.len() > 1 {
-                return Err(self.error(
-                    &at("key"),
-                    "several `scenarios` are the axis `scenario` already; remove this axis",
-                ));
-            }
-            if let Some(b) = axes.iter().find(|b: &&Axis| keys_overlap(&b.key, &a.key)) {
-                return Err(self.error(
-                    &at("key"),
-                    if b.key == a.key {
-                        format!("a second axis on `{}`", a.key)
-                    } else {
-                        format!(
-                            "axes `{}` and `{}` set some of the same values, so one would silently replace \
-                             the other; give each value one axis",
-                            b.key, a.key
-                        )
-                    },
-                ));
-            }
-            let given = [
-                a.values.is_some(),
-                a.linspace.is_some(),
-                a.logspace.is_some(),
-                a.range.is_some(),
-            ];
-            if given.iter().filter(|g| **g).count() != 1 {
-                return Err(self.error(
-                    &[K("axes"), I(k)],
-                    format!(
-                        "axis `{}`: expected exactly one of `values`, `linspace`, `logspace` or `range`",
-                        a.key
-                    ),
-                ));
-            }
-            let values = if let Some(v) = &a.values {
-                v.clone()
-            } else if let Some(l) = a.linspace {
-                spaced(l, false).map_err(|e| self.error(&at("linspace"), format!("axis `{}`: {e}", a.key)))?
-            } else if let Some(l) = a.logspace {
-                spaced(l, true).map_err(|e| self.error(&at("logspace"), format!("axis `{}`: {e}", a.key)))?
-            } else if let Some(r) = a.range {
-                stepped(r).map_err(|e| self.error(&at("range"), format!("axis `{}`: {e}", a.key)))?
-            } else {
-                Vec::new()
-            };
-            let field = if a.values.is_some() {
-                "values"
-            } else if a.linspace.is_some() {
-                "linspace"
-            } else if a.logspace.is_some() {
-                "logspace"
-            } else {
-                "range"
-            };
-            if values.is_empty() {
-                return Err(self.error(&at(field), format!("axis `{}` has no values", a.key)));
-            }
-            if values.len() > MAX_AXIS_VALUES {
-                return Err(self.error(
-                    &at(field),
-                    format!(
-                        "axis `{}` has {} values; at most {MAX_AXIS_VALUES}",
-                        a.key,
-                        values.len()
-                    ),
-                ));
-            }
-            if a.key == super::presets::PRESET_KEY {
-                for (j, v) in values.iter().enumerate() {
-                    let known = v.as_str().is_some_and(|name| self.preset(name).is_some());
-                    if !known {
-                        let at: Vec<KeySeg<'_>> = vec![K("axes"), I(k), K("values"), I(j)];
-                        return Err(self.error(
-                            &at,
-                            format!("unknown preset {v}; presets: {}", self.preset_names().join(", ")),
-                        ));
-                    }
-                }
-            }
+            let values = self.check_axis(k, a, &axes)?;
             axes.push(Axis {
                 key: a.key.clone(),
                 values,
             });
         }
+        Ok(axes)
+    }
+
+    /// Axis `k`: its key (not the key of an earlier axis, nor overlapping one), exactly one way of giving its
+    /// values, and the values themselves (known presets on the preset axis).
+    fn check_axis(&self, k: usize, a: &AxisSpec, axes: &[Axis]) -> Result<Vec<Value>> {
+        use KeySeg::{Index as I, Key as K};
+        let s = &self.spec;
+        let at = |field: &'static str| [K("axes"), I(k), K(field)];
+        crate::settings::overrides::check_key(&a.key).map_err(|e| self.error(&at("key"), e.to_string()))?;
+        if a.key == "scenario" && s.scenarios.len() > 1 {
+            return Err(self.error(
+                &at("key"),
+                "several `scenarios` are the axis `scenario` already; remove this axis",
+            ));
+        }
+        if let Some(b) = axes.iter().find(|b: &&Axis| keys_overlap(&b.key, &a.key)) {
+            return Err(self.error(
+                &at("key"),
+                if b.key == a.key {
+                    format!("a second axis on `{}`", a.key)
+                } else {
+                    format!(
+                        "axes `{}` and `{}` set some of the same values, so one would silently replace \
+                         the other; give each value one axis",
+                        b.key, a.key
+                    )
+                },
+            ));
+        }
+        let given = [
+            a.values.is_some(),
+            a.linspace.is_some(),
+            a.logspace.is_some(),
+            a.range.is_some(),
+        ];
+        if given.iter().filter(|g| **g).count() != 1 {
+            return Err(self.error(
+                &[K("axes"), I(k)],
+                format!(
+                    "axis `{}`: expected exactly one of `values`, `linspace`, `logspace` or `range`",
+                    a.key
+                ),
+            ));
+        }
+        let values = if let Some(v) = &a.values {
+            v.clone()
+        } else if let Some(l) = a.linspace {
+            spaced(l, false).map_err(|e| self.error(&at("linspace"), format!("axis `{}`: {e}", a.key)))?
+        } else if let Some(l) = a.logspace {
+            spaced(l, true).map_err(|e| self.error(&at("logspace"), format!("axis `{}`: {e}", a.key)))?
+        } else if let Some(r) = a.range {
+            stepped(r).map_err(|e| self.error(&at("range"), format!("axis `{}`: {e}", a.key)))?
+        } else {
+            Vec::new()
+        };
+        let field = if a.values.is_some() {
+            "values"
+        } else if a.linspace.is_some() {
+            "linspace"
+        } else if a.logspace.is_some() {
+            "logspace"
+        } else {
+            "range"
+        };
+        if values.is_empty() {
+            return Err(self.error(&at(field), format!("axis `{}` has no values", a.key)));
+        }
+        if values.len() > MAX_AXIS_VALUES {
+            return Err(self.error(
+                &at(field),
+                format!(
+                    "axis `{}` has {} values; at most {MAX_AXIS_VALUES}",
+                    a.key,
+                    values.len()
+                ),
+            ));
+        }
+        if a.key == super::presets::PRESET_KEY {
+            for (j, v) in values.iter().enumerate() {
+                let known = v.as_str().is_some_and(|name| self.preset(name).is_some());
+                if !known {
+                    let at: Vec<KeySeg<'_>> = vec![K("axes"), I(k), K("values"), I(j)];
+                    return Err(self.error(
+                        &at,
+                        format!("unknown preset {v}; presets: {}", self.preset_names().join(", ")),
+                    ));
+                }
+            }
+        }
+        Ok(values)
+    }
+
+    /// `combine = "zip"` needs axes of equal length.
+    fn check_zip(&self, axes: &[Axis]) -> Result<()> {
+        use KeySeg::{Index as I, Key as K};
+        let s = &self.spec;
         if s.combine == Combine::Zip
             && let Some(first) = axes.first()
             && let Some((k, other)) = axes
@@ -387,7 +426,7 @@ impl Sweep {
                 ),
             ));
         }
-        Ok(axes)
+        Ok(())
     }
 
     /// How many runs the plan will have: base scenarios x combinations of axis values x replicates (saturating,
