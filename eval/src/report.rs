@@ -1,6 +1,6 @@
 //! A scenario run's report, written into its (staged) output folder: the map, its layer images, the comparison
 //! images, `plan.csv`, `obstacles.csv`, `wrong_cells.csv`, `metrics.json`, and with a compared model
-//! `comparison.csv` and `decisions_comparison.png`.
+//! `comparison.csv` (and the same table as `comparison.md`) and `decisions_comparison.png`.
 
 use std::path::{Path, PathBuf};
 
@@ -9,10 +9,10 @@ use serde::Serialize;
 use sim::scenario;
 use sim::truth::TruthRaster;
 
-use crate::error::Result;
+use crate::error::{EvalError, Result};
 use crate::figures::{comparison, write_layer_images};
 use crate::judge::Evaluation;
-use crate::output::{write_bytes, write_json, write_table};
+use crate::output::{csv_table, write_bytes, write_json, write_markdown, write_table};
 
 /// Writes one map's report into `out_dir`: the map, its layer images, the comparison images, `plan.csv`,
 /// `obstacles.csv`, `wrong_cells.csv` and `metrics.json` (last).
@@ -121,6 +121,13 @@ pub fn write_comparison(
         .collect();
     let csv_path = out_dir.join("comparison.csv");
     write_table(&csv_path, &rows)?;
+    // The same table as Markdown: the README's status table is this file of the default run.
+    let md_path = out_dir.join("comparison.md");
+    let csv = csv_table(&rows).map_err(|message| EvalError::Input {
+        path: csv_path.clone(),
+        message,
+    })?;
+    write_markdown(&md_path, &csv, &[])?;
     let figures: Vec<crate::figures::Figure> = runs
         .iter()
         .zip(&rows)
@@ -132,5 +139,5 @@ pub fn write_comparison(
         &png_path,
         &crate::figures::Canvas::side_by_side(&canvases, 24).to_png(),
     )?;
-    Ok(vec![csv_path, png_path])
+    Ok(vec![csv_path, md_path, png_path])
 }

@@ -1,6 +1,6 @@
 //! The rules beyond the paper's equations, one pure function each: how a scan's hits in a cell combine, how a
 //! hit is fused with a cell's estimate, and whether a free sample says anything about a cell. The options
-//! that select them are in [`super::options`]; `oeg/README.md` gives each rule's source.
+//! that select them are in [`super::options`]; `docs/design/robust-model.md` gives each rule's source.
 
 use super::equations::{Elevation, kalman_fuse, log_odds, update_log_odds};
 use super::options::{ElevationFusion, FreeSpaceOccupancy, ModelOptions, ScanHitElevation};

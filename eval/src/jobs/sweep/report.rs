@@ -198,6 +198,16 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
     files.extend(study.decision_plots(&folder, &plots, &mut summary)?);
     let path = dir.join("summary.csv");
     folder.write_table(&path, &summary)?;
+    // The same summary as Markdown, for a study's results page.
+    let md_path = dir.join("summary.md");
+    let md = crate::output::csv_table(&summary)
+        .and_then(|csv| crate::output::markdown_table(&csv, &[]))
+        .map_err(|message| EvalError::Input {
+            path: md_path.clone(),
+            message,
+        })?;
+    folder.write_bytes(&md_path, md.as_bytes())?;
+    files.insert(0, md_path);
     files.insert(0, path);
     Ok(ReportSummary {
         num_covered: study.num_covered,
