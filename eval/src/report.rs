@@ -123,9 +123,9 @@ pub fn write_comparison(
     write_table(&csv_path, &rows)?;
     // The same table as Markdown: the README's status table is this file of the default run.
     let md_path = out_dir.join("comparison.md");
-    let csv = csv_table(&rows).map_err(|message| EvalError::Input {
+    let csv = csv_table(&rows).map_err(|e| EvalError::Input {
         path: csv_path.clone(),
-        message,
+        message: e.to_string(),
     })?;
     write_markdown(&md_path, &csv, &[])?;
     let figures: Vec<crate::figures::Figure> = runs

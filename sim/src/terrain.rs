@@ -1,5 +1,6 @@
 //! The ground as a grid of heights, built from the scenario's terrain settings.
 
+use crate::scenario::heightmap::HeightmapError;
 use rand::RngExt;
 
 use crate::scenario::{Scenario, ScenarioSource, Terrain};
@@ -49,7 +50,7 @@ impl HeightGrid {
 ///
 /// # Errors
 /// A message if the terrain image cannot be read.
-pub fn build(scenario: &Scenario, source: &ScenarioSource) -> Result<HeightGrid, String> {
+pub fn build(scenario: &Scenario, source: &ScenarioSource) -> Result<HeightGrid, HeightmapError> {
     let m = TERRAIN_MARGIN_M;
     let lo = [scenario.map.min_xy_m[0] - m, scenario.map.min_xy_m[1] - m];
     let hi = [scenario.map.max_xy_m[0] + m, scenario.map.max_xy_m[1] + m];

@@ -155,9 +155,9 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
     write_table(&stage.join("suite.csv"), &rows)?;
     write_json(&stage.join("suite.json"), &rows)?;
     // The table as Markdown for a results page, without what varies from run to run (the wall time).
-    let csv = csv_table(&rows).map_err(|message| EvalError::Input {
+    let csv = csv_table(&rows).map_err(|e| EvalError::Input {
         path: stage.join("suite.csv"),
-        message,
+        message: e.to_string(),
     })?;
     write_markdown(&stage.join("suite.md"), &csv, &["file", "wall_time_s"])?;
     staged.commit()?;

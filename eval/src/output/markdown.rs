@@ -4,17 +4,17 @@
 
 use std::path::Path;
 
-use super::write_bytes;
+use super::{TableError, write_bytes};
 use crate::error::{EvalError, Result};
 
 /// A CSV table (header first, as [`super::csv_bytes`] writes it) as a Markdown table, without the columns
 /// named in `drop`. Whole numbers stay as they are, other numbers get 3 decimals, empty fields read `-`.
 ///
 /// # Errors
-/// A message when the bytes are not CSV.
-pub fn markdown_table(csv: &[u8], drop: &[&str]) -> std::result::Result<String, String> {
+/// [`TableError`] when the bytes are not CSV.
+pub fn markdown_table(csv: &[u8], drop: &[&str]) -> std::result::Result<String, TableError> {
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(csv);
-    let header = reader.headers().map_err(|e| e.to_string())?.clone();
+    let header = reader.headers()?.clone();
     let keep: Vec<usize> = (0..header.len())
         .filter(|&k| !drop.contains(&&header[k]))
         .collect();
@@ -22,7 +22,7 @@ pub fn markdown_table(csv: &[u8], drop: &[&str]) -> std::result::Result<String, 
     let mut out = row(keep.iter().map(|&k| header[k].to_string()).collect());
     out.push_str(&row(keep.iter().map(|_| "---".to_string()).collect()));
     for record in reader.records() {
-        let record = record.map_err(|e| e.to_string())?;
+        let record = record?;
         out.push_str(&row(keep
             .iter()
             .map(|&k| cell(record.get(k).unwrap_or_default()))
@@ -50,9 +50,9 @@ fn cell(field: &str) -> String {
 /// # Errors
 /// [`EvalError::Input`] naming the file when the table is not CSV, and a failed write.
 pub fn write_markdown(path: &Path, csv: &[u8], drop: &[&str]) -> Result<()> {
-    let text = markdown_table(csv, drop).map_err(|message| EvalError::Input {
+    let text = markdown_table(csv, drop).map_err(|e| EvalError::Input {
         path: path.to_path_buf(),
-        message,
+        message: e.to_string(),
     })?;
     write_bytes(path, text.as_bytes())
 }

@@ -60,15 +60,25 @@ pub trait CsvRow: Serialize {
 pub fn csv_bytes<T: Serialize>(
     columns: &[&str],
     rows: impl IntoIterator<Item = T>,
-) -> std::result::Result<Vec<u8>, String> {
+) -> std::result::Result<Vec<u8>, TableError> {
     let mut w = csv::WriterBuilder::new()
         .has_headers(false)
         .from_writer(Vec::new());
-    w.write_record(columns).map_err(|e| e.to_string())?;
+    w.write_record(columns)?;
     for row in rows {
-        w.serialize(row).map_err(|e| e.to_string())?;
+        w.serialize(row)?;
     }
-    w.into_inner().map_err(|e| e.to_string())
+    w.into_inner()
+        .map_err(|e| TableError::Csv(csv::Error::from(e.into_error())))
+}
+
+/// A table that cannot be written or read as CSV: a row that is not one flat record, or bytes that are not
+/// CSV (the caller names the file).
+#[derive(Debug, thiserror::Error)]
+pub enum TableError {
+    /// From the CSV writer or reader.
+    #[error("{0}")]
+    Csv(#[from] csv::Error),
 }
 
 /// [`csv_bytes`] of [`CsvRow`]s, with their [`CsvRow::COLUMNS`].
@@ -77,7 +87,7 @@ pub fn csv_bytes<T: Serialize>(
 /// As [`csv_bytes`].
 pub fn csv_table<'a, T: CsvRow + 'a>(
     rows: impl IntoIterator<Item = &'a T>,
-) -> std::result::Result<Vec<u8>, String> {
+) -> std::result::Result<Vec<u8>, TableError> {
     csv_bytes(T::COLUMNS, rows)
 }
 
@@ -90,9 +100,9 @@ pub fn write_csv<T: Serialize>(
     columns: &[&str],
     rows: impl IntoIterator<Item = T>,
 ) -> Result<()> {
-    let bytes = csv_bytes(columns, rows).map_err(|message| EvalError::Input {
+    let bytes = csv_bytes(columns, rows).map_err(|e| EvalError::Input {
         path: path.to_path_buf(),
-        message,
+        message: e.to_string(),
     })?;
     write_bytes(path, &bytes)
 }

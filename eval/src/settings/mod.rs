@@ -226,7 +226,7 @@ impl Checked for PlanJobSettings {
 /// Reads settings of type `T` from a document: `[map] preset` expanded, the schema, then `T`'s own check.
 fn read<T: Checked>(doc: &Table) -> Result<T, SettingError> {
     let mut doc = doc.clone();
-    sim::scenario::expand_map_preset(&mut doc).map_err(SettingError::invalid)?;
+    sim::scenario::expand_map_preset(&mut doc).map_err(|e| SettingError::invalid(e.to_string()))?;
     let text = toml::to_string(&doc).map_err(|e| SettingError::invalid(e.to_string()))?;
     let value: T = toml::from_str(&text).map_err(|e| SettingError::invalid(e.message().trim()))?;
     value.check()?;

@@ -404,7 +404,7 @@ impl Checker<'_> {
                 let file = self.source.resolve(path);
                 super::heightmap::read_greyscale_png(&file)
                     .map(|_| ())
-                    .map_err(|e| self.error(&at("path"), e))
+                    .map_err(|e| self.error(&at("path"), e.to_string()))
             }
         }
     }

@@ -1,15 +1,32 @@
 //! Height-map images a scenario's `[terrain]` refers to: 8- or 16-bit greyscale PNGs, checked from their
 //! header before a pixel is decoded.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// A height-map image that cannot be used: the file, and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct HeightmapError {
+    /// The image.
+    pub path: PathBuf,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+fn error(path: &Path, message: String) -> HeightmapError {
+    HeightmapError {
+        path: path.to_path_buf(),
+        message,
+    }
+}
 
 /// Reads an 8- or 16-bit greyscale PNG as values in [0, 1], row 0 first. Returns (width, height, values).
 ///
 /// # Errors
 /// As [`decode_greyscale_png`], and a file that cannot be read.
-pub fn read_greyscale_png(path: &Path) -> Result<(usize, usize, Vec<f64>), String> {
+pub fn read_greyscale_png(path: &Path) -> Result<(usize, usize, Vec<f64>), HeightmapError> {
     let bytes =
-        std::fs::read(path).map_err(|e| format!("cannot open the terrain image {}: {e}", path.display()))?;
+        std::fs::read(path).map_err(|e| error(path, format!("cannot open the terrain image: {e}")))?;
     decode_greyscale_png(path, &bytes)
 }
 
@@ -22,32 +39,35 @@ pub const MAX_TERRAIN_PIXELS: u64 = super::MAX_MAP_CELLS;
 /// # Errors
 /// A message naming the file: not a PNG, not greyscale, smaller than 2 x 2, or larger than
 /// [`MAX_TERRAIN_PIXELS`] (refused before decoding).
-pub fn decode_greyscale_png(path: &Path, bytes: &[u8]) -> Result<(usize, usize, Vec<f64>), String> {
-    let name = path.display();
+pub fn decode_greyscale_png(path: &Path, bytes: &[u8]) -> Result<(usize, usize, Vec<f64>), HeightmapError> {
     let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     let mut reader = decoder
         .read_info()
-        .map_err(|e| format!("{name} is not a readable PNG: {e}"))?;
+        .map_err(|e| error(path, format!("not a readable PNG: {e}")))?;
     let (w, h) = (reader.info().width, reader.info().height);
     if u64::from(w) * u64::from(h) > MAX_TERRAIN_PIXELS {
-        return Err(format!(
-            "{name}: the header declares {w} x {h} pixels, over the limit of {MAX_TERRAIN_PIXELS}"
+        return Err(error(
+            path,
+            format!("the header declares {w} x {h} pixels, over the limit of {MAX_TERRAIN_PIXELS}"),
         ));
     }
     let (color, depth) = reader.output_color_type();
     if color != png::ColorType::Grayscale {
-        return Err(format!("{name}: expected a greyscale PNG, found {color:?}"));
+        return Err(error(path, format!("expected a greyscale PNG, found {color:?}")));
     }
     let size = reader
         .output_buffer_size()
-        .ok_or_else(|| format!("{name}: image too large"))?;
+        .ok_or_else(|| error(path, "image too large".into()))?;
     let mut buf = vec![0; size];
     let info = reader
         .next_frame(&mut buf)
-        .map_err(|e| format!("{name}: corrupt image data: {e}"))?;
+        .map_err(|e| error(path, format!("corrupt image data: {e}")))?;
     let (w, h) = (info.width as usize, info.height as usize);
     if w < 2 || h < 2 {
-        return Err(format!("{name}: expected at least 2 x 2 pixels, found {w} x {h}"));
+        return Err(error(
+            path,
+            format!("expected at least 2 x 2 pixels, found {w} x {h}"),
+        ));
     }
     let values = match depth {
         png::BitDepth::Eight => buf[..w * h].iter().map(|&v| f64::from(v) / 255.0).collect(),
@@ -55,7 +75,12 @@ pub fn decode_greyscale_png(path: &Path, bytes: &[u8]) -> Result<(usize, usize, 
             .chunks_exact(2)
             .map(|c| f64::from(u16::from_be_bytes([c[0], c[1]])) / 65535.0)
             .collect(),
-        other => return Err(format!("{name}: expected 8- or 16-bit samples, found {other:?}")),
+        other => {
+            return Err(error(
+                path,
+                format!("expected 8- or 16-bit samples, found {other:?}"),
+            ));
+        }
     };
     Ok((w, h, values))
 }
@@ -104,6 +129,7 @@ mod tests {
         let bytes = header_only_png(60_000, 60_000);
         assert!(bytes.len() < 200, "{} bytes", bytes.len());
         let err = decode_greyscale_png(Path::new("huge.png"), &bytes).expect_err("too large");
+        let err = err.to_string();
         assert!(err.contains("huge.png") && err.contains("60000 x 60000"), "{err}");
     }
 }

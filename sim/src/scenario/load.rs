@@ -112,6 +112,16 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
     })
 }
 
+/// A value of a settings document that cannot be read, by its dotted key (`map.preset`, `robot.height_m`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{key}: {message}")]
+pub struct InvalidValue {
+    /// The value's dotted key.
+    pub key: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
 /// Applies the scenario's `[map] preset` to its model and step rule: the keys the file gives in `[map.model]`
 /// and `[map] traversability` over the preset's.
 fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), String> {
@@ -119,7 +129,7 @@ fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), 
         return Ok(());
     }
     let mut doc: toml::Table = toml::from_str(text).map_err(|e| e.message().to_string())?;
-    expand_map_preset(&mut doc)?;
+    expand_map_preset(&mut doc).map_err(|e| e.to_string())?;
     let map = doc
         .get("map")
         .cloned()
@@ -139,7 +149,11 @@ fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), 
 ///
 /// # Errors
 /// A preset name or a `[robot]` that does not read.
-pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), String> {
+pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), InvalidValue> {
+    let invalid = |key: &str, message: String| InvalidValue {
+        key: key.to_string(),
+        message,
+    };
     let Some(map) = doc.get("map").and_then(toml::Value::as_table) else {
         return Ok(());
     };
@@ -148,20 +162,20 @@ pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), Strin
         Some(v) => v
             .clone()
             .try_into()
-            .map_err(|e: toml::de::Error| format!("map.preset: {}", e.message()))?,
+            .map_err(|e: toml::de::Error| invalid("map.preset", e.message().to_string()))?,
     };
     if preset == oeg::MapPreset::Paper {
         return Ok(());
     }
     let robot = doc.get("robot").and_then(toml::Value::as_table);
-    let number = |key: &str, default: f32| -> std::result::Result<f32, String> {
+    let number = |key: &str, default: f32| -> std::result::Result<f32, InvalidValue> {
         match robot.and_then(|r| r.get(key)) {
             None => Ok(default),
             Some(v) => v
                 .as_float()
                 .or_else(|| v.as_integer().map(|i| i as f64))
                 .map(|x| x as f32)
-                .ok_or_else(|| format!("robot.{key}: expected a number")),
+                .ok_or_else(|| invalid(&format!("robot.{key}"), "expected a number".into())),
         }
     };
     let profile = oeg::RobotProfile {
@@ -169,7 +183,8 @@ pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), Strin
         height_m: number("height_m", oeg::DEFAULT_ROBOT_HEIGHT_M)?,
         max_grade: number("max_grade", oeg::DEFAULT_MAX_GRADE)?,
     };
-    let mut model = toml::Table::try_from(preset.model(&profile)).map_err(|e| e.to_string())?;
+    let mut model =
+        toml::Table::try_from(preset.model(&profile)).map_err(|e| invalid("map.model", e.to_string()))?;
     if let Some(given) = map.get("model").and_then(toml::Value::as_table) {
         for (k, v) in given {
             model.insert(k.clone(), v.clone());
@@ -178,7 +193,8 @@ pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), Strin
     let mut map = map.clone();
     map.insert("model".into(), toml::Value::Table(model));
     if !map.contains_key("traversability") {
-        let rule = toml::Value::try_from(preset.traversability()).map_err(|e| e.to_string())?;
+        let rule = toml::Value::try_from(preset.traversability())
+            .map_err(|e| invalid("map.traversability", e.to_string()))?;
         map.insert("traversability".into(), rule);
     }
     doc.insert("map".into(), toml::Value::Table(map));

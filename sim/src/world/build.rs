@@ -33,7 +33,7 @@ impl World {
         let mut physics = PhysicsWorld::new();
         physics.gravity = Vector::new(0.0, 0.0, -9.81);
 
-        let terrain = terrain::build(s, &loaded.source).map_err(scenario_error)?;
+        let terrain = terrain::build(s, &loaded.source).map_err(|e| scenario_error(e.to_string()))?;
         physics.insert(
             RigidBodyBuilder::fixed(),
             heightfield_collider(&terrain).user_data(tag(KIND_TERRAIN, 0)),

@@ -53,20 +53,34 @@ pub struct ExecuteSummary {
     pub files: Vec<PathBuf>,
 }
 
+/// A shard that cannot be used: `--shard` or a cluster's variable, named in the message with its value.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{message}")]
+pub struct ShardError {
+    /// What is wrong, with the option or variable at fault and what was expected.
+    pub message: String,
+}
+
+fn shard_error(message: impl Into<String>) -> ShardError {
+    ShardError {
+        message: message.into(),
+    }
+}
+
 /// Parses `--shard i/n` (1-based).
 ///
 /// # Errors
 /// A message saying what was expected.
-pub fn parse_shard(text: &str) -> std::result::Result<(usize, usize), String> {
+pub fn parse_shard(text: &str) -> std::result::Result<(usize, usize), ShardError> {
     let parsed = text
         .split_once('/')
         .and_then(|(i, n)| Some((i.trim().parse::<usize>().ok()?, n.trim().parse::<usize>().ok()?)));
     match parsed {
         Some((i, n)) if n >= 1 && (1..=n).contains(&i) => Ok((i, n)),
-        Some((i, n)) => Err(format!(
+        Some((i, n)) => Err(shard_error(format!(
             "shard {i} of {n}: expected i/n with 1 <= i <= n (shards count from 1)"
-        )),
-        None => Err(format!("expected i/n, such as 2/5, got `{text}`")),
+        ))),
+        None => Err(shard_error(format!("expected i/n, such as 2/5, got `{text}`"))),
     }
 }
 
@@ -79,36 +93,40 @@ pub fn parse_shard(text: &str) -> std::result::Result<(usize, usize), String> {
 pub fn shard_from_env(
     get: impl Fn(&str) -> Option<String>,
     shards: Option<usize>,
-) -> std::result::Result<Option<(usize, usize)>, String> {
-    let number = |name: &str| -> std::result::Result<Option<usize>, String> {
+) -> std::result::Result<Option<(usize, usize)>, ShardError> {
+    let number = |name: &str| -> std::result::Result<Option<usize>, ShardError> {
         get(name)
             .map(|v| {
                 v.trim()
                     .parse::<usize>()
-                    .map_err(|_| format!("{name}={v}: expected a whole number"))
+                    .map_err(|_| shard_error(format!("{name}={v}: expected a whole number")))
             })
             .transpose()
     };
     if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
         let (Some(min), Some(max)) = (number("SLURM_ARRAY_TASK_MIN")?, number("SLURM_ARRAY_TASK_MAX")?)
         else {
-            return Err("SLURM_ARRAY_TASK_ID is set without SLURM_ARRAY_TASK_MIN and _MAX".into());
+            return Err(shard_error(
+                "SLURM_ARRAY_TASK_ID is set without SLURM_ARRAY_TASK_MIN and _MAX",
+            ));
         };
         if !(min..=max).contains(&id) {
-            return Err(format!(
+            return Err(shard_error(format!(
                 "SLURM_ARRAY_TASK_ID={id} lies outside the array {min}-{max}"
-            ));
+            )));
         }
         return Ok(Some((id - min + 1, max - min + 1)));
     }
     if let Some(index) = number("JOB_COMPLETION_INDEX")? {
         let Some(n) = shards else {
-            return Err("JOB_COMPLETION_INDEX is set: give the job's completions as --shards N".into());
+            return Err(shard_error(
+                "JOB_COMPLETION_INDEX is set: give the job's completions as --shards N",
+            ));
         };
         if index >= n {
-            return Err(format!(
+            return Err(shard_error(format!(
                 "JOB_COMPLETION_INDEX={index} with --shards {n}: expected an index below {n}"
-            ));
+            )));
         }
         return Ok(Some((index + 1, n)));
     }
@@ -314,7 +332,7 @@ mod tests {
         assert_eq!(parse_shard("1/1"), Ok((1, 1)));
         for bad in ["0/3", "4/3", "1/0", "x/3", "3"] {
             let e = parse_shard(bad).expect_err(bad);
-            assert!(e.contains("expected"), "{bad}: {e}");
+            assert!(e.message.contains("expected"), "{bad}: {e}");
         }
     }
 

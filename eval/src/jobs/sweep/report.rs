@@ -202,9 +202,9 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
     let md_path = dir.join("summary.md");
     let md = crate::output::csv_table(&summary)
         .and_then(|csv| crate::output::markdown_table(&csv, &[]))
-        .map_err(|message| EvalError::Input {
+        .map_err(|e| EvalError::Input {
             path: md_path.clone(),
-            message,
+            message: e.to_string(),
         })?;
     folder.write_bytes(&md_path, md.as_bytes())?;
     files.insert(0, md_path);

@@ -193,28 +193,55 @@ pub fn read_record(path: &Path, id: &str) -> Result<Option<(Json, Vec<Json>)>> {
         })
 }
 
+/// A run's record (`runs/<id>/row.json`) that is not one: what is wrong with it (the reader names the file).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{message}")]
+pub struct RecordError {
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl From<String> for RecordError {
+    fn from(message: String) -> Self {
+        Self { message }
+    }
+}
+
+impl From<&str> for RecordError {
+    fn from(message: &str) -> Self {
+        Self {
+            message: message.to_string(),
+        }
+    }
+}
+
 /// The checks of [`read_record`] on parsed JSON.
 ///
 /// # Errors
-/// What is wrong, as text.
-pub fn parse_record(record: &Json, id: &str) -> std::result::Result<(Json, Vec<Json>), String> {
+/// [`RecordError`]: not an object with `row` (of run `id`, with a status) and `obstacles`.
+pub fn parse_record(record: &Json, id: &str) -> std::result::Result<(Json, Vec<Json>), RecordError> {
     let Json::Object(record) = record else {
-        return Err(format!(
+        return Err(RecordError::from(format!(
             "expected a run's row, an object with `row` and `obstacles`, got {}",
             kind_of(record)
-        ));
+        )));
     };
     let row = match record.get("row") {
         Some(row @ Json::Object(_)) => row.clone(),
-        Some(other) => return Err(format!("`row`: expected an object, got {}", kind_of(other))),
+        Some(other) => {
+            return Err(RecordError::from(format!(
+                "`row`: expected an object, got {}",
+                kind_of(other)
+            )));
+        }
         None => return Err("not a run's row: no `row`".into()),
     };
     match row.get("id") {
         Some(Json::String(found)) if found == id => {}
         Some(Json::String(found)) => {
-            return Err(format!(
+            return Err(RecordError::from(format!(
                 "holds the row of run {found}, not of run {id} (a copied row)"
-            ));
+            )));
         }
         _ => return Err("`row.id`: expected the run's id".into()),
     }
