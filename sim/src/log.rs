@@ -172,41 +172,22 @@ pub fn read_log(path: &Path) -> Result<SensorLog> {
 /// # Errors
 /// As [`read_log`], but for reading the file.
 pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
-    let fail = |at: usize, message: String| SimError::Log {
-        path: path.to_path_buf(),
-        message: format!("at byte {at}: {message}"),
-    };
-    let take = |pos: &mut usize, n: usize, what: &str| -> Result<&[u8]> {
-        if data.len() - *pos < n {
-            return Err(fail(
-                *pos,
-                format!(
-                    "the log is truncated: expected {n} bytes for {what}, found {}",
-                    data.len() - *pos
-                ),
-            ));
-        }
-        let s = &data[*pos..*pos + n];
-        *pos += n;
-        Ok(s)
-    };
-    let u32_at = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-    let u64_at = |b: &[u8]| u64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
-    let f64_at = |b: &[u8]| f64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
-    let f32_at = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-
     let prefix = read_container_prefix(path, data, MAGIC, &[FORMAT_VERSION], "an OEG sensor log")?;
+    let mut r = LogReader {
+        path,
+        data,
+        pos: prefix.body_start,
+    };
     let header: LogHeader =
-        serde_json::from_slice(prefix.header).map_err(|e| fail(16, format!("malformed header: {e}")))?;
-    let mut pos = prefix.body_start;
+        serde_json::from_slice(prefix.header).map_err(|e| r.fail(16, format!("malformed header: {e}")))?;
     let mut scans = Vec::new();
     loop {
-        let at = pos;
-        match take(&mut pos, 1, "a record tag")?[0] {
+        let at = r.pos;
+        match r.take(1, "a record tag")?[0] {
             0 => {
-                let count = u64_at(take(&mut pos, 8, "the scan count")?);
+                let count = u64_at(r.take(8, "the scan count")?);
                 if count != scans.len() as u64 {
-                    return Err(fail(
+                    return Err(r.fail(
                         at,
                         format!(
                             "the end record counts {count} scans, the log holds {}",
@@ -214,73 +195,123 @@ pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
                         ),
                     ));
                 }
-                check_container_checksum(path, data, pos)?;
+                check_container_checksum(path, data, r.pos)?;
                 return Ok(SensorLog { header, scans });
             }
-            1 => {
-                let fixed = take(&mut pos, SCAN_FIXED_BYTES, "a scan record")?;
-                let sensor_index = u32_at(&fixed[0..4]) as usize;
-                if sensor_index >= header.sensors.len() {
-                    return Err(fail(
-                        at,
-                        format!(
-                            "scan of sensor {sensor_index}, but the header lists {}",
-                            header.sensors.len()
-                        ),
-                    ));
-                }
-                let scan_index = u64_at(&fixed[4..12]);
-                let stamp_s = f64_at(&fixed[12..20]);
-                let mut poses = [Isometry3::identity(); 2];
-                for (k, pose) in poses.iter_mut().enumerate() {
-                    let v: Vec<f64> = (0..7).map(|n| f64_at(&fixed[20 + (k * 7 + n) * 8..])).collect();
-                    let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
-                        .filter(|_| v.iter().all(|x| x.is_finite()))
-                        .ok_or_else(|| fail(at, "a scan pose is not finite or has a zero rotation".into()))?;
-                    *pose = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation);
-                }
-                let num_rays = u32_at(&fixed[SCAN_FIXED_BYTES - 4..]) as usize;
-                if num_rays.saturating_mul(RAY_BYTES) > data.len() - pos {
-                    return Err(fail(
-                        at,
-                        format!("a scan declares {num_rays} rays, more than the log holds: truncated"),
-                    ));
-                }
-                let bytes = take(&mut pos, num_rays * RAY_BYTES, "the rays")?;
-                let mut rays = Vec::with_capacity(num_rays);
-                for (n, r) in bytes.chunks_exact(RAY_BYTES).enumerate() {
-                    let kind = match r[0] {
-                        0 => RayKind::Hit,
-                        1 => RayKind::NoReturn,
-                        other => {
-                            return Err(fail(
-                                at,
-                                format!("ray {n} has kind {other}, expected 0 (hit) or 1 (no return)"),
-                            ));
-                        }
-                    };
-                    let v = Vector3::new(f32_at(&r[1..]), f32_at(&r[5..]), f32_at(&r[9..]));
-                    let sigma = f32_at(&r[13..]);
-                    if !(v.iter().all(|x| x.is_finite()) && sigma.is_finite() && sigma >= 0.0) {
-                        return Err(fail(at, format!("ray {n} holds a non-finite number")));
-                    }
-                    rays.push(SensorRay {
-                        kind,
-                        vector_in_sensor: v,
-                        range_sigma_m: sigma,
-                    });
-                }
-                let [world_from_sensor, estimated_world_from_sensor] = poses;
-                scans.push(SensorScan {
-                    sensor_index,
-                    scan_index,
-                    stamp_s,
-                    world_from_sensor,
-                    estimated_world_from_sensor,
-                    rays,
-                });
-            }
-            other => return Err(fail(at, format!("unknown record tag {other}"))),
+            1 => scans.push(r.scan_record(at, header.sensors.len())?),
+            other => return Err(r.fail(at, format!("unknown record tag {other}"))),
         }
+    }
+}
+
+fn u32_at(b: &[u8]) -> u32 {
+    u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+}
+
+fn u64_at(b: &[u8]) -> u64 {
+    u64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]))
+}
+
+fn f64_at(b: &[u8]) -> f64 {
+    f64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]))
+}
+
+fn f32_at(b: &[u8]) -> f32 {
+    f32::from_le_bytes([b[0], b[1], b[2], b[3]])
+}
+
+/// The log's body, read from `pos` on; every error names the file and the byte.
+struct LogReader<'a> {
+    path: &'a Path,
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> LogReader<'a> {
+    fn fail(&self, at: usize, message: String) -> SimError {
+        SimError::Log {
+            path: self.path.to_path_buf(),
+            message: format!("at byte {at}: {message}"),
+        }
+    }
+
+    /// The next `n` bytes, which hold `what`.
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8]> {
+        let data = self.data;
+        if data.len() - self.pos < n {
+            return Err(self.fail(
+                self.pos,
+                format!(
+                    "the log is truncated: expected {n} bytes for {what}, found {}",
+                    data.len() - self.pos
+                ),
+            ));
+        }
+        let s = &data[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+
+    /// A scan record (its tag, at byte `at`, already read) of one of `num_sensors` sensors: its fixed part, both
+    /// poses and its rays, each checked.
+    fn scan_record(&mut self, at: usize, num_sensors: usize) -> Result<SensorScan> {
+        let fixed = self.take(SCAN_FIXED_BYTES, "a scan record")?;
+        let sensor_index = u32_at(&fixed[0..4]) as usize;
+        if sensor_index >= num_sensors {
+            return Err(self.fail(
+                at,
+                format!("scan of sensor {sensor_index}, but the header lists {num_sensors}"),
+            ));
+        }
+        let scan_index = u64_at(&fixed[4..12]);
+        let stamp_s = f64_at(&fixed[12..20]);
+        let mut poses = [Isometry3::identity(); 2];
+        for (k, pose) in poses.iter_mut().enumerate() {
+            let v: Vec<f64> = (0..7).map(|n| f64_at(&fixed[20 + (k * 7 + n) * 8..])).collect();
+            let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
+                .filter(|_| v.iter().all(|x| x.is_finite()))
+                .ok_or_else(|| self.fail(at, "a scan pose is not finite or has a zero rotation".into()))?;
+            *pose = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation);
+        }
+        let num_rays = u32_at(&fixed[SCAN_FIXED_BYTES - 4..]) as usize;
+        if num_rays.saturating_mul(RAY_BYTES) > self.data.len() - self.pos {
+            return Err(self.fail(
+                at,
+                format!("a scan declares {num_rays} rays, more than the log holds: truncated"),
+            ));
+        }
+        let bytes = self.take(num_rays * RAY_BYTES, "the rays")?;
+        let mut rays = Vec::with_capacity(num_rays);
+        for (n, r) in bytes.chunks_exact(RAY_BYTES).enumerate() {
+            let kind = match r[0] {
+                0 => RayKind::Hit,
+                1 => RayKind::NoReturn,
+                other => {
+                    return Err(self.fail(
+                        at,
+                        format!("ray {n} has kind {other}, expected 0 (hit) or 1 (no return)"),
+                    ));
+                }
+            };
+            let v = Vector3::new(f32_at(&r[1..]), f32_at(&r[5..]), f32_at(&r[9..]));
+            let sigma = f32_at(&r[13..]);
+            if !(v.iter().all(|x| x.is_finite()) && sigma.is_finite() && sigma >= 0.0) {
+                return Err(self.fail(at, format!("ray {n} holds a non-finite number")));
+            }
+            rays.push(SensorRay {
+                kind,
+                vector_in_sensor: v,
+                range_sigma_m: sigma,
+            });
+        }
+        let [world_from_sensor, estimated_world_from_sensor] = poses;
+        Ok(SensorScan {
+            sensor_index,
+            scan_index,
+            stamp_s,
+            world_from_sensor,
+            estimated_world_from_sensor,
+            rays,
+        })
     }
 }

@@ -63,14 +63,63 @@ fn lighten(c: Rgb) -> Rgb {
     c.map(|v| (u16::from(v) + 3 * 255).div_ceil(4) as u8)
 }
 
+/// The data's extent on the plot, and the pixel of a value.
+struct Frame {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+}
+
+impl Frame {
+    /// The column of `x`.
+    fn px(&self, x: f64) -> i64 {
+        LEFT as i64 + ((x - self.x0) / (self.x1 - self.x0) * PLOT_W as f64).round() as i64
+    }
+
+    /// The row of `y` (up is smaller).
+    fn py(&self, y: f64) -> i64 {
+        TOP as i64 + PLOT_H as i64 - ((y - self.y0) / (self.y1 - self.y0) * PLOT_H as f64).round() as i64
+    }
+}
+
 impl Chart {
     /// Draws the chart as a PNG.
     pub fn to_png(&self) -> Vec<u8> {
         self.draw().to_png()
     }
 
-    /// Draws the chart.
+    /// Draws the chart: the intervals' bands, the axes, the bands' edges, the lines and markers, the legend
+    /// and the title.
     pub fn draw(&self) -> Canvas {
+        let frame = self.frame();
+        let legend_w = self
+            .series
+            .iter()
+            .map(|s| 28 + Canvas::text_width(&s.label, 1))
+            .chain([Canvas::text_width(&self.note, 1)])
+            .max()
+            .unwrap_or(0);
+        let width = LEFT + PLOT_W + LEGEND_GAP + legend_w + 16;
+        let height = TOP + PLOT_H + BOTTOM;
+        let mut c = Canvas::new(width, height, WHITE);
+        // Bands first, then lines and markers over them.
+        self.draw_bands(&mut c, &frame);
+        self.draw_axes(&mut c, (frame.x0, frame.x1), (frame.y0, frame.y1));
+        self.draw_band_edges(&mut c, &frame);
+        self.draw_lines(&mut c, &frame);
+        self.draw_legend(&mut c);
+        let scale = if Canvas::text_width(&self.title, 2) + 8 <= width {
+            2
+        } else {
+            1
+        };
+        c.text(8, 12, &self.title, scale, BLACK);
+        c
+    }
+
+    /// The data's extent: every finite x, and every finite mean and interval bound with 5 % padding.
+    fn frame(&self) -> Frame {
         let finite = |v: f64| v.is_finite().then_some(v);
         let xs: Vec<f64> = self
             .series
@@ -95,23 +144,18 @@ impl Chart {
             }
         };
         let (x0, x1) = range(&xs);
-        let (mut y0, mut y1) = range(&ys);
+        let (y0, y1) = range(&ys);
         let pad = 0.05 * (y1 - y0);
-        y0 -= pad;
-        y1 += pad;
-        let legend_w = self
-            .series
-            .iter()
-            .map(|s| 28 + Canvas::text_width(&s.label, 1))
-            .chain([Canvas::text_width(&self.note, 1)])
-            .max()
-            .unwrap_or(0);
-        let width = LEFT + PLOT_W + LEGEND_GAP + legend_w + 16;
-        let height = TOP + PLOT_H + BOTTOM;
-        let mut c = Canvas::new(width, height, WHITE);
-        let px = |x: f64| LEFT as i64 + ((x - x0) / (x1 - x0) * PLOT_W as f64).round() as i64;
-        let py = |y: f64| TOP as i64 + PLOT_H as i64 - ((y - y0) / (y1 - y0) * PLOT_H as f64).round() as i64;
-        // Bands first, then lines and markers over them.
+        Frame {
+            x0,
+            x1,
+            y0: y0 - pad,
+            y1: y1 + pad,
+        }
+    }
+
+    /// Each series' interval as a light band between consecutive points.
+    fn draw_bands(&self, c: &mut Canvas, f: &Frame) {
         for (k, s) in self.series.iter().enumerate() {
             let color = lighten(SERIES_COLORS[k % SERIES_COLORS.len()]);
             for w in s.points.windows(2) {
@@ -122,7 +166,7 @@ impl Chart {
                 {
                     continue;
                 }
-                let (pa, pb) = (px(a.x), px(b.x));
+                let (pa, pb) = (f.px(a.x), f.px(b.x));
                 for x in pa.min(pb)..=pa.max(pb) {
                     let t = if pb == pa {
                         0.0
@@ -131,31 +175,37 @@ impl Chart {
                     };
                     let lo = a.low + t * (b.low - a.low);
                     let hi = a.high + t * (b.high - a.high);
-                    let (top, bottom) = (py(hi), py(lo));
+                    let (top, bottom) = (f.py(hi), f.py(lo));
                     c.fill_rect(x, top, 1, bottom - top + 1, color);
                 }
             }
         }
-        self.draw_axes(&mut c, (x0, x1), (y0, y1));
-        // Band edges, so that a band behind another stays visible.
+    }
+
+    /// The bands' edges, dashed, so that a band behind another stays visible.
+    fn draw_band_edges(&self, c: &mut Canvas, f: &Frame) {
         for (k, s) in self.series.iter().enumerate() {
             let color = SERIES_COLORS[k % SERIES_COLORS.len()];
             for w in s.points.windows(2) {
                 let (a, b) = (w[0], w[1]);
                 for (ya, yb) in [(a.low, b.low), (a.high, b.high)] {
                     if [a.x, b.x, ya, yb].iter().all(|v| v.is_finite()) {
-                        c.dashed_line(px(a.x), py(ya), px(b.x), py(yb), color);
+                        c.dashed_line(f.px(a.x), f.py(ya), f.px(b.x), f.py(yb), color);
                     }
                 }
             }
         }
+    }
+
+    /// The means as lines with square markers; a lone point gets its interval as a bar.
+    fn draw_lines(&self, c: &mut Canvas, f: &Frame) {
         for (k, s) in self.series.iter().enumerate() {
             let color = SERIES_COLORS[k % SERIES_COLORS.len()];
             let pts: Vec<(i64, i64)> = s
                 .points
                 .iter()
                 .filter(|p| p.x.is_finite() && p.y.is_finite())
-                .map(|p| (px(p.x), py(p.y)))
+                .map(|p| (f.px(p.x), f.py(p.y)))
                 .collect();
             for w in pts.windows(2) {
                 for d in 0..2 {
@@ -164,14 +214,17 @@ impl Chart {
             }
             for p in &s.points {
                 if p.x.is_finite() && p.y.is_finite() {
-                    c.fill_rect(px(p.x) - 3, py(p.y) - 3, 7, 7, color);
+                    c.fill_rect(f.px(p.x) - 3, f.py(p.y) - 3, 7, 7, color);
                 }
                 if p.x.is_finite() && p.low.is_finite() && p.high.is_finite() && s.points.len() == 1 {
-                    c.line(px(p.x), py(p.low), px(p.x), py(p.high), color);
+                    c.line(f.px(p.x), f.py(p.low), f.px(p.x), f.py(p.high), color);
                 }
             }
         }
-        // Legend.
+    }
+
+    /// One swatch and label per series, and the note under them.
+    fn draw_legend(&self, c: &mut Canvas) {
         let lx = (LEFT + PLOT_W + LEGEND_GAP) as i64;
         for (k, s) in self.series.iter().enumerate() {
             let y = TOP as i64 + 20 * k as i64;
@@ -187,13 +240,6 @@ impl Chart {
             1,
             BLACK,
         );
-        let scale = if Canvas::text_width(&self.title, 2) + 8 <= width {
-            2
-        } else {
-            1
-        };
-        c.text(8, 12, &self.title, scale, BLACK);
-        c
     }
 
     fn draw_axes(&self, c: &mut Canvas, (x0, x1): (f64, f64), (y0, y1): (f64, f64)) {

@@ -155,7 +155,6 @@ pub fn decisions(
     verdicts: &Verdicts,
     returns: &ObstacleReturns,
 ) -> Vec<ObstacleDecision> {
-    let geometry = *map.geometry();
     s.obstacles
         .iter()
         .enumerate()
@@ -181,80 +180,115 @@ pub fn decisions(
                 decision: "unseen",
                 decision_right: false,
             };
-            // The cells whose centre lies in the footprint, and the cell of the obstacle's centre (a 2 cm pole
-            // covers no cell centre).
-            let [cx, cy] = o.center_xy_m();
-            let center_cell = geometry.cell_of(cx, cy);
-            let (mut true_sum, mut mapped_sum, mut num_mapped) = (0.0, 0.0, 0u64);
-            // Over the truly blocked cells and over all observed ones: (cells, mapped blocked, mapped uncertain).
-            let (mut over_blocked, mut over_all) = ([0u64; 3], [0u64; 3]);
-            for (k, cell) in truth.region.cells().enumerate() {
-                let (x, y) = geometry.cell_center(cell);
-                if !footprint_contains(o, Point2::new(x, y)) && center_cell != Some(cell) {
-                    continue;
-                }
-                row.num_cells += 1;
-                let verdict = verdicts.verdict[k];
-                if verdict == Verdict::NotScored {
-                    continue;
-                }
-                row.num_observed_cells += 1;
-                let truly = verdicts.truth[k].is_blocked();
-                let mapped = verdicts.mapped[k];
-                let tally = [
-                    1,
-                    u64::from(mapped == Traversability::Blocked),
-                    u64::from(mapped == Traversability::Uncertain),
-                ];
-                for (a, t) in over_all.iter_mut().zip(tally) {
-                    *a += t;
-                }
-                if truly {
-                    for (a, t) in over_blocked.iter_mut().zip(tally) {
-                        *a += t;
-                    }
-                }
-                row.true_blocked_cells += u64::from(truly);
-                row.mapped_blocked_cells += tally[1];
-                row.uncertain_cells += tally[2];
-                row.unsafe_cells += u64::from(verdict == Verdict::Unsafe);
-                row.overcautious_cells += u64::from(verdict == Verdict::OverCautious);
-                true_sum += f64::from(truth.cells[k].elevation_m);
-                if let Some(e) = map.cell(cell).elevation() {
-                    mapped_sum += f64::from(e.mean_m);
-                    num_mapped += 1;
-                }
-            }
-            // Rounded to the tenth of a millimetre, so the CSV reads 0.0361, not 0.036112...
-            let round = |v: f64| (v * 1e4).round() / 1e4;
-            if row.num_observed_cells > 0 {
-                row.true_elevation_mean_m = Some(round(true_sum / row.num_observed_cells as f64));
-            }
-            if num_mapped > 0 {
-                row.mapped_elevation_mean_m = Some(round(mapped_sum / num_mapped as f64));
-            }
-            if row.num_observed_cells > 0 {
-                let truly_blocked = row.true_blocked_cells > 0;
-                row.true_decision = if truly_blocked { "blocked" } else { "passable" };
-                let [n, blocked, uncertain] = if truly_blocked { over_blocked } else { over_all };
-                row.mapped_decision = if 2 * blocked > n {
-                    "blocked"
-                } else if 2 * (blocked + uncertain) > n {
-                    "uncertain"
-                } else {
-                    "passable"
-                };
-                row.decision_right = row.true_decision == row.mapped_decision;
-                row.decision = match (row.true_decision, row.mapped_decision) {
-                    (_, "uncertain") => "uncertain",
-                    (t, m) if t == m => "right",
-                    ("blocked", _) => "unsafe",
-                    _ => "overcautious",
-                };
-            }
+            let tally = tally_footprint(o, map, truth, verdicts, &mut row);
+            conclude(&mut row, &tally);
             row
         })
         .collect()
+}
+
+/// What the footprint's cells add up to, beyond the row's counts.
+struct Tally {
+    /// Sum of the true elevations of the observed cells, metres.
+    true_sum: f64,
+    /// Sum of the mapped elevations of the cells with one, metres.
+    mapped_sum: f64,
+    /// Cells with a mapped elevation.
+    num_mapped: u64,
+    /// Over the truly blocked cells: (cells, mapped blocked, mapped uncertain).
+    over_blocked: [u64; 3],
+    /// Over every observed cell: (cells, mapped blocked, mapped uncertain).
+    over_all: [u64; 3],
+}
+
+/// Counts the cells of `o`'s footprint into `row`: the cells whose centre lies in the footprint, and the cell
+/// of the obstacle's centre (a 2 cm pole covers no cell centre).
+fn tally_footprint(
+    o: &Obstacle,
+    map: &Map,
+    truth: &TruthRaster,
+    verdicts: &Verdicts,
+    row: &mut ObstacleDecision,
+) -> Tally {
+    let geometry = *map.geometry();
+    let [cx, cy] = o.center_xy_m();
+    let center_cell = geometry.cell_of(cx, cy);
+    let mut t = Tally {
+        true_sum: 0.0,
+        mapped_sum: 0.0,
+        num_mapped: 0,
+        over_blocked: [0; 3],
+        over_all: [0; 3],
+    };
+    for (k, cell) in truth.region.cells().enumerate() {
+        let (x, y) = geometry.cell_center(cell);
+        if !footprint_contains(o, Point2::new(x, y)) && center_cell != Some(cell) {
+            continue;
+        }
+        row.num_cells += 1;
+        let verdict = verdicts.verdict[k];
+        if verdict == Verdict::NotScored {
+            continue;
+        }
+        row.num_observed_cells += 1;
+        let truly = verdicts.truth[k].is_blocked();
+        let mapped = verdicts.mapped[k];
+        let tally = [
+            1,
+            u64::from(mapped == Traversability::Blocked),
+            u64::from(mapped == Traversability::Uncertain),
+        ];
+        for (a, n) in t.over_all.iter_mut().zip(tally) {
+            *a += n;
+        }
+        if truly {
+            for (a, n) in t.over_blocked.iter_mut().zip(tally) {
+                *a += n;
+            }
+        }
+        row.true_blocked_cells += u64::from(truly);
+        row.mapped_blocked_cells += tally[1];
+        row.uncertain_cells += tally[2];
+        row.unsafe_cells += u64::from(verdict == Verdict::Unsafe);
+        row.overcautious_cells += u64::from(verdict == Verdict::OverCautious);
+        t.true_sum += f64::from(truth.cells[k].elevation_m);
+        if let Some(e) = map.cell(cell).elevation() {
+            t.mapped_sum += f64::from(e.mean_m);
+            t.num_mapped += 1;
+        }
+    }
+    t
+}
+
+/// The row's mean elevations and its decisions, from the counts (see [`decisions`]).
+fn conclude(row: &mut ObstacleDecision, t: &Tally) {
+    // Rounded to the tenth of a millimetre, so the CSV reads 0.0361, not 0.036112...
+    let round = |v: f64| (v * 1e4).round() / 1e4;
+    if row.num_observed_cells > 0 {
+        row.true_elevation_mean_m = Some(round(t.true_sum / row.num_observed_cells as f64));
+    }
+    if t.num_mapped > 0 {
+        row.mapped_elevation_mean_m = Some(round(t.mapped_sum / t.num_mapped as f64));
+    }
+    if row.num_observed_cells > 0 {
+        let truly_blocked = row.true_blocked_cells > 0;
+        row.true_decision = if truly_blocked { "blocked" } else { "passable" };
+        let [n, blocked, uncertain] = if truly_blocked { t.over_blocked } else { t.over_all };
+        row.mapped_decision = if 2 * blocked > n {
+            "blocked"
+        } else if 2 * (blocked + uncertain) > n {
+            "uncertain"
+        } else {
+            "passable"
+        };
+        row.decision_right = row.true_decision == row.mapped_decision;
+        row.decision = match (row.true_decision, row.mapped_decision) {
+            (_, "uncertain") => "uncertain",
+            (t, m) if t == m => "right",
+            ("blocked", _) => "unsafe",
+            _ => "overcautious",
+        };
+    }
 }
 
 impl crate::output::CsvRow for ObstacleDecision {

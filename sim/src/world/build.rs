@@ -165,52 +165,15 @@ impl World {
                 height_m,
                 yaw_deg,
                 ..
-            } => {
-                let (l, w, h) = ((length_m / 2.0) as f32, (width_m / 2.0) as f32, *height_m as f32);
-                let f = OBSTACLE_FOOTING_M as f32;
-                // The wedge, sealed below the ground by the footing.
-                let points = [
-                    Vector::new(-l, -w, 0.0),
-                    Vector::new(-l, w, 0.0),
-                    Vector::new(l, -w, h),
-                    Vector::new(l, w, h),
-                    Vector::new(-l, -w, -f),
-                    Vector::new(-l, w, -f),
-                    Vector::new(l, -w, -f),
-                    Vector::new(l, w, -f),
-                ];
-                let hull = ColliderBuilder::convex_hull(&points)
-                    .ok_or_else(|| format!("ramp {index} has a degenerate shape"))?;
-                vec![hull.position(yaw_pose(ground, *yaw_deg))]
-            }
+            } => vec![
+                ramp_collider(index, [*length_m, *width_m, *height_m])?.position(yaw_pose(ground, *yaw_deg)),
+            ],
             Obstacle::Bush {
                 radius_m,
                 height_m,
                 num_parts,
                 ..
-            } => {
-                let mut rng = seed::stream(s.seed, &format!("bush/{index}"));
-                (0..*num_parts)
-                    .map(|_| {
-                        let r = radius_m * rng.random_range(0.0f64..1.0).sqrt();
-                        let a = rng.random_range(0.0..std::f64::consts::TAU);
-                        let hx = radius_m * rng.random_range(0.15..0.35);
-                        let hy = radius_m * rng.random_range(0.15..0.35);
-                        let hz = height_m * rng.random_range(0.2..0.5);
-                        let z = if height_m - hz > hz {
-                            rng.random_range(hz..height_m - hz)
-                        } else {
-                            height_m / 2.0
-                        };
-                        let yaw = rng.random_range(0.0..360.0);
-                        let pose = to_pose(&Isometry3::from_parts(
-                            Translation3::new(cx + r * a.cos(), cy + r * a.sin(), ground + z),
-                            UnitQuaternion::from_euler_angles(0.0, 0.0, f64::to_radians(yaw)),
-                        ));
-                        ColliderBuilder::cuboid(hx as f32, hy as f32, hz as f32).position(pose)
-                    })
-                    .collect()
-            }
+            } => bush_colliders(s.seed, index, [cx, cy, ground], *radius_m, *height_m, *num_parts),
             Obstacle::Overhang {
                 size_m,
                 clearance_m,
@@ -229,6 +192,60 @@ impl World {
         }
         Ok(())
     }
+}
+
+/// A ramp's wedge (`[length, width, height]` in metres), rising along its local +x, sealed below the ground
+/// by the footing.
+fn ramp_collider(
+    index: usize,
+    [length_m, width_m, height_m]: [f64; 3],
+) -> std::result::Result<ColliderBuilder, String> {
+    let (l, w, h) = ((length_m / 2.0) as f32, (width_m / 2.0) as f32, height_m as f32);
+    let f = OBSTACLE_FOOTING_M as f32;
+    let points = [
+        Vector::new(-l, -w, 0.0),
+        Vector::new(-l, w, 0.0),
+        Vector::new(l, -w, h),
+        Vector::new(l, w, h),
+        Vector::new(-l, -w, -f),
+        Vector::new(-l, w, -f),
+        Vector::new(l, -w, -f),
+        Vector::new(l, w, -f),
+    ];
+    ColliderBuilder::convex_hull(&points).ok_or_else(|| format!("ramp {index} has a degenerate shape"))
+}
+
+/// A bush: `num_parts` leafy boxes at random places, sizes, heights and yaws within its radius and height,
+/// drawn from the stream `bush/<index>` of the scenario's seed, standing on the ground at `[x, y, ground]`.
+fn bush_colliders(
+    seed: u64,
+    index: usize,
+    [cx, cy, ground]: [f64; 3],
+    radius_m: f64,
+    height_m: f64,
+    num_parts: u32,
+) -> Vec<ColliderBuilder> {
+    let mut rng = seed::stream(seed, &format!("bush/{index}"));
+    (0..num_parts)
+        .map(|_| {
+            let r = radius_m * rng.random_range(0.0f64..1.0).sqrt();
+            let a = rng.random_range(0.0..std::f64::consts::TAU);
+            let hx = radius_m * rng.random_range(0.15..0.35);
+            let hy = radius_m * rng.random_range(0.15..0.35);
+            let hz = height_m * rng.random_range(0.2..0.5);
+            let z = if height_m - hz > hz {
+                rng.random_range(hz..height_m - hz)
+            } else {
+                height_m / 2.0
+            };
+            let yaw = rng.random_range(0.0..360.0);
+            let pose = to_pose(&Isometry3::from_parts(
+                Translation3::new(cx + r * a.cos(), cy + r * a.sin(), ground + z),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, f64::to_radians(yaw)),
+            ));
+            ColliderBuilder::cuboid(hx as f32, hy as f32, hz as f32).position(pose)
+        })
+        .collect()
 }
 
 /// Rapier's heightfield for a grid: its heights are local y and its rows run along local z, so it is turned
