@@ -388,6 +388,20 @@ mod tests {
     }
 
     #[test]
+    fn every_preset_of_the_map_crate_is_a_setting() {
+        for preset in oeg::MapPreset::ALL {
+            let s = map_settings(0.05, &[format!("map.preset={}", preset.name())]).expect(preset.name());
+            assert_eq!(
+                s.map.model,
+                preset.model(&oeg::RobotProfile::default()),
+                "{}",
+                preset.name()
+            );
+            assert_eq!(s.map.traversability, preset.traversability(), "{}", preset.name());
+        }
+    }
+
+    #[test]
     fn the_cell_size_is_given_once_on_oeg_map() {
         for o in ["map.resolution_m=0.1", "map.*=0.1", "map={ resolution_m = 0.1 }"] {
             let e = map_settings(0.5, &[o.into()]).expect_err(o).to_string();
