@@ -390,7 +390,8 @@ mod tests {
     #[test]
     fn every_preset_of_the_map_crate_is_a_setting() {
         for preset in oeg::MapPreset::ALL {
-            let s = map_settings(0.05, &[format!("map.preset={}", preset.name())]).expect(preset.name());
+            let name = preset.name();
+            let s = map_settings(0.05, &[format!("map.preset={name}")]).expect(name);
             assert_eq!(
                 s.map.model,
                 preset.model(&oeg::RobotProfile::default()),
