@@ -227,8 +227,10 @@ impl Checked for PlanJobSettings {
 fn read<T: Checked>(doc: &Table) -> Result<T, SettingError> {
     let mut doc = doc.clone();
     sim::scenario::expand_map_preset(&mut doc).map_err(|e| SettingError::invalid(e.to_string()))?;
-    let text = toml::to_string(&doc).map_err(|e| SettingError::invalid(e.to_string()))?;
-    let value: T = toml::from_str(&text).map_err(|e| SettingError::invalid(e.message().trim()))?;
+    // Read from the document itself: no trip through TOML text.
+    let value: T = toml::Value::Table(doc)
+        .try_into()
+        .map_err(|e: toml::de::Error| SettingError::invalid(e.message().trim()))?;
     value.check()?;
     Ok(value)
 }

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use serde::Deserialize;
 use toml::de::{DeTable, DeValue};
 
 use super::check::Checker;
@@ -72,17 +73,24 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         path: path.to_path_buf(),
         text: text.to_string(),
     };
-    let scenario: Scenario = toml::from_str(text).map_err(|e| SimError::Scenario {
+    let at_its_place = |e: toml::de::Error| SimError::Scenario {
         path: path.to_path_buf(),
         position: e.span().map(|s| TextPosition::of_offset(text, s.start)),
         message: e.message().trim().to_string(),
-    })?;
+    };
+    // The text is parsed once, with the place of every value: the schema reads the scenario from it, the
+    // checks find their places in it, and a preset's expansion reads its tables.
+    let parsed = DeTable::parse(text).map_err(at_its_place)?;
+    let mut scenario =
+        Scenario::deserialize(toml::de::Deserializer::from(parsed.clone())).map_err(at_its_place)?;
     let checker = Checker {
         source: &source,
-        document: DeTable::parse(text).ok().map(|d| d.into_inner()),
+        document: Some(parsed.get_ref().clone()),
     };
-    let mut scenario = scenario;
-    apply_preset(&mut scenario, text).map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
+    if scenario.map.preset != oeg::MapPreset::Paper {
+        let doc = toml::Table::deserialize(toml::de::Deserializer::from(parsed)).map_err(at_its_place)?;
+        apply_preset(&mut scenario, doc).map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
+    }
     checker.validate(&scenario)?;
     let urdf_path = source.resolve(&scenario.robot.urdf);
     let robot = RobotModel::load(&urdf_path, &scenario.robot.base_link)
@@ -124,11 +132,7 @@ pub struct InvalidValue {
 
 /// Applies the scenario's `[map] preset` to its model and step rule: the keys the file gives in `[map.model]`
 /// and `[map] traversability` over the preset's.
-fn apply_preset(scenario: &mut Scenario, text: &str) -> std::result::Result<(), String> {
-    if scenario.map.preset == oeg::MapPreset::Paper {
-        return Ok(());
-    }
-    let mut doc: toml::Table = toml::from_str(text).map_err(|e| e.message().to_string())?;
+fn apply_preset(scenario: &mut Scenario, mut doc: toml::Table) -> std::result::Result<(), String> {
     expand_map_preset(&mut doc).map_err(|e| e.to_string())?;
     let map = doc
         .get("map")
