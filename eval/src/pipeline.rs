@@ -92,8 +92,7 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
             message: format!("not valid TOML: {}", e.message()),
         })?;
         loaded = crate::settings::resolve_with(&doc, &options.overrides, |doc| {
-            let text = toml::to_string(doc).map_err(|e| SettingError::invalid(e.to_string()))?;
-            scenario::load_str(path, &text).map_err(|e| SettingError::invalid(scenario_message(&e)))
+            scenario::load_doc(path, &text, doc).map_err(|e| SettingError::invalid(scenario_message(&e)))
         })
         .map_err(|e| EvalError::Input {
             path: path.clone(),

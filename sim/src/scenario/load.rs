@@ -92,7 +92,17 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         apply_preset(&mut scenario, doc).map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
     }
     checker.validate(&scenario)?;
-    let urdf_path = source.resolve(&scenario.robot.urdf);
+    let robot = load_robot(&checker, &scenario)?;
+    Ok(LoadedScenario {
+        scenario,
+        source,
+        robot,
+    })
+}
+
+/// The scenario's robot from its URDF, with every sensor's mount link checked against it.
+fn load_robot(checker: &Checker<'_>, scenario: &Scenario) -> Result<RobotModel> {
+    let urdf_path = checker.source.resolve(&scenario.robot.urdf);
     let robot = RobotModel::load(&urdf_path, &scenario.robot.base_link)
         .map_err(|e| checker.error(&[KeySeg::Key("robot"), KeySeg::Key("urdf")], e.to_string()))?;
     for (k, s) in scenario.sensors.iter().enumerate() {
@@ -113,6 +123,38 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
             ));
         }
     }
+    Ok(robot)
+}
+
+/// As [`load_str`], for a document already read and changed (a scenario file with `--set` overrides applied):
+/// the same schema and checks, without a trip through TOML text. `text` is the file's own text; errors carry
+/// no place in it, since the value at fault may come from the command line.
+///
+/// # Errors
+/// As [`load`], without positions.
+pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScenario> {
+    let source = ScenarioSource {
+        path: path.to_path_buf(),
+        text: text.to_string(),
+    };
+    let mut scenario: Scenario =
+        toml::Value::Table(doc.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| SimError::Scenario {
+                path: path.to_path_buf(),
+                position: None,
+                message: e.message().trim().to_string(),
+            })?;
+    let checker = Checker {
+        source: &source,
+        document: None,
+    };
+    if scenario.map.preset != oeg::MapPreset::Paper {
+        apply_preset(&mut scenario, doc.clone())
+            .map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
+    }
+    checker.validate(&scenario)?;
+    let robot = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
         scenario,
         source,
