@@ -9,10 +9,10 @@ use serde::Serialize;
 use sim::scenario;
 use sim::truth::TruthRaster;
 
-use crate::error::{EvalError, Result};
+use crate::error::Result;
 use crate::figures::{comparison, write_layer_images};
 use crate::judge::Evaluation;
-use crate::output::{csv_table, write_bytes, write_json, write_markdown, write_table};
+use crate::output::{write_bytes, write_json, write_markdown_rows, write_table};
 
 /// Writes one map's report into `out_dir`: the map, its layer images, the comparison images, `plan.csv`,
 /// `obstacles.csv`, `wrong_cells.csv` and `metrics.json` (last).
@@ -123,11 +123,7 @@ pub fn write_comparison(
     write_table(&csv_path, &rows)?;
     // The same table as Markdown: the README's status table is this file of the default run.
     let md_path = out_dir.join("comparison.md");
-    let csv = csv_table(&rows).map_err(|e| EvalError::Input {
-        path: csv_path.clone(),
-        message: e.to_string(),
-    })?;
-    write_markdown(&md_path, &csv, &[])?;
+    write_markdown_rows(&md_path, &rows, &[])?;
     let figures: Vec<crate::figures::Figure> = runs
         .iter()
         .zip(&rows)

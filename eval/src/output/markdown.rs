@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{TableError, write_bytes};
+use super::{CsvRow, TableError, csv_table, write_bytes};
 use crate::error::{EvalError, Result};
 
 /// A CSV table (header first, as [`super::csv_bytes`] writes it) as a Markdown table, without the columns
@@ -45,12 +45,27 @@ fn cell(field: &str) -> String {
     }
 }
 
-/// Writes [`markdown_table`] of a CSV table to `path` atomically.
+/// [`markdown_table`] of [`CsvRow`]s: the same rows as their CSV file, without the columns in `drop`.
 ///
 /// # Errors
-/// [`EvalError::Input`] naming the file when the table is not CSV, and a failed write.
-pub fn write_markdown(path: &Path, csv: &[u8], drop: &[&str]) -> Result<()> {
-    let text = markdown_table(csv, drop).map_err(|e| EvalError::Input {
+/// As [`markdown_table`], and a row that is not one flat record.
+pub fn markdown_rows<'a, T: CsvRow + 'a>(
+    rows: impl IntoIterator<Item = &'a T>,
+    drop: &[&str],
+) -> std::result::Result<String, TableError> {
+    markdown_table(&csv_table(rows)?, drop)
+}
+
+/// Writes [`markdown_rows`] to `path` atomically, beside the rows' CSV file.
+///
+/// # Errors
+/// [`EvalError::Input`] naming the file for a row that is not one flat record, and a failed write.
+pub fn write_markdown_rows<'a, T: CsvRow + 'a>(
+    path: &Path,
+    rows: impl IntoIterator<Item = &'a T>,
+    drop: &[&str],
+) -> Result<()> {
+    let text = markdown_rows(rows, drop).map_err(|e| EvalError::Input {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::error::{EvalError, Result};
 
-pub use markdown::{markdown_table, write_markdown};
+pub use markdown::{markdown_rows, markdown_table, write_markdown_rows};
 pub use staged::{OUTPUT_MARKER, Staged};
 
 /// Creates the output folder (and its parents).

@@ -200,12 +200,10 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
     folder.write_table(&path, &summary)?;
     // The same summary as Markdown, for a study's results page.
     let md_path = dir.join("summary.md");
-    let md = crate::output::csv_table(&summary)
-        .and_then(|csv| crate::output::markdown_table(&csv, &[]))
-        .map_err(|e| EvalError::Input {
-            path: md_path.clone(),
-            message: e.to_string(),
-        })?;
+    let md = crate::output::markdown_rows(&summary, &[]).map_err(|e| EvalError::Input {
+        path: md_path.clone(),
+        message: e.to_string(),
+    })?;
     folder.write_bytes(&md_path, md.as_bytes())?;
     files.insert(0, md_path);
     files.insert(0, path);
