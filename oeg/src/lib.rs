@@ -6,6 +6,7 @@
 
 mod cell;
 mod error;
+mod footprint;
 mod geometry;
 mod io;
 mod map;
@@ -46,6 +47,7 @@ pub use model::{
 pub use preset::{MapPreset, ROBUST_HEIGHT_MARGIN_M, STATIC_MAX_DEPTH_M};
 
 // The decision: where the robot can drive, and a planner that uses it.
+pub use footprint::{Footprint, Pose2};
 pub use planner::{
     DEFAULT_FOOTPRINT_RADIUS_M, DEFAULT_INFLATION_RADIUS_M, Plan, PlannerOptions, UncertainCells,
     UnknownCells, forbidden_mask, plan,

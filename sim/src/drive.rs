@@ -56,6 +56,11 @@ impl DrivePath {
         self.cumulative_m.last().copied().unwrap_or(0.0)
     }
 
+    /// How long the drive takes, seconds.
+    pub fn duration_s(&self) -> f64 {
+        self.length_m() / self.speed_m_s
+    }
+
     /// The waypoints.
     pub fn waypoints(&self) -> &[[f64; 2]] {
         &self.waypoints
@@ -89,6 +94,52 @@ impl DrivePath {
             distance_m: s,
         }
     }
+}
+
+/// A velocity command held from a time on (a ROS `cmd_vel`): the robot drives an arc of constant speed and
+/// turn rate from the pose it had when the command was given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VelocityCommand {
+    /// When the command was given, seconds.
+    pub since_s: f64,
+    /// The pose then.
+    pub from: PlanarPose,
+    /// Forward speed, m/s (not negative: the robot does not reverse).
+    pub speed_m_s: f64,
+    /// Turn rate, radians per second, counter-clockwise.
+    pub turn_rate_rad_s: f64,
+}
+
+impl VelocityCommand {
+    /// The pose at `t_s` (not before the command): the exact arc of a unicycle.
+    pub fn pose_at(&self, t_s: f64) -> PlanarPose {
+        let dt = (t_s - self.since_s).max(0.0);
+        let (v, w, p) = (self.speed_m_s.max(0.0), self.turn_rate_rad_s, self.from);
+        let yaw = p.yaw_rad + w * dt;
+        let (dx, dy) = if (w * dt).abs() < 1e-9 {
+            let mid = p.yaw_rad + w * dt / 2.0;
+            (v * dt * mid.cos(), v * dt * mid.sin())
+        } else {
+            let r = v / w;
+            (
+                r * (yaw.sin() - p.yaw_rad.sin()),
+                -r * (yaw.cos() - p.yaw_rad.cos()),
+            )
+        };
+        PlanarPose {
+            x_m: p.x_m + dx,
+            y_m: p.y_m + dy,
+            yaw_rad: wrap_angle(yaw),
+            distance_m: p.distance_m + v * dt,
+        }
+    }
+}
+
+/// An angle in `(-pi, pi]`.
+pub fn wrap_angle(a: f64) -> f64 {
+    let two_pi = std::f64::consts::TAU;
+    let w = a.rem_euclid(two_pi);
+    if w > std::f64::consts::PI { w - two_pi } else { w }
 }
 
 /// The odometry drift: a random walk in x, y and yaw whose steps have a standard deviation proportional to the
@@ -167,6 +218,45 @@ mod tests {
         assert!((b.yaw_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         let end = p.pose_at(100.0);
         assert_eq!((end.x_m, end.y_m, end.distance_m), (4.0, 3.0, 7.0));
+    }
+
+    #[test]
+    fn a_held_command_drives_an_arc_and_a_straight_line() {
+        let from = PlanarPose {
+            x_m: 1.0,
+            y_m: 2.0,
+            yaw_rad: 0.0,
+            distance_m: 3.0,
+        };
+        let straight = VelocityCommand {
+            since_s: 10.0,
+            from,
+            speed_m_s: 0.5,
+            turn_rate_rad_s: 0.0,
+        };
+        let p = straight.pose_at(12.0);
+        assert_eq!((p.x_m, p.y_m, p.yaw_rad, p.distance_m), (2.0, 2.0, 0.0, 4.0));
+        // A quarter circle of radius 1 m.
+        let arc = VelocityCommand {
+            turn_rate_rad_s: std::f64::consts::FRAC_PI_2,
+            speed_m_s: std::f64::consts::FRAC_PI_2,
+            ..straight
+        };
+        let q = arc.pose_at(11.0);
+        assert!(
+            (q.x_m - 2.0).abs() < 1e-12 && (q.y_m - 3.0).abs() < 1e-12,
+            "{q:?}"
+        );
+        assert!((q.yaw_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        // Turning on the spot moves nothing.
+        let spin = VelocityCommand {
+            speed_m_s: 0.0,
+            turn_rate_rad_s: 1.0,
+            ..straight
+        };
+        let r = spin.pose_at(14.0);
+        assert_eq!((r.x_m, r.y_m, r.distance_m), (1.0, 2.0, 3.0));
+        assert!((r.yaw_rad - wrap_angle(4.0)).abs() < 1e-12 && r.yaw_rad < 0.0);
     }
 
     #[test]

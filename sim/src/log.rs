@@ -302,6 +302,7 @@ impl<'a> LogReader<'a> {
                 kind,
                 vector_in_sensor: v,
                 range_sigma_m: sigma,
+                true_range_m: f32::NAN,
             });
         }
         let [world_from_sensor, estimated_world_from_sensor] = poses;

@@ -41,6 +41,38 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// The shape's x-y bounding box placed at `pose`: `[min_x, max_x, min_y, max_y]`, metres (exact for
+    /// boxes, spheres, cylinders and capsules at any angle).
+    fn plan_extent(&self, pose: &Isometry3<f64>) -> [f64; 4] {
+        let c = pose.translation.vector;
+        let (hx, hy) = match self {
+            Self::Cuboid { half_extents_m: h } => {
+                let r = pose.rotation.to_rotation_matrix();
+                let m = r.matrix();
+                (
+                    m[(0, 0)].abs() * h.x + m[(0, 1)].abs() * h.y + m[(0, 2)].abs() * h.z,
+                    m[(1, 0)].abs() * h.x + m[(1, 1)].abs() * h.y + m[(1, 2)].abs() * h.z,
+                )
+            }
+            Self::Sphere { radius_m } => (*radius_m, *radius_m),
+            Self::Cylinder { radius_m, length_m } | Self::Capsule { radius_m, length_m } => {
+                // Along a world axis e: the axis ends at |a.e| h/2, and the rim (cylinder) or the cap
+                // (capsule) adds r sqrt(1 - (a.e)^2) or r.
+                let axis = pose.rotation * Vector3::z();
+                let half = length_m / 2.0;
+                let side = |a: f64| match self {
+                    Self::Capsule { .. } => *radius_m,
+                    _ => radius_m * (1.0 - a * a).max(0.0).sqrt(),
+                };
+                (
+                    axis.x.abs() * half + side(axis.x),
+                    axis.y.abs() * half + side(axis.y),
+                )
+            }
+        };
+        [c.x - hx, c.x + hx, c.y - hy, c.y + hy]
+    }
+
     /// The highest z of the shape placed at `pose`.
     fn top_z(&self, pose: &Isometry3<f64>) -> f64 {
         let corners: Vec<Point3<f64>> = match self {
@@ -268,6 +300,35 @@ impl RobotModel {
             .fold(0.0, f64::max)
     }
 
+    /// The footprint: the rectangle in the base frame that bounds every collision shape, wheels included
+    /// (a zero rectangle for a robot without collision shapes).
+    pub fn footprint(&self) -> oeg::Footprint {
+        let extents: Vec<[f64; 4]> = self
+            .links()
+            .flat_map(|l| {
+                l.shapes
+                    .iter()
+                    .map(move |(pose, s)| s.plan_extent(&(l.base_from_link * pose)))
+            })
+            .collect();
+        if extents.is_empty() {
+            return oeg::Footprint {
+                min_x_m: 0.0,
+                max_x_m: 0.0,
+                min_y_m: 0.0,
+                max_y_m: 0.0,
+            };
+        }
+        let low = |k: usize| extents.iter().map(|e| e[k]).fold(f64::INFINITY, f64::min);
+        let high = |k: usize| extents.iter().map(|e| e[k]).fold(f64::NEG_INFINITY, f64::max);
+        oeg::Footprint {
+            min_x_m: low(0),
+            max_x_m: high(1),
+            min_y_m: low(2),
+            max_y_m: high(3),
+        }
+    }
+
     /// The wheels' ground contact points in the base frame: the lowest point of every cylinder whose axis is
     /// horizontal (sorted front-left, front-right, rear-left, rear-right by x then y).
     pub fn wheel_contacts(&self) -> Vec<Point3<f64>> {
@@ -319,6 +380,27 @@ mod tests {
         );
         let stereo = robot.base_from_link("stereo_mount").expect("mount");
         assert!((stereo.translation.z - 0.452).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_footprint_bounds_the_body_and_the_wheels() {
+        let f = pioneer().footprint();
+        // The body is 0.51 m long; the wheels (radius 0.111 m at x = +-0.135 m, 0.075 m wide at y = +-0.197 m)
+        // stand out to y = +-0.2345 m: the datasheet's 0.508 x 0.497 m, within a centimetre.
+        assert!(
+            (f.max_x_m - 0.255).abs() < 1e-9 && (f.min_x_m + 0.255).abs() < 1e-9,
+            "{f:?}"
+        );
+        assert!(
+            (f.max_y_m - 0.2345).abs() < 1e-6 && (f.min_y_m + 0.2345).abs() < 1e-6,
+            "{f:?}"
+        );
+        let wheels = pioneer().wheel_contacts();
+        assert!(
+            wheels
+                .iter()
+                .all(|c| c.x < f.max_x_m && c.x > f.min_x_m && c.y.abs() < f.max_y_m)
+        );
     }
 
     #[test]

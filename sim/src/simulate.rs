@@ -88,12 +88,19 @@ impl Simulation {
 
     /// The next scan in time order (ties: the sensor listed first), or `None` at the end of the run.
     pub fn next_scan(&mut self) -> Option<SensorScan> {
+        self.next_scan_until(self.duration_s)
+    }
+
+    /// The next scan in time order taken at or before `until_s` (and the end of the run), or `None`: a
+    /// closed loop takes the scans of one control step at a time.
+    pub fn next_scan_until(&mut self, until_s: f64) -> Option<SensorScan> {
+        let end = until_s.min(self.duration_s) + 1e-9;
         let (index, t) = self
             .sensors
             .iter()
             .enumerate()
             .map(|(k, s)| (k, self.next[k] as f64 / s.spec.rate_hz))
-            .filter(|(_, t)| *t <= self.duration_s + 1e-9)
+            .filter(|(_, t)| *t <= end)
             .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
         self.next[index] += 1;
         self.world.advance_to(t);

@@ -40,7 +40,10 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
     };
     let (from, to) = s
         .planner
-        .ends(&s.robot.drive.waypoints_xy_m)
+        .ends(
+            &s.robot.drive.waypoints_xy_m,
+            s.navigation.as_ref().map(|n| n.goal_xy_m),
+        )
         .ok_or_else(missing)?;
     // A point on the region's max edge (valid in a scenario) lies in the cell just outside: take the edge cell.
     let (lo, hi) = (region.min, region.max());

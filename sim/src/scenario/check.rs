@@ -83,6 +83,7 @@ impl Checker<'_> {
         self.validate_run(s)?;
         self.validate_map(s)?;
         self.validate_robot(s)?;
+        self.validate_navigation(s)?;
         self.validate_terrain(s)?;
         self.validate_objects(s)?;
         self.validate_sensors(s)?;
@@ -185,6 +186,63 @@ impl Checker<'_> {
         Ok(())
     }
 
+    /// `[navigation]`: the goal, the clocks, the controller and the planner.
+    fn validate_navigation(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::Key as K;
+        let Some(n) = &s.navigation else {
+            return Ok(());
+        };
+        let at = |key| [K("navigation"), K(key)];
+        self.inside(s, n.goal_xy_m, &at("goal_xy_m"))?;
+        if let Some(limit) = n.time_limit_s {
+            self.check(
+                limit.is_finite() && limit > 0.0 && limit <= MAX_DURATION_S,
+                &at("time_limit_s"),
+                || format!("expected a time limit in (0, {MAX_DURATION_S}] s, got {limit}"),
+            )?;
+        }
+        self.check(
+            n.replan_period_s.is_finite()
+                && n.replan_period_s >= s.tick_s
+                && n.replan_period_s <= MAX_DURATION_S,
+            &at("replan_period_s"),
+            || {
+                format!(
+                    "expected a period of at least one tick ({} s) and at most {MAX_DURATION_S} s, got {}",
+                    s.tick_s, n.replan_period_s
+                )
+            },
+        )?;
+        self.length(
+            n.goal_tolerance_m,
+            &at("goal_tolerance_m"),
+            "goal tolerance in metres",
+        )?;
+        self.length(n.lookahead_m, &at("lookahead_m"), "lookahead in metres")?;
+        self.positive(n.speed_m_s, &at("speed_m_s"), "speed in m/s")?;
+        self.check(n.speed_m_s <= s.robot.max_speed_m_s, &at("speed_m_s"), || {
+            format!(
+                "expected at most the robot's max_speed_m_s ({} m/s), got {} m/s",
+                s.robot.max_speed_m_s, n.speed_m_s
+            )
+        })?;
+        self.positive(n.stuck_time_s, &at("stuck_time_s"), "time in seconds")?;
+        self.length(n.stuck_radius_m, &at("stuck_radius_m"), "radius in metres")?;
+        self.check(
+            n.planner_timeout_s.is_finite() && n.planner_timeout_s > 0.0 && n.planner_timeout_s <= 3600.0,
+            &at("planner_timeout_s"),
+            || format!("expected a time-out in (0, 3600] s, got {}", n.planner_timeout_s),
+        )?;
+        if let Some(command) = &n.command {
+            self.check(
+                command.first().is_some_and(|p| !p.trim().is_empty()),
+                &at("command"),
+                || "expected a command line: a program, then its arguments".into(),
+            )?;
+        }
+        Ok(())
+    }
+
     /// `[robot]`: its decision limits, its drive and its odometry.
     fn validate_robot(&self, s: &Scenario) -> Result<()> {
         use KeySeg::{Index as I, Key as K};
@@ -199,6 +257,12 @@ impl Checker<'_> {
         if let Err(e) = r.profile().validate() {
             return Err(self.error(&[K("robot"), K("max_grade")], e.to_string()));
         }
+        self.positive(r.max_speed_m_s, &[K("robot"), K("max_speed_m_s")], "speed in m/s")?;
+        self.positive(
+            r.max_turn_rate_deg_s,
+            &[K("robot"), K("max_turn_rate_deg_s")],
+            "turn rate in degrees per second",
+        )?;
         self.positive(
             r.drive.speed_m_s,
             &[K("robot"), K("drive"), K("speed_m_s")],

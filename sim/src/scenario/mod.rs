@@ -4,6 +4,7 @@ mod check;
 pub mod exact;
 pub mod heightmap;
 mod load;
+mod navigation;
 mod schema;
 pub mod sensors;
 
@@ -12,5 +13,6 @@ pub use load::{
     MAX_MAP_CELLS, MAX_OBJECTS, MAX_PARTS, MAX_RAYS_PER_RUN, expand_map_preset, load, load_doc, load_str,
     position_of,
 };
+pub use navigation::*;
 pub use schema::*;
 pub use sensors::{NoiseSettings, SensorKind, SensorMount};

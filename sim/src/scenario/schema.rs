@@ -34,6 +34,9 @@ pub struct Scenario {
     /// The run's planner check: where it plans from and to, and how it reads the map.
     #[serde(default)]
     pub planner: PlannerSettings,
+    /// A closed-loop run after the drive (`None`: the drive alone).
+    #[serde(default)]
+    pub navigation: Option<super::navigation::Navigation>,
     /// The ground.
     #[serde(default)]
     pub terrain: Terrain,
@@ -117,11 +120,12 @@ impl PlannerSettings {
         }
     }
 
-    /// The start and the goal for a drive through `waypoints` (`None` without waypoints).
-    pub fn ends(&self, waypoints: &[[f64; 2]]) -> Option<([f64; 2], [f64; 2])> {
+    /// The start and the goal for a drive through `waypoints` (`None` without waypoints); `goal` replaces
+    /// the last waypoint as the default goal (a closed-loop run's).
+    pub fn ends(&self, waypoints: &[[f64; 2]], goal: Option<[f64; 2]>) -> Option<([f64; 2], [f64; 2])> {
         Some((
             self.start_xy_m.or_else(|| waypoints.first().copied())?,
-            self.goal_xy_m.or_else(|| waypoints.last().copied())?,
+            self.goal_xy_m.or(goal).or_else(|| waypoints.last().copied())?,
         ))
     }
 }
@@ -145,7 +149,13 @@ pub struct RobotSettings {
     /// distance of a step, `max_step_m / max_grade`).
     #[serde(default = "default_max_grade")]
     pub max_grade: f64,
-    /// The path it drives.
+    /// Top speed, m/s: the Pioneer 3-AT's datasheet gives 0.7 (closed-loop runs).
+    #[serde(default = "default_max_speed")]
+    pub max_speed_m_s: f64,
+    /// Top turn rate, degrees per second: the Pioneer 3-AT's datasheet gives 140 (closed-loop runs).
+    #[serde(default = "default_max_turn_rate")]
+    pub max_turn_rate_deg_s: f64,
+    /// The path it drives (a drive of one waypoint places the robot there).
     pub drive: Drive,
     /// Odometry drift of the estimated pose.
     #[serde(default)]
@@ -167,6 +177,19 @@ fn default_max_step() -> f64 {
 
 fn default_height() -> f64 {
     DEFAULT_ROBOT_HEIGHT_M
+}
+
+/// Default top speed, m/s (Pioneer 3-AT datasheet).
+pub const DEFAULT_MAX_SPEED_M_S: f64 = 0.7;
+/// Default top turn rate, degrees per second (Pioneer 3-AT datasheet).
+pub const DEFAULT_MAX_TURN_RATE_DEG_S: f64 = 140.0;
+
+fn default_max_speed() -> f64 {
+    DEFAULT_MAX_SPEED_M_S
+}
+
+fn default_max_turn_rate() -> f64 {
+    DEFAULT_MAX_TURN_RATE_DEG_S
 }
 
 fn default_max_grade() -> f64 {

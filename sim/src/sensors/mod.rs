@@ -43,6 +43,10 @@ pub struct SensorRay {
     pub vector_in_sensor: Vector3<f32>,
     /// The range error of the sensor model at the measured range, metres (0 for no returns).
     pub range_sigma_m: f32,
+    /// How far the beam truly went along its nominal direction before it hit something, metres, noise-free:
+    /// infinite when it hit nothing within range, NaN when it told nothing (a hole, a dropout, a hit outside
+    /// the sensor's range) or the scan was read from a log. The observability truth reads it.
+    pub true_range_m: f32,
 }
 
 /// How many readings each obstacle returned over a run: whether the sensors saw it at all. An obstacle with none
@@ -297,6 +301,7 @@ impl SimSensor {
             kind: RayKind::NoReturn,
             vector_in_sensor: nominal.cast(),
             range_sigma_m: 0.0,
+            true_range_m: f32::NAN,
         };
         // A stream per beam: the same numbers whatever thread casts it.
         let mut rng = Stream::seed_from_u64(
@@ -326,7 +331,11 @@ impl SimSensor {
             )
         };
         let Some(hit) = cast(&travelled) else {
-            return (no_return, None);
+            let nothing = SensorRay {
+                true_range_m: f32::INFINITY,
+                ..no_return
+            };
+            return (nothing, None);
         };
         let mut range = hit.distance_m;
         if range < self.spec.min_range_m {
@@ -363,6 +372,7 @@ impl SimSensor {
                 kind: RayKind::Hit,
                 vector_in_sensor: (nominal * measured).cast(),
                 range_sigma_m: sigma_at_measured as f32,
+                true_range_m: hit.distance_m as f32,
             },
             source,
         )

@@ -46,6 +46,13 @@ impl World {
             actors: Vec::new(),
             robot: loaded.robot.clone(),
             path: DrivePath::new(&s.robot.drive),
+            command: None,
+            planar: crate::drive::PlanarPose {
+                x_m: 0.0,
+                y_m: 0.0,
+                yaw_rad: 0.0,
+                distance_m: 0.0,
+            },
             drift: OdometryDrift::new(s.robot.odometry, seed::stream(s.seed, "odometry")),
             wheel_contacts: loaded.robot.wheel_contacts(),
             time_s: 0.0,

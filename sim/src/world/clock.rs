@@ -5,6 +5,7 @@ use crate::convert::to_pose;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
 use super::{ActorTrack, World};
+use crate::drive::{PlanarPose, VelocityCommand};
 
 impl ActorTrack {
     /// Position at `t_s`, or `None` when the actor is not in the scene.
@@ -33,12 +34,16 @@ impl World {
         self.time_s
     }
 
-    /// Moves the clock to `t_s` (not before the current time): the robot along its drive, draped on the
-    /// terrain, its odometry drift, and the actors.
+    /// Moves the clock to `t_s` (not before the current time): the robot along its drive (or its velocity
+    /// command, once one was given), draped on the terrain, its odometry drift, and the actors.
     pub fn advance_to(&mut self, t_s: f64) {
         let t_s = t_s.max(self.time_s);
         self.time_s = t_s;
-        let planar = self.path.pose_at(t_s);
+        let planar = match &self.command {
+            Some(c) => c.pose_at(t_s),
+            None => self.path.pose_at(t_s),
+        };
+        self.planar = planar;
         self.world_from_base = self.drape(planar.x_m, planar.y_m, planar.yaw_rad);
         self.drift.advance(planar.distance_m);
         self.estimated_world_from_base = self.drift.apply(&self.world_from_base);
@@ -92,6 +97,29 @@ impl World {
             Translation3::new(x, y, mean),
             UnitQuaternion::from_euler_angles(roll, pitch, yaw),
         )
+    }
+
+    /// From now on, the robot drives at `speed_m_s` (clamped to be at least 0) turning at `turn_rate_rad_s`
+    /// from where it is, instead of along its scripted path, until the next command: the simulator's side of
+    /// a `cmd_vel`. The robot is kinematic: it goes where it is sent, through obstacles too (contacts are
+    /// the judge's to find).
+    pub fn command(&mut self, speed_m_s: f64, turn_rate_rad_s: f64) {
+        self.command = Some(VelocityCommand {
+            since_s: self.time_s,
+            from: self.planar,
+            speed_m_s: speed_m_s.max(0.0),
+            turn_rate_rad_s,
+        });
+    }
+
+    /// The robot's true planar pose now: position, heading and distance driven.
+    pub fn planar_pose(&self) -> PlanarPose {
+        self.planar
+    }
+
+    /// The time at which the scripted drive ends (the robot stands at its last waypoint), seconds.
+    pub fn drive_end_s(&self) -> f64 {
+        self.path.duration_s()
     }
 
     /// The robot's true pose, `world_from_base`.

@@ -12,7 +12,7 @@ mod queries;
 use nalgebra::{Isometry3, Point3};
 use rapier3d::prelude::{Collider, ColliderHandle, PhysicsWorld, RigidBodyHandle};
 
-use crate::drive::{DrivePath, OdometryDrift};
+use crate::drive::{DrivePath, OdometryDrift, PlanarPose, VelocityCommand};
 use crate::robot::RobotModel;
 use crate::terrain::HeightGrid;
 
@@ -96,6 +96,10 @@ pub struct World {
     actors: Vec<ActorTrack>,
     robot: RobotModel,
     path: DrivePath,
+    /// The velocity command the robot follows instead of its path, once one was given.
+    command: Option<VelocityCommand>,
+    /// The robot's planar pose now.
+    planar: PlanarPose,
     drift: OdometryDrift,
     wheel_contacts: Vec<Point3<f64>>,
     time_s: f64,
