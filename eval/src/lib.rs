@@ -11,6 +11,8 @@
 //! | [`settings`] | `--set key=value` overrides and every job's settings table |
 //! | [`judge`] | the verdict raster and what reads it: metrics, obstacles, wrong cells, the plan check |
 //! | [`figures`] | the rasteriser and every figure |
+//! | [`mapping`] | a simulation feeding its scans into one map per model |
+//! | [`navigation`] | closed-loop runs: replanning, the controller, external planners, contacts |
 //! | [`pipeline`], [`report`] | simulate, map, truth, judge; the run's report files |
 //! | [`jobs`] | one module per command; no job calls another |
 
@@ -19,6 +21,8 @@ pub mod figures;
 pub mod jobs;
 pub mod judge;
 pub mod lock;
+pub mod mapping;
+pub mod navigation;
 pub mod output;
 pub mod pipeline;
 pub mod progress;

@@ -6,9 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use oeg::{GridGeometry, Map, MapConfig, RobotProfile};
+use oeg::{GridGeometry, Map, RobotProfile};
 use serde::Serialize;
-use sim::sensors::PoseSource;
 use sim::truth::{DEFAULT_SAMPLES_PER_SIDE, TruthRaster};
 use sim::world::Actors;
 use sim::{Simulation, scenario};
@@ -17,6 +16,9 @@ use crate::error::{EvalError, Result};
 use crate::judge::metrics::{self, FailedExpectation, Metrics};
 use crate::judge::{Evaluation, evaluate};
 use crate::output::{Staged, create_dir, write_json};
+use crate::mapping::{Mapping, SimulatedTiming};
+use crate::navigation::external::ExternalPlanner;
+use crate::navigation::{NavigationInputs, NavigationLog, PlannerSource, navigate};
 use crate::progress::Progress;
 use crate::report::{write_comparison, write_report};
 use crate::settings::SettingError;
@@ -36,6 +38,12 @@ pub struct RunOptions {
     /// `[map.model]` keys still apply), and writes that report into `<out>/<preset>/` with a side-by-side
     /// comparison (`comparison.csv`, `decisions_comparison.png`).
     pub compare: Option<oeg::MapPreset>,
+    /// The external planner of a closed-loop run, from the command line (`--planner-command`): it replaces
+    /// the scenario's planner.
+    pub planner_command: Option<Vec<String>>,
+    /// Whether the scenario's own `[navigation] command` may run (`--allow-scenario-command`). A scenario
+    /// file someone sent never runs a program without it.
+    pub allow_scenario_command: bool,
 }
 
 /// `timing.json`: wall times, kept apart from the metrics because they vary from run to run.
@@ -55,6 +63,9 @@ pub struct RunTiming {
     pub total_wall_time_s: f64,
     /// Threads available to the parallel parts (ray casts, truth).
     pub threads: u64,
+    /// A closed-loop run's time in its planner, seconds (absent without `[navigation]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planner_wall_time_s: Option<f64>,
 }
 
 /// What a run produced.
@@ -150,20 +161,8 @@ pub fn region_of(s: &scenario::Scenario, geometry: &GridGeometry) -> Result<oeg:
     )?)
 }
 
-/// Wall times of a simulation shared by several maps.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct SimulatedTiming {
-    /// Simulating the drive and the sensors, seconds.
-    pub simulation_wall_time_s: f64,
-    /// Integrating the scans, seconds, summed over the maps.
-    pub map_wall_time_s: f64,
-    /// Rays simulated.
-    pub num_rays: u64,
-}
-
 /// Simulates `loaded` once and integrates every scan, at the estimated pose, into one map per entry of
-/// `maps` (the map settings of runs that share this simulation: they differ only in the map's model,
-/// resolution or rule). The simulation is returned at the end of its drive.
+/// `maps` (see [`Mapping::new`]). The simulation is returned at the end of its drive.
 ///
 /// # Errors
 /// A world or map that cannot be built, or a scan the map rejects.
@@ -173,68 +172,119 @@ pub fn simulate_and_map(
     progress: &Progress,
 ) -> Result<(Simulation, Vec<Map>, SimulatedTiming)> {
     let s = &loaded.scenario;
-    let mut simulation = Simulation::new(loaded)?;
-    let mut built = maps
-        .iter()
-        .map(|m| {
-            Map::new(MapConfig {
-                resolution_m: m.resolution_m,
-                model: m.model,
-                memory_limit_bytes: oeg::DEFAULT_MEMORY_LIMIT_BYTES,
-            })
-        })
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    let models: Vec<oeg::SensorModel> = simulation.sensors().iter().map(|x| x.map_model()).collect();
-    progress.set_length(simulation.num_scans_total());
-    let mut simulation_s = 0.0;
-    let mut map_s = vec![0.0; built.len()];
-    let mut last_tick = -1i64;
-    loop {
-        let t0 = Instant::now();
-        let Some(scan) = simulation.next_scan() else { break };
-        simulation_s += t0.elapsed().as_secs_f64();
-        let stamp_s = scan.stamp_s;
-        let scan = scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]);
-        // The maps are independent: with several, each scan goes into all of them at once (a map's integration
-        // is one thread, so the other cores would idle). The results do not depend on it.
-        let integrate = |(map, seconds): (&mut Map, &mut f64)| {
-            let t1 = Instant::now();
-            let r = map.integrate(&scan).map(|_| ());
-            *seconds += t1.elapsed().as_secs_f64();
-            r
-        };
-        if built.len() > 1 {
-            use rayon::prelude::*;
-            built
-                .par_iter_mut()
-                .zip(map_s.par_iter_mut())
-                .map(integrate)
-                .collect::<std::result::Result<Vec<()>, _>>()?;
-        } else {
-            built.iter_mut().zip(map_s.iter_mut()).try_for_each(integrate)?;
-        }
-        progress.inc(1);
-        // The progress line is refreshed once per simulation tick (`tick_s`).
-        let tick = (stamp_s / s.tick_s).floor() as i64;
-        if tick != last_tick {
-            last_tick = tick;
-            progress.message(format!(
-                "t = {:.1} / {:.0} s, {:.2} M rays/s",
-                stamp_s,
-                s.duration_s,
-                simulation.num_rays() as f64 / simulation_s.max(1e-9) / 1e6
-            ));
-        }
-    }
+    let mut mapping = Mapping::new(loaded, maps)?;
+    progress.set_length(mapping.simulation.num_scans_total());
+    mapping.feed_until(s.duration_s, progress)?;
     progress.finish();
     // The truth is taken at the end of the run: a person who left must have left the map too.
-    simulation.world_mut().advance_to(s.duration_s);
-    let timing = SimulatedTiming {
-        simulation_wall_time_s: simulation_s,
-        map_wall_time_s: map_s.iter().sum(),
-        num_rays: simulation.num_rays(),
+    mapping.simulation.world_mut().advance_to(s.duration_s);
+    let timing = mapping.timing();
+    Ok((mapping.simulation, mapping.maps, timing))
+}
+
+/// A simulated run: the simulation at its end, the maps, the wall times, and for a closed-loop run its truth
+/// (taken before the loop, on the first map's grid) and its log.
+#[derive(Debug)]
+pub struct Simulated {
+    /// The simulation at the end of the run.
+    pub simulation: Simulation,
+    /// One map per entry of the map settings.
+    pub maps: Vec<Map>,
+    /// Wall times.
+    pub timing: SimulatedTiming,
+    /// A closed-loop run's truth and the seconds it took.
+    pub truth: Option<(TruthRaster, f64)>,
+    /// A closed-loop run's log.
+    pub navigation: Option<NavigationLog>,
+}
+
+/// Simulates `loaded` and maps it into one map per entry of `maps`: the scripted drive, or with
+/// `[navigation]` the drive and then the closed loop, planning with `planner` on the first map.
+///
+/// # Errors
+/// A world or map that cannot be built, a scan the map rejects, a planner's map file that cannot be
+/// written.
+pub fn simulate(
+    loaded: &scenario::LoadedScenario,
+    maps: &[&scenario::MapSettings],
+    planner: &PlannerSource,
+    progress: &Progress,
+) -> Result<Simulated> {
+    let s = &loaded.scenario;
+    let Some(settings) = &s.navigation else {
+        let (simulation, maps, timing) = simulate_and_map(loaded, maps, progress)?;
+        return Ok(Simulated {
+            simulation,
+            maps,
+            timing,
+            truth: None,
+            navigation: None,
+        });
     };
-    Ok((simulation, built, timing))
+    let mut mapping = Mapping::new(loaded, maps)?;
+    progress.set_length(mapping.simulation.num_scans_total());
+    let truth_start = Instant::now();
+    // The static world's truth (people and the robot left out) is the same at any time: it is taken before
+    // the loop, so the judge can watch the robot's footprint against it at every step.
+    let truth = truth_of(s, mapping.simulation.world(), mapping.maps[0].geometry())?;
+    let truth_s = truth_start.elapsed().as_secs_f64();
+    let inputs = NavigationInputs {
+        scenario: s,
+        settings,
+        footprint: loaded.robot.footprint(),
+        truth: &truth,
+        planner,
+    };
+    let log = navigate(&mut mapping, &inputs, progress)?;
+    progress.finish();
+    let timing = mapping.timing();
+    Ok(Simulated {
+        simulation: mapping.simulation,
+        maps: mapping.maps,
+        timing,
+        truth: Some((truth, truth_s)),
+        navigation: Some(log),
+    })
+}
+
+/// The planner a closed-loop run uses: `--planner-command`, else the scenario's (its command only when
+/// allowed), exchanging files in `dir`.
+///
+/// # Errors
+/// [`EvalError::Input`] naming the scenario when it asks for an external planner without a command, or for
+/// its own command without `--allow-scenario-command`.
+pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) -> Result<PlannerSource> {
+    let Some(n) = &s.navigation else {
+        return Ok(PlannerSource::Builtin);
+    };
+    let external = |command: Vec<String>| {
+        PlannerSource::External(ExternalPlanner {
+            command,
+            timeout: std::time::Duration::from_secs_f64(n.planner_timeout_s),
+            dir: dir.to_path_buf(),
+        })
+    };
+    if let Some(command) = &options.planner_command {
+        return Ok(external(command.clone()));
+    }
+    match (&n.planner, &n.command) {
+        (scenario::PlannerKind::Astar, _) => Ok(PlannerSource::Builtin),
+        (scenario::PlannerKind::External, None) => Err(EvalError::Input {
+            path: options.scenario.clone(),
+            message: "navigation.planner = \"external\" needs a command: give one with --planner-command, or \
+                      [navigation] command with --allow-scenario-command"
+                .into(),
+        }),
+        (scenario::PlannerKind::External, Some(command)) if !options.allow_scenario_command => Err(EvalError::Input {
+            path: options.scenario.clone(),
+            message: format!(
+                "the scenario asks to run the program `{}` as its planner; a scenario file never runs a program \
+                 unless allowed: pass --allow-scenario-command to run it, or give your own with --planner-command",
+                command.join(" ")
+            ),
+        }),
+        (scenario::PlannerKind::External, Some(command)) => Ok(external(command.clone())),
+    }
 }
 
 /// The truth over the scenario's map region on `geometry`'s cells, people left out, from the world at the end
@@ -295,26 +345,51 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     if let Some((_, c)) = &compared {
         settings.push(&c.map);
     }
-    let (simulation, maps, sim_timing) = simulate_and_map(&loaded, &settings, progress)?;
+    let stage = staged.dir();
+    let planner_dir = stage.join("planner");
+    let planner = planner_source(s, options, &planner_dir)?;
+    if matches!(planner, PlannerSource::External(_)) {
+        create_dir(&planner_dir)?;
+    }
+    let Simulated {
+        simulation,
+        maps,
+        timing: sim_timing,
+        truth,
+        navigation,
+    } = simulate(&loaded, &settings, &planner, progress)?;
     let mut maps = maps.into_iter();
     let map = maps.next().ok_or_else(|| EvalError::Input {
         path: options.scenario.clone(),
         message: "the simulation built no map".into(),
     })?;
-    let truth_start = Instant::now();
     let geometry = *map.geometry();
-    let truth = truth_of(s, simulation.world(), &geometry)?;
-    let truth_wall_time_s = truth_start.elapsed().as_secs_f64();
-    let evaluation = evaluate(s, &map, &truth, simulation.obstacle_returns())?;
+    let (truth, truth_wall_time_s) = match truth {
+        Some(t) => t,
+        None => {
+            let truth_start = Instant::now();
+            let truth = truth_of(s, simulation.world(), &geometry)?;
+            (truth, truth_start.elapsed().as_secs_f64())
+        }
+    };
+    let figures = navigation.as_ref().map(|n| n.summary.figures());
+    let evaluation = evaluate(s, &map, &truth, simulation.obstacle_returns(), figures.as_ref())?;
+    let overlay = navigation.as_ref().map(crate::report::overlay_of);
 
-    let stage = staged.dir();
-    let mut files = write_report(stage, s, &map, &truth, &evaluation)?;
+    let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref())?;
+    if let Some(log) = &navigation {
+        files.extend(crate::report::write_navigation(stage, s, &truth, log)?);
+    }
+    if planner_dir.is_dir() {
+        files.push(planner_dir.clone());
+    }
     let mut compared_metrics = None;
     if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
-        let other_eval = evaluate(c, &other, &truth, simulation.obstacle_returns())?;
+        // The compared model maps the same scans; the robot decided with the run's own map.
+        let other_eval = evaluate(c, &other, &truth, simulation.obstacle_returns(), figures.as_ref())?;
         let dir = stage.join(preset.name());
         create_dir(&dir)?;
-        files.extend(write_report(&dir, c, &other, &truth, &other_eval)?);
+        files.extend(write_report(&dir, c, &other, &truth, &other_eval, None)?);
         files.extend(write_comparison(
             stage,
             [(s, &evaluation), (c, &other_eval)],
@@ -332,6 +407,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         truth_wall_time_s,
         total_wall_time_s: total_start.elapsed().as_secs_f64(),
         threads: rayon::current_num_threads() as u64,
+        planner_wall_time_s: navigation.as_ref().map(|n| n.planner_wall_time_s),
     };
     let timing_path = stage.join("timing.json");
     write_json(&timing_path, &timing)?;

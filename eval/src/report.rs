@@ -12,6 +12,8 @@ use sim::truth::TruthRaster;
 use crate::error::Result;
 use crate::figures::{comparison, write_layer_images};
 use crate::judge::Evaluation;
+use crate::navigation::NavigationLog;
+use crate::navigation::record::{Event, PlanPointRow};
 use crate::output::{write_bytes, write_json, write_markdown_rows, write_table};
 
 /// Writes one map's report into `out_dir`: the map, its layer images, the comparison images, `plan.csv`,
@@ -25,6 +27,7 @@ pub fn write_report(
     map: &Map,
     truth: &TruthRaster,
     evaluation: &Evaluation,
+    overlay: Option<&comparison::Overlay>,
 ) -> Result<Vec<PathBuf>> {
     let profile = truth.profile;
     let geometry = *map.geometry();
@@ -39,7 +42,7 @@ pub fn write_report(
         s.map.traversability,
         Some(truth.region),
     )?);
-    files.extend(comparison::write(out_dir, s, map, truth, evaluation)?);
+    files.extend(comparison::write(out_dir, s, map, truth, evaluation, overlay)?);
     let plan_path = out_dir.join("plan.csv");
     write_table(
         &plan_path,
@@ -127,7 +130,7 @@ pub fn write_comparison(
     let figures: Vec<crate::figures::Figure> = runs
         .iter()
         .zip(&rows)
-        .map(|((s, e), r)| comparison::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model)))
+        .map(|((s, e), r)| comparison::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model), None))
         .collect();
     let canvases: Vec<&crate::figures::Canvas> = figures.iter().map(|f| f.canvas()).collect();
     let png_path = out_dir.join("decisions_comparison.png");
@@ -136,4 +139,96 @@ pub fn write_comparison(
         &crate::figures::Canvas::side_by_side(&canvases, 24).to_png(),
     )?;
     Ok(vec![csv_path, md_path, png_path])
+}
+
+/// The most planned paths drawn on a closed-loop run's decisions image (evenly spread over the run).
+pub const MAX_DRAWN_PLANS: usize = 5;
+
+/// What a closed-loop run draws on its decisions image: the true trajectory and up to [`MAX_DRAWN_PLANS`]
+/// of its plans, the first and the last among them.
+pub fn overlay_of(log: &NavigationLog) -> comparison::Overlay {
+    let n = log.plans.len();
+    let picks: Vec<usize> = if n <= MAX_DRAWN_PLANS {
+        (0..n).collect()
+    } else {
+        (0..MAX_DRAWN_PLANS).map(|k| k * (n - 1) / (MAX_DRAWN_PLANS - 1)).collect()
+    };
+    comparison::Overlay {
+        trajectory: log.trajectory.iter().map(|r| (r.true_x_m, r.true_y_m)).collect(),
+        plans: picks.into_iter().map(|k| log.plans[k].points.clone()).collect(),
+    }
+}
+
+/// Writes a closed-loop run's files: `navigation.json`, `events.csv`, `trajectory.csv`, `plans.csv`, and
+/// the map's decisions at the first events' times (`events/<index>_<kind>.png`, the index its row in
+/// `events.csv`).
+///
+/// # Errors
+/// A failed write.
+pub fn write_navigation(
+    out_dir: &Path,
+    s: &scenario::Scenario,
+    truth: &TruthRaster,
+    log: &NavigationLog,
+) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let path = out_dir.join("navigation.json");
+    write_json(&path, &log.summary)?;
+    files.push(path);
+    let path = out_dir.join("events.csv");
+    write_table(&path, &log.summary.events)?;
+    files.push(path);
+    let path = out_dir.join("trajectory.csv");
+    write_table(&path, &log.trajectory)?;
+    files.push(path);
+    let rows: Vec<PlanPointRow> = log
+        .plans
+        .iter()
+        .enumerate()
+        .flat_map(|(k, p)| {
+            p.points.iter().enumerate().map(move |(step, (x, y))| PlanPointRow {
+                plan: k as u64,
+                time_s: p.time_s,
+                step: step as u64,
+                x_m: crate::output::round_m(*x),
+                y_m: crate::output::round_m(*y),
+            })
+        })
+        .collect();
+    let path = out_dir.join("plans.csv");
+    write_table(&path, &rows)?;
+    files.push(path);
+    if !log.snapshots.is_empty() {
+        let dir = out_dir.join("events");
+        crate::output::create_dir(&dir)?;
+        // Events are numbered in time order in `events.csv`; the snapshots name their event there.
+        for snap in &log.snapshots {
+            let event = &snap.event;
+            let index = log.summary.events.iter().position(|e| e == event).unwrap_or(0);
+            let name = serde_json::to_value(event.kind)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default();
+            let fig = comparison::event_figure(s, truth, &snap.decisions, event_at(log, event), &format!(
+                "{}: {name} at t = {:.1} s",
+                s.name, event.time_s
+            ));
+            let path = dir.join(format!("{index:02}_{name}.png"));
+            write_bytes(&path, &fig.to_png())?;
+            files.push(path);
+        }
+    }
+    Ok(files)
+}
+
+/// The trajectory up to an event, and the event's place.
+fn event_at(log: &NavigationLog, event: &Event) -> (Vec<(f64, f64)>, (f64, f64)) {
+    (
+        log.trajectory
+            .iter()
+            .take_while(|r| r.time_s <= event.time_s + 1e-9)
+            .map(|r| (r.true_x_m, r.true_y_m))
+            .collect(),
+        (event.x_m, event.y_m),
+    )
 }

@@ -41,6 +41,14 @@ impl Footprint {
         self.max_y_m - self.min_y_m
     }
 
+    /// The radius of the smallest circle about the base frame's origin that holds the footprint, metres
+    /// (nav2's circumscribed radius: an inflation smaller than it lets a turning robot's corners reach an
+    /// obstacle).
+    pub fn circumscribed_radius_m(&self) -> f64 {
+        let far = |a: f64, b: f64| a.abs().max(b.abs());
+        far(self.min_x_m, self.max_x_m).hypot(far(self.min_y_m, self.max_y_m))
+    }
+
     /// The corners in the world at `pose`, counter-clockwise from the rear right.
     pub fn corners(&self, pose: Pose2) -> [Point; 4] {
         let (s, c) = pose.yaw_rad.sin_cos();

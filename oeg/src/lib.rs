@@ -68,10 +68,13 @@ pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_
 pub use io::mapfile::{
     MapFileHeader, load_map, load_map_within, map_from_bytes, map_to_bytes, read_map_header, save_map,
 };
+pub use io::nav2::{PGM_FREE, PGM_OCCUPIED, PGM_UNKNOWN, nav2_grey, nav2_map};
+pub use io::npy::{NpyArray, NpyData};
 pub use io::pcd::{
     InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, parse_pcd, parse_pcd_within, read_pcd,
     read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd,
 };
+pub use io::planner_files::planner_files;
 pub use io::{
     AtomicFile, Fnv1a64, MAX_TEXT_INPUT_BYTES, fnv1a64, output_target, read_bounded, read_text, stale_owners,
     unique_suffix, unit_quaternion, write_atomically,

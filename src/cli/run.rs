@@ -25,6 +25,14 @@ pub struct RunArgs {
     /// into OUT/PRESET/ with comparison.csv and decisions_comparison.png side by side.
     #[arg(long, value_name = "PRESET")]
     compare: Option<oeg::MapPreset>,
+    /// A closed-loop run's planner: this program plans at every replanning time instead of the scenario's
+    /// planner (docs/planner-protocol.md). One string, split into words like a shell does (quotes keep
+    /// spaces), with no variables or globs.
+    #[arg(long, value_name = "COMMAND")]
+    planner_command: Option<String>,
+    /// Let the scenario's own `[navigation] command` run: a scenario file never runs a program without it.
+    #[arg(long)]
+    allow_scenario_command: bool,
 }
 
 impl RunArgs {
@@ -37,6 +45,8 @@ impl RunArgs {
             seed: None,
             overrides: Vec::new(),
             compare: Some(oeg::MapPreset::Robust),
+            planner_command: None,
+            allow_scenario_command: false,
         }
     }
 }
@@ -54,6 +64,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         seed: args.seed,
         overrides: args.overrides.clone(),
         compare: args.compare,
+        planner_command: args
+            .planner_command
+            .as_deref()
+            .map(oeg_eval::navigation::external::split_command)
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("--planner-command: {e}"))?,
+        allow_scenario_command: args.allow_scenario_command,
     };
     let report = run_scenario(&options, &Progress::new(0, "scans"))?;
     for line in summary_lines(&report) {

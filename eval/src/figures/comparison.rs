@@ -73,7 +73,41 @@ pub fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
     )
 }
 
-/// Writes `truth_elevation.png`, `elevation_error.png` and `decisions.png`.
+/// What a closed-loop run adds to its decisions image: the trajectory the robot truly drove and some of the
+/// paths it planned on the way.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Overlay {
+    /// The true trajectory, world points.
+    pub trajectory: Vec<(f64, f64)>,
+    /// Planned paths, world points each.
+    pub plans: Vec<Vec<(f64, f64)>>,
+}
+
+/// The driven trajectory on the images.
+pub const DRIVEN: Rgb = [0, 150, 60];
+/// Paths planned on the way, on the images.
+pub const REPLANNED: Rgb = [190, 120, 230];
+
+impl Overlay {
+    /// Draws the plans, then the trajectory over them.
+    pub fn draw(&self, fig: &mut Figure) {
+        for p in &self.plans {
+            fig.polyline(p, REPLANNED);
+        }
+        fig.polyline(&self.trajectory, DRIVEN);
+    }
+
+    /// The legend entries of what [`Overlay::draw`] draws.
+    pub fn legend(&self) -> Vec<(String, Rgb)> {
+        vec![
+            ("driven (true pose)".into(), DRIVEN),
+            (format!("{} of the paths planned on the way", self.plans.len()), REPLANNED),
+        ]
+    }
+}
+
+/// Writes `truth_elevation.png`, `elevation_error.png` and `decisions.png` (with a closed-loop run's
+/// `overlay`).
 ///
 /// # Errors
 /// A failed write.
@@ -83,6 +117,7 @@ pub fn write(
     map: &Map,
     truth: &TruthRaster,
     evaluation: &Evaluation,
+    overlay: Option<&Overlay>,
 ) -> Result<Vec<PathBuf>> {
     let metrics = &evaluation.metrics;
     let region = truth.region;
@@ -129,7 +164,7 @@ pub fn write(
     write_bytes(&path, &with_drive(fig).to_png())?;
     files.push(path);
 
-    let fig = decisions_figure(s, map.geometry(), evaluation, &s.name);
+    let fig = decisions_figure(s, map.geometry(), evaluation, &s.name, overlay);
     let path = out_dir.join("decisions.png");
     write_bytes(&path, &fig.to_png())?;
     files.push(path);
@@ -143,6 +178,7 @@ pub fn decisions_figure(
     geometry: &oeg::GridGeometry,
     evaluation: &Evaluation,
     title: &str,
+    overlay: Option<&Overlay>,
 ) -> Figure {
     let (metrics, plan, verdicts) = (&evaluation.metrics, &evaluation.plan, &evaluation.verdicts);
     let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
@@ -159,6 +195,9 @@ pub fn decisions_figure(
         },
         PLAN,
     ));
+    if let Some(o) = overlay {
+        classes.extend(o.legend());
+    }
     let legend = Legend::Classes(classes);
     let fig = Figure::new(
         verdicts.region,
@@ -175,6 +214,9 @@ pub fn decisions_figure(
         &legend,
     );
     let mut fig = fig;
+    if let Some(o) = overlay {
+        o.draw(&mut fig);
+    }
     fig.polyline(&drive_polyline(s), DRIVE);
     // The scene under the decisions: every obstacle's footprint, and the names of the named ones.
     for o in &s.obstacles {
@@ -192,5 +234,36 @@ pub fn decisions_figure(
     if let Some(p) = &plan.map_plan {
         fig.polyline(&crate::judge::plan_check::polyline(p, geometry), PLAN);
     }
+    fig
+}
+
+/// The map's decisions at an event of a closed-loop run, judged against the truth, with the trajectory up
+/// to the event and a marker where the robot was.
+pub fn event_figure(
+    s: &Scenario,
+    truth: &TruthRaster,
+    decisions: &[oeg::Traversability],
+    (trajectory, at): (Vec<(f64, f64)>, (f64, f64)),
+    title: &str,
+) -> Figure {
+    let verdicts = crate::judge::verdict::Verdicts::from_classes(truth, decisions.to_vec());
+    let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
+        .iter()
+        .map(|(_, n, c)| ((*n).to_string(), *c))
+        .collect();
+    classes.push(("driven so far".into(), DRIVEN));
+    classes.push(("obstacle footprint".into(), OUTLINE));
+    let mut fig = Figure::new(
+        verdicts.region,
+        verdicts.resolution_m,
+        title,
+        |c| verdicts.offset(c).map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k])),
+        &Legend::Classes(classes),
+    );
+    for o in &s.obstacles {
+        fig.polyline(&crate::judge::obstacles::footprint_outline(o), OUTLINE);
+    }
+    fig.polyline(&trajectory, DRIVEN);
+    fig.marker(at.0, at.1, DRIVEN);
     fig
 }

@@ -173,6 +173,8 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
         seed: None,
         overrides: overrides.to_vec(),
         compare: None,
+        planner_command: None,
+        allow_scenario_command: false,
     };
     let row = match run_scenario(&options, &Progress::hidden()) {
         Ok(r) => SuiteRow {

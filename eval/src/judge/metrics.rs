@@ -84,6 +84,24 @@ pub struct Metrics {
     /// `plan_length_m / truth_plan_length_m`: the detour the map's decisions cost (1 = none; null when either
     /// path is missing).
     pub plan_length_ratio: f64,
+    /// Closed-loop runs (`[navigation]`; null otherwise): whether the robot reached the goal.
+    pub nav_reached: Option<bool>,
+    /// Seconds the robot navigated.
+    pub nav_time_s: Option<f64>,
+    /// Length truly driven over the truth's shortest path (null unless reached).
+    pub nav_length_ratio: Option<f64>,
+    /// Plans asked for.
+    pub nav_replans: Option<u64>,
+    /// Replanning times with no path on the map.
+    pub nav_no_path_replans: Option<u64>,
+    /// Planner calls that failed (an external planner's crash, time-out or bad path).
+    pub nav_planner_failures: Option<u64>,
+    /// Times the robot's footprint entered truly blocked cells. The number that must be zero.
+    pub nav_contacts: Option<u64>,
+    /// The smallest distance from the footprint to a truly blocked cell, metres.
+    pub nav_closest_approach_m: Option<f64>,
+    /// Whether the robot ended stuck.
+    pub nav_stuck: Option<bool>,
     /// Whether every expectation of the scenario holds.
     pub expectations_passed: bool,
     /// Number of expectations that failed.
@@ -176,6 +194,15 @@ pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdic
         truth_plan_found: false,
         truth_plan_length_m: f64::NAN,
         plan_length_ratio: f64::NAN,
+        nav_reached: None,
+        nav_time_s: None,
+        nav_length_ratio: None,
+        nav_replans: None,
+        nav_no_path_replans: None,
+        nav_planner_failures: None,
+        nav_contacts: None,
+        nav_closest_approach_m: None,
+        nav_stuck: None,
         expectations_passed: true,
         num_expectations_failed: 0,
     }
@@ -238,6 +265,8 @@ pub fn metric_domain(name: &str) -> (f64, f64) {
         | "occupancy_brier"
         | "plan_found"
         | "truth_plan_found"
+        | "nav_reached"
+        | "nav_stuck"
         | "expectations_passed" => (0.0, 1.0),
         "elevation_bias_m" => (f64::NEG_INFINITY, f64::INFINITY),
         _ => (0.0, f64::INFINITY),
@@ -314,6 +343,15 @@ fn compute_empty() -> Metrics {
         truth_plan_found: false,
         truth_plan_length_m: 0.0,
         plan_length_ratio: 0.0,
+        nav_reached: Some(false),
+        nav_time_s: Some(0.0),
+        nav_length_ratio: Some(0.0),
+        nav_replans: Some(0),
+        nav_no_path_replans: Some(0),
+        nav_planner_failures: Some(0),
+        nav_contacts: Some(0),
+        nav_closest_approach_m: Some(0.0),
+        nav_stuck: Some(false),
         expectations_passed: true,
         num_expectations_failed: 0,
     }

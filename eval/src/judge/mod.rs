@@ -36,7 +36,8 @@ pub struct Evaluation {
 }
 
 /// Judges `map` against `truth` under the scenario's decisions; `returns` are the readings each obstacle gave
-/// the sensors (whether it was seen at all).
+/// the sensors (whether it was seen at all); `navigation` is a closed-loop run's figures (the `nav_*`
+/// metrics), which the expectations may name.
 ///
 /// # Errors
 /// A planner check that cannot run (a start or goal outside the region).
@@ -45,11 +46,15 @@ pub fn evaluate(
     map: &Map,
     truth: &TruthRaster,
     returns: &ObstacleReturns,
+    navigation: Option<&NavigationFigures>,
 ) -> Result<Evaluation> {
     let verdicts = Verdicts::new(map, truth, s.map.traversability)?;
     let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &verdicts);
     let plan = plan_check::check(s, map.geometry(), &verdicts)?;
     record_plan(&mut metrics, &plan);
+    if let Some(n) = navigation {
+        record_navigation(&mut metrics, n);
+    }
     let failed = metrics::check_expectations(&mut metrics, &s.expectations);
     let obstacles = obstacles::decisions(s, map, truth, &verdicts, returns);
     Ok(Evaluation {
@@ -59,6 +64,42 @@ pub fn evaluate(
         obstacles,
         verdicts,
     })
+}
+
+/// A closed-loop run's figures, as the judge records them (the `nav_*` metrics).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavigationFigures {
+    /// Whether the goal was reached.
+    pub reached: bool,
+    /// Seconds navigated.
+    pub time_s: f64,
+    /// Driven over the truth's shortest path (reached runs only).
+    pub length_ratio: Option<f64>,
+    /// Plans asked for.
+    pub replans: u64,
+    /// Replanning times without a path.
+    pub no_path_replans: u64,
+    /// Failed planner calls.
+    pub planner_failures: u64,
+    /// Contacts with truly blocked cells.
+    pub contacts: u64,
+    /// Closest approach to a truly blocked cell, metres.
+    pub closest_approach_m: Option<f64>,
+    /// Whether the robot ended stuck.
+    pub stuck: bool,
+}
+
+/// Records a closed-loop run's figures in the metrics (the `nav_*` keys).
+pub fn record_navigation(metrics: &mut Metrics, n: &NavigationFigures) {
+    metrics.nav_reached = Some(n.reached);
+    metrics.nav_time_s = Some(n.time_s);
+    metrics.nav_length_ratio = n.length_ratio;
+    metrics.nav_replans = Some(n.replans);
+    metrics.nav_no_path_replans = Some(n.no_path_replans);
+    metrics.nav_planner_failures = Some(n.planner_failures);
+    metrics.nav_contacts = Some(n.contacts);
+    metrics.nav_closest_approach_m = n.closest_approach_m;
+    metrics.nav_stuck = Some(n.stuck);
 }
 
 /// Records the planner check in the metrics (the `plan_*` keys).

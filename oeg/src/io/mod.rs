@@ -12,7 +12,10 @@ pub mod container;
 pub mod graph;
 mod lzf;
 pub mod mapfile;
+pub mod nav2;
+pub mod npy;
 pub mod pcd;
+pub mod planner_files;
 
 use std::path::Path;
 

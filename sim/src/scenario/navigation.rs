@@ -60,6 +60,12 @@ pub struct Navigation {
     /// See `stuck_time_s`, metres.
     #[serde(default = "default_stuck_radius")]
     pub stuck_radius_m: f64,
+    /// What the planner makes of never-observed cells while navigating; default `drivable` (nav2's
+    /// `allow_unknown: true`: a robot plans through what it has not seen yet, and replans when it sees it).
+    /// The other options come from `[planner]`, but for the inflation, which defaults to the footprint's
+    /// circumscribed radius.
+    #[serde(default = "default_unknown")]
+    pub unknown: oeg::UnknownCells,
     /// `astar` (default) or `external`.
     #[serde(default)]
     pub planner: PlannerKind,
@@ -72,6 +78,9 @@ pub struct Navigation {
     pub planner_timeout_s: f64,
 }
 
+fn default_unknown() -> oeg::UnknownCells {
+    oeg::UnknownCells::Drivable
+}
 fn default_replan() -> f64 {
     DEFAULT_REPLAN_PERIOD_S
 }

@@ -286,13 +286,34 @@ fn simulate_group(
         .iter()
         .map(|l| l.as_ref().map_or(&first.scenario.map, |l| &l.scenario.map))
         .collect();
-    let (simulation, maps, _) = crate::pipeline::simulate_and_map(first, &settings, &Progress::hidden())
-        .map_err(|e| e.to_string())?;
-    // One truth per grid and region (runs that differ only in the model share it).
+    if first
+        .scenario
+        .navigation
+        .as_ref()
+        .is_some_and(|n| n.planner != sim::scenario::PlannerKind::Astar)
+    {
+        return Err("an external planner runs in `oeg run` only (with --planner-command); a sweep plans with \
+                    the built-in A*"
+            .into());
+    }
+    let simulated = crate::pipeline::simulate(
+        first,
+        &settings,
+        &crate::navigation::PlannerSource::Builtin,
+        &Progress::hidden(),
+    )
+    .map_err(|e| e.to_string())?;
+    let (simulation, maps) = (&simulated.simulation, &simulated.maps);
+    let figures = simulated.navigation.as_ref().map(|n| n.summary.figures());
+    // One truth per grid and region (runs that differ only in the model share it); a closed-loop run's was
+    // taken before its loop.
     let mut truths: Vec<(oeg::GridGeometry, sim::truth::TruthRaster)> = Vec::new();
+    if let (Some((truth, _)), Some(map)) = (&simulated.truth, maps.first()) {
+        truths.push((*map.geometry(), truth.clone()));
+    }
     let outcomes = loaded
         .iter()
-        .zip(&maps)
+        .zip(maps)
         .map(|(l, map)| {
             let s = &l.as_ref().map_err(Clone::clone)?.scenario;
             let geometry = *map.geometry();
@@ -310,7 +331,7 @@ fn simulate_group(
                 }
             };
             let truth = &truths[k].1;
-            let evaluation = crate::judge::evaluate(s, map, truth, simulation.obstacle_returns())
+            let evaluation = crate::judge::evaluate(s, map, truth, simulation.obstacle_returns(), figures.as_ref())
                 .map_err(|e| e.to_string())?;
             Ok(Outcome {
                 evaluation,

@@ -151,9 +151,17 @@ impl SweepPlan {
                     for key in MAP_ONLY_KEYS {
                         crate::settings::overrides::remove(&mut sim_doc, key);
                     }
+                    let id = digest(&prefix, &doc);
+                    // A closed-loop run's map decides where the robot drives: it shares its simulation
+                    // with no other run.
+                    let group = if doc.contains_key("navigation") {
+                        id.clone()
+                    } else {
+                        digest(&prefix, &sim_doc)
+                    };
                     runs.push(Run {
-                        id: digest(&prefix, &doc),
-                        group: digest(&prefix, &sim_doc),
+                        id,
+                        group,
                         base: base.clone(),
                         scenario: label.clone(),
                         replicate: r,

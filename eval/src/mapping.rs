@@ -1,0 +1,131 @@
+//! A simulation feeding its scans into the maps: one map per model, every scan at the estimated pose. The
+//! scripted drive takes all the scans at once ([`crate::pipeline::simulate_and_map`]), a closed loop one
+//! control step at a time ([`crate::navigation`]).
+
+use std::time::Instant;
+
+use oeg::{Map, MapConfig};
+use sim::Simulation;
+use sim::scenario;
+use sim::sensors::PoseSource;
+
+use crate::error::Result;
+use crate::progress::Progress;
+
+/// Wall times of a simulation shared by several maps.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SimulatedTiming {
+    /// Simulating the drive and the sensors, seconds.
+    pub simulation_wall_time_s: f64,
+    /// Integrating the scans, seconds, summed over the maps.
+    pub map_wall_time_s: f64,
+    /// Rays simulated.
+    pub num_rays: u64,
+}
+
+/// A simulation feeding its scans, at the estimated pose, into one map per model.
+#[derive(Debug)]
+pub struct Mapping {
+    /// The simulation, at the time of its last scan.
+    pub simulation: Simulation,
+    /// One map per model, the first the run's own.
+    pub maps: Vec<Map>,
+    models: Vec<oeg::SensorModel>,
+    simulation_s: f64,
+    map_s: Vec<f64>,
+    last_tick: i64,
+    tick_s: f64,
+    duration_s: f64,
+}
+
+impl Mapping {
+    /// A simulation at time 0 and empty maps, one per entry of `maps` (the map settings of runs that share
+    /// this simulation: they differ only in the map's model, resolution or rule).
+    ///
+    /// # Errors
+    /// A world or map that cannot be built.
+    pub fn new(loaded: &scenario::LoadedScenario, maps: &[&scenario::MapSettings]) -> Result<Self> {
+        let simulation = Simulation::new(loaded)?;
+        let maps = maps
+            .iter()
+            .map(|m| {
+                Map::new(MapConfig {
+                    resolution_m: m.resolution_m,
+                    model: m.model,
+                    memory_limit_bytes: oeg::DEFAULT_MEMORY_LIMIT_BYTES,
+                })
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let models = simulation.sensors().iter().map(|x| x.map_model()).collect();
+        Ok(Self {
+            map_s: vec![0.0; maps.len()],
+            simulation,
+            maps,
+            models,
+            simulation_s: 0.0,
+            last_tick: -1,
+            tick_s: loaded.scenario.tick_s,
+            duration_s: loaded.scenario.duration_s,
+        })
+    }
+
+    /// Takes every scan up to `until_s` (and the end of the run) and integrates it into every map.
+    ///
+    /// # Errors
+    /// A scan a map rejects.
+    pub fn feed_until(&mut self, until_s: f64, progress: &Progress) -> Result<()> {
+        loop {
+            let t0 = Instant::now();
+            let Some(scan) = self.simulation.next_scan_until(until_s) else {
+                break;
+            };
+            self.simulation_s += t0.elapsed().as_secs_f64();
+            let stamp_s = scan.stamp_s;
+            let scan = scan.to_scan(PoseSource::Estimated, self.models[scan.sensor_index]);
+            // The maps are independent: with several, each scan goes into all of them at once (a map's
+            // integration is one thread, so the other cores would idle). The results do not depend on it.
+            let integrate = |(map, seconds): (&mut Map, &mut f64)| {
+                let t1 = Instant::now();
+                let r = map.integrate(&scan).map(|_| ());
+                *seconds += t1.elapsed().as_secs_f64();
+                r
+            };
+            if self.maps.len() > 1 {
+                use rayon::prelude::*;
+                self.maps
+                    .par_iter_mut()
+                    .zip(self.map_s.par_iter_mut())
+                    .map(integrate)
+                    .collect::<std::result::Result<Vec<()>, _>>()?;
+            } else {
+                self.maps
+                    .iter_mut()
+                    .zip(self.map_s.iter_mut())
+                    .try_for_each(integrate)?;
+            }
+            progress.inc(1);
+            // The progress line is refreshed once per simulation tick (`tick_s`).
+            let tick = (stamp_s / self.tick_s).floor() as i64;
+            if tick != self.last_tick {
+                self.last_tick = tick;
+                progress.message(format!(
+                    "t = {:.1} / {:.0} s, {:.2} M rays/s",
+                    stamp_s,
+                    self.duration_s,
+                    self.simulation.num_rays() as f64 / self.simulation_s.max(1e-9) / 1e6
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The wall times so far.
+    pub fn timing(&self) -> SimulatedTiming {
+        SimulatedTiming {
+            simulation_wall_time_s: self.simulation_s,
+            map_wall_time_s: self.map_s.iter().sum(),
+            num_rays: self.simulation.num_rays(),
+        }
+    }
+}
+

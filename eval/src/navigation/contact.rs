@@ -1,0 +1,119 @@
+//! The judge's watch over a closed-loop run: the robot's real footprint, turned with its true heading,
+//! against the truly blocked cells of the truth raster. Nothing here reads the map.
+
+use oeg::{CellIndex, Footprint, GridGeometry, Pose2};
+use sim::scenario::Scenario;
+use sim::truth::TruthRaster;
+
+/// How far around the footprint blocked cells are looked for, metres: nearer ones set the closest approach.
+pub const APPROACH_WINDOW_M: f64 = 2.0;
+
+/// The contacts and the closest approach over a run.
+#[derive(Debug, Clone)]
+pub struct ContactWatch<'a> {
+    scenario: &'a Scenario,
+    truth: &'a TruthRaster,
+    geometry: GridGeometry,
+    footprint: Footprint,
+    blocked: Vec<bool>,
+    in_contact: bool,
+    /// The closest approach so far: distance, time, pose, the cell.
+    pub closest: Option<(f64, f64, Pose2, CellIndex)>,
+}
+
+/// A contact that began at this step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NewContact {
+    /// The truly blocked cell the footprint entered nearest the robot's centre.
+    pub cell: CellIndex,
+    /// The obstacle it belongs to (`terrain` for a step of the ground).
+    pub obstacle: String,
+}
+
+impl<'a> ContactWatch<'a> {
+    /// A watch with no contact yet.
+    pub fn new(scenario: &'a Scenario, truth: &'a TruthRaster, geometry: GridGeometry, footprint: Footprint) -> Self {
+        Self {
+            scenario,
+            truth,
+            geometry,
+            footprint,
+            blocked: (0..truth.cells.len()).map(|k| truth.truly_blocked(k)).collect(),
+            in_contact: false,
+            closest: None,
+        }
+    }
+
+    /// Checks the robot at its true `pose` at `time_s`: a contact that begins here, if one does, and the
+    /// closest approach updated.
+    pub fn check(&mut self, time_s: f64, pose: Pose2) -> Option<NewContact> {
+        let region = self.truth.region;
+        let reach = self.footprint.length_m().hypot(self.footprint.width_m()) + APPROACH_WINDOW_M;
+        let window = self.geometry.region_covering(
+            (pose.x_m - reach, pose.y_m - reach),
+            (pose.x_m + reach, pose.y_m + reach),
+        );
+        let mut nearest: Option<(f64, CellIndex)> = None;
+        if let Ok(window) = window {
+            let (wlo, whi, rlo, rhi) = (window.min, window.max(), region.min, region.max());
+            let lo = CellIndex::new(wlo.i.max(rlo.i), wlo.j.max(rlo.j));
+            let hi = CellIndex::new(whi.i.min(rhi.i), whi.j.min(rhi.j));
+            for j in lo.j..=hi.j {
+                for i in lo.i..=hi.i {
+                    let cell = CellIndex::new(i, j);
+                    if region.offset(cell).is_some_and(|k| self.blocked[k]) {
+                        let d = self.footprint.distance_to_cell(&self.geometry, cell, pose);
+                        if d <= APPROACH_WINDOW_M && nearest.is_none_or(|(best, _)| d < best) {
+                            nearest = Some((d, cell));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((d, cell)) = nearest
+            && self.closest.is_none_or(|(best, ..)| d < best)
+        {
+            self.closest = Some((d, time_s, pose, cell));
+        }
+        let touching = nearest.filter(|(d, _)| *d == 0.0);
+        let began = touching.is_some() && !self.in_contact;
+        self.in_contact = touching.is_some();
+        if !began {
+            return None;
+        }
+        // The touched cell nearest the robot's centre names the obstacle.
+        let cell = self
+            .footprint
+            .cells_under(&self.geometry, &region, pose)
+            .into_iter()
+            .filter(|c| region.offset(*c).is_some_and(|k| self.blocked[k]))
+            .min_by(|a, b| {
+                let d = |c: &CellIndex| {
+                    let (x, y) = self.geometry.cell_center(*c);
+                    (x - pose.x_m).hypot(y - pose.y_m)
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .or(touching.map(|(_, c)| c))?;
+        Some(NewContact {
+            cell,
+            obstacle: self.obstacle_of(cell),
+        })
+    }
+
+    /// The obstacle a blocked cell belongs to: the one whose footprint holds the cell's centre, else the one
+    /// holding a corner of the cell, else `terrain`.
+    pub fn obstacle_of(&self, cell: CellIndex) -> String {
+        let (x, y) = self.geometry.cell_center(cell);
+        let h = self.geometry.resolution_m() / 2.0;
+        let points = [(x, y), (x - h, y - h), (x + h, y - h), (x + h, y + h), (x - h, y + h)];
+        points
+            .iter()
+            .find_map(|(px, py)| {
+                self.scenario.obstacles.iter().enumerate().find(|(_, o)| {
+                    crate::judge::obstacles::footprint_contains(o, nalgebra::Point2::new(*px, *py))
+                })
+            })
+            .map_or_else(|| "terrain".to_string(), |(k, o)| o.label(k))
+    }
+}

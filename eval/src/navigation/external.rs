@@ -1,0 +1,299 @@
+//! An external planner (`docs/planner-protocol.md`): at each replanning time the map is written as files a
+//! planner reads ([`oeg::planner_files`]), the command runs with the start, the goal and the file names, and
+//! the path comes back as a CSV of x and y in metres, world frame. A planner that fails in any way (it cannot
+//! start, exits non-zero, runs over its time-out, writes a malformed path) gives a [`PlannerFailure`] that
+//! names the file and the line, and the run goes on.
+
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::error::Result;
+use crate::output::write_bytes;
+
+/// The largest path file read back, bytes.
+pub const MAX_PATH_FILE_BYTES: u64 = 16 << 20;
+/// The stderr kept from a failed call, bytes (its end).
+const STDERR_TAIL_BYTES: usize = 2000;
+
+/// An external planner: its command line, its time-out, and the folder the map and the path are exchanged
+/// in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExternalPlanner {
+    /// Program, then its own arguments; the protocol's seven arguments follow them.
+    pub command: Vec<String>,
+    /// Wall-time limit of one call.
+    pub timeout: Duration,
+    /// Where `map.pgm`, `map.yaml`, the `.npy` layers, `layers.json` and `path.csv` are exchanged.
+    pub dir: PathBuf,
+}
+
+/// Why a call gave no path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannerFailure {
+    /// `timeout`, `exit`, `spawn` or `malformed_path`.
+    pub kind: &'static str,
+    /// What happened, naming the file and the line where there is one.
+    pub message: String,
+}
+
+/// The region's extent a path must stay in: min x, max x, min y, max y, metres.
+pub type Extent = [f64; 4];
+
+impl ExternalPlanner {
+    /// Writes `files` (the map) into the exchange folder, runs the command with
+    /// `START_X START_Y GOAL_X GOAL_Y MAP_YAML LAYERS_JSON PATH_CSV` after its own arguments, and reads the
+    /// path back. `Ok(Err(..))` is the planner's failure, an event of the run; `Err` is the testbed's own
+    /// failure to write the files.
+    ///
+    /// # Errors
+    /// A map file that cannot be written.
+    pub fn call(
+        &self,
+        files: &[(String, Vec<u8>)],
+        start: (f64, f64),
+        goal: (f64, f64),
+        extent: Extent,
+    ) -> Result<std::result::Result<Vec<(f64, f64)>, PlannerFailure>> {
+        for (name, bytes) in files {
+            write_bytes(&self.dir.join(name), bytes)?;
+        }
+        let path_csv = self.dir.join("path.csv");
+        // A path left from the last call must not pass for this call's.
+        if path_csv.exists() {
+            let _ = std::fs::remove_file(&path_csv);
+        }
+        Ok(self.run(start, goal, &path_csv).and_then(|()| read_path(&path_csv, extent)))
+    }
+
+    fn run(&self, start: (f64, f64), goal: (f64, f64), path_csv: &Path) -> std::result::Result<(), PlannerFailure> {
+        let program = self.command.first().map_or("", String::as_str);
+        let number = |v: f64| format!("{v}");
+        let mut child = Command::new(program)
+            .args(&self.command[1..])
+            .args([number(start.0), number(start.1), number(goal.0), number(goal.1)])
+            .arg(self.dir.join("map.yaml"))
+            .arg(self.dir.join("layers.json"))
+            .arg(path_csv)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| PlannerFailure {
+                kind: "spawn",
+                message: format!("the planner command `{}` could not start: {e}", self.command.join(" ")),
+            })?;
+        // stderr is drained on its own thread, so a chatty planner never blocks on a full pipe.
+        let stderr = child.stderr.take().map(|mut pipe| {
+            std::thread::spawn(move || {
+                let mut all = Vec::new();
+                let _ = pipe.read_to_end(&mut all);
+                all
+            })
+        });
+        let started = Instant::now();
+        let status = loop {
+            match child.try_wait() {
+                Ok(Some(status)) => break Some(status),
+                Ok(None) if started.elapsed() >= self.timeout => {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    break None;
+                }
+                Ok(None) => std::thread::sleep(Duration::from_millis(2)),
+                Err(_) => break None,
+            }
+        };
+        let tail = stderr
+            .and_then(|h| h.join().ok())
+            .map(|bytes| {
+                let text = String::from_utf8_lossy(&bytes);
+                let text = text.trim();
+                let cut = text.len().saturating_sub(STDERR_TAIL_BYTES);
+                let cut = (cut..=text.len()).find(|k| text.is_char_boundary(*k)).unwrap_or(text.len());
+                text[cut..].to_string()
+            })
+            .unwrap_or_default();
+        let with_stderr = |m: String| if tail.is_empty() { m } else { format!("{m}; its stderr ends: {tail}") };
+        match status {
+            None => Err(PlannerFailure {
+                kind: "timeout",
+                message: format!(
+                    "the planner `{}` ran over its time-out of {} s and was stopped",
+                    self.command.join(" "),
+                    self.timeout.as_secs_f64()
+                ),
+            }),
+            Some(s) if !s.success() => Err(PlannerFailure {
+                kind: "exit",
+                message: with_stderr(format!("the planner `{}` exited with {s}", self.command.join(" "))),
+            }),
+            Some(_) => Ok(()),
+        }
+    }
+}
+
+/// Reads a path file: one point per line, `x,y` in metres (world frame), an optional header line
+/// (`x_m,y_m` or `x,y`) and `#` comments. Every point must be finite and inside `extent`.
+///
+/// # Errors
+/// A [`PlannerFailure`] of kind `malformed_path` naming the file and the line.
+pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f64)>, PlannerFailure> {
+    let fail = |message: String| PlannerFailure {
+        kind: "malformed_path",
+        message,
+    };
+    let name = path.display();
+    let bytes = oeg::read_bounded(path, MAX_PATH_FILE_BYTES)
+        .map_err(|e| fail(format!("the planner wrote no readable path: {e}")))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        fail(format!(
+            "{name}: byte {}: not UTF-8 text; expected lines of x,y",
+            e.utf8_error().valid_up_to()
+        ))
+    })?;
+    let [x0, x1, y0, y1] = extent;
+    let mut points = Vec::new();
+    let mut header_allowed = true;
+    for (k, line) in text.lines().enumerate() {
+        let at = k + 1;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if std::mem::take(&mut header_allowed)
+            && fields.len() == 2
+            && fields.iter().all(|f| f.starts_with(|c: char| c.is_ascii_alphabetic()) && !is_number(f))
+        {
+            continue;
+        }
+        let [x, y] = fields[..] else {
+            return Err(fail(format!(
+                "{name}:{at}: expected two numbers `x,y` in metres, got {} field(s): `{line}`",
+                fields.len()
+            )));
+        };
+        let parse = |v: &str, axis: &str| {
+            v.parse::<f64>()
+                .map_err(|_| fail(format!("{name}:{at}: {axis} `{v}` is not a number; expected metres")))
+        };
+        let (x, y) = (parse(x, "x")?, parse(y, "y")?);
+        if !(x.is_finite() && y.is_finite()) {
+            return Err(fail(format!("{name}:{at}: ({x}, {y}) is not a finite point")));
+        }
+        if !(x0..=x1).contains(&x) || !(y0..=y1).contains(&y) {
+            return Err(fail(format!(
+                "{name}:{at}: ({x}, {y}) m lies off the map, which spans x {x0} .. {x1} m and y {y0} .. {y1} m"
+            )));
+        }
+        points.push((x, y));
+    }
+    if points.is_empty() {
+        return Err(fail(format!("{name}: the path is empty; expected at least one line x,y")));
+    }
+    Ok(points)
+}
+
+fn is_number(v: &str) -> bool {
+    v.parse::<f64>().is_ok()
+}
+
+/// Splits a command line given as one string into words: spaces separate, single or double quotes keep
+/// spaces in a word, a backslash outside single quotes keeps the next character. No variables, no globs: the
+/// words go to the program as they are.
+///
+/// # Errors
+/// An unclosed quote or an empty command, as a message.
+pub fn split_command(line: &str) -> std::result::Result<Vec<String>, String> {
+    let (mut words, mut word, mut in_word) = (Vec::new(), String::new(), false);
+    let mut chars = line.chars();
+    let mut quote: Option<char> = None;
+    while let Some(c) = chars.next() {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some('\''), c) => word.push(c),
+            (_, '\\') => {
+                if let Some(next) = chars.next() {
+                    word.push(next);
+                    in_word = true;
+                }
+            }
+            (Some(_), c) => word.push(c),
+            (None, '\'' | '"') => {
+                quote = Some(c);
+                in_word = true;
+            }
+            (None, c) if c.is_whitespace() => {
+                if in_word {
+                    words.push(std::mem::take(&mut word));
+                    in_word = false;
+                }
+            }
+            (None, c) => {
+                word.push(c);
+                in_word = true;
+            }
+        }
+    }
+    if let Some(q) = quote {
+        return Err(format!("the command `{line}` has an unclosed {q}"));
+    }
+    if in_word {
+        words.push(word);
+    }
+    if words.is_empty() {
+        return Err("the planner command is empty".into());
+    }
+    Ok(words)
+}
+
+#[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests write their inputs directly")]
+mod tests {
+    use super::*;
+
+    const EXTENT: Extent = [-1.0, 10.0, -5.0, 5.0];
+
+    fn path_from(text: &str) -> std::result::Result<Vec<(f64, f64)>, PlannerFailure> {
+        let dir = std::env::temp_dir().join(format!("oeg-path-{}-{}", std::process::id(), text.len()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let p = dir.join("path.csv");
+        std::fs::write(&p, text).expect("write");
+        read_path(&p, EXTENT)
+    }
+
+    #[test]
+    fn a_path_reads_with_or_without_a_header() {
+        assert_eq!(path_from("x_m,y_m\n0,0\n1.5, 2\n").expect("path"), [(0.0, 0.0), (1.5, 2.0)]);
+        assert_eq!(path_from("# comment\n0,0\n\n3,4\n").expect("path"), [(0.0, 0.0), (3.0, 4.0)]);
+    }
+
+    #[test]
+    fn each_malformed_path_names_the_file_and_the_line() {
+        for (text, expected) in [
+            ("x,y\n0,0\nzero,1\n", "path.csv:3: x `zero` is not a number"),
+            ("0,0\nNaN,1\n", "path.csv:2: (NaN, 1) is not a finite point"),
+            ("0,0\n1,2,3\n", "path.csv:2: expected two numbers"),
+            ("0,0\n50,0\n", "path.csv:2: (50, 0) m lies off the map"),
+            ("x,y\n", "the path is empty"),
+            ("", "the path is empty"),
+        ] {
+            let e = path_from(text).expect_err(text);
+            assert_eq!(e.kind, "malformed_path");
+            assert!(e.message.contains(expected), "{text:?}: {}", e.message);
+        }
+    }
+
+    #[test]
+    fn command_lines_split_like_a_shell_without_its_surprises() {
+        assert_eq!(split_command("python3 plan.py").expect("ok"), ["python3", "plan.py"]);
+        assert_eq!(
+            split_command(r#"sh -c 'echo $HOME' "a b" c\ d"#).expect("ok"),
+            ["sh", "-c", "echo $HOME", "a b", "c d"]
+        );
+        assert!(split_command("  ").is_err());
+        assert!(split_command("sh 'open").expect_err("unclosed").contains("unclosed"));
+    }
+}

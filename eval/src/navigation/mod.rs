@@ -1,0 +1,557 @@
+//! Closed-loop navigation (`[navigation]` in a scenario): the robot plans on the map it has *now*, drives a
+//! little, maps, and plans again, as nav2 runs a robot: a planner at a replanning rate, a controller (pure
+//! pursuit, [`controller`]) at the simulation's tick, a goal checker and a progress checker.
+//!
+//! At every tick the sensors scan the world at the robot's true pose and the maps integrate the scans at the
+//! estimated pose (odometry drift as in a scripted drive); at every replanning time the planner plans from
+//! the estimated pose to the goal on the run's map, the built-in A* or an external program ([`external`]);
+//! the controller's command moves the robot in the world, settled on the terrain. The judge watches the true
+//! footprint against the truth ([`contact`]); nothing the robot decides reads the truth.
+
+pub mod contact;
+pub mod controller;
+pub mod external;
+pub mod record;
+
+use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability, UncertainCells, UnknownCells};
+use sim::scenario::{Navigation, Scenario};
+use sim::truth::TruthRaster;
+
+use crate::error::{EvalError, Result};
+use crate::mapping::Mapping;
+use crate::progress::Progress;
+pub use contact::APPROACH_WINDOW_M;
+use contact::ContactWatch;
+use controller::{Command, PurePursuit};
+use external::ExternalPlanner;
+use record::{Event, EventKind, NavigationSummary, Outcome, PlannedPath, TrajectoryRow};
+
+/// The most map snapshots kept for event images.
+pub const MAX_SNAPSHOTS: usize = 6;
+/// Exit status by which an external planner says that no path exists (`docs/planner-protocol.md`).
+pub const NO_PATH_EXIT_CODE: i32 = 3;
+
+/// Which planner plans.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlannerSource {
+    /// The built-in A* with the scenario's `[planner]` options.
+    Builtin,
+    /// An external program.
+    External(ExternalPlanner),
+}
+
+/// The map's decisions at an event's time, for its image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// The event.
+    pub event: Event,
+    /// The decisions over the truth's region, row-major.
+    pub decisions: Vec<Traversability>,
+}
+
+/// Everything a closed-loop run recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NavigationLog {
+    /// The robot at every tick.
+    pub trajectory: Vec<TrajectoryRow>,
+    /// Every plan made.
+    pub plans: Vec<PlannedPath>,
+    /// The summary, with the events.
+    pub summary: NavigationSummary,
+    /// The map at the first events' times.
+    pub snapshots: Vec<Snapshot>,
+    /// Wall time spent in the planner, seconds (not deterministic: it goes to `timing.json`).
+    pub planner_wall_time_s: f64,
+}
+
+/// What the loop needs besides the simulation and the maps.
+#[derive(Debug, Clone, Copy)]
+pub struct NavigationInputs<'a> {
+    /// The scenario.
+    pub scenario: &'a Scenario,
+    /// Its `[navigation]`.
+    pub settings: &'a Navigation,
+    /// The robot's footprint from its URDF.
+    pub footprint: Footprint,
+    /// The truth over the map region (the static world; the judge's, never the robot's).
+    pub truth: &'a TruthRaster,
+    /// The planner.
+    pub planner: &'a PlannerSource,
+}
+
+/// What one replanning gave.
+enum Replan {
+    Path(Vec<(f64, f64)>),
+    NoPath { closed_by: String },
+    Failed { message: String, timed_out: bool },
+}
+
+/// Runs the scripted drive, then navigates to the goal until it is reached, the robot is stuck, or the time
+/// runs out. Every map of `mapping` integrates every scan; the robot plans on the first.
+///
+/// # Errors
+/// A scan a map rejects, or a map file for an external planner that cannot be written.
+pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: &Progress) -> Result<NavigationLog> {
+    let s = inputs.scenario;
+    let n = inputs.settings;
+    let geometry = *mapping.maps[0].geometry();
+    let mut watch = ContactWatch::new(s, inputs.truth, geometry, inputs.footprint);
+    let mut log = Recorder::default();
+    let dt = s.tick_s;
+
+    // The scripted drive, one tick at a time, so that the trajectory and the watch see all of it.
+    let drive_end = mapping.simulation.world().drive_end_s().min(s.duration_s);
+    let ticks = (drive_end / dt).ceil() as u64;
+    for k in 1..=ticks {
+        let t = (k as f64 * dt).min(drive_end);
+        step_to(mapping, t, progress)?;
+        log.sample(mapping, Command::default(), "scripted", None);
+        log.watch(&mut watch, mapping);
+    }
+
+    let start = mapping.simulation.world().planar_pose();
+    let t0 = mapping.simulation.world().time_s();
+    let end = n.time_limit_s.map_or(s.duration_s, |l| (t0 + l).min(s.duration_s));
+    let controller = PurePursuit {
+        lookahead_m: n.lookahead_m,
+        speed_m_s: n.speed_m_s,
+        max_turn_rate_rad_s: s.robot.max_turn_rate_deg_s.to_radians(),
+    };
+    let (mut path, mut progress_index, mut plan_index): (Vec<(f64, f64)>, usize, Option<u64>) = (Vec::new(), 0, None);
+    let mut state = "following";
+    let mut had_path = true;
+    let (mut anchor, mut anchor_t) = ((start.x_m, start.y_m), t0);
+    let mut next_replan = t0;
+    let mut planner_wall_time_s = 0.0;
+    let mut wall_time_dependent = false;
+    let (mut replans, mut no_path_replans, mut failures) = (0u64, 0u64, 0u64);
+    let mut k = 0u64;
+    let outcome = loop {
+        let t = t0 + k as f64 * dt;
+        let estimated = estimated_pose(mapping);
+        // The goal checker reads the estimated pose, as a robot's does.
+        if (estimated.x_m - n.goal_xy_m[0]).hypot(estimated.y_m - n.goal_xy_m[1]) <= n.goal_tolerance_m {
+            log.event(mapping, EventKind::Reached, "the estimated position is within the goal tolerance");
+            break Outcome::Reached;
+        }
+        if t - anchor_t >= n.stuck_time_s - 1e-9 {
+            log.event(
+                mapping,
+                EventKind::Stuck,
+                &format!("moved less than {} m in {} s", n.stuck_radius_m, n.stuck_time_s),
+            );
+            break Outcome::Stuck;
+        }
+        if t >= end - 1e-9 {
+            log.event(mapping, EventKind::TimeLimit, "the time limit ran out");
+            break Outcome::TimeLimit;
+        }
+        if t >= next_replan - 1e-9 {
+            next_replan += n.replan_period_s;
+            replans += 1;
+            let wall = std::time::Instant::now();
+            let result = replan(mapping, inputs, estimated)?;
+            planner_wall_time_s += wall.elapsed().as_secs_f64();
+            match result {
+                Replan::Path(points) => {
+                    plan_index = Some(log.plans.len() as u64);
+                    log.plans.push(PlannedPath {
+                        time_s: round(t),
+                        points: points.clone(),
+                    });
+                    (path, progress_index, state, had_path) = (points, 0, "following", true);
+                }
+                Replan::NoPath { closed_by } => {
+                    no_path_replans += 1;
+                    if had_path {
+                        let e = log.event(mapping, EventKind::NoPath, "no path on the map from the estimated pose to the goal");
+                        log.summary_events[e].closed_by = closed_by;
+                        log.snapshot(mapping, inputs, e)?;
+                    }
+                    (path, plan_index, state, had_path) = (Vec::new(), None, "no_path", false);
+                }
+                Replan::Failed { message, timed_out } => {
+                    failures += 1;
+                    wall_time_dependent |= timed_out;
+                    let e = log.event(mapping, EventKind::PlannerFailed, &message);
+                    log.snapshot(mapping, inputs, e)?;
+                    (path, plan_index, state) = (Vec::new(), None, "planner_failed");
+                }
+            }
+        }
+        let command = controller.command(estimated, &path, &mut progress_index);
+        mapping.simulation.world_mut().command(command.speed_m_s, command.turn_rate_rad_s);
+        k += 1;
+        let t_next = (t0 + k as f64 * dt).min(end);
+        step_to(mapping, t_next, progress)?;
+        log.sample(mapping, command, state, plan_index);
+        if let Some(e) = log.watch(&mut watch, mapping) {
+            log.snapshot(mapping, inputs, e)?;
+        }
+        let now = mapping.simulation.world().planar_pose();
+        if (now.x_m - anchor.0).hypot(now.y_m - anchor.1) >= n.stuck_radius_m {
+            (anchor, anchor_t) = ((now.x_m, now.y_m), t_next);
+        }
+    };
+    mapping.simulation.world_mut().command(0.0, 0.0);
+    if let Some(row) = log.trajectory.last_mut() {
+        row.planner_state = match outcome {
+            Outcome::Reached => "reached",
+            Outcome::Stuck => "stuck",
+            Outcome::TimeLimit => "time_limit",
+        };
+    }
+    if let Some((d, time_s, pose, cell)) = watch.closest {
+        log.summary_events.push(Event {
+            time_s: round(time_s),
+            kind: EventKind::ClosestApproach,
+            x_m: round(pose.x_m),
+            y_m: round(pose.y_m),
+            yaw_deg: round(pose.yaw_rad.to_degrees()),
+            obstacle: watch.obstacle_of(cell),
+            distance_m: Some(round(d)),
+            closed_by: String::new(),
+            message: "the closest the footprint came to a truly blocked cell".into(),
+        });
+        log.summary_events.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    }
+    let end_pose = mapping.simulation.world().planar_pose();
+    let driven = end_pose.distance_m - start.distance_m;
+    let truth_path = truth_shortest_path(inputs, (start.x_m, start.y_m))?;
+    let reached = outcome == Outcome::Reached;
+    let contacts = log.summary_events.iter().filter(|e| e.kind == EventKind::Contact).count() as u64;
+    let summary = NavigationSummary {
+        scenario: s.name.clone(),
+        seed: s.seed,
+        outcome,
+        reached,
+        planner: match inputs.planner {
+            PlannerSource::Builtin => "astar",
+            PlannerSource::External(_) => "external",
+        },
+        start_xy_m: [round(start.x_m), round(start.y_m)],
+        goal_xy_m: n.goal_xy_m,
+        start_time_s: round(t0),
+        time_s: round(mapping.simulation.world().time_s() - t0),
+        driven_length_m: round(driven),
+        truth_shortest_path_m: truth_path.map(round),
+        length_ratio: truth_path.filter(|_| reached).map(|p| round(driven / p)),
+        final_distance_to_goal_m: round((end_pose.x_m - n.goal_xy_m[0]).hypot(end_pose.y_m - n.goal_xy_m[1])),
+        replans,
+        no_path_replans,
+        planner_failures: failures,
+        contacts,
+        closest_approach_m: watch.closest.map(|c| round(c.0)),
+        footprint_m: [
+            round(inputs.footprint.min_x_m),
+            round(inputs.footprint.max_x_m),
+            round(inputs.footprint.min_y_m),
+            round(inputs.footprint.max_y_m),
+        ],
+        wall_time_dependent,
+        events: log.summary_events,
+    };
+    Ok(NavigationLog {
+        trajectory: log.trajectory,
+        plans: log.plans,
+        summary,
+        snapshots: log.snapshots,
+        planner_wall_time_s,
+    })
+}
+
+/// Takes the scans up to `t_s` and moves the world there.
+fn step_to(mapping: &mut Mapping, t_s: f64, progress: &Progress) -> Result<()> {
+    mapping.feed_until(t_s, progress)?;
+    mapping.simulation.world_mut().advance_to(t_s);
+    Ok(())
+}
+
+fn estimated_pose(mapping: &Mapping) -> Pose2 {
+    let p = mapping.simulation.world().estimated_world_from_base();
+    Pose2 {
+        x_m: p.translation.x,
+        y_m: p.translation.y,
+        yaw_rad: p.rotation.euler_angles().2,
+    }
+}
+
+fn true_pose(mapping: &Mapping) -> Pose2 {
+    let p = mapping.simulation.world().planar_pose();
+    Pose2 {
+        x_m: p.x_m,
+        y_m: p.y_m,
+        yaw_rad: p.yaw_rad,
+    }
+}
+
+/// Metres and degrees in the outputs, rounded to the micrometre (as every CSV of the testbed).
+fn round(v: f64) -> f64 {
+    crate::output::round_m(v)
+}
+
+/// The cell of a point, clamped into the region (a point on its max edge lies in the cell beyond).
+fn clamped_cell(geometry: &oeg::GridGeometry, region: &oeg::CellRegion, (x, y): (f64, f64)) -> Option<CellIndex> {
+    let (lo, hi) = (region.min, region.max());
+    let c = geometry.cell_of(x, y)?;
+    let inside = c.i >= lo.i - 1 && c.i <= hi.i + 1 && c.j >= lo.j - 1 && c.j <= hi.j + 1;
+    inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
+}
+
+/// Plans on the run's map from the estimated pose.
+fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
+    let s = inputs.scenario;
+    let map = &mapping.maps[0];
+    let geometry = *map.geometry();
+    let region = inputs.truth.region;
+    let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
+    let options = planner_options(inputs);
+    let decisions = map.traversability_layer(region, &inputs.truth.profile, s.map.traversability)?.values;
+    let result = match inputs.planner {
+        PlannerSource::Builtin => {
+            let (Some(a), Some(b)) = (
+                clamped_cell(&geometry, &region, (from.x_m, from.y_m)),
+                clamped_cell(&geometry, &region, goal),
+            ) else {
+                return Ok(Replan::Failed {
+                    message: format!(
+                        "the estimated position ({:.3}, {:.3}) m lies outside the map region",
+                        from.x_m, from.y_m
+                    ),
+                    timed_out: false,
+                });
+            };
+            let plan = |options: &oeg::PlannerOptions| {
+                oeg::plan(&region, geometry.resolution_m(), &decisions, a, b, options).map_err(|e| {
+                    EvalError::Input {
+                        path: s.name.clone().into(),
+                        message: format!("planner: {e}"),
+                    }
+                })
+            };
+            let mut found = plan(&options)?;
+            // A robot whose centre is already inside the inflation (it turned close to an obstacle, or the
+            // obstacle was seen late) may keep the clearance it has, never less: nav2's costmaps let the
+            // planner leave the inflated band the robot stands in.
+            if found.is_none()
+                && let Some(clearance) = start_clearance(&decisions, &region, &geometry, a, &options)
+            {
+                found = plan(&oeg::PlannerOptions {
+                    inflation_radius_m: clearance,
+                    footprint_radius_m: options.footprint_radius_m.min(clearance),
+                    ..options
+                })?;
+            }
+            found.map(|p| path_points(&p, &geometry, goal))
+        }
+        PlannerSource::External(planner) => {
+            let files = oeg::planner_files(map, region, &inputs.truth.profile, s.map.traversability, options.uncertain)?;
+            let res = geometry.resolution_m();
+            let (x0, y0) = (f64::from(region.min.i) * res, f64::from(region.min.j) * res);
+            let extent = [x0, x0 + f64::from(region.num_x) * res, y0, y0 + f64::from(region.num_y) * res];
+            match planner.call(&files, (from.x_m, from.y_m), goal, extent)? {
+                Ok(points) => Some(points),
+                Err(f) if f.kind == "exit" && f.message.contains(&format!("exit status: {NO_PATH_EXIT_CODE}")) => None,
+                Err(f) => {
+                    return Ok(Replan::Failed {
+                        timed_out: f.kind == "timeout",
+                        message: f.message,
+                    });
+                }
+            }
+        }
+    };
+    Ok(match result {
+        Some(points) => Replan::Path(points),
+        None => Replan::NoPath {
+            closed_by: closed_by(&decisions, inputs, &geometry, from, goal)?,
+        },
+    })
+}
+
+/// The planner's options while navigating: the scenario's `[planner]` options, with `[navigation]`'s
+/// `unknown`, and by default an inflation of the footprint's circumscribed radius (nav2's rule: less lets a
+/// turning robot's corners reach what the planner kept its centre away from).
+pub fn planner_options(inputs: &NavigationInputs<'_>) -> oeg::PlannerOptions {
+    let planner = &inputs.scenario.planner;
+    oeg::PlannerOptions {
+        unknown: inputs.settings.unknown,
+        inflation_radius_m: planner.inflation_radius_m.unwrap_or_else(|| {
+            oeg::DEFAULT_INFLATION_RADIUS_M.max(inputs.footprint.circumscribed_radius_m())
+        }),
+        ..planner.options()
+    }
+}
+
+/// The clearance the robot has at `start` when it stands inside the inflation of a cell the planner treats
+/// as blocked: the distance from the start cell's centre to the nearest such cell, less half a cell; `None`
+/// when the start is outside every inflation, or touches a blocked cell.
+fn start_clearance(
+    decisions: &[Traversability],
+    region: &oeg::CellRegion,
+    geometry: &oeg::GridGeometry,
+    start: CellIndex,
+    options: &oeg::PlannerOptions,
+) -> Option<f64> {
+    let res = geometry.resolution_m();
+    let reach = (options.inflation_radius_m / res).ceil() as i32;
+    let obstacle = |t: Traversability| match t {
+        Traversability::Blocked => true,
+        Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
+        Traversability::Unknown => options.unknown == UnknownCells::Inflate,
+        Traversability::Free | Traversability::Traversable => false,
+    };
+    let mut nearest = f64::INFINITY;
+    for dj in -reach..=reach {
+        for di in -reach..=reach {
+            let c = CellIndex::new(start.i + di, start.j + dj);
+            if region.offset(c).is_some_and(|k| obstacle(decisions[k])) {
+                nearest = nearest.min(f64::from(di).hypot(f64::from(dj)) * res);
+            }
+        }
+    }
+    let clearance = nearest - res / 2.0;
+    (nearest < options.inflation_radius_m && clearance >= res).then_some(clearance)
+}
+
+/// The path through a plan's cell centres, ending at the goal itself.
+fn path_points(plan: &Plan, geometry: &oeg::GridGeometry, goal: (f64, f64)) -> Vec<(f64, f64)> {
+    let mut points: Vec<(f64, f64)> = plan.cells.iter().map(|c| geometry.cell_center(*c)).collect();
+    if let Some(last) = points.last_mut() {
+        *last = goal;
+    }
+    points
+}
+
+/// Which cells closed the way: the path that taking every uncertain and never-observed cell as drivable
+/// would give, counted by the map's class of its cells; `blocked` when even that finds none.
+fn closed_by(
+    decisions: &[Traversability],
+    inputs: &NavigationInputs<'_>,
+    geometry: &oeg::GridGeometry,
+    from: Pose2,
+    goal: (f64, f64),
+) -> Result<String> {
+    let region = inputs.truth.region;
+    let (Some(a), Some(b)) = (
+        clamped_cell(geometry, &region, (from.x_m, from.y_m)),
+        clamped_cell(geometry, &region, goal),
+    ) else {
+        return Ok("outside the map region".into());
+    };
+    let relaxed = oeg::PlannerOptions {
+        unknown: UnknownCells::Drivable,
+        uncertain: UncertainCells::Drivable,
+        ..planner_options(inputs)
+    };
+    let plan = oeg::plan(&region, geometry.resolution_m(), decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
+        path: inputs.scenario.name.clone().into(),
+        message: format!("planner: {e}"),
+    })?;
+    let Some(plan) = plan else {
+        return Ok("blocked".into());
+    };
+    let count = |class: Traversability| {
+        plan.cells
+            .iter()
+            .filter(|c| region.offset(**c).is_some_and(|k| decisions[k] == class))
+            .count()
+    };
+    let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
+    Ok(match (uncertain, unknown) {
+        (0, 0) => "blocked (the inflation around blocked cells)".into(),
+        (u, 0) => format!("{u} uncertain cells"),
+        (0, n) => format!("{n} never-observed cells"),
+        (u, n) => format!("{u} uncertain and {n} never-observed cells"),
+    })
+}
+
+/// The length of the built-in planner's path on the truth from `from` to the goal, metres.
+fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<f64>> {
+    let truth = inputs.truth;
+    let region = truth.region;
+    let geometry = oeg::GridGeometry::new(truth.resolution_m)?;
+    let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
+    let (Some(a), Some(b)) = (clamped_cell(&geometry, &region, from), clamped_cell(&geometry, &region, goal)) else {
+        return Ok(None);
+    };
+    let decisions = crate::judge::verdict::Verdicts::from_classes(truth, vec![Traversability::Unknown; truth.cells.len()])
+        .truth_decisions();
+    let options = planner_options(inputs);
+    Ok(oeg::plan(&region, truth.resolution_m, &decisions, a, b, &options)
+        .map_err(|e| EvalError::Input {
+            path: inputs.scenario.name.clone().into(),
+            message: format!("planner: {e}"),
+        })?
+        .map(|p| p.length_m))
+}
+
+/// The records as the loop writes them.
+#[derive(Default)]
+struct Recorder {
+    trajectory: Vec<TrajectoryRow>,
+    plans: Vec<PlannedPath>,
+    summary_events: Vec<Event>,
+    snapshots: Vec<Snapshot>,
+}
+
+impl Recorder {
+    fn sample(&mut self, mapping: &Mapping, command: Command, state: &'static str, plan: Option<u64>) {
+        let world = mapping.simulation.world();
+        let t = true_pose(mapping);
+        let e = estimated_pose(mapping);
+        self.trajectory.push(TrajectoryRow {
+            time_s: round(world.time_s()),
+            true_x_m: round(t.x_m),
+            true_y_m: round(t.y_m),
+            true_yaw_deg: round(t.yaw_rad.to_degrees()),
+            estimated_x_m: round(e.x_m),
+            estimated_y_m: round(e.y_m),
+            estimated_yaw_deg: round(e.yaw_rad.to_degrees()),
+            speed_m_s: round(command.speed_m_s),
+            turn_rate_deg_s: round(command.turn_rate_rad_s.to_degrees()),
+            planner_state: state,
+            plan,
+        });
+    }
+
+    /// Records an event at the robot's true pose now; returns its index.
+    fn event(&mut self, mapping: &Mapping, kind: EventKind, message: &str) -> usize {
+        let p = true_pose(mapping);
+        self.summary_events.push(Event {
+            time_s: round(mapping.simulation.world().time_s()),
+            kind,
+            x_m: round(p.x_m),
+            y_m: round(p.y_m),
+            yaw_deg: round(p.yaw_rad.to_degrees()),
+            obstacle: String::new(),
+            distance_m: None,
+            closed_by: String::new(),
+            message: message.to_string(),
+        });
+        self.summary_events.len() - 1
+    }
+
+    /// Checks the true footprint now; a contact that begins is an event (its index returned).
+    fn watch(&mut self, watch: &mut ContactWatch<'_>, mapping: &Mapping) -> Option<usize> {
+        let time_s = mapping.simulation.world().time_s();
+        let contact = watch.check(time_s, true_pose(mapping))?;
+        let e = self.event(mapping, EventKind::Contact, "the footprint entered a truly blocked cell");
+        self.summary_events[e].obstacle = contact.obstacle;
+        self.summary_events[e].distance_m = Some(0.0);
+        Some(e)
+    }
+
+    /// Keeps the map's decisions for the image of event `event` (the first [`MAX_SNAPSHOTS`] only).
+    fn snapshot(&mut self, mapping: &Mapping, inputs: &NavigationInputs<'_>, event: usize) -> Result<()> {
+        if self.snapshots.len() >= MAX_SNAPSHOTS {
+            return Ok(());
+        }
+        let decisions = mapping.maps[0]
+            .traversability_layer(inputs.truth.region, &inputs.truth.profile, inputs.scenario.map.traversability)?
+            .values;
+        let event = self.summary_events[event].clone();
+        self.snapshots.push(Snapshot { event, decisions });
+        Ok(())
+    }
+}
