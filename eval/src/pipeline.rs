@@ -15,10 +15,10 @@ use sim::{Simulation, scenario};
 use crate::error::{EvalError, Result};
 use crate::judge::metrics::{self, FailedExpectation, Metrics};
 use crate::judge::{Evaluation, evaluate};
-use crate::output::{Staged, create_dir, write_json};
 use crate::mapping::{Mapping, SimulatedTiming};
 use crate::navigation::external::ExternalPlanner;
 use crate::navigation::{NavigationInputs, NavigationLog, PlannerSource, navigate};
+use crate::output::{Staged, create_dir, write_json};
 use crate::progress::Progress;
 use crate::report::{write_comparison, write_report};
 use crate::settings::SettingError;
@@ -271,18 +271,21 @@ pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) 
         (scenario::PlannerKind::Astar, _) => Ok(PlannerSource::Builtin),
         (scenario::PlannerKind::External, None) => Err(EvalError::Input {
             path: options.scenario.clone(),
-            message: "navigation.planner = \"external\" needs a command: give one with --planner-command, or \
+            message:
+                "navigation.planner = \"external\" needs a command: give one with --planner-command, or \
                       [navigation] command with --allow-scenario-command"
-                .into(),
+                    .into(),
         }),
-        (scenario::PlannerKind::External, Some(command)) if !options.allow_scenario_command => Err(EvalError::Input {
-            path: options.scenario.clone(),
-            message: format!(
-                "the scenario asks to run the program `{}` as its planner; a scenario file never runs a program \
+        (scenario::PlannerKind::External, Some(command)) if !options.allow_scenario_command => {
+            Err(EvalError::Input {
+                path: options.scenario.clone(),
+                message: format!(
+                    "the scenario asks to run the program `{}` as its planner; a scenario file never runs a program \
                  unless allowed: pass --allow-scenario-command to run it, or give your own with --planner-command",
-                command.join(" ")
-            ),
-        }),
+                    command.join(" ")
+                ),
+            })
+        }
         (scenario::PlannerKind::External, Some(command)) => Ok(external(command.clone())),
     }
 }

@@ -130,7 +130,9 @@ pub fn write_comparison(
     let figures: Vec<crate::figures::Figure> = runs
         .iter()
         .zip(&rows)
-        .map(|((s, e), r)| comparison::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model), None))
+        .map(|((s, e), r)| {
+            comparison::decisions_figure(s, geometry, e, &format!("{}: {}", s.name, r.model), None)
+        })
         .collect();
     let canvases: Vec<&crate::figures::Canvas> = figures.iter().map(|f| f.canvas()).collect();
     let png_path = out_dir.join("decisions_comparison.png");
@@ -151,7 +153,9 @@ pub fn overlay_of(log: &NavigationLog) -> comparison::Overlay {
     let picks: Vec<usize> = if n <= MAX_DRAWN_PLANS {
         (0..n).collect()
     } else {
-        (0..MAX_DRAWN_PLANS).map(|k| k * (n - 1) / (MAX_DRAWN_PLANS - 1)).collect()
+        (0..MAX_DRAWN_PLANS)
+            .map(|k| k * (n - 1) / (MAX_DRAWN_PLANS - 1))
+            .collect()
     };
     comparison::Overlay {
         trajectory: log.trajectory.iter().map(|r| (r.true_x_m, r.true_y_m)).collect(),
@@ -186,13 +190,16 @@ pub fn write_navigation(
         .iter()
         .enumerate()
         .flat_map(|(k, p)| {
-            p.points.iter().enumerate().map(move |(step, (x, y))| PlanPointRow {
-                plan: k as u64,
-                time_s: p.time_s,
-                step: step as u64,
-                x_m: crate::output::round_m(*x),
-                y_m: crate::output::round_m(*y),
-            })
+            p.points
+                .iter()
+                .enumerate()
+                .map(move |(step, (x, y))| PlanPointRow {
+                    plan: k as u64,
+                    time_s: p.time_s,
+                    step: step as u64,
+                    x_m: crate::output::round_m(*x),
+                    y_m: crate::output::round_m(*y),
+                })
         })
         .collect();
     let path = out_dir.join("plans.csv");
@@ -209,10 +216,13 @@ pub fn write_navigation(
                 .ok()
                 .and_then(|v| v.as_str().map(str::to_string))
                 .unwrap_or_default();
-            let fig = comparison::event_figure(s, truth, &snap.decisions, event_at(log, event), &format!(
-                "{}: {name} at t = {:.1} s",
-                s.name, event.time_s
-            ));
+            let fig = comparison::event_figure(
+                s,
+                truth,
+                &snap.decisions,
+                event_at(log, event),
+                &format!("{}: {name} at t = {:.1} s", s.name, event.time_s),
+            );
             let path = dir.join(format!("{index:02}_{name}.png"));
             write_bytes(&path, &fig.to_png())?;
             files.push(path);

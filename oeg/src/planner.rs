@@ -297,6 +297,11 @@ fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 /// whatever [`UnknownCells`] says (the ground under the robot's final footprint need not have been seen), but
 /// blocked cells near the goal still count.
 ///
+/// A robot whose centre stands inside the inflation (it turned close to an obstacle, or saw it late) keeps
+/// the clearance it has, never less: the path then keeps its centre as far from every obstacle as the start
+/// is, less half a cell, instead of there being no path out (costmap_2d's inflation is a cost the planner may
+/// cross on its way out of it).
+///
 /// # Errors
 /// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the region.
 pub fn plan(
@@ -321,7 +326,20 @@ pub fn plan(
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
-    let forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
+    let mut forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
+    if forbidden[s]
+        && let Some(clearance) = start_clearance(region, resolution_m, &decisions, start, options)
+    {
+        forbidden = forbidden_mask(
+            region,
+            resolution_m,
+            &decisions,
+            &PlannerOptions {
+                inflation_radius_m: clearance,
+                ..*options
+            },
+        )?;
+    }
     if forbidden[s] || forbidden[g] {
         return Ok(None);
     }
@@ -339,6 +357,38 @@ pub fn plan(
         let length_m = (num_side as f64 + num_diagonal as f64 * std::f64::consts::SQRT_2) * resolution_m;
         Plan { cells, length_m }
     }))
+}
+
+/// The clearance a robot standing inside the inflation at `start` may keep: the distance from the start
+/// cell's centre to the nearest cell the inflation grows from, less half a cell; `None` when the start lies
+/// outside every inflation or on such a cell itself.
+fn start_clearance(
+    region: &CellRegion,
+    resolution_m: f64,
+    decisions: &[Traversability],
+    start: CellIndex,
+    options: &PlannerOptions,
+) -> Option<f64> {
+    let reach = (options.inflation_radius_m / resolution_m)
+        .ceil()
+        .min(f64::from(region.num_x.max(region.num_y))) as i32;
+    let grows = |t: Traversability| match t {
+        Traversability::Blocked => true,
+        Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
+        Traversability::Unknown => options.unknown == UnknownCells::Inflate,
+        Traversability::Free | Traversability::Traversable => false,
+    };
+    let mut nearest = f64::INFINITY;
+    for dj in -reach..=reach {
+        for di in -reach..=reach {
+            let c = CellIndex::new(start.i.saturating_add(di), start.j.saturating_add(dj));
+            if region.offset(c).is_some_and(|k| grows(decisions[k])) {
+                nearest = nearest.min(f64::from(di).hypot(f64::from(dj)) * resolution_m);
+            }
+        }
+    }
+    let clearance = nearest - resolution_m / 2.0;
+    (nearest <= options.inflation_radius_m && clearance > 0.0).then_some(clearance)
 }
 
 /// Octile distance in cost units: exact for 8-connected moves on an empty grid, so A* stays optimal.
@@ -555,6 +605,32 @@ mod tests {
             plan(&r, 1.0, &corridor, s, g, &opts(UnknownCells::Inflate)).expect("valid"),
             None
         );
+    }
+
+    #[test]
+    fn a_robot_inside_the_inflation_keeps_the_clearance_it_has_and_no_less() {
+        // 0.1 m cells; a wall along x = 5; the robot's centre 0.3 m from it, inside a 0.5 m inflation, with
+        // a start exemption too small to reach the wall.
+        let r = region(12, 9);
+        let d = marked(&r, Traversability::Blocked, |c| c.i == 5 && c.j <= 5);
+        let options = PlannerOptions {
+            inflation_radius_m: 0.5,
+            footprint_radius_m: 0.1,
+            unknown: UnknownCells::Drivable,
+            uncertain: UncertainCells::Blocked,
+        };
+        let (s, g) = (CellIndex::new(2, 2), CellIndex::new(10, 2));
+        let p = plan(&r, 0.1, &d, s, g, &options).expect("valid").expect("a way out and round");
+        // Every cell of the path keeps at least the start's clearance less half a cell (0.25 m) from the wall.
+        for c in &p.cells {
+            for k in 0..=5 {
+                let d = f64::from(c.i - 5).hypot(f64::from(c.j - k)) * 0.1;
+                assert!(d > 0.25, "{c:?} is {d} m from the wall");
+            }
+        }
+        // Without the clearance rule the start would be pinned: every cell round it lies in the inflation.
+        let forbidden = forbidden_mask(&r, 0.1, &d, &options).expect("valid");
+        assert!(forbidden[r.offset(s).expect("inside")]);
     }
 
     #[test]

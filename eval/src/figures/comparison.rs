@@ -101,7 +101,10 @@ impl Overlay {
     pub fn legend(&self) -> Vec<(String, Rgb)> {
         vec![
             ("driven (true pose)".into(), DRIVEN),
-            (format!("{} of the paths planned on the way", self.plans.len()), REPLANNED),
+            (
+                format!("{} of the paths planned on the way", self.plans.len()),
+                REPLANNED,
+            ),
         ]
     }
 }
@@ -257,7 +260,11 @@ pub fn event_figure(
         verdicts.region,
         verdicts.resolution_m,
         title,
-        |c| verdicts.offset(c).map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k])),
+        |c| {
+            verdicts
+                .offset(c)
+                .map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k]))
+        },
         &Legend::Classes(classes),
     );
     for o in &s.obstacles {

@@ -32,7 +32,12 @@ pub struct NewContact {
 
 impl<'a> ContactWatch<'a> {
     /// A watch with no contact yet.
-    pub fn new(scenario: &'a Scenario, truth: &'a TruthRaster, geometry: GridGeometry, footprint: Footprint) -> Self {
+    pub fn new(
+        scenario: &'a Scenario,
+        truth: &'a TruthRaster,
+        geometry: GridGeometry,
+        footprint: Footprint,
+    ) -> Self {
         Self {
             scenario,
             truth,
@@ -106,7 +111,13 @@ impl<'a> ContactWatch<'a> {
     pub fn obstacle_of(&self, cell: CellIndex) -> String {
         let (x, y) = self.geometry.cell_center(cell);
         let h = self.geometry.resolution_m() / 2.0;
-        let points = [(x, y), (x - h, y - h), (x + h, y - h), (x + h, y + h), (x - h, y + h)];
+        let points = [
+            (x, y),
+            (x - h, y - h),
+            (x + h, y - h),
+            (x + h, y + h),
+            (x - h, y + h),
+        ];
         points
             .iter()
             .find_map(|(px, py)| {

@@ -159,7 +159,10 @@ mod tests {
             ..CONTROLLER
         };
         let c = slow.command(at(0.0, 0.0, 0.0), &[(0.0, 0.0), (0.3, 0.3), (0.3, 2.0)], &mut 0);
-        assert!((c.turn_rate_rad_s - 0.2).abs() < 1e-12 && c.speed_m_s < 0.4, "{c:?}");
+        assert!(
+            (c.turn_rate_rad_s - 0.2).abs() < 1e-12 && c.speed_m_s < 0.4,
+            "{c:?}"
+        );
     }
 
     #[test]
@@ -169,6 +172,9 @@ mod tests {
         let mut progress = 2;
         let target = CONTROLLER.lookahead_point(at(1.0, 0.9, 180.0), &path, &mut progress);
         assert_eq!(progress, 2);
-        assert!((target.0 - 0.4).abs() < 1e-9 && (target.1 - 1.0).abs() < 1e-9, "{target:?}");
+        assert!(
+            (target.0 - 0.4).abs() < 1e-9 && (target.1 - 1.0).abs() < 1e-9,
+            "{target:?}"
+        );
     }
 }

@@ -64,10 +64,17 @@ impl ExternalPlanner {
         if path_csv.exists() {
             let _ = std::fs::remove_file(&path_csv);
         }
-        Ok(self.run(start, goal, &path_csv).and_then(|()| read_path(&path_csv, extent)))
+        Ok(self
+            .run(start, goal, &path_csv)
+            .and_then(|()| read_path(&path_csv, extent)))
     }
 
-    fn run(&self, start: (f64, f64), goal: (f64, f64), path_csv: &Path) -> std::result::Result<(), PlannerFailure> {
+    fn run(
+        &self,
+        start: (f64, f64),
+        goal: (f64, f64),
+        path_csv: &Path,
+    ) -> std::result::Result<(), PlannerFailure> {
         let program = self.command.first().map_or("", String::as_str);
         let number = |v: f64| format!("{v}");
         let mut child = Command::new(program)
@@ -82,7 +89,10 @@ impl ExternalPlanner {
             .spawn()
             .map_err(|e| PlannerFailure {
                 kind: "spawn",
-                message: format!("the planner command `{}` could not start: {e}", self.command.join(" ")),
+                message: format!(
+                    "the planner command `{}` could not start: {e}",
+                    self.command.join(" ")
+                ),
             })?;
         // stderr is drained on its own thread, so a chatty planner never blocks on a full pipe.
         let stderr = child.stderr.take().map(|mut pipe| {
@@ -111,11 +121,19 @@ impl ExternalPlanner {
                 let text = String::from_utf8_lossy(&bytes);
                 let text = text.trim();
                 let cut = text.len().saturating_sub(STDERR_TAIL_BYTES);
-                let cut = (cut..=text.len()).find(|k| text.is_char_boundary(*k)).unwrap_or(text.len());
+                let cut = (cut..=text.len())
+                    .find(|k| text.is_char_boundary(*k))
+                    .unwrap_or(text.len());
                 text[cut..].to_string()
             })
             .unwrap_or_default();
-        let with_stderr = |m: String| if tail.is_empty() { m } else { format!("{m}; its stderr ends: {tail}") };
+        let with_stderr = |m: String| {
+            if tail.is_empty() {
+                m
+            } else {
+                format!("{m}; its stderr ends: {tail}")
+            }
+        };
         match status {
             None => Err(PlannerFailure {
                 kind: "timeout",
@@ -127,7 +145,10 @@ impl ExternalPlanner {
             }),
             Some(s) if !s.success() => Err(PlannerFailure {
                 kind: "exit",
-                message: with_stderr(format!("the planner `{}` exited with {s}", self.command.join(" "))),
+                message: with_stderr(format!(
+                    "the planner `{}` exited with {s}",
+                    self.command.join(" ")
+                )),
             }),
             Some(_) => Ok(()),
         }
@@ -165,7 +186,9 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         if std::mem::take(&mut header_allowed)
             && fields.len() == 2
-            && fields.iter().all(|f| f.starts_with(|c: char| c.is_ascii_alphabetic()) && !is_number(f))
+            && fields
+                .iter()
+                .all(|f| f.starts_with(|c: char| c.is_ascii_alphabetic()) && !is_number(f))
         {
             continue;
         }
@@ -176,8 +199,11 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
             )));
         };
         let parse = |v: &str, axis: &str| {
-            v.parse::<f64>()
-                .map_err(|_| fail(format!("{name}:{at}: {axis} `{v}` is not a number; expected metres")))
+            v.parse::<f64>().map_err(|_| {
+                fail(format!(
+                    "{name}:{at}: {axis} `{v}` is not a number; expected metres"
+                ))
+            })
         };
         let (x, y) = (parse(x, "x")?, parse(y, "y")?);
         if !(x.is_finite() && y.is_finite()) {
@@ -191,7 +217,9 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
         points.push((x, y));
     }
     if points.is_empty() {
-        return Err(fail(format!("{name}: the path is empty; expected at least one line x,y")));
+        return Err(fail(format!(
+            "{name}: the path is empty; expected at least one line x,y"
+        )));
     }
     Ok(points)
 }
@@ -266,8 +294,14 @@ mod tests {
 
     #[test]
     fn a_path_reads_with_or_without_a_header() {
-        assert_eq!(path_from("x_m,y_m\n0,0\n1.5, 2\n").expect("path"), [(0.0, 0.0), (1.5, 2.0)]);
-        assert_eq!(path_from("# comment\n0,0\n\n3,4\n").expect("path"), [(0.0, 0.0), (3.0, 4.0)]);
+        assert_eq!(
+            path_from("x_m,y_m\n0,0\n1.5, 2\n").expect("path"),
+            [(0.0, 0.0), (1.5, 2.0)]
+        );
+        assert_eq!(
+            path_from("# comment\n0,0\n\n3,4\n").expect("path"),
+            [(0.0, 0.0), (3.0, 4.0)]
+        );
     }
 
     #[test]
@@ -288,12 +322,19 @@ mod tests {
 
     #[test]
     fn command_lines_split_like_a_shell_without_its_surprises() {
-        assert_eq!(split_command("python3 plan.py").expect("ok"), ["python3", "plan.py"]);
+        assert_eq!(
+            split_command("python3 plan.py").expect("ok"),
+            ["python3", "plan.py"]
+        );
         assert_eq!(
             split_command(r#"sh -c 'echo $HOME' "a b" c\ d"#).expect("ok"),
             ["sh", "-c", "echo $HOME", "a b", "c d"]
         );
         assert!(split_command("  ").is_err());
-        assert!(split_command("sh 'open").expect_err("unclosed").contains("unclosed"));
+        assert!(
+            split_command("sh 'open")
+                .expect_err("unclosed")
+                .contains("unclosed")
+        );
     }
 }

@@ -91,7 +91,11 @@ enum Replan {
 ///
 /// # Errors
 /// A scan a map rejects, or a map file for an external planner that cannot be written.
-pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: &Progress) -> Result<NavigationLog> {
+pub fn navigate(
+    mapping: &mut Mapping,
+    inputs: &NavigationInputs<'_>,
+    progress: &Progress,
+) -> Result<NavigationLog> {
     let s = inputs.scenario;
     let n = inputs.settings;
     let geometry = *mapping.maps[0].geometry();
@@ -111,13 +115,16 @@ pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: 
 
     let start = mapping.simulation.world().planar_pose();
     let t0 = mapping.simulation.world().time_s();
-    let end = n.time_limit_s.map_or(s.duration_s, |l| (t0 + l).min(s.duration_s));
+    let end = n
+        .time_limit_s
+        .map_or(s.duration_s, |l| (t0 + l).min(s.duration_s));
     let controller = PurePursuit {
         lookahead_m: n.lookahead_m,
         speed_m_s: n.speed_m_s,
         max_turn_rate_rad_s: s.robot.max_turn_rate_deg_s.to_radians(),
     };
-    let (mut path, mut progress_index, mut plan_index): (Vec<(f64, f64)>, usize, Option<u64>) = (Vec::new(), 0, None);
+    let (mut path, mut progress_index, mut plan_index): (Vec<(f64, f64)>, usize, Option<u64>) =
+        (Vec::new(), 0, None);
     let mut state = "following";
     let mut had_path = true;
     let (mut anchor, mut anchor_t) = ((start.x_m, start.y_m), t0);
@@ -131,7 +138,11 @@ pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: 
         let estimated = estimated_pose(mapping);
         // The goal checker reads the estimated pose, as a robot's does.
         if (estimated.x_m - n.goal_xy_m[0]).hypot(estimated.y_m - n.goal_xy_m[1]) <= n.goal_tolerance_m {
-            log.event(mapping, EventKind::Reached, "the estimated position is within the goal tolerance");
+            log.event(
+                mapping,
+                EventKind::Reached,
+                "the estimated position is within the goal tolerance",
+            );
             break Outcome::Reached;
         }
         if t - anchor_t >= n.stuck_time_s - 1e-9 {
@@ -164,7 +175,11 @@ pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: 
                 Replan::NoPath { closed_by } => {
                     no_path_replans += 1;
                     if had_path {
-                        let e = log.event(mapping, EventKind::NoPath, "no path on the map from the estimated pose to the goal");
+                        let e = log.event(
+                            mapping,
+                            EventKind::NoPath,
+                            "no path on the map from the estimated pose to the goal",
+                        );
                         log.summary_events[e].closed_by = closed_by;
                         log.snapshot(mapping, inputs, e)?;
                     }
@@ -180,7 +195,10 @@ pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: 
             }
         }
         let command = controller.command(estimated, &path, &mut progress_index);
-        mapping.simulation.world_mut().command(command.speed_m_s, command.turn_rate_rad_s);
+        mapping
+            .simulation
+            .world_mut()
+            .command(command.speed_m_s, command.turn_rate_rad_s);
         k += 1;
         let t_next = (t0 + k as f64 * dt).min(end);
         step_to(mapping, t_next, progress)?;
@@ -219,7 +237,11 @@ pub fn navigate(mapping: &mut Mapping, inputs: &NavigationInputs<'_>, progress: 
     let driven = end_pose.distance_m - start.distance_m;
     let truth_path = truth_shortest_path(inputs, (start.x_m, start.y_m))?;
     let reached = outcome == Outcome::Reached;
-    let contacts = log.summary_events.iter().filter(|e| e.kind == EventKind::Contact).count() as u64;
+    let contacts = log
+        .summary_events
+        .iter()
+        .filter(|e| e.kind == EventKind::Contact)
+        .count() as u64;
     let summary = NavigationSummary {
         scenario: s.name.clone(),
         seed: s.seed,
@@ -291,7 +313,11 @@ fn round(v: f64) -> f64 {
 }
 
 /// The cell of a point, clamped into the region (a point on its max edge lies in the cell beyond).
-fn clamped_cell(geometry: &oeg::GridGeometry, region: &oeg::CellRegion, (x, y): (f64, f64)) -> Option<CellIndex> {
+fn clamped_cell(
+    geometry: &oeg::GridGeometry,
+    region: &oeg::CellRegion,
+    (x, y): (f64, f64),
+) -> Option<CellIndex> {
     let (lo, hi) = (region.min, region.max());
     let c = geometry.cell_of(x, y)?;
     let inside = c.i >= lo.i - 1 && c.i <= hi.i + 1 && c.j >= lo.j - 1 && c.j <= hi.j + 1;
@@ -306,7 +332,9 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
     let region = inputs.truth.region;
     let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
     let options = planner_options(inputs);
-    let decisions = map.traversability_layer(region, &inputs.truth.profile, s.map.traversability)?.values;
+    let decisions = map
+        .traversability_layer(region, &inputs.truth.profile, s.map.traversability)?
+        .values;
     let result = match inputs.planner {
         PlannerSource::Builtin => {
             let (Some(a), Some(b)) = (
@@ -321,37 +349,39 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
                     timed_out: false,
                 });
             };
-            let plan = |options: &oeg::PlannerOptions| {
-                oeg::plan(&region, geometry.resolution_m(), &decisions, a, b, options).map_err(|e| {
-                    EvalError::Input {
-                        path: s.name.clone().into(),
-                        message: format!("planner: {e}"),
-                    }
-                })
-            };
-            let mut found = plan(&options)?;
-            // A robot whose centre is already inside the inflation (it turned close to an obstacle, or the
-            // obstacle was seen late) may keep the clearance it has, never less: nav2's costmaps let the
-            // planner leave the inflated band the robot stands in.
-            if found.is_none()
-                && let Some(clearance) = start_clearance(&decisions, &region, &geometry, a, &options)
-            {
-                found = plan(&oeg::PlannerOptions {
-                    inflation_radius_m: clearance,
-                    footprint_radius_m: options.footprint_radius_m.min(clearance),
-                    ..options
-                })?;
-            }
-            found.map(|p| path_points(&p, &geometry, goal))
+            oeg::plan(&region, geometry.resolution_m(), &decisions, a, b, &options)
+                .map_err(|e| EvalError::Input {
+                    path: s.name.clone().into(),
+                    message: format!("planner: {e}"),
+                })?
+                .map(|p| path_points(&p, &geometry, goal))
         }
         PlannerSource::External(planner) => {
-            let files = oeg::planner_files(map, region, &inputs.truth.profile, s.map.traversability, options.uncertain)?;
+            let mut files = oeg::planner_files(
+                map,
+                region,
+                &inputs.truth.profile,
+                s.map.traversability,
+                options.uncertain,
+            )?;
+            // The map itself too, for planners that read this project's format (`oeg plan`).
+            files.push(("map.oeg".into(), oeg::map_to_bytes(map)));
             let res = geometry.resolution_m();
             let (x0, y0) = (f64::from(region.min.i) * res, f64::from(region.min.j) * res);
-            let extent = [x0, x0 + f64::from(region.num_x) * res, y0, y0 + f64::from(region.num_y) * res];
+            let extent = [
+                x0,
+                x0 + f64::from(region.num_x) * res,
+                y0,
+                y0 + f64::from(region.num_y) * res,
+            ];
             match planner.call(&files, (from.x_m, from.y_m), goal, extent)? {
                 Ok(points) => Some(points),
-                Err(f) if f.kind == "exit" && f.message.contains(&format!("exit status: {NO_PATH_EXIT_CODE}")) => None,
+                Err(f)
+                    if f.kind == "exit"
+                        && f.message.contains(&format!("exit status: {NO_PATH_EXIT_CODE}")) =>
+                {
+                    None
+                }
                 Err(f) => {
                     return Ok(Replan::Failed {
                         timed_out: f.kind == "timeout",
@@ -381,37 +411,6 @@ pub fn planner_options(inputs: &NavigationInputs<'_>) -> oeg::PlannerOptions {
         }),
         ..planner.options()
     }
-}
-
-/// The clearance the robot has at `start` when it stands inside the inflation of a cell the planner treats
-/// as blocked: the distance from the start cell's centre to the nearest such cell, less half a cell; `None`
-/// when the start is outside every inflation, or touches a blocked cell.
-fn start_clearance(
-    decisions: &[Traversability],
-    region: &oeg::CellRegion,
-    geometry: &oeg::GridGeometry,
-    start: CellIndex,
-    options: &oeg::PlannerOptions,
-) -> Option<f64> {
-    let res = geometry.resolution_m();
-    let reach = (options.inflation_radius_m / res).ceil() as i32;
-    let obstacle = |t: Traversability| match t {
-        Traversability::Blocked => true,
-        Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
-        Traversability::Unknown => options.unknown == UnknownCells::Inflate,
-        Traversability::Free | Traversability::Traversable => false,
-    };
-    let mut nearest = f64::INFINITY;
-    for dj in -reach..=reach {
-        for di in -reach..=reach {
-            let c = CellIndex::new(start.i + di, start.j + dj);
-            if region.offset(c).is_some_and(|k| obstacle(decisions[k])) {
-                nearest = nearest.min(f64::from(di).hypot(f64::from(dj)) * res);
-            }
-        }
-    }
-    let clearance = nearest - res / 2.0;
-    (nearest < options.inflation_radius_m && clearance >= res).then_some(clearance)
 }
 
 /// The path through a plan's cell centres, ending at the goal itself.
@@ -444,9 +443,11 @@ fn closed_by(
         uncertain: UncertainCells::Drivable,
         ..planner_options(inputs)
     };
-    let plan = oeg::plan(&region, geometry.resolution_m(), decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
-        path: inputs.scenario.name.clone().into(),
-        message: format!("planner: {e}"),
+    let plan = oeg::plan(&region, geometry.resolution_m(), decisions, a, b, &relaxed).map_err(|e| {
+        EvalError::Input {
+            path: inputs.scenario.name.clone().into(),
+            message: format!("planner: {e}"),
+        }
     })?;
     let Some(plan) = plan else {
         return Ok("blocked".into());
@@ -472,11 +473,17 @@ fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Resul
     let region = truth.region;
     let geometry = oeg::GridGeometry::new(truth.resolution_m)?;
     let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
-    let (Some(a), Some(b)) = (clamped_cell(&geometry, &region, from), clamped_cell(&geometry, &region, goal)) else {
+    let (Some(a), Some(b)) = (
+        clamped_cell(&geometry, &region, from),
+        clamped_cell(&geometry, &region, goal),
+    ) else {
         return Ok(None);
     };
-    let decisions = crate::judge::verdict::Verdicts::from_classes(truth, vec![Traversability::Unknown; truth.cells.len()])
-        .truth_decisions();
+    let decisions = crate::judge::verdict::Verdicts::from_classes(
+        truth,
+        vec![Traversability::Unknown; truth.cells.len()],
+    )
+    .truth_decisions();
     let options = planner_options(inputs);
     Ok(oeg::plan(&region, truth.resolution_m, &decisions, a, b, &options)
         .map_err(|e| EvalError::Input {
@@ -536,7 +543,11 @@ impl Recorder {
     fn watch(&mut self, watch: &mut ContactWatch<'_>, mapping: &Mapping) -> Option<usize> {
         let time_s = mapping.simulation.world().time_s();
         let contact = watch.check(time_s, true_pose(mapping))?;
-        let e = self.event(mapping, EventKind::Contact, "the footprint entered a truly blocked cell");
+        let e = self.event(
+            mapping,
+            EventKind::Contact,
+            "the footprint entered a truly blocked cell",
+        );
         self.summary_events[e].obstacle = contact.obstacle;
         self.summary_events[e].distance_m = Some(0.0);
         Some(e)
@@ -548,7 +559,11 @@ impl Recorder {
             return Ok(());
         }
         let decisions = mapping.maps[0]
-            .traversability_layer(inputs.truth.region, &inputs.truth.profile, inputs.scenario.map.traversability)?
+            .traversability_layer(
+                inputs.truth.region,
+                &inputs.truth.profile,
+                inputs.scenario.map.traversability,
+            )?
             .values;
         let event = self.summary_events[event].clone();
         self.snapshots.push(Snapshot { event, decisions });

@@ -292,9 +292,11 @@ fn simulate_group(
         .as_ref()
         .is_some_and(|n| n.planner != sim::scenario::PlannerKind::Astar)
     {
-        return Err("an external planner runs in `oeg run` only (with --planner-command); a sweep plans with \
+        return Err(
+            "an external planner runs in `oeg run` only (with --planner-command); a sweep plans with \
                     the built-in A*"
-            .into());
+                .into(),
+        );
     }
     let simulated = crate::pipeline::simulate(
         first,
@@ -331,8 +333,9 @@ fn simulate_group(
                 }
             };
             let truth = &truths[k].1;
-            let evaluation = crate::judge::evaluate(s, map, truth, simulation.obstacle_returns(), figures.as_ref())
-                .map_err(|e| e.to_string())?;
+            let evaluation =
+                crate::judge::evaluate(s, map, truth, simulation.obstacle_returns(), figures.as_ref())
+                    .map_err(|e| e.to_string())?;
             Ok(Outcome {
                 evaluation,
                 max_step_m: s.robot.max_step_m,
