@@ -10,7 +10,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use common::{err, ok, oeg, oeg_with_threads, root, s, temp_dir};
+use common::{err, oeg, oeg_with_threads, ok, root, s, temp_dir};
 
 fn scene(name: &str) -> PathBuf {
     root().join("tests/scenes").join(format!("{name}.toml"))
@@ -37,7 +37,10 @@ fn contents(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
             if p.is_dir() {
                 stack.push(p);
             } else if p.file_name().is_some_and(|n| n != "timing.json") {
-                out.insert(p.strip_prefix(dir).expect("inside").to_path_buf(), std::fs::read(&p).expect("read"));
+                out.insert(
+                    p.strip_prefix(dir).expect("inside").to_path_buf(),
+                    std::fs::read(&p).expect("read"),
+                );
             }
         }
     }
@@ -52,10 +55,15 @@ fn a_closed_loop_run_reaches_a_goal_round_a_wall_without_touching_it() {
     let nav = json(&out.join("navigation.json"));
     assert_eq!(nav["outcome"], "reached", "{nav:#}");
     assert_eq!(nav["contacts"], 0);
-    assert!(nav["replans"].as_u64().expect("replans") > 3, "it replanned as it saw the wall");
+    assert!(
+        nav["replans"].as_u64().expect("replans") > 3,
+        "it replanned as it saw the wall"
+    );
     // It went round: the straight line is 5.5 m, the way round the wall's end longer.
     assert!(nav["driven_length_m"].as_f64().expect("length") > 6.0, "{nav:#}");
-    let approach = nav["closest_approach_m"].as_f64().expect("an approach within 2 m");
+    let approach = nav["closest_approach_m"]
+        .as_f64()
+        .expect("an approach within 2 m");
     assert!(approach > 0.0 && approach < 1.0, "{approach}");
     let m = json(&out.join("metrics.json"));
     assert_eq!(m["nav_reached"], true);
@@ -71,12 +79,18 @@ fn a_closed_loop_run_reaches_a_goal_round_a_wall_without_touching_it() {
         )
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert!(rows.windows(2).all(|w| w[0][0].parse::<f64>().ok() < w[1][0].parse::<f64>().ok()));
+    assert!(
+        rows.windows(2)
+            .all(|w| w[0][0].parse::<f64>().ok() < w[1][0].parse::<f64>().ok())
+    );
     assert_eq!(rows.last().expect("rows")[9], "reached");
     for f in ["events.csv", "plans.csv", "decisions.png", "metrics.json"] {
         assert!(out.join(f).is_file(), "{f}");
     }
-    assert!(!out.join("planner").exists(), "the built-in planner exchanges no files");
+    assert!(
+        !out.join("planner").exists(),
+        "the built-in planner exchanges no files"
+    );
 }
 
 #[test]
@@ -89,7 +103,10 @@ fn a_curb_the_sensors_cannot_see_is_a_contact_with_its_time_and_place() {
         .expect("a contact");
     assert_eq!(contact["obstacle"], "curb 6 cm");
     // The curb spans x 2.35 .. 2.65 m; the footprint reaches 0.255 m ahead of the robot's centre.
-    let (x, t) = (contact["x_m"].as_f64().expect("x"), contact["time_s"].as_f64().expect("t"));
+    let (x, t) = (
+        contact["x_m"].as_f64().expect("x"),
+        contact["time_s"].as_f64().expect("t"),
+    );
     assert!((2.0..2.4).contains(&x), "{contact:#}");
     assert!(t > 4.0 && t < 7.0, "{contact:#}");
     let nav = json(&out.join("navigation.json"));
@@ -98,21 +115,38 @@ fn a_curb_the_sensors_cannot_see_is_a_contact_with_its_time_and_place() {
     let csv = std::fs::read_to_string(out.join("events.csv")).expect("events");
     assert!(csv.starts_with("time_s,kind,x_m,y_m,yaw_deg,obstacle,distance_m,closed_by,message\n"));
     assert!(csv.contains(",contact,") && csv.contains("curb 6 cm"), "{csv}");
-    let images: Vec<_> = std::fs::read_dir(out.join("events")).expect("event images").flatten().collect();
-    assert!(images.iter().any(|e| e.file_name().to_string_lossy().ends_with("_contact.png")));
+    let images: Vec<_> = std::fs::read_dir(out.join("events"))
+        .expect("event images")
+        .flatten()
+        .collect();
+    assert!(
+        images
+            .iter()
+            .any(|e| e.file_name().to_string_lossy().ends_with("_contact.png"))
+    );
     assert_eq!(json(&out.join("metrics.json"))["nav_contacts"], nav["contacts"]);
 }
 
 #[test]
 fn closed_loop_runs_are_the_same_bytes_on_one_and_two_threads() {
     let (a, b) = (temp_dir("nav", "threads1"), temp_dir("nav", "threads2"));
-    ok(&oeg_with_threads(&["run", s(&scene("nav_blind")), "--out", s(&a)], Some("1")));
-    ok(&oeg_with_threads(&["run", s(&scene("nav_blind")), "--out", s(&b)], Some("2")));
+    ok(&oeg_with_threads(
+        &["run", s(&scene("nav_blind")), "--out", s(&a)],
+        Some("1"),
+    ));
+    ok(&oeg_with_threads(
+        &["run", s(&scene("nav_blind")), "--out", s(&b)],
+        Some("2"),
+    ));
     let (ca, cb) = (contents(&a), contents(&b));
     assert!(ca.contains_key(Path::new("trajectory.csv")));
     assert_eq!(ca.keys().collect::<Vec<_>>(), cb.keys().collect::<Vec<_>>());
     for (name, bytes) in &ca {
-        assert!(cb[name] == *bytes, "{} differs between 1 and 2 threads", name.display());
+        assert!(
+            cb[name] == *bytes,
+            "{} differs between 1 and 2 threads",
+            name.display()
+        );
     }
 }
 
@@ -127,12 +161,28 @@ fn planner_script(dir: &Path, name: &str, body: &str) -> String {
 fn every_way_a_planner_fails_is_an_event_with_its_message() {
     let dir = temp_dir("nav", "failing-planners");
     let cases = [
-        ("letters", "printf 'x,y\\n0,0\\nzero,1\\n' > \"$7\"", "path.csv:3: x `zero` is not a number"),
-        ("nan", "printf '0,0\\nNaN,1\\n' > \"$7\"", "path.csv:2: (NaN, 1) is not a finite point"),
-        ("off_the_map", "printf '0,0\\n500,0\\n' > \"$7\"", "path.csv:2: (500, 0) m lies off the map"),
+        (
+            "letters",
+            "printf 'x,y\\n0,0\\nzero,1\\n' > \"$7\"",
+            "path.csv:3: x `zero` is not a number",
+        ),
+        (
+            "nan",
+            "printf '0,0\\nNaN,1\\n' > \"$7\"",
+            "path.csv:2: (NaN, 1) is not a finite point",
+        ),
+        (
+            "off_the_map",
+            "printf '0,0\\n500,0\\n' > \"$7\"",
+            "path.csv:2: (500, 0) m lies off the map",
+        ),
         ("empty", ": > \"$7\"", "path.csv: the path is empty"),
         ("no_file", "exit 0", "the planner wrote no readable path"),
-        ("exit", "echo boom >&2; exit 1", "exited with exit status: 1; its stderr ends: boom"),
+        (
+            "exit",
+            "echo boom >&2; exit 1",
+            "exited with exit status: 1; its stderr ends: boom",
+        ),
         ("timeout", "sleep 20", "ran over its time-out of 0.3 s"),
     ];
     for (name, body, expected) in cases {
@@ -157,7 +207,10 @@ fn every_way_a_planner_fails_is_an_event_with_its_message() {
         let message = failure["message"].as_str().expect("message");
         assert!(message.contains(expected), "{name}: {message}");
         let nav = json(&out.join("navigation.json"));
-        assert_eq!(nav["outcome"], "stuck", "{name}: the robot waits for a path it never gets");
+        assert_eq!(
+            nav["outcome"], "stuck",
+            "{name}: the robot waits for a path it never gets"
+        );
         assert!(nav["planner_failures"].as_u64() >= Some(1));
         assert_eq!(nav["wall_time_dependent"], name == "timeout", "{name}");
     }
@@ -169,7 +222,11 @@ fn the_example_planners_drive_the_robot_to_its_goal() {
     let shell = root().join("examples/planners/oeg_plan.sh");
     let python = root().join("examples/planners/npy_planner.py");
     let mut planners = vec![("shell", format!("sh {}", s(&shell)))];
-    if std::process::Command::new("python3").arg("--version").output().is_ok_and(|o| o.status.success()) {
+    if std::process::Command::new("python3")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+    {
         planners.push(("python", format!("python3 {}", s(&python))));
     } else {
         println!("skipped the Python example planner: python3 is not on the PATH");
@@ -177,7 +234,14 @@ fn the_example_planners_drive_the_robot_to_its_goal() {
     for (name, command) in planners {
         let out = dir.join(name);
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_oeg"))
-            .args(["run", s(&scene("nav_wall")), "--out", s(&out), "--planner-command", &command])
+            .args([
+                "run",
+                s(&scene("nav_wall")),
+                "--out",
+                s(&out),
+                "--planner-command",
+                &command,
+            ])
             .env("OEG", env!("CARGO_BIN_EXE_oeg"))
             .output()
             .expect("runs");
@@ -195,7 +259,11 @@ fn the_planner_files_read_back_with_their_origin_resolution_and_values() {
     let out = temp_dir("nav", "files");
     let dir = temp_dir("nav", "files-planner");
     // A planner that keeps a copy of what it was given, then fails (the run goes on).
-    let copy = planner_script(&dir, "copy", &format!("cp \"$(dirname \"$5\")\"/* {} ; exit 1", s(&dir)));
+    let copy = planner_script(
+        &dir,
+        "copy",
+        &format!("cp \"$(dirname \"$5\")\"/* {} ; exit 1", s(&dir)),
+    );
     ok(&oeg(&[
         "run",
         s(&scene("nav_wall")),
@@ -218,7 +286,10 @@ fn the_planner_files_read_back_with_their_origin_resolution_and_values() {
     assert_eq!(sidecar["shape"], serde_json::json!([120, 160]));
     assert_eq!(sidecar["layers"]["decisions"]["values"]["3"], "blocked");
     let yaml = std::fs::read_to_string(dir.join("map.yaml")).expect("yaml");
-    assert!(yaml.contains("resolution: 0.05\n") && yaml.contains("origin: [-1, -3, 0.0]\n"), "{yaml}");
+    assert!(
+        yaml.contains("resolution: 0.05\n") && yaml.contains("origin: [-1, -3, 0.0]\n"),
+        "{yaml}"
+    );
     assert!(yaml.contains("image: map.pgm\n") && yaml.contains("mode: trinary\n"));
     let pgm = std::fs::read(dir.join("map.pgm")).expect("pgm");
     let header = b"P5\n# CREATOR: oeg 0.05\n160 120\n255\n";
@@ -238,17 +309,35 @@ fn the_planner_files_read_back_with_their_origin_resolution_and_values() {
     };
     let d = npy("decisions.npy");
     assert_eq!((d.rows, d.cols), (120, 160));
-    let oeg::NpyData::U8(codes) = d.data else { panic!("uint8 decisions") };
-    assert_eq!(codes, decisions.values.iter().map(|t| *t as u8).collect::<Vec<_>>());
+    let oeg::NpyData::U8(codes) = d.data else {
+        panic!("uint8 decisions")
+    };
+    assert_eq!(
+        codes,
+        decisions.values.iter().map(|t| *t as u8).collect::<Vec<_>>()
+    );
     // PGM rows run from the max-y edge: its last row is the npy's first.
     let pixels = &pgm[header.len()..];
     for (k, t) in decisions.values[..160].iter().enumerate() {
-        assert_eq!(pixels[119 * 160 + k], oeg::nav2_grey(*t, oeg::UncertainCells::Blocked));
+        assert_eq!(
+            pixels[119 * 160 + k],
+            oeg::nav2_grey(*t, oeg::UncertainCells::Blocked)
+        );
     }
     let e = npy("elevation_m.npy");
-    let oeg::NpyData::F32(elevation) = e.data else { panic!("float32 elevation") };
-    let expected = map.layer(oeg::LayerKind::ElevationM, region).expect("layer").values;
-    assert!(elevation.iter().zip(&expected).all(|(a, b)| a.to_bits() == b.to_bits()));
+    let oeg::NpyData::F32(elevation) = e.data else {
+        panic!("float32 elevation")
+    };
+    let expected = map
+        .layer(oeg::LayerKind::ElevationM, region)
+        .expect("layer")
+        .values;
+    assert!(
+        elevation
+            .iter()
+            .zip(&expected)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
     // And with numpy, where it is installed.
     let script = format!(
         "import numpy, json\nd = numpy.load({:?})\nassert d.shape == (120, 160) and d.dtype == numpy.uint8\n\
@@ -256,12 +345,18 @@ fn the_planner_files_read_back_with_their_origin_resolution_and_values() {
         s(&dir.join("decisions.npy")),
         s(&dir.join("elevation_m.npy"))
     );
-    match std::process::Command::new("python3").args(["-c", &script]).output() {
+    match std::process::Command::new("python3")
+        .args(["-c", &script])
+        .output()
+    {
         Ok(o) if o.status.success() => println!("{}", String::from_utf8_lossy(&o.stdout)),
         Ok(o) if String::from_utf8_lossy(&o.stderr).contains("No module named 'numpy'") => {
             println!("skipped the numpy check: numpy is not installed");
         }
-        Ok(o) => panic!("numpy could not read the files: {}", String::from_utf8_lossy(&o.stderr)),
+        Ok(o) => panic!(
+            "numpy could not read the files: {}",
+            String::from_utf8_lossy(&o.stderr)
+        ),
         Err(_) => println!("skipped the numpy check: python3 is not on the PATH"),
     }
 }
@@ -283,7 +378,10 @@ fn a_scenario_command_never_runs_unless_allowed() {
     let scenario = dir.join("sent.toml");
     std::fs::write(&scenario, text).expect("scenario");
     let e = err(&oeg(&["run", s(&scenario), "--out", s(&dir.join("refused"))]));
-    assert!(e.contains("--allow-scenario-command") && e.contains("touch"), "{e}");
+    assert!(
+        e.contains("--allow-scenario-command") && e.contains("touch"),
+        "{e}"
+    );
     assert!(!marker.exists(), "the command ran without being allowed");
     assert!(!dir.join("refused").exists(), "refused before any work");
     ok(&oeg(&[

@@ -9,6 +9,8 @@ use sim::Simulation;
 use sim::scenario;
 use sim::sensors::PoseSource;
 
+use sim::observability::{BlindBandRow, Observability, blind_band};
+
 use crate::error::Result;
 use crate::progress::Progress;
 
@@ -36,7 +38,17 @@ pub struct Mapping {
     last_tick: i64,
     tick_s: f64,
     duration_s: f64,
+    /// What the rays could have told, over the map region on the first map's grid.
+    pub observability: Observability,
+    /// The sensors' blind band at the start, on flat ground (`blind_band.csv`).
+    pub blind_band: Vec<BlindBandRow>,
+    max_range_m: Vec<f64>,
 }
+
+/// Ranges of the blind band, metres: every half metre.
+pub const BLIND_BAND_STEP_M: f64 = 0.5;
+/// The farthest range of the blind band, metres (or the sensors' longest range, if shorter).
+pub const BLIND_BAND_MAX_M: f64 = 20.0;
 
 impl Mapping {
     /// A simulation at time 0 and empty maps, one per entry of `maps` (the map settings of runs that share
@@ -57,7 +69,33 @@ impl Mapping {
             })
             .collect::<std::result::Result<Vec<_>, _>>()?;
         let models = simulation.sensors().iter().map(|x| x.map_model()).collect();
+        let s = &loaded.scenario;
+        let first_geometry = match maps.first() {
+            Some(m) => *m.geometry(),
+            None => oeg::GridGeometry::new(s.map.resolution_m)?,
+        };
+        let observability = Observability::new(
+            simulation.world(),
+            &first_geometry,
+            region_of(s, &first_geometry)?,
+            s.robot.profile(),
+        );
+        let max_range_m: Vec<f64> = simulation.sensors().iter().map(|x| x.spec.max_range_m).collect();
+        let blind_band = blind_band(
+            simulation.sensors(),
+            simulation.world(),
+            &s.robot.profile(),
+            BLIND_BAND_STEP_M,
+            max_range_m
+                .iter()
+                .copied()
+                .fold(0.0, f64::max)
+                .min(BLIND_BAND_MAX_M),
+        );
         Ok(Self {
+            observability,
+            blind_band,
+            max_range_m,
             map_s: vec![0.0; maps.len()],
             simulation,
             maps,
@@ -81,6 +119,8 @@ impl Mapping {
             };
             self.simulation_s += t0.elapsed().as_secs_f64();
             let stamp_s = scan.stamp_s;
+            self.observability
+                .observe(&scan, self.max_range_m[scan.sensor_index]);
             let scan = scan.to_scan(PoseSource::Estimated, self.models[scan.sensor_index]);
             // The maps are independent: with several, each scan goes into all of them at once (a map's
             // integration is one thread, so the other cores would idle). The results do not depend on it.
@@ -127,4 +167,16 @@ impl Mapping {
             num_rays: self.simulation.num_rays(),
         }
     }
+}
+
+/// The scenario's map region as cells.
+///
+/// # Errors
+/// A region that does not fit the grid.
+pub fn region_of(s: &scenario::Scenario, geometry: &oeg::GridGeometry) -> Result<oeg::CellRegion> {
+    let eps = s.map.resolution_m * 1e-6;
+    Ok(geometry.region_covering(
+        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
+        (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
+    )?)
 }

@@ -14,7 +14,8 @@ use sim::{Simulation, scenario};
 
 use crate::error::{EvalError, Result};
 use crate::judge::metrics::{self, FailedExpectation, Metrics};
-use crate::judge::{Evaluation, evaluate};
+use crate::judge::{Evaluation, Sensed, evaluate};
+pub use crate::mapping::region_of;
 use crate::mapping::{Mapping, SimulatedTiming};
 use crate::navigation::external::ExternalPlanner;
 use crate::navigation::{NavigationInputs, NavigationLog, PlannerSource, navigate};
@@ -152,15 +153,6 @@ pub fn scenario_message(e: &sim::SimError) -> String {
     }
 }
 
-/// The scenario's map region as cells.
-pub fn region_of(s: &scenario::Scenario, geometry: &GridGeometry) -> Result<oeg::CellRegion> {
-    let eps = s.map.resolution_m * 1e-6;
-    Ok(geometry.region_covering(
-        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
-        (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
-    )?)
-}
-
 /// Simulates `loaded` once and integrates every scan, at the estimated pose, into one map per entry of
 /// `maps` (see [`Mapping::new`]). The simulation is returned at the end of its drive.
 ///
@@ -170,7 +162,7 @@ pub fn simulate_and_map(
     loaded: &scenario::LoadedScenario,
     maps: &[&scenario::MapSettings],
     progress: &Progress,
-) -> Result<(Simulation, Vec<Map>, SimulatedTiming)> {
+) -> Result<Mapping> {
     let s = &loaded.scenario;
     let mut mapping = Mapping::new(loaded, maps)?;
     progress.set_length(mapping.simulation.num_scans_total());
@@ -178,8 +170,7 @@ pub fn simulate_and_map(
     progress.finish();
     // The truth is taken at the end of the run: a person who left must have left the map too.
     mapping.simulation.world_mut().advance_to(s.duration_s);
-    let timing = mapping.timing();
-    Ok((mapping.simulation, mapping.maps, timing))
+    Ok(mapping)
 }
 
 /// A simulated run: the simulation at its end, the maps, the wall times, and for a closed-loop run its truth
@@ -196,6 +187,10 @@ pub struct Simulated {
     pub truth: Option<(TruthRaster, f64)>,
     /// A closed-loop run's log.
     pub navigation: Option<NavigationLog>,
+    /// What the sensors' rays could have told, over the map region on the first map's grid.
+    pub observability: sim::observability::Observability,
+    /// The sensors' blind band at the start.
+    pub blind_band: Vec<sim::observability::BlindBandRow>,
 }
 
 /// Simulates `loaded` and maps it into one map per entry of `maps`: the scripted drive, or with
@@ -212,13 +207,16 @@ pub fn simulate(
 ) -> Result<Simulated> {
     let s = &loaded.scenario;
     let Some(settings) = &s.navigation else {
-        let (simulation, maps, timing) = simulate_and_map(loaded, maps, progress)?;
+        let mapping = simulate_and_map(loaded, maps, progress)?;
+        let timing = mapping.timing();
         return Ok(Simulated {
-            simulation,
-            maps,
+            simulation: mapping.simulation,
+            maps: mapping.maps,
             timing,
             truth: None,
             navigation: None,
+            observability: mapping.observability,
+            blind_band: mapping.blind_band,
         });
     };
     let mut mapping = Mapping::new(loaded, maps)?;
@@ -244,6 +242,8 @@ pub fn simulate(
         timing,
         truth: Some((truth, truth_s)),
         navigation: Some(log),
+        observability: mapping.observability,
+        blind_band: mapping.blind_band,
     })
 }
 
@@ -360,6 +360,8 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         timing: sim_timing,
         truth,
         navigation,
+        observability,
+        blind_band,
     } = simulate(&loaded, &settings, &planner, progress)?;
     let mut maps = maps.into_iter();
     let map = maps.next().ok_or_else(|| EvalError::Input {
@@ -376,20 +378,32 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         }
     };
     let figures = navigation.as_ref().map(|n| n.summary.figures());
-    let evaluation = evaluate(s, &map, &truth, simulation.obstacle_returns(), figures.as_ref())?;
+    let sensed = Sensed {
+        returns: simulation.obstacle_returns(),
+        observability: Some(&observability),
+        navigation: figures.as_ref(),
+    };
+    let evaluation = evaluate(s, &map, &truth, &sensed)?;
     let overlay = navigation.as_ref().map(crate::report::overlay_of);
 
     let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref())?;
     if let Some(log) = &navigation {
         files.extend(crate::report::write_navigation(stage, s, &truth, log)?);
     }
+    files.extend(crate::report::write_observability(
+        stage,
+        s,
+        &observability,
+        &evaluation.verdicts,
+        &blind_band,
+    )?);
     if planner_dir.is_dir() {
         files.push(planner_dir.clone());
     }
     let mut compared_metrics = None;
     if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
         // The compared model maps the same scans; the robot decided with the run's own map.
-        let other_eval = evaluate(c, &other, &truth, simulation.obstacle_returns(), figures.as_ref())?;
+        let other_eval = evaluate(c, &other, &truth, &sensed)?;
         let dir = stage.join(preset.name());
         create_dir(&dir)?;
         files.extend(write_report(&dir, c, &other, &truth, &other_eval, None)?);

@@ -242,3 +242,37 @@ fn event_at(log: &NavigationLog, event: &Event) -> (Vec<(f64, f64)>, (f64, f64))
         (event.x_m, event.y_m),
     )
 }
+
+/// Writes what the sensors could see: `observability.png` (per cell, whether a ray ended on it and whether
+/// one crossed its band between a step and the robot's height, with the blind cells: truly blocked, and no
+/// ray could have told) and `blind_band.csv` (per range, the largest gap between rays within that band).
+///
+/// # Errors
+/// A failed write.
+pub fn write_observability(
+    out_dir: &Path,
+    s: &scenario::Scenario,
+    observability: &sim::observability::Observability,
+    verdicts: &crate::judge::verdict::Verdicts,
+    blind_band: &[sim::observability::BlindBandRow],
+) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let fig = comparison::observability_figure(s, observability, verdicts);
+    let path = out_dir.join("observability.png");
+    write_bytes(&path, &fig.to_png())?;
+    files.push(path);
+    let path = out_dir.join("blind_band.csv");
+    write_table(&path, blind_band)?;
+    files.push(path);
+    Ok(files)
+}
+
+impl crate::output::CsvRow for sim::observability::BlindBandRow {
+    const COLUMNS: &'static [&'static str] = &[
+        "range_m",
+        "rays_in_band",
+        "largest_gap_m",
+        "gap_from_m",
+        "gap_to_m",
+    ];
+}

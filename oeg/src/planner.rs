@@ -620,7 +620,9 @@ mod tests {
             uncertain: UncertainCells::Blocked,
         };
         let (s, g) = (CellIndex::new(2, 2), CellIndex::new(10, 2));
-        let p = plan(&r, 0.1, &d, s, g, &options).expect("valid").expect("a way out and round");
+        let p = plan(&r, 0.1, &d, s, g, &options)
+            .expect("valid")
+            .expect("a way out and round");
         // Every cell of the path keeps at least the start's clearance less half a cell (0.25 m) from the wall.
         for c in &p.cells {
             for k in 0..=5 {

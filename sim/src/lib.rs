@@ -9,6 +9,7 @@ mod convert;
 pub mod drive;
 pub mod error;
 pub mod log;
+pub mod observability;
 pub mod robot;
 pub mod scenario;
 pub mod seed;

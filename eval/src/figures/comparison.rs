@@ -274,3 +274,52 @@ pub fn event_figure(
     fig.marker(at.0, at.1, DRIVEN);
     fig
 }
+
+/// `observability.png`: per cell, what a ray of the sensors could have told (a ray ended on the cell: its
+/// step; a ray crossed its band between a step and the robot's height: its clearance), and the truly blocked
+/// cells no ray could have told about.
+pub fn observability_figure(
+    s: &Scenario,
+    observability: &sim::observability::Observability,
+    verdicts: &crate::judge::verdict::Verdicts,
+) -> Figure {
+    const BOTH: Rgb = [255, 255, 255];
+    const STEP_ONLY: Rgb = [150, 200, 150];
+    const BAND_ONLY: Rgb = [150, 170, 230];
+    const NEITHER: Rgb = [200, 200, 200];
+    const BLIND: Rgb = [150, 0, 150];
+    let classes = vec![
+        ("step and clearance observable".to_string(), BOTH),
+        ("step only (a ray ended here)".to_string(), STEP_ONLY),
+        ("clearance only (a ray crossed the band)".to_string(), BAND_ONLY),
+        ("no ray told anything".to_string(), NEITHER),
+        ("truly blocked, no ray could tell (blind)".to_string(), BLIND),
+        ("obstacle footprint".to_string(), OUTLINE),
+    ];
+    let o = observability;
+    let mut fig = Figure::new(
+        o.region,
+        o.resolution_m,
+        &format!("{}: what the sensors could see ({} rays)", s.name, o.num_rays),
+        |c| {
+            let Some(k) = o.region.offset(c) else {
+                return NO_DATA;
+            };
+            if verdicts.region == o.region && verdicts.unobservable[k] {
+                return BLIND;
+            }
+            match (o.step[k], o.clearance[k]) {
+                (true, true) => BOTH,
+                (true, false) => STEP_ONLY,
+                (false, true) => BAND_ONLY,
+                (false, false) => NEITHER,
+            }
+        },
+        &Legend::Classes(classes),
+    );
+    for obstacle in &s.obstacles {
+        fig.polyline(&crate::judge::obstacles::footprint_outline(obstacle), OUTLINE);
+    }
+    fig.polyline(&drive_polyline(s), DRIVE);
+    fig
+}

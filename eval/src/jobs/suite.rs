@@ -40,6 +40,12 @@ pub struct SuiteRow {
     pub plan_length_ratio: Option<f64>,
     /// Cells of the map's path near a true obstacle.
     pub plan_unsafe_cells: Option<u64>,
+    /// Unsafe cells no ray could have told about.
+    pub blind_cells: Option<u64>,
+    /// A closed-loop run: whether it reached its goal (empty without `[navigation]`).
+    pub nav_reached: Option<bool>,
+    /// A closed-loop run: contacts with truly blocked cells.
+    pub nav_contacts: Option<u64>,
     /// Wall time of the run, seconds.
     pub wall_time_s: f64,
     /// Failed expectations, or the error, `; `-separated.
@@ -59,6 +65,9 @@ impl CsvRow for SuiteRow {
         "overcautious_clearance_cells",
         "plan_length_ratio",
         "plan_unsafe_cells",
+        "blind_cells",
+        "nav_reached",
+        "nav_contacts",
         "wall_time_s",
         "problems",
     ];
@@ -189,6 +198,9 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
             overcautious_clearance_cells: Some(r.metrics.overcautious_clearance_cells),
             plan_length_ratio: Some(r.metrics.plan_length_ratio).filter(|v| v.is_finite()),
             plan_unsafe_cells: Some(r.metrics.plan_unsafe_cells),
+            blind_cells: Some(r.metrics.blind_cells),
+            nav_reached: r.metrics.nav_reached,
+            nav_contacts: r.metrics.nav_contacts,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: r
                 .failed
@@ -209,6 +221,9 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
             overcautious_clearance_cells: None,
             plan_length_ratio: None,
             plan_unsafe_cells: None,
+            blind_cells: None,
+            nav_reached: None,
+            nav_contacts: None,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: e.to_string(),
         },

@@ -59,6 +59,15 @@ pub struct Metrics {
     pub unsafe_cells: u64,
     /// `overcautious_step_cells + overcautious_clearance_cells`.
     pub overcautious_cells: u64,
+    /// Of the unsafe step cells, those no ray of the sensors ended on: no map of these readings could have
+    /// known (`sim::observability`).
+    pub blind_step_cells: u64,
+    /// Of the unsafe clearance cells, those whose band between a step and the robot's height no ray crossed.
+    pub blind_clearance_cells: u64,
+    /// `blind_step_cells + blind_clearance_cells`.
+    pub blind_cells: u64,
+    /// `unsafe_cells - blind_cells`: the unsafe cells a ray could have told about, the map's own.
+    pub unsafe_observable_cells: u64,
     /// Of the uncertain cells, those truly blocked.
     pub uncertain_truly_blocked_cells: u64,
     /// Scored cells under a structure (a gap higher than a step within 3 m above the ground).
@@ -77,6 +86,8 @@ pub struct Metrics {
     /// Cells of the map's path within the planner's inflation radius of a truly blocked cell: where the robot
     /// would touch an obstacle. The number that must be zero.
     pub plan_unsafe_cells: u64,
+    /// Of the unsafe path cells, those whose near truly blocked cells no ray could have told about.
+    pub plan_blind_cells: u64,
     /// Whether a path exists on the truth.
     pub truth_plan_found: bool,
     /// Length of the truth's path, metres (null when there is none).
@@ -183,6 +194,10 @@ pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdic
         uncertain_cells: counts.uncertain_cells,
         unsafe_cells: counts.unsafe_cells(),
         overcautious_cells: counts.overcautious_cells(),
+        blind_step_cells: counts.blind_step_cells,
+        blind_clearance_cells: counts.blind_clearance_cells,
+        blind_cells: counts.blind_cells(),
+        unsafe_observable_cells: counts.unsafe_cells() - counts.blind_cells(),
         uncertain_truly_blocked_cells: counts.uncertain_truly_blocked_cells,
         num_clearance_cells: counts.num_clearance_cells,
         map_bytes: map.memory_bytes(),
@@ -191,6 +206,7 @@ pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdic
         plan_found: false,
         plan_length_m: f64::NAN,
         plan_unsafe_cells: 0,
+        plan_blind_cells: 0,
         truth_plan_found: false,
         truth_plan_length_m: f64::NAN,
         plan_length_ratio: f64::NAN,
@@ -332,6 +348,10 @@ fn compute_empty() -> Metrics {
         uncertain_cells: 0,
         unsafe_cells: 0,
         overcautious_cells: 0,
+        blind_step_cells: 0,
+        blind_clearance_cells: 0,
+        blind_cells: 0,
+        unsafe_observable_cells: 0,
         uncertain_truly_blocked_cells: 0,
         num_clearance_cells: 0,
         map_bytes: 0,
@@ -340,6 +360,7 @@ fn compute_empty() -> Metrics {
         plan_found: false,
         plan_length_m: 0.0,
         plan_unsafe_cells: 0,
+        plan_blind_cells: 0,
         truth_plan_found: false,
         truth_plan_length_m: 0.0,
         plan_length_ratio: 0.0,

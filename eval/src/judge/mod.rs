@@ -35,9 +35,18 @@ pub struct Evaluation {
     pub verdicts: Verdicts,
 }
 
-/// Judges `map` against `truth` under the scenario's decisions; `returns` are the readings each obstacle gave
-/// the sensors (whether it was seen at all); `navigation` is a closed-loop run's figures (the `nav_*`
-/// metrics), which the expectations may name.
+/// What the run's sensors and robot did, beside the map: the judge reads it with the truth.
+#[derive(Debug, Clone, Copy)]
+pub struct Sensed<'a> {
+    /// The readings each obstacle gave the sensors (whether it was seen at all).
+    pub returns: &'a ObstacleReturns,
+    /// What the sensors' rays could have told, cell by cell (`None`: a replayed log).
+    pub observability: Option<&'a sim::observability::Observability>,
+    /// A closed-loop run's figures (the `nav_*` metrics, which the expectations may name).
+    pub navigation: Option<&'a NavigationFigures>,
+}
+
+/// Judges `map` against `truth` under the scenario's decisions, with what the run `sensed`.
 ///
 /// # Errors
 /// A planner check that cannot run (a start or goal outside the region).
@@ -45,16 +54,16 @@ pub fn evaluate(
     s: &scenario::Scenario,
     map: &Map,
     truth: &TruthRaster,
-    returns: &ObstacleReturns,
-    navigation: Option<&NavigationFigures>,
+    sensed: &Sensed<'_>,
 ) -> Result<Evaluation> {
-    let verdicts = Verdicts::new(map, truth, s.map.traversability)?;
+    let verdicts = Verdicts::new(map, truth, s.map.traversability)?.with_observability(sensed.observability);
     let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &verdicts);
     let plan = plan_check::check(s, map.geometry(), &verdicts)?;
     record_plan(&mut metrics, &plan);
-    if let Some(n) = navigation {
+    if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }
+    let returns = sensed.returns;
     let failed = metrics::check_expectations(&mut metrics, &s.expectations);
     let obstacles = obstacles::decisions(s, map, truth, &verdicts, returns);
     Ok(Evaluation {
@@ -108,6 +117,7 @@ pub fn record_plan(metrics: &mut Metrics, check: &plan_check::PlanCheck) {
     metrics.plan_found = check.map_plan.is_some();
     metrics.plan_length_m = length(&check.map_plan);
     metrics.plan_unsafe_cells = check.unsafe_cells.len() as u64;
+    metrics.plan_blind_cells = check.blind_cells.len() as u64;
     metrics.truth_plan_found = check.truth_plan.is_some();
     metrics.truth_plan_length_m = length(&check.truth_plan);
     metrics.plan_length_ratio = metrics.plan_length_m / metrics.truth_plan_length_m;

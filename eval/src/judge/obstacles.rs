@@ -39,6 +39,8 @@ pub struct ObstacleDecision {
     pub uncertain_cells: u64,
     /// Truly blocked, mapped drivable.
     pub unsafe_cells: u64,
+    /// Of the unsafe cells, those no ray could have told about (blind).
+    pub blind_cells: u64,
     /// Truly drivable, mapped blocked.
     pub overcautious_cells: u64,
     /// Mean true elevation (highest surface below the robot's height) over the observed cells, metres.
@@ -172,6 +174,7 @@ pub fn decisions(
                 mapped_blocked_cells: 0,
                 uncertain_cells: 0,
                 unsafe_cells: 0,
+                blind_cells: 0,
                 overcautious_cells: 0,
                 true_elevation_mean_m: None,
                 mapped_elevation_mean_m: None,
@@ -250,6 +253,7 @@ fn tally_footprint(
         row.mapped_blocked_cells += tally[1];
         row.uncertain_cells += tally[2];
         row.unsafe_cells += u64::from(verdict == Verdict::Unsafe);
+        row.blind_cells += u64::from(verdict == Verdict::Unsafe && verdicts.unobservable[k]);
         row.overcautious_cells += u64::from(verdict == Verdict::OverCautious);
         t.true_sum += f64::from(truth.cells[k].elevation_m);
         if let Some(e) = map.cell(cell).elevation() {
@@ -304,6 +308,7 @@ impl crate::output::CsvRow for ObstacleDecision {
         "mapped_blocked_cells",
         "uncertain_cells",
         "unsafe_cells",
+        "blind_cells",
         "overcautious_cells",
         "true_elevation_mean_m",
         "mapped_elevation_mean_m",

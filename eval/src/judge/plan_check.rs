@@ -22,6 +22,9 @@ pub struct PlanCheck {
     /// Cells of the map's path whose centre lies within the inflation radius of a truly blocked cell: where
     /// the robot following the map's path would touch an obstacle.
     pub unsafe_cells: Vec<CellIndex>,
+    /// Of the unsafe cells, those whose truly blocked cells within the inflation radius no ray could have
+    /// told about ([`Verdicts::unobservable`]): blind, not the map's fault.
+    pub blind_cells: Vec<CellIndex>,
 }
 
 /// Plans on the map and on the truth from the drive's first waypoint to its last.
@@ -66,11 +69,33 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
         Some(p) => unsafe_path_cells(p, &region, res, &truly, &options).map_err(planner_error)?,
         None => Vec::new(),
     };
+    let blind_cells = blind_path_cells(&unsafe_cells, verdicts, options.inflation_radius_m);
     Ok(PlanCheck {
         map_plan,
         truth_plan,
         unsafe_cells,
+        blind_cells,
     })
+}
+
+/// The unsafe path cells all of whose truly blocked cells within `radius_m` are unobservable.
+fn blind_path_cells(unsafe_cells: &[CellIndex], verdicts: &Verdicts, radius_m: f64) -> Vec<CellIndex> {
+    let reach = (radius_m / verdicts.resolution_m).ceil() as i32;
+    let r2 = (radius_m / verdicts.resolution_m).powi(2) + 1e-9;
+    unsafe_cells
+        .iter()
+        .filter(|c| {
+            let mut near = (-reach..=reach)
+                .flat_map(|dj| (-reach..=reach).map(move |di| (di, dj)))
+                .filter_map(|(di, dj)| {
+                    let inside = f64::from(di * di + dj * dj) <= r2;
+                    let k = verdicts.offset(CellIndex::new(c.i + di, c.j + dj))?;
+                    (inside && verdicts.truth[k].is_blocked()).then_some(k)
+                });
+            near.all(|k| verdicts.unobservable[k])
+        })
+        .copied()
+        .collect()
 }
 
 /// The cells of `plan` whose centre lies within the inflation radius of a blocked cell of the truth's
@@ -103,7 +128,7 @@ pub fn unsafe_path_cells(
 }
 
 impl crate::output::CsvRow for PlanRow {
-    const COLUMNS: &'static [&'static str] = &["path", "step", "x_m", "y_m", "unsafe_cell"];
+    const COLUMNS: &'static [&'static str] = &["path", "step", "x_m", "y_m", "unsafe_cell", "blind_cell"];
 }
 
 /// One row of `plan.csv`: a cell of a planned path.
@@ -120,6 +145,8 @@ pub struct PlanRow {
     /// Whether the cell lies within the inflation radius of a truly blocked cell (always false on the truth's
     /// path).
     pub unsafe_cell: bool,
+    /// Whether it is unsafe and no ray could have told about the truly blocked cells near it.
+    pub blind_cell: bool,
 }
 
 /// The rows of `plan.csv`: the map's path, then the truth's.
@@ -134,6 +161,7 @@ pub fn rows(check: &PlanCheck, geometry: &oeg::GridGeometry) -> Vec<PlanRow> {
                 x_m,
                 y_m,
                 unsafe_cell: name == "map" && check.unsafe_cells.contains(c),
+                blind_cell: name == "map" && check.blind_cells.contains(c),
             });
         }
     }
@@ -209,14 +237,15 @@ mod tests {
             map_plan: Some(straight),
             truth_plan: Some(truth_plan),
             unsafe_cells,
+            blind_cells: Vec::new(),
         };
         let geometry = oeg::GridGeometry::new(1.0).expect("geometry");
         let csv = String::from_utf8(crate::output::csv_table(&rows(&check, &geometry)).expect("csv"))
             .expect("utf8");
         let mut lines = csv.lines();
-        assert_eq!(lines.next(), Some("path,step,x_m,y_m,unsafe_cell"));
-        assert_eq!(lines.next(), Some("map,0,0.5,0.5,false"));
-        assert!(csv.contains("map,3,3.5,0.5,true\n"), "{csv}");
+        assert_eq!(lines.next(), Some("path,step,x_m,y_m,unsafe_cell,blind_cell"));
+        assert_eq!(lines.next(), Some("map,0,0.5,0.5,false,false"));
+        assert!(csv.contains("map,3,3.5,0.5,true,false\n"), "{csv}");
         assert!(csv.lines().any(|l| l.starts_with("truth,0,")));
     }
 }

@@ -122,6 +122,10 @@ pub struct Verdicts {
     pub mapped: Vec<Traversability>,
     /// The verdict on every cell.
     pub verdict: Vec<Verdict>,
+    /// Per cell: truly blocked, and no ray could have told (`sim::observability`): the deciding decision (a
+    /// step's or a structure's) was not observable. All false when the run has no observability truth (a
+    /// replayed log).
+    pub unobservable: Vec<bool>,
 }
 
 /// How many cells got each verdict, with the unsafe and over-cautious ones split by what decides them.
@@ -147,12 +151,21 @@ pub struct VerdictCounts {
     pub uncertain_truly_blocked_cells: u64,
     /// Scored cells under a structure.
     pub num_clearance_cells: u64,
+    /// Of the unsafe step cells, those no ray ended on: blind, not the map's fault.
+    pub blind_step_cells: u64,
+    /// Of the unsafe clearance cells, those whose band no ray crossed: blind.
+    pub blind_clearance_cells: u64,
 }
 
 impl VerdictCounts {
     /// Unsafe cells, step and clearance.
     pub fn unsafe_cells(&self) -> u64 {
         self.unsafe_step_cells + self.unsafe_clearance_cells
+    }
+
+    /// Blind cells: unsafe cells no ray could have told, step and clearance.
+    pub fn blind_cells(&self) -> u64 {
+        self.blind_step_cells + self.blind_clearance_cells
     }
 
     /// Over-cautious cells, step and clearance.
@@ -185,10 +198,28 @@ impl Verdicts {
         Self {
             region: truth.region,
             resolution_m: truth.resolution_m,
+            unobservable: vec![false; truth_classes.len()],
             truth: truth_classes,
             mapped,
             verdict,
         }
+    }
+
+    /// Marks the truly blocked cells no ray could have told about, from the run's observability truth over
+    /// the same region (a step: no ray ended on the cell; a structure lower than the robot: no ray crossed its
+    /// band). Without one (`None`, or another region) nothing is marked.
+    pub fn with_observability(mut self, observability: Option<&sim::observability::Observability>) -> Self {
+        let Some(o) = observability.filter(|o| o.region == self.region) else {
+            return self;
+        };
+        for (k, t) in self.truth.iter().enumerate() {
+            self.unobservable[k] = match t {
+                TruthClass::Step => !o.step[k],
+                TruthClass::TooLow => !o.clearance[k],
+                _ => false,
+            };
+        }
+        self
     }
 
     /// The raster offset of `cell`, if inside the region.
@@ -199,7 +230,13 @@ impl Verdicts {
     /// The counts of every verdict.
     pub fn counts(&self) -> VerdictCounts {
         let mut c = VerdictCounts::default();
-        for (t, v) in self.truth.iter().zip(&self.verdict) {
+        for ((t, v), blind) in self.truth.iter().zip(&self.verdict).zip(&self.unobservable) {
+            if *v == Verdict::Unsafe && *blind {
+                match t {
+                    TruthClass::TooLow => c.blind_clearance_cells += 1,
+                    _ => c.blind_step_cells += 1,
+                }
+            }
             if *v == Verdict::NotScored {
                 continue;
             }

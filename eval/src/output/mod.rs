@@ -163,6 +163,9 @@ mod tests {
             overcautious_clearance_cells: None,
             plan_length_ratio: None,
             plan_unsafe_cells: None,
+            blind_cells: None,
+            nav_reached: None,
+            nav_contacts: None,
             wall_time_s: 1.0,
             problems: String::new(),
         });
@@ -189,6 +192,7 @@ mod tests {
             mapped_blocked_cells: 0,
             uncertain_cells: 0,
             unsafe_cells: 0,
+            blind_cells: 0,
             overcautious_cells: 0,
             true_elevation_mean_m: Some(0.03),
             mapped_elevation_mean_m: None,
@@ -215,6 +219,45 @@ mod tests {
             x_m: 0.0,
             y_m: 0.0,
             unsafe_cell: false,
+            blind_cell: false,
+        });
+        check(&sim::observability::BlindBandRow {
+            range_m: 1.0,
+            rays_in_band: 2,
+            largest_gap_m: 0.1,
+            gap_from_m: 0.2,
+            gap_to_m: 0.3,
+        });
+        check(&crate::navigation::record::Event {
+            time_s: 1.0,
+            kind: crate::navigation::record::EventKind::Contact,
+            x_m: 0.0,
+            y_m: 0.0,
+            yaw_deg: 0.0,
+            obstacle: "wall".into(),
+            distance_m: Some(0.0),
+            closed_by: String::new(),
+            message: "m".into(),
+        });
+        check(&crate::navigation::record::TrajectoryRow {
+            time_s: 0.1,
+            true_x_m: 0.0,
+            true_y_m: 0.0,
+            true_yaw_deg: 0.0,
+            estimated_x_m: 0.0,
+            estimated_y_m: 0.0,
+            estimated_yaw_deg: 0.0,
+            speed_m_s: 0.4,
+            turn_rate_deg_s: 0.0,
+            planner_state: "following",
+            plan: Some(0),
+        });
+        check(&crate::navigation::record::PlanPointRow {
+            plan: 0,
+            time_s: 0.0,
+            step: 0,
+            x_m: 0.0,
+            y_m: 0.0,
         });
         check(&crate::test_support::wrong_cell());
     }

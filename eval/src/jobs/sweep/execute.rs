@@ -333,9 +333,17 @@ fn simulate_group(
                 }
             };
             let truth = &truths[k].1;
-            let evaluation =
-                crate::judge::evaluate(s, map, truth, simulation.obstacle_returns(), figures.as_ref())
-                    .map_err(|e| e.to_string())?;
+            let evaluation = crate::judge::evaluate(
+                s,
+                map,
+                truth,
+                &crate::judge::Sensed {
+                    returns: simulation.obstacle_returns(),
+                    observability: Some(&simulated.observability),
+                    navigation: figures.as_ref(),
+                },
+            )
+            .map_err(|e| e.to_string())?;
             Ok(Outcome {
                 evaluation,
                 max_step_m: s.robot.max_step_m,

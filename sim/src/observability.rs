@@ -1,0 +1,300 @@
+//! What the sensors could see: an observability truth, from the rays the simulated sensors cast and from
+//! nothing the map computes. Per cell of the map region:
+//!
+//! * the **step** decision was observable when a ray truly ended on the cell (on its surface);
+//! * the **clearance** decision was observable when a ray crossed, or ended inside, the band over the cell
+//!   between a step above the ground (`max_step_m`) and the robot's height: the band where a structure the
+//!   robot cannot pass under would have to be.
+//!
+//! A truly blocked cell that the map calls drivable is then *unsafe* when a ray could have told, and *blind*
+//! when none could: no map of these readings could have known (`oeg_eval::judge::verdict`).
+//!
+//! [`blind_band`] answers the same question on the geometry alone: for each range from the robot, the largest
+//! vertical gap between the sensors' rays within the robot's height band, on flat ground. A board thinner than
+//! the gap at a range can hide in it.
+
+use nalgebra::{Point3, Vector3};
+use oeg::{CellIndex, CellRegion, GridGeometry, RobotProfile};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::sensors::{SensorScan, SimSensor};
+use crate::world::World;
+
+/// The observability of every cell of a region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observability {
+    /// The cells.
+    pub region: CellRegion,
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// Per cell: a ray truly ended on it.
+    pub step: Vec<bool>,
+    /// Per cell: a ray crossed or ended inside its band between a step and the robot's height.
+    pub clearance: Vec<bool>,
+    /// Rays that told something (cast, and not a hole or a dropout).
+    pub num_rays: u64,
+    geometry: GridGeometry,
+    profile: RobotProfile,
+    /// Ground height at each cell's centre, metres (NaN off the terrain).
+    ground_m: Vec<f64>,
+    ground_lo_m: f64,
+    ground_hi_m: f64,
+}
+
+impl Observability {
+    /// Nothing observed yet over `region`; the ground is read from `world` under every cell's centre.
+    pub fn new(world: &World, geometry: &GridGeometry, region: CellRegion, profile: RobotProfile) -> Self {
+        let cells: Vec<CellIndex> = region.cells().collect();
+        let ground_m: Vec<f64> = cells
+            .par_iter()
+            .map(|c| {
+                let (x, y) = geometry.cell_center(*c);
+                world.ground_z(x, y).unwrap_or(f64::NAN)
+            })
+            .collect();
+        let finite = ground_m.iter().copied().filter(|g| g.is_finite());
+        let (ground_lo_m, ground_hi_m) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), g| {
+            (lo.min(g), hi.max(g))
+        });
+        Self {
+            region,
+            resolution_m: geometry.resolution_m(),
+            step: vec![false; cells.len()],
+            clearance: vec![false; cells.len()],
+            num_rays: 0,
+            geometry: *geometry,
+            profile,
+            ground_m,
+            ground_lo_m,
+            ground_hi_m,
+        }
+    }
+
+    /// Records the rays of one scan of a sensor whose range ends at `max_range_m`.
+    pub fn observe(&mut self, scan: &SensorScan, max_range_m: f64) {
+        let origin = Point3::from(scan.world_from_sensor.translation.vector);
+        let rotation = scan.world_from_sensor.rotation;
+        let this = &*self;
+        // Each ray lists the cells it makes observable; the lists are merged by OR, so the order of the
+        // threads does not matter.
+        let (steps, bands) = scan
+            .rays
+            .par_iter()
+            .filter(|r| !r.true_range_m.is_nan())
+            .fold(
+                || (Vec::new(), Vec::new()),
+                |(mut steps, mut bands), r| {
+                    let dir = rotation * r.vector_in_sensor.cast::<f64>().normalize();
+                    let hit = r.true_range_m.is_finite();
+                    let length = if hit {
+                        f64::from(r.true_range_m)
+                    } else {
+                        max_range_m
+                    };
+                    if hit && let Some(k) = this.offset_at(&(origin + dir * length)) {
+                        steps.push(k);
+                    }
+                    this.walk_band(&origin, &dir, length, &mut bands);
+                    (steps, bands)
+                },
+            )
+            .reduce(
+                || (Vec::new(), Vec::new()),
+                |(mut a, mut b), (c, d)| {
+                    a.extend(c);
+                    b.extend(d);
+                    (a, b)
+                },
+            );
+        self.num_rays += scan.rays.iter().filter(|r| !r.true_range_m.is_nan()).count() as u64;
+        for k in steps {
+            self.step[k] = true;
+        }
+        for k in bands {
+            self.clearance[k] = true;
+        }
+    }
+
+    fn offset_at(&self, p: &Point3<f64>) -> Option<usize> {
+        self.region.offset(self.geometry.cell_of(p.x, p.y)?)
+    }
+
+    /// The cells whose band the ray from `origin` along the unit `dir` crosses within `length`.
+    fn walk_band(&self, origin: &Point3<f64>, dir: &Vector3<f64>, length: f64, out: &mut Vec<usize>) {
+        let (step, height) = (
+            f64::from(self.profile.max_step_m),
+            f64::from(self.profile.height_m),
+        );
+        // The part of the ray within the heights any cell's band can take.
+        let (z_lo, z_hi) = (self.ground_lo_m + step, self.ground_hi_m + height);
+        let Some((mut t0, mut t1)) = slab(origin.z, dir.z, z_lo, z_hi, length) else {
+            return;
+        };
+        // ... and within the region.
+        let res = self.resolution_m;
+        let lo = self.region.min;
+        let (x0, y0) = (f64::from(lo.i) * res, f64::from(lo.j) * res);
+        let (x1, y1) = (
+            x0 + f64::from(self.region.num_x) * res,
+            y0 + f64::from(self.region.num_y) * res,
+        );
+        for (o, d, a, b) in [(origin.x, dir.x, x0, x1), (origin.y, dir.y, y0, y1)] {
+            match slab(o, d, a, b, length) {
+                Some((s0, s1)) => (t0, t1) = (t0.max(s0), t1.min(s1)),
+                None => return,
+            }
+        }
+        if t0 >= t1 {
+            return;
+        }
+        // Amanatides and Woo's traversal of the cells the segment's x-y shadow crosses.
+        let at = |t: f64| (origin.x + dir.x * t, origin.y + dir.y * t);
+        let (sx, sy) = at(t0);
+        let Some(mut cell) = self.geometry.cell_of(sx, sy) else {
+            return;
+        };
+        let axis = |d: f64, p: f64, index: i32| -> (i32, f64, f64) {
+            if d.abs() < 1e-12 {
+                return (0, f64::INFINITY, f64::INFINITY);
+            }
+            let boundary = if d > 0.0 {
+                f64::from(index + 1) * res
+            } else {
+                f64::from(index) * res
+            };
+            (
+                if d > 0.0 { 1 } else { -1 },
+                t0 + (boundary - p) / d,
+                res / d.abs(),
+            )
+        };
+        let (step_i, mut next_x, dx) = axis(dir.x, sx, cell.i);
+        let (step_j, mut next_y, dy) = axis(dir.y, sy, cell.j);
+        let mut enter = t0;
+        let max_cells = self.region.num_x as usize + self.region.num_y as usize + 2;
+        for _ in 0..max_cells {
+            let leave = next_x.min(next_y).min(t1);
+            if let Some(k) = self.region.offset(cell) {
+                let g = self.ground_m[k];
+                let (za, zb) = (origin.z + dir.z * enter, origin.z + dir.z * leave);
+                if g.is_finite() && za.max(zb) >= g + step && za.min(zb) <= g + height {
+                    out.push(k);
+                }
+            }
+            if leave >= t1 {
+                break;
+            }
+            if next_x < next_y {
+                cell.i += step_i;
+                next_x += dx;
+            } else {
+                cell.j += step_j;
+                next_y += dy;
+            }
+            enter = leave;
+        }
+    }
+}
+
+/// The interval of `t` in `[0, length]` over which `o + d t` lies within `[a, b]`.
+fn slab(o: f64, d: f64, a: f64, b: f64, length: f64) -> Option<(f64, f64)> {
+    if d.abs() < 1e-12 {
+        return (a..=b).contains(&o).then_some((0.0, length));
+    }
+    let (ta, tb) = ((a - o) / d, (b - o) / d);
+    let (lo, hi) = (ta.min(tb).max(0.0), ta.max(tb).min(length));
+    (lo < hi).then_some((lo, hi))
+}
+
+/// One row of `blind_band.csv`: the sensors' rays at one range from the robot, on flat ground.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BlindBandRow {
+    /// Horizontal distance from the robot's base, metres.
+    pub range_m: f64,
+    /// Distinct ray heights within the band between a step and the robot's height at this range.
+    pub rays_in_band: u64,
+    /// The largest vertical gap between rays (or a band edge) within the band, metres: a board thinner than
+    /// this can hide in it.
+    pub largest_gap_m: f64,
+    /// The gap's lower edge, metres above the ground.
+    pub gap_from_m: f64,
+    /// The gap's upper edge, metres above the ground.
+    pub gap_to_m: f64,
+}
+
+/// The blind band of `sensors` mounted on the robot as `world` holds it now (its pose at the time), over
+/// flat ground at the base's height: for each range from `step_m` to `max_range_m`, the heights at which the
+/// rays pass, and the largest gap between them within `[max_step_m, height_m]` above the ground. A ray that
+/// reaches the ground before a range does not count there.
+pub fn blind_band(
+    sensors: &[SimSensor],
+    world: &World,
+    profile: &RobotProfile,
+    step_m: f64,
+    max_range_m: f64,
+) -> Vec<BlindBandRow> {
+    let base = world.world_from_base();
+    let ground = base.translation.z;
+    let rays: Vec<(Point3<f64>, Vector3<f64>)> = sensors
+        .iter()
+        .filter_map(|s| {
+            let world_from_sensor = world.world_from_link(&s.spec.mount_link)? * s.link_from_sensor;
+            let origin = Point3::from(world_from_sensor.translation.vector);
+            Some(
+                s.directions()
+                    .iter()
+                    .map(|d| (origin, world_from_sensor.rotation * d))
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .flatten()
+        .collect();
+    let (lo, hi) = (f64::from(profile.max_step_m), f64::from(profile.height_m));
+    let num = (max_range_m / step_m).floor() as usize;
+    (1..=num)
+        .map(|k| {
+            let range = k as f64 * step_m;
+            let mut heights: Vec<f64> = rays
+                .iter()
+                .filter_map(|(o, d)| {
+                    let horizontal = d.x.hypot(d.y);
+                    if horizontal < 1e-9 {
+                        return None;
+                    }
+                    // The horizontal distance from the base to the ray's point at range: the sensor's offset
+                    // from the base is small beside a range, and is taken along the ray.
+                    let offset =
+                        ((o.x - base.translation.x) * d.x + (o.y - base.translation.y) * d.y) / horizontal;
+                    let along = range - offset;
+                    if along <= 0.0 {
+                        return None;
+                    }
+                    let h = o.z - ground + d.z / horizontal * along;
+                    // A ray that met the ground before this range does not reach it.
+                    (h >= 0.0).then_some(h)
+                })
+                .filter(|h| (lo..=hi).contains(h))
+                .collect();
+            heights.sort_by(f64::total_cmp);
+            heights.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+            let rays_in_band = heights.len() as u64;
+            let mut edges = vec![lo];
+            edges.extend(&heights);
+            edges.push(hi);
+            let (from, to) = edges
+                .windows(2)
+                .map(|w| (w[0], w[1]))
+                .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
+                .unwrap_or((lo, hi));
+            let round = |v: f64| (v * 1e6).round() / 1e6;
+            BlindBandRow {
+                range_m: round(range),
+                rays_in_band,
+                largest_gap_m: round(to - from),
+                gap_from_m: round(from),
+                gap_to_m: round(to),
+            }
+        })
+        .collect()
+}
