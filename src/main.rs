@@ -33,6 +33,10 @@ enum Command {
     /// Plan a path on a saved map (map.oeg) from one point to another: write plan.json, path.csv and
     /// plan.png.
     Plan(cli::plan::PlanArgs),
+    /// Check a path (x,y lines in metres, e.g. one a planner logged in the field) against a scenario's truth
+    /// with the robot's footprint: the first contact, the closest approach, the cells crossed; exit non-zero
+    /// on a contact.
+    CheckPath(cli::check_path::CheckPathArgs),
     /// Print a saved map's header and statistics.
     Inspect(cli::inspect::InspectArgs),
     /// Run a scenario end to end: simulate, map, compare with the truth, write the report; exit non-zero when
@@ -74,6 +78,7 @@ fn main() -> ExitCode {
         Some(Command::Map(args)) => cli::map::run(&args),
         Some(Command::Plan(args)) => cli::plan::run(&args),
         Some(Command::Inspect(args)) => cli::inspect::run(&args),
+        Some(Command::CheckPath(args)) => cli::check_path::run(&args),
         Some(Command::Run(args)) => cli::run::run(&args),
         Some(Command::Suite(args)) => cli::suite::run(&args),
         Some(Command::Validate(args)) => cli::validate::run(&args),

@@ -140,7 +140,7 @@ fn the_decision_scene_gets_the_papers_decisions_right() {
     assert_eq!(m["plan_length_ratio"], 1.0);
     let plan = std::fs::read_to_string(out.join("plan.csv")).expect("plan.csv");
     assert!(
-        plan.starts_with("path,step,x_m,y_m,unsafe_cell\nmap,0,"),
+        plan.starts_with("path,step,x_m,y_m,unsafe_cell,blind_cell\nmap,0,"),
         "{plan}"
     );
     assert!(plan.lines().any(|l| l.starts_with("truth,")), "{plan}");

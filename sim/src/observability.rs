@@ -2,9 +2,12 @@
 //! nothing the map computes. Per cell of the map region:
 //!
 //! * the **step** decision was observable when a ray truly ended on the cell (on its surface);
-//! * the **clearance** decision was observable when a ray crossed, or ended inside, the band over the cell
-//!   between a step above the ground (`max_step_m`) and the robot's height: the band where a structure the
-//!   robot cannot pass under would have to be.
+//! * the **clearance** decision: a ray crossed, or ended inside, the band over the cell between a step above
+//!   the ground (`max_step_m`) and the robot's height, the band where a structure the robot cannot pass under
+//!   would have to be ([`Observability::clearance`]). Over a cell that truly holds such a structure, only a
+//!   ray that *ended* inside the band ([`Observability::band_hit`]) can have told: a ray that crossed the band
+//!   there without ending passed above or below the structure (between two lidar rings, say), and saw
+//!   nothing of it.
 //!
 //! A truly blocked cell that the map calls drivable is then *unsafe* when a ray could have told, and *blind*
 //! when none could: no map of these readings could have known (`oeg_eval::judge::verdict`).
@@ -32,6 +35,8 @@ pub struct Observability {
     pub step: Vec<bool>,
     /// Per cell: a ray crossed or ended inside its band between a step and the robot's height.
     pub clearance: Vec<bool>,
+    /// Per cell: a ray ended inside that band (it hit something there: a structure's underside or side).
+    pub band_hit: Vec<bool>,
     /// Rays that told something (cast, and not a hole or a dropout).
     pub num_rays: u64,
     geometry: GridGeometry,
@@ -62,6 +67,7 @@ impl Observability {
             resolution_m: geometry.resolution_m(),
             step: vec![false; cells.len()],
             clearance: vec![false; cells.len()],
+            band_hit: vec![false; cells.len()],
             num_rays: 0,
             geometry: *geometry,
             profile,
@@ -76,6 +82,10 @@ impl Observability {
         let origin = Point3::from(scan.world_from_sensor.translation.vector);
         let rotation = scan.world_from_sensor.rotation;
         let this = &*self;
+        let (step, height) = (
+            f64::from(self.profile.max_step_m),
+            f64::from(self.profile.height_m),
+        );
         // Each ray lists the cells it makes observable; the lists are merged by OR, so the order of the
         // threads does not matter.
         let (steps, bands) = scan
@@ -92,8 +102,10 @@ impl Observability {
                     } else {
                         max_range_m
                     };
-                    if hit && let Some(k) = this.offset_at(&(origin + dir * length)) {
-                        steps.push(k);
+                    let end = origin + dir * length;
+                    if hit && let Some(k) = this.offset_at(&end) {
+                        // On the cell, and whether inside its band.
+                        steps.push((k, (step..=height).contains(&(end.z - this.ground_m[k]))));
                     }
                     this.walk_band(&origin, &dir, length, &mut bands);
                     (steps, bands)
@@ -108,8 +120,9 @@ impl Observability {
                 },
             );
         self.num_rays += scan.rays.iter().filter(|r| !r.true_range_m.is_nan()).count() as u64;
-        for k in steps {
+        for (k, in_band) in steps {
             self.step[k] = true;
+            self.band_hit[k] |= in_band;
         }
         for k in bands {
             self.clearance[k] = true;
@@ -223,20 +236,20 @@ pub struct BlindBandRow {
     pub gap_to_m: f64,
 }
 
-/// The blind band of `sensors` mounted on the robot as `world` holds it now (its pose at the time), over
-/// flat ground at the base's height: for each range from `step_m` to `max_range_m`, the heights at which the
-/// rays pass, and the largest gap between them within `[max_step_m, height_m]` above the ground. A ray that
-/// reaches the ground before a range does not count there.
-pub fn blind_band(
-    sensors: &[SimSensor],
-    world: &World,
-    profile: &RobotProfile,
-    step_m: f64,
-    max_range_m: f64,
-) -> Vec<BlindBandRow> {
-    let base = world.world_from_base();
-    let ground = base.translation.z;
-    let rays: Vec<(Point3<f64>, Vector3<f64>)> = sensors
+/// The heights above the ground, metres, at which the rays of `sensors` (mounted on the robot as `world`
+/// holds it now) pass at `range_m` from the robot's base, over flat ground at the base's height; sorted, a
+/// ray that meets the ground before the range left out.
+pub fn ray_heights_at(sensors: &[SimSensor], world: &World, range_m: f64) -> Vec<f64> {
+    let rays = rays_of(sensors, world);
+    let mut h = heights_at(&rays, &world.world_from_base(), range_m);
+    h.sort_by(f64::total_cmp);
+    h
+}
+
+type RayLine = (Point3<f64>, Vector3<f64>);
+
+fn rays_of(sensors: &[SimSensor], world: &World) -> Vec<RayLine> {
+    sensors
         .iter()
         .filter_map(|s| {
             let world_from_sensor = world.world_from_link(&s.spec.mount_link)? * s.link_from_sensor;
@@ -249,31 +262,51 @@ pub fn blind_band(
             )
         })
         .flatten()
-        .collect();
+        .collect()
+}
+
+fn heights_at(rays: &[RayLine], base: &nalgebra::Isometry3<f64>, range: f64) -> Vec<f64> {
+    let ground = base.translation.z;
+    rays.iter()
+        .filter_map(|(o, d)| {
+            let horizontal = d.x.hypot(d.y);
+            if horizontal < 1e-9 {
+                return None;
+            }
+            // The horizontal distance from the base to the ray's point at range: the sensor's offset from the
+            // base is small beside a range, and is taken along the ray.
+            let offset = ((o.x - base.translation.x) * d.x + (o.y - base.translation.y) * d.y) / horizontal;
+            let along = range - offset;
+            if along <= 0.0 {
+                return None;
+            }
+            let h = o.z - ground + d.z / horizontal * along;
+            // A ray that met the ground before this range does not reach it.
+            (h >= 0.0).then_some(h)
+        })
+        .collect()
+}
+
+/// The blind band of `sensors` mounted on the robot as `world` holds it now (its pose at the time), over
+/// flat ground at the base's height: for each range from `step_m` to `max_range_m`, the heights at which the
+/// rays pass ([`ray_heights_at`]), and the largest gap between them within `[max_step_m, height_m]` above
+/// the ground.
+pub fn blind_band(
+    sensors: &[SimSensor],
+    world: &World,
+    profile: &RobotProfile,
+    step_m: f64,
+    max_range_m: f64,
+) -> Vec<BlindBandRow> {
+    let base = world.world_from_base();
+    let rays = rays_of(sensors, world);
     let (lo, hi) = (f64::from(profile.max_step_m), f64::from(profile.height_m));
     let num = (max_range_m / step_m).floor() as usize;
     (1..=num)
         .map(|k| {
             let range = k as f64 * step_m;
-            let mut heights: Vec<f64> = rays
-                .iter()
-                .filter_map(|(o, d)| {
-                    let horizontal = d.x.hypot(d.y);
-                    if horizontal < 1e-9 {
-                        return None;
-                    }
-                    // The horizontal distance from the base to the ray's point at range: the sensor's offset
-                    // from the base is small beside a range, and is taken along the ray.
-                    let offset =
-                        ((o.x - base.translation.x) * d.x + (o.y - base.translation.y) * d.y) / horizontal;
-                    let along = range - offset;
-                    if along <= 0.0 {
-                        return None;
-                    }
-                    let h = o.z - ground + d.z / horizontal * along;
-                    // A ray that met the ground before this range does not reach it.
-                    (h >= 0.0).then_some(h)
-                })
+            let mut heights: Vec<f64> = heights_at(&rays, &base, range)
+                .into_iter()
                 .filter(|h| (lo..=hi).contains(h))
                 .collect();
             heights.sort_by(f64::total_cmp);

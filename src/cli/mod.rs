@@ -1,6 +1,7 @@
 //! One file per command: its arguments (clap's derive) and the few lines that call the job in `oeg_eval` and
 //! print what it did.
 
+pub mod check_path;
 pub mod demo;
 pub mod inspect;
 pub mod map;

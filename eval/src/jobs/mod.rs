@@ -3,6 +3,7 @@
 //! [`crate::figures`], [`crate::output`]) and returns what it did. No job calls another; `oeg demo` is
 //! `oeg map` on built-in scans, so it lives in the map job's folder ([`map::demo`]).
 
+pub mod check_path;
 pub mod inspect;
 pub mod map;
 pub mod plan;

@@ -62,7 +62,8 @@ pub struct Metrics {
     /// Of the unsafe step cells, those no ray of the sensors ended on: no map of these readings could have
     /// known (`sim::observability`).
     pub blind_step_cells: u64,
-    /// Of the unsafe clearance cells, those whose band between a step and the robot's height no ray crossed.
+    /// Of the unsafe clearance cells, those where no ray ended inside the band between a step and the robot's
+    /// height: no ray reached the structure.
     pub blind_clearance_cells: u64,
     /// `blind_step_cells + blind_clearance_cells`.
     pub blind_cells: u64,

@@ -122,8 +122,8 @@ pub struct Verdicts {
     pub mapped: Vec<Traversability>,
     /// The verdict on every cell.
     pub verdict: Vec<Verdict>,
-    /// Per cell: truly blocked, and no ray could have told (`sim::observability`): the deciding decision (a
-    /// step's or a structure's) was not observable. All false when the run has no observability truth (a
+    /// Per cell: truly blocked, and no ray could have told (`sim::observability`): no ray ended on a step
+    /// cell, or inside the band of a cell under a structure lower than the robot. All false when the run has no observability truth (a
     /// replayed log).
     pub unobservable: Vec<bool>,
 }
@@ -206,8 +206,8 @@ impl Verdicts {
     }
 
     /// Marks the truly blocked cells no ray could have told about, from the run's observability truth over
-    /// the same region (a step: no ray ended on the cell; a structure lower than the robot: no ray crossed its
-    /// band). Without one (`None`, or another region) nothing is marked.
+    /// the same region (a step: no ray ended on the cell; a structure lower than the robot: no ray ended in
+    /// its band, on the structure). Without one (`None`, or another region) nothing is marked.
     pub fn with_observability(mut self, observability: Option<&sim::observability::Observability>) -> Self {
         let Some(o) = observability.filter(|o| o.region == self.region) else {
             return self;
@@ -215,7 +215,7 @@ impl Verdicts {
         for (k, t) in self.truth.iter().enumerate() {
             self.unobservable[k] = match t {
                 TruthClass::Step => !o.step[k],
-                TruthClass::TooLow => !o.clearance[k],
+                TruthClass::TooLow => !o.band_hit[k],
                 _ => false,
             };
         }

@@ -355,6 +355,19 @@ fn write_map_files(job: &MapJob, map: &Map, stage: &Path) -> Result<(Vec<PathBuf
         other => other,
     })?;
     files.extend(images);
+    // The decisions and layers as files a planner reads (`docs/planner-protocol.md`), over the observed
+    // region: a map built from real data can feed a planner too.
+    if let Some(region) = map.observed_region() {
+        let dir = stage.join("planner");
+        crate::output::create_dir(&dir)?;
+        for (name, bytes) in
+            oeg::planner_files(map, region, &job.profile, job.rule, oeg::UncertainCells::Blocked)?
+        {
+            let path = dir.join(name);
+            write_bytes(&path, &bytes)?;
+            files.push(path);
+        }
+    }
 
     Ok((files, map_file_bytes))
 }

@@ -52,6 +52,17 @@ pub struct GenerateSpec {
     /// Seconds the sensors keep scanning after the robot stops and the last person left.
     #[serde(default = "d_settle")]
     pub settle_s: f64,
+    /// How far past the field's far end the goal lies, metres (kept free of obstacles; the map region reaches
+    /// a metre beyond it).
+    #[serde(default = "d_goal_beyond")]
+    pub goal_beyond_m: f64,
+    /// Closed loop: after its drive the robot navigates to the goal (`[navigation]`), for at most
+    /// `navigation_time_s`.
+    #[serde(default)]
+    pub navigate: bool,
+    /// A closed-loop run's time limit after the drive, seconds.
+    #[serde(default = "d_navigation_time")]
+    pub navigation_time_s: f64,
     /// Curbs: boxes across the drive at a random yaw and offset to the cell grid.
     pub curbs: Option<Curbs>,
     /// Boards and table tops at a clearance near the robot's height.
@@ -83,6 +94,12 @@ fn d_half_width() -> f64 {
 }
 fn d_lane() -> f64 {
     0.6
+}
+fn d_goal_beyond() -> f64 {
+    0.5
+}
+fn d_navigation_time() -> f64 {
+    60.0
 }
 fn d_settle() -> f64 {
     2.0
@@ -346,6 +363,7 @@ impl GenerateSpec {
             ("field_length_m", self.field_length_m),
             ("field_half_width_m", self.field_half_width_m),
             ("lane_half_width_m", self.lane_half_width_m),
+            ("navigation_time_s", self.navigation_time_s),
         ] {
             if !(v.is_finite() && v > 0.0 && v <= 1000.0) {
                 return Err(fail(
@@ -354,7 +372,11 @@ impl GenerateSpec {
                 ));
             }
         }
-        for (name, v) in [("field_start_m", self.field_start_m), ("settle_s", self.settle_s)] {
+        for (name, v) in [
+            ("field_start_m", self.field_start_m),
+            ("settle_s", self.settle_s),
+            ("goal_beyond_m", self.goal_beyond_m),
+        ] {
             if !(v.is_finite() && (0.0..=1000.0).contains(&v)) {
                 return Err(fail(
                     &[K(name)],
@@ -431,7 +453,7 @@ impl GenerateSpec {
     }
 
     fn goal(&self) -> [f64; 2] {
-        [self.field_end_m() + 0.5, 0.0]
+        [self.field_end_m() + self.goal_beyond_m, 0.0]
     }
 
     /// Places this seed's scene into `doc` (a base scenario): obstacles and people appended, the drive, the
@@ -607,7 +629,11 @@ impl GenerateSpec {
         let end = self.field_end_m();
         let half = self.field_half_width_m;
         set(doc, &["map", "min_xy_m"], xy(-1.0, -half - 1.0));
-        set(doc, &["map", "max_xy_m"], xy(end + 1.0, half + 1.0));
+        set(
+            doc,
+            &["map", "max_xy_m"],
+            xy(end.max(self.goal()[0]) + 1.0, half + 1.0),
+        );
         set(
             doc,
             &["robot", "drive", "waypoints_xy_m"],
@@ -617,11 +643,17 @@ impl GenerateSpec {
         set(doc, &["planner", "start_xy_m"], xy(0.0, 0.0));
         let [gx, gy] = self.goal();
         set(doc, &["planner", "goal_xy_m"], xy(gx, gy));
-        set(
-            doc,
-            &["duration_s"],
-            f(((last_s + self.settle_s) * 10.0).ceil() / 10.0),
-        );
+        let mut duration = last_s + self.settle_s;
+        if self.navigate {
+            let drive_s = self.drive_length_m / self.speed_m_s;
+            duration = duration.max(drive_s + self.navigation_time_s);
+            let mut navigation = Table::new();
+            navigation.insert("goal_xy_m".into(), xy(gx, gy));
+            navigation.insert("speed_m_s".into(), f(self.speed_m_s));
+            navigation.insert("time_limit_s".into(), f(self.navigation_time_s));
+            doc.insert("navigation".into(), Value::Table(navigation));
+        }
+        set(doc, &["duration_s"], f((duration * 10.0).ceil() / 10.0));
     }
 }
 

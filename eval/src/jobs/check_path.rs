@@ -1,0 +1,213 @@
+//! `oeg check-path`: any path (one logged by a planner in the field, one from another tool) checked against a
+//! scenario's truth with the robot's real footprint: the rectangle bounding its URDF's collision shapes, turned
+//! along the path. It reports the first contact, the closest approach and the cells the footprint crossed by
+//! the truth's class, and with a map file the map's verdict on them too.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use oeg::{CellIndex, Pose2};
+use serde::Serialize;
+
+use crate::error::{EvalError, Result};
+use crate::judge::verdict::Verdicts;
+use crate::navigation::contact::ContactWatch;
+use crate::output::{Staged, write_json};
+
+/// `oeg check-path`.
+#[derive(Debug, Clone)]
+pub struct CheckPathJob {
+    /// The scenario whose world is the truth.
+    pub scenario: PathBuf,
+    /// `--set` overrides of the scenario.
+    pub overrides: Vec<String>,
+    /// The path: lines of `x,y` in metres, world frame (the planner protocol's format).
+    pub path: PathBuf,
+    /// A map to judge along the path too (`map.oeg`).
+    pub map: Option<PathBuf>,
+    /// Output folder.
+    pub out_dir: PathBuf,
+}
+
+/// Where the footprint first entered a truly blocked cell.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Contact {
+    /// Distance along the path, metres.
+    pub along_m: f64,
+    /// The robot's centre, metres.
+    pub x_m: f64,
+    /// The robot's centre, metres.
+    pub y_m: f64,
+    /// Heading, degrees.
+    pub yaw_deg: f64,
+    /// The obstacle holding the cell (`terrain` for a step of the ground).
+    pub obstacle: String,
+}
+
+/// `path_check.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PathCheck {
+    /// The scenario's name.
+    pub scenario: String,
+    /// Points of the path.
+    pub num_points: u64,
+    /// Its length, metres.
+    pub length_m: f64,
+    /// Poses checked: every half cell along the path, heading along it.
+    pub num_poses: u64,
+    /// The first contact, null when there is none.
+    pub first_contact: Option<Contact>,
+    /// Poses whose footprint touched a truly blocked cell.
+    pub contact_poses: u64,
+    /// The smallest distance from the footprint to a truly blocked cell, metres (null: none within 2 m).
+    pub closest_approach_m: Option<f64>,
+    /// Where along the path, metres.
+    pub closest_approach_along_m: Option<f64>,
+    /// The cells the footprint crossed, by the truth's class.
+    pub cells_by_truth: BTreeMap<String, u64>,
+    /// With a map: the same cells by the map's verdict (`unsafe`, `right_drivable`, ...).
+    pub cells_by_verdict: Option<BTreeMap<String, u64>>,
+    /// The footprint used, base frame, metres: `[min_x, max_x, min_y, max_y]`.
+    pub footprint_m: [f64; 4],
+}
+
+/// Checks the path and writes `path_check.json` into the output folder.
+///
+/// # Errors
+/// A bad scenario or override, an unreadable or malformed path file (named with its line), an unreadable map,
+/// a failed write.
+pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
+    let loaded = crate::pipeline::load(&crate::pipeline::RunOptions {
+        scenario: job.scenario.clone(),
+        overrides: job.overrides.clone(),
+        ..Default::default()
+    })?;
+    let s = &loaded.scenario;
+    let staged = Staged::begin(&job.out_dir)?;
+    let geometry = oeg::GridGeometry::new(s.map.resolution_m)?;
+    let world = sim::World::new(&loaded)?;
+    let truth = crate::pipeline::truth_of(s, &world, &geometry)?;
+    let region = truth.region;
+    let res = geometry.resolution_m();
+    let (x0, y0) = (f64::from(region.min.i) * res, f64::from(region.min.j) * res);
+    let extent = [
+        x0,
+        x0 + f64::from(region.num_x) * res,
+        y0,
+        y0 + f64::from(region.num_y) * res,
+    ];
+    let points = crate::navigation::external::read_path(&job.path, extent).map_err(|f| EvalError::Input {
+        path: job.path.clone(),
+        message: f.message,
+    })?;
+    let footprint = loaded.robot.footprint();
+    let poses = poses_along(&points, res / 2.0);
+    let mut watch = ContactWatch::new(s, &truth, geometry, footprint);
+    let (mut first_contact, mut contact_poses) = (None, 0u64);
+    let mut crossed: Vec<CellIndex> = Vec::new();
+    for (along, pose) in &poses {
+        let began = watch.check(*along, *pose);
+        let cells = footprint.cells_under(&geometry, &region, *pose);
+        let touching = cells
+            .iter()
+            .any(|c| region.offset(*c).is_some_and(|k| truth.truly_blocked(k)));
+        contact_poses += u64::from(touching);
+        if let (None, Some(c)) = (&first_contact, began) {
+            first_contact = Some(Contact {
+                along_m: round(*along),
+                x_m: round(pose.x_m),
+                y_m: round(pose.y_m),
+                yaw_deg: round(pose.yaw_rad.to_degrees()),
+                obstacle: c.obstacle,
+            });
+        }
+        crossed.extend(cells);
+    }
+    crossed.sort_by_key(|c| (c.j, c.i));
+    crossed.dedup();
+    let verdicts = match &job.map {
+        Some(path) => {
+            let map = oeg::load_map(path)?;
+            Some(Verdicts::new(&map, &truth, s.map.traversability)?)
+        }
+        None => None,
+    };
+    let classes = Verdicts::from_classes(&truth, vec![oeg::Traversability::Unknown; truth.cells.len()]);
+    let mut cells_by_truth = BTreeMap::new();
+    let mut cells_by_verdict = verdicts.as_ref().map(|_| BTreeMap::new());
+    for c in &crossed {
+        let Some(k) = region.offset(*c) else { continue };
+        let name = serde_json::to_value(classes.truth[k])
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string));
+        *cells_by_truth.entry(name.unwrap_or_default()).or_insert(0) += 1;
+        if let (Some(v), Some(by)) = (&verdicts, cells_by_verdict.as_mut()) {
+            *by.entry(v.verdict[k].name().to_string()).or_insert(0) += 1;
+        }
+    }
+    let length_m = points
+        .windows(2)
+        .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+        .sum::<f64>();
+    let check = PathCheck {
+        scenario: s.name.clone(),
+        num_points: points.len() as u64,
+        length_m: round(length_m),
+        num_poses: poses.len() as u64,
+        first_contact,
+        contact_poses,
+        closest_approach_m: watch.closest.map(|c| round(c.0)),
+        closest_approach_along_m: watch.closest.map(|c| round(c.1)),
+        cells_by_truth,
+        cells_by_verdict,
+        footprint_m: [
+            footprint.min_x_m,
+            footprint.max_x_m,
+            footprint.min_y_m,
+            footprint.max_y_m,
+        ]
+        .map(round),
+    };
+    let json = staged.dir().join("path_check.json");
+    write_json(&json, &check)?;
+    let files = vec![staged.final_path(&json)];
+    staged.commit()?;
+    Ok((check, files))
+}
+
+/// Poses every `step_m` along the polyline, heading along each segment, with the distance along the path (the
+/// watch's clock). A one-point path is one pose, heading +x.
+fn poses_along(points: &[(f64, f64)], step_m: f64) -> Vec<(f64, Pose2)> {
+    let mut poses = Vec::new();
+    let mut along = 0.0;
+    for w in points.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let length = (b.0 - a.0).hypot(b.1 - a.1);
+        if length <= 0.0 {
+            continue;
+        }
+        let yaw_rad = (b.1 - a.1).atan2(b.0 - a.0);
+        let n = (length / step_m).ceil() as usize;
+        for k in 0..n {
+            let f = k as f64 / n as f64;
+            poses.push((
+                along + f * length,
+                Pose2 {
+                    x_m: a.0 + f * (b.0 - a.0),
+                    y_m: a.1 + f * (b.1 - a.1),
+                    yaw_rad,
+                },
+            ));
+        }
+        along += length;
+    }
+    let yaw_rad = poses.last().map_or(0.0, |(_, p)| p.yaw_rad);
+    if let Some(&(x_m, y_m)) = points.last() {
+        poses.push((along, Pose2 { x_m, y_m, yaw_rad }));
+    }
+    poses
+}
+
+fn round(v: f64) -> f64 {
+    crate::output::round_m(v)
+}

@@ -1,0 +1,91 @@
+//! What the sensors could see, on the geometry alone and in a simulated world: a board that fits between two
+//! lidar rings is blind at 3 m and observable at 1 m.
+
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
+mod common;
+
+use oeg::{GridGeometry, RobotProfile};
+use sim::Simulation;
+use sim::observability::{Observability, blind_band, ray_heights_at};
+
+/// A 16-ring lidar (rings 2 degrees apart, none level) 0.452 m up, looking level; the robot stands still.
+const LIDAR: &str = r#"
+[[sensors]]
+name = "lidar"
+kind = "lidar3d"
+mount_link = "stereo_mount"
+preset = "vlp16"
+"#;
+
+/// A board 4 cm thick whose underside is 0.33 m above the ground, 1.2 m wide, its centre `x` metres ahead.
+fn board(x: f64) -> String {
+    format!(
+        "[[obstacles]]\nkind = \"overhang\"\nname = \"board\"\ncenter_xy_m = [{x}, 0.0]\nsize_m = [0.3, 1.2, \
+         0.04]\nclearance_m = 0.33\n"
+    )
+}
+
+fn standing(extra: &str) -> String {
+    common::scenario_text(extra).replace("[[0.0, 0.0], [4.0, 0.0]]", "[[0.0, 0.0]]")
+}
+
+#[test]
+fn a_board_between_two_rings_is_blind_at_3_m_and_observable_at_1_m_on_the_geometry_alone() {
+    let loaded = common::load_text("rings", &standing(LIDAR)).expect("valid");
+    let sim = Simulation::new(&loaded).expect("simulation");
+    let inside = |range: f64| {
+        ray_heights_at(sim.sensors(), sim.world(), range)
+            .into_iter()
+            .filter(|h| (0.33..=0.37).contains(h))
+            .count()
+    };
+    // At 1 m the rings at -5 degrees pass at 0.365 m: through the board.
+    assert!(inside(1.0) > 0, "a ring crosses the board at 1 m");
+    // At 3 m the -1 and -3 degree rings pass at 0.40 and 0.29 m: the board hides between them.
+    assert_eq!(inside(3.0), 0, "no ring crosses the board at 3 m");
+    let band = blind_band(sim.sensors(), sim.world(), &RobotProfile::default(), 0.5, 5.0);
+    let at = |r: f64| band.iter().find(|b| (b.range_m - r).abs() < 1e-9).expect("row");
+    assert!(at(3.0).largest_gap_m > 0.04, "{:?}", at(3.0));
+    assert!(
+        at(3.0).gap_from_m < 0.33 && at(3.0).gap_to_m > 0.37,
+        "{:?}",
+        at(3.0)
+    );
+    // Near the robot the lowest ring has not come down yet: below 0.15 m nothing is seen at 1 m.
+    assert!(
+        at(1.0).gap_from_m < 0.04 && at(1.0).gap_to_m > 0.15,
+        "{:?}",
+        at(1.0)
+    );
+}
+
+/// The board's cells after one second of scans: whether a ray ended in their band.
+fn board_band_hits(x: f64) -> (usize, usize) {
+    let text = standing(&format!("{LIDAR}{}", board(x)));
+    let loaded = common::load_text(&format!("board-{x}"), &text).expect("valid");
+    let mut sim = Simulation::new(&loaded).expect("simulation");
+    let geometry = GridGeometry::new(0.05).expect("geometry");
+    let region = geometry
+        .region_covering((x - 0.1, -0.5), (x + 0.1, 0.5))
+        .expect("region");
+    let mut o = Observability::new(sim.world(), &geometry, region, RobotProfile::default());
+    while let Some(scan) = sim.next_scan() {
+        if scan.stamp_s > 1.0 {
+            break;
+        }
+        o.observe(&scan, 100.0);
+    }
+    (o.band_hit.iter().filter(|h| **h).count(), o.band_hit.len())
+}
+
+#[test]
+fn in_the_world_the_far_board_is_never_hit_and_the_near_one_is() {
+    let (far, n) = board_band_hits(3.0);
+    assert_eq!(far, 0, "no ray ended on the board at 3 m ({n} cells)");
+    let (near, _) = board_band_hits(1.0);
+    assert!(near > 0, "rays ended on the board at 1 m");
+}
