@@ -365,6 +365,26 @@ fn the_demo_runs_with_no_arguments_style_output() {
     assert_eq!(summary["num_scans"], 12);
     assert!(summary["num_cells_blocked"].as_u64().expect("count") > 0);
     assert!(out.join("traversability.png").is_file());
+    // The same files a closed-loop run gives an external planner, over the observed region.
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("planner/layers.json")).expect("layers.json"))
+            .expect("json");
+    let shape = sidecar["shape"].as_array().expect("shape");
+    let decisions = std::fs::read(out.join("planner/decisions.npy")).expect("decisions.npy");
+    let array = oeg::NpyArray::from_bytes(&out.join("planner/decisions.npy"), &decisions).expect("npy");
+    assert_eq!(
+        [array.rows as u64, array.cols as u64],
+        [shape[0].as_u64().expect("rows"), shape[1].as_u64().expect("cols")]
+    );
+    for f in [
+        "map.pgm",
+        "map.yaml",
+        "elevation_m.npy",
+        "variance_m2.npy",
+        "occupancy_probability.npy",
+    ] {
+        assert!(out.join("planner").join(f).is_file(), "{f}");
+    }
 }
 
 #[test]

@@ -395,3 +395,53 @@ fn a_scenario_command_never_runs_unless_allowed() {
     ]));
     assert!(marker.exists(), "allowed, the command ran");
 }
+
+#[test]
+fn check_path_finds_the_first_contact_and_passes_a_path_round_the_wall() {
+    let dir = temp_dir("nav", "check-path");
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).expect("path");
+        p
+    };
+    let straight = write("straight.csv", "x_m,y_m\n0,0\n5.5,0\n");
+    let e = err(&oeg(&[
+        "check-path",
+        s(&scene("nav_wall")),
+        s(&straight),
+        "--out",
+        s(&dir.join("a")),
+    ]));
+    assert!(e.contains("touches `wall`"), "{e}");
+    let check = json(&dir.join("a/path_check.json"));
+    let contact = &check["first_contact"];
+    // The wall's face is at x = 2.7 m; the footprint reaches 0.255 m ahead of the robot's centre.
+    let x = contact["x_m"].as_f64().expect("x");
+    assert!((2.4..2.5).contains(&x), "{check:#}");
+    assert!(check["cells_by_truth"]["step"].as_u64() > Some(0), "{check:#}");
+    let round = write(
+        "round.csv",
+        "# round the wall's lower end\n0,0\n2.8,-1.6\n5.5,0\n",
+    );
+    let out = ok(&oeg(&[
+        "check-path",
+        s(&scene("nav_wall")),
+        s(&round),
+        "--out",
+        s(&dir.join("b")),
+    ]));
+    assert!(out.contains("closest approach"), "{out}");
+    let check = json(&dir.join("b/path_check.json"));
+    assert_eq!(check["first_contact"], serde_json::Value::Null);
+    assert_eq!(check["contact_poses"], 0);
+    let broken = write("broken.csv", "0,0\n1,north\n");
+    let e = err(&oeg(&[
+        "check-path",
+        s(&scene("nav_wall")),
+        s(&broken),
+        "--out",
+        s(&dir.join("c")),
+    ]));
+    assert!(e.contains("broken.csv:2: y `north` is not a number"), "{e}");
+    assert!(!dir.join("c").exists(), "nothing written for a broken path");
+}

@@ -289,3 +289,67 @@ fn fixed_length_lists_with_extra_elements_are_errors_at_their_place() {
         assert!(position.is_some(), "{name}: {message}");
     }
 }
+
+#[test]
+fn bad_navigation_settings_are_errors_at_their_place() {
+    for (name, navigation, expected) in [
+        (
+            "nav-goal",
+            "goal_xy_m = [50.0, 0.0]",
+            "`navigation.goal_xy_m`: point [50.0, 0.0] m lies outside",
+        ),
+        (
+            "nav-replan",
+            "goal_xy_m = [5.0, 0.0]\nreplan_period_s = 0.01",
+            "`navigation.replan_period_s`",
+        ),
+        (
+            "nav-speed",
+            "goal_xy_m = [5.0, 0.0]\nspeed_m_s = 2.0",
+            "at most the robot's max_speed_m_s",
+        ),
+        (
+            "nav-lookahead",
+            "goal_xy_m = [5.0, 0.0]\nlookahead_m = -1.0",
+            "`navigation.lookahead_m`",
+        ),
+        (
+            "nav-timeout",
+            "goal_xy_m = [5.0, 0.0]\nplanner_timeout_s = 0.0",
+            "`navigation.planner_timeout_s`",
+        ),
+        (
+            "nav-command",
+            "goal_xy_m = [5.0, 0.0]\ncommand = [\" \"]",
+            "expected a command line",
+        ),
+        (
+            "nav-unknown-key",
+            "goal_xy_m = [5.0, 0.0]\ngoal_tol = 1.0",
+            "unknown field `goal_tol`",
+        ),
+        (
+            "nav-planner",
+            "goal_xy_m = [5.0, 0.0]\nplanner = \"dijkstra\"",
+            "unknown variant `dijkstra`",
+        ),
+    ] {
+        let text = common::scenario_text(&format!("[navigation]\n{navigation}\n"));
+        let (message, position) = error_of(name, &text);
+        assert!(message.contains(expected), "{name}: {message}");
+        let line = position.expect("a place in the file").line;
+        let navigation_line = text.lines().position(|l| l == "[navigation]").expect("table") + 1;
+        assert!(line >= navigation_line, "{name}: line {line}");
+    }
+    let loaded = common::load_text(
+        "nav-ok",
+        &common::scenario_text("[navigation]\ngoal_xy_m = [5.0, 0.0]\n"),
+    )
+    .expect("valid");
+    let n = loaded.scenario.navigation.expect("navigation");
+    assert_eq!(
+        (n.replan_period_s, n.goal_tolerance_m, n.lookahead_m),
+        (1.0, 0.25, 0.6)
+    );
+    assert_eq!(n.unknown, oeg::UnknownCells::Drivable);
+}

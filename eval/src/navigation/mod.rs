@@ -422,8 +422,10 @@ fn path_points(plan: &Plan, geometry: &oeg::GridGeometry, goal: (f64, f64)) -> V
     points
 }
 
-/// Which cells closed the way: the path that taking every uncertain and never-observed cell as drivable
-/// would give, counted by the map's class of its cells; `blocked` when even that finds none.
+/// Which cells closed the way: on the path that taking every uncertain and never-observed cell as drivable
+/// gives, the uncertain and never-observed cells the planner's rules forbid (on the path, or within the
+/// inflation radius of it when those cells are inflated), by class; `blocked` when even that path does not
+/// exist.
 fn closed_by(
     decisions: &[Traversability],
     inputs: &NavigationInputs<'_>,
@@ -438,26 +440,49 @@ fn closed_by(
     ) else {
         return Ok("outside the map region".into());
     };
+    let strict = planner_options(inputs);
     let relaxed = oeg::PlannerOptions {
         unknown: UnknownCells::Drivable,
         uncertain: UncertainCells::Drivable,
-        ..planner_options(inputs)
+        ..strict
     };
-    let plan = oeg::plan(&region, geometry.resolution_m(), decisions, a, b, &relaxed).map_err(|e| {
-        EvalError::Input {
-            path: inputs.scenario.name.clone().into(),
-            message: format!("planner: {e}"),
-        }
+    let res = geometry.resolution_m();
+    let plan = oeg::plan(&region, res, decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
+        path: inputs.scenario.name.clone().into(),
+        message: format!("planner: {e}"),
     })?;
     let Some(plan) = plan else {
         return Ok("blocked".into());
     };
-    let count = |class: Traversability| {
-        plan.cells
-            .iter()
-            .filter(|c| region.offset(**c).is_some_and(|k| decisions[k] == class))
-            .count()
-    };
+    let reach = (strict.inflation_radius_m / res).ceil() as i32;
+    let r2 = (strict.inflation_radius_m / res).powi(2) + 1e-9;
+    let mut closing: Vec<usize> = Vec::new();
+    for c in &plan.cells {
+        for dj in -reach..=reach {
+            for di in -reach..=reach {
+                let Some(k) = region.offset(CellIndex::new(c.i + di, c.j + dj)) else {
+                    continue;
+                };
+                let on_path = di == 0 && dj == 0;
+                let within = f64::from(di * di + dj * dj) <= r2;
+                let forbids = match decisions[k] {
+                    Traversability::Uncertain => strict.uncertain == UncertainCells::Blocked && within,
+                    Traversability::Unknown => match strict.unknown {
+                        UnknownCells::Avoid => on_path,
+                        UnknownCells::Inflate => within,
+                        UnknownCells::Drivable => false,
+                    },
+                    _ => false,
+                };
+                if forbids {
+                    closing.push(k);
+                }
+            }
+        }
+    }
+    closing.sort_unstable();
+    closing.dedup();
+    let count = |class: Traversability| closing.iter().filter(|k| decisions[**k] == class).count();
     let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
     Ok(match (uncertain, unknown) {
         (0, 0) => "blocked (the inflation around blocked cells)".into(),

@@ -35,7 +35,7 @@ use crate::world::{Actors, HitKind, RayStart, World};
 pub const DEPTH_EDGE_M: f64 = 0.1;
 
 /// One reading of a scan, in the sensor frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct SensorRay {
     /// Hit or no return.
     pub kind: RayKind,
@@ -47,6 +47,16 @@ pub struct SensorRay {
     /// infinite when it hit nothing within range, NaN when it told nothing (a hole, a dropout, a hit outside
     /// the sensor's range) or the scan was read from a log. The observability truth reads it.
     pub true_range_m: f32,
+}
+
+impl PartialEq for SensorRay {
+    /// Field by field, with the true range compared bit for bit: a ray that told nothing (NaN) equals itself.
+    fn eq(&self, other: &Self) -> bool {
+        self.kind == other.kind
+            && self.vector_in_sensor == other.vector_in_sensor
+            && self.range_sigma_m == other.range_sigma_m
+            && self.true_range_m.to_bits() == other.true_range_m.to_bits()
+    }
 }
 
 /// How many readings each obstacle returned over a run: whether the sensors saw it at all. An obstacle with none

@@ -833,6 +833,48 @@ mod tests {
     }
 
     #[test]
+    fn a_goal_beyond_the_field_is_navigated_to_in_closed_loop() {
+        let (path, base) = base();
+        let g = GenerateSpec {
+            goal_beyond_m: 2.0,
+            navigate: true,
+            navigation_time_s: 30.0,
+            ..spec()
+        };
+        let mut doc = base.clone();
+        g.place(3, &mut doc);
+        let text = toml::to_string(&doc).expect("text");
+        let s = sim::scenario::load_str(&path, &text).expect("valid").scenario;
+        let n = s.navigation.expect("a closed-loop run");
+        assert_eq!(n.goal_xy_m, [g.field_end_m() + 2.0, 0.0]);
+        assert_eq!(n.time_limit_s, Some(30.0));
+        assert!(
+            s.map.max_xy_m[0] >= n.goal_xy_m[0] + 1.0,
+            "the region holds the goal"
+        );
+        assert!(s.duration_s >= g.drive_length_m / g.speed_m_s + 30.0);
+        for o in &s.obstacles {
+            let [x, y] = o.center_xy_m();
+            assert!(
+                (x - n.goal_xy_m[0]).hypot(y - n.goal_xy_m[1]) > 0.6,
+                "{o:?} at the goal"
+            );
+        }
+        // Without `navigate`, the goal is the planner check's only.
+        let mut open = base;
+        GenerateSpec {
+            goal_beyond_m: 2.0,
+            ..spec()
+        }
+        .place(3, &mut open);
+        assert!(!open.contains_key("navigation"));
+        assert_eq!(
+            open["planner"]["goal_xy_m"][0].as_float(),
+            Some(g.field_end_m() + 2.0)
+        );
+    }
+
+    #[test]
     fn heights_fall_in_their_ranges_and_straddle_the_step() {
         let (_, base) = base();
         let g = spec();
