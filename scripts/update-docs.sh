@@ -46,4 +46,11 @@ for study in "$@"; do
     "$oeg" sweep report "$work/$study" >/dev/null
     page "docs/results/$study.md" "The study \`$study\`" \
         "oeg sweep run sweeps/$study.toml --out DIR && oeg sweep report DIR" "$work/$study/summary.md"
+    # The plots of what no ray could tell and of the closed loops, where the study has them.
+    for plot in "$work/$study"/plots/blind_cells_vs_*.png "$work/$study"/plots/nav_*_vs_*.png; do
+        [ -f "$plot" ] || continue
+        mkdir -p "docs/images/sweeps/$study"
+        cp "$plot" "docs/images/sweeps/$study/"
+        echo "wrote docs/images/sweeps/$study/$(basename "$plot")"
+    done
 done
