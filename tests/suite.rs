@@ -80,6 +80,28 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     assert!(csv.starts_with("scenario,file,status,coverage,elevation_rmse_m,unsafe_step_cells"));
 
     // The decision-boundary scenes map no truly blocked cell drivable, per scene and per obstacle.
+    // The unsafe cells split into those a ray could have told about and the blind ones; the totals are the
+    // verdict's as before (the golden map digests below pin the maps they count).
+    for row in rows {
+        let name = row["scenario"].as_str().expect("name");
+        let m: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(name).join("metrics.json")).expect("metrics"))
+                .expect("json");
+        let n = |k: &str| m[k].as_u64().unwrap_or_else(|| panic!("{name}: {k}"));
+        assert_eq!(
+            n("unsafe_observable_cells") + n("blind_cells"),
+            n("unsafe_cells"),
+            "{name}"
+        );
+        assert_eq!(
+            n("blind_step_cells") + n("blind_clearance_cells"),
+            n("blind_cells"),
+            "{name}"
+        );
+        assert!(n("blind_step_cells") <= n("unsafe_step_cells"), "{name}");
+        assert!(n("plan_blind_cells") <= n("plan_unsafe_cells"), "{name}");
+        assert_eq!(row["blind_cells"], m["blind_cells"], "{name}");
+    }
     for scenario in ["curb_staircase", "boards_and_branches"] {
         let row = rows
             .iter()

@@ -47,9 +47,21 @@ pub const METRICS: [(&str, &str, bool); 10] = [
 pub const OPTIONAL_METRICS: [(&str, &str, bool); 5] = [
     ("blind_cells", "unsafe cells no ray could tell about", false),
     ("plan_blind_cells", "blind cells on the planned path", false),
-    ("nav_reached", "rate of closed-loop runs that reached the goal", true),
-    ("nav_contacts", "contacts with truly blocked cells per closed-loop run", false),
-    ("nav_closest_approach_m", "closest approach to a truly blocked cell [m]", false),
+    (
+        "nav_reached",
+        "rate of closed-loop runs that reached the goal",
+        true,
+    ),
+    (
+        "nav_contacts",
+        "contacts with truly blocked cells per closed-loop run",
+        false,
+    ),
+    (
+        "nav_closest_approach_m",
+        "closest approach to a truly blocked cell [m]",
+        false,
+    ),
 ];
 
 /// One row of `summary.csv`.
@@ -342,9 +354,11 @@ impl Study {
         };
         for axis in axis_list {
             let groups = self.points_along(axis);
-            let optional = OPTIONAL_METRICS
-                .into_iter()
-                .filter(|(metric, _, is_rate)| groups.values().any(|runs| summarize(runs, metric, *is_rate).n > 0));
+            let optional = OPTIONAL_METRICS.into_iter().filter(|(metric, _, is_rate)| {
+                groups
+                    .values()
+                    .any(|runs| summarize(runs, metric, *is_rate).n > 0)
+            });
             for (metric, label, is_rate) in METRICS.into_iter().chain(optional) {
                 let mut lines: BTreeMap<String, Vec<Point>> = BTreeMap::new();
                 for ((line, value), runs) in &groups {
