@@ -165,9 +165,14 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     assert!(metric("trees_threshold", "plan_length_ratio") <= 1.01);
     // The staircase's truth lets the robot over the 3.4 cm curb; the map, which maps it blocked, crosses at 3 cm.
     assert!(metric("curb_staircase", "plan_length_ratio") > 1.03);
+    // No planned path runs near a true obstacle. The closed-loop scenes are judged by their contacts instead:
+    // two of them (`nav_curbs`, `nav_blind_spot`) show the paper's model mapping a 5 cm curb low and a board's
+    // underside open, and the plan on their final map crosses what the robot met (their `[expectations]`).
     for row in rows {
         let name = row["scenario"].as_str().expect("name");
-        assert_eq!(metric(name, "plan_unsafe_cells"), 0.0, "{name}");
+        if row["nav_reached"].is_null() {
+            assert_eq!(metric(name, "plan_unsafe_cells"), 0.0, "{name}");
+        }
     }
 
     check_golden(&out);
