@@ -89,13 +89,7 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let truth = crate::pipeline::truth_of(s, &world, &geometry)?;
     let region = truth.region;
     let res = geometry.resolution_m();
-    let (x0, y0) = (f64::from(region.min.i) * res, f64::from(region.min.j) * res);
-    let extent = [
-        x0,
-        x0 + f64::from(region.num_x) * res,
-        y0,
-        y0 + f64::from(region.num_y) * res,
-    ];
+    let extent = crate::navigation::external::extent_of(&region, res);
     let points = crate::navigation::external::read_path(&job.path, extent).map_err(|f| EvalError::Input {
         path: job.path.clone(),
         message: f.message,

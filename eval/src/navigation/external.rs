@@ -41,6 +41,20 @@ pub struct PlannerFailure {
 /// The region's extent a path must stay in: min x, max x, min y, max y, metres.
 pub type Extent = [f64; 4];
 
+/// The extent of `region`'s cells of `resolution_m`.
+pub fn extent_of(region: &oeg::CellRegion, resolution_m: f64) -> Extent {
+    let (x0, y0) = (
+        f64::from(region.min.i) * resolution_m,
+        f64::from(region.min.j) * resolution_m,
+    );
+    [
+        x0,
+        x0 + f64::from(region.num_x) * resolution_m,
+        y0,
+        y0 + f64::from(region.num_y) * resolution_m,
+    ]
+}
+
 impl ExternalPlanner {
     /// Writes `files` (the map) into the exchange folder, runs the command with
     /// `START_X START_Y GOAL_X GOAL_Y MAP_YAML LAYERS_JSON PATH_CSV` after its own arguments, and reads the

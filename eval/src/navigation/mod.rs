@@ -366,14 +366,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
             )?;
             // The map itself too, for planners that read this project's format (`oeg plan`).
             files.push(("map.oeg".into(), oeg::map_to_bytes(map)));
-            let res = geometry.resolution_m();
-            let (x0, y0) = (f64::from(region.min.i) * res, f64::from(region.min.j) * res);
-            let extent = [
-                x0,
-                x0 + f64::from(region.num_x) * res,
-                y0,
-                y0 + f64::from(region.num_y) * res,
-            ];
+            let extent = external::extent_of(&region, geometry.resolution_m());
             match planner.call(&files, (from.x_m, from.y_m), goal, extent)? {
                 Ok(points) => Some(points),
                 Err(f)
