@@ -283,9 +283,10 @@ fn a_far_point_or_pose_is_refused_at_once_naming_the_file_and_the_node() {
 }
 
 #[test]
-fn a_failure_after_the_map_is_built_writes_nothing_and_its_memory_error_names_the_inputs() {
-    // Two small scans 2.8 km apart: the sparse map is small, but the dense images over its extent (1.6 billion
-    // cells at 0.05 m) are over the memory limit. The map is built; the job fails at the images.
+fn images_follow_what_the_map_holds_and_dense_planner_files_fail_whole_naming_the_inputs() {
+    // Two small scans 2.8 km apart: the sparse map is small, its extent is 1.6 billion cells at 0.05 m. The
+    // images read only the cells they show, so they are drawn in well under a second of work; the planner's
+    // dense files over that extent are over the memory limit, and then nothing is written.
     let dir = temp_dir("map", "images");
     let input = dir.join("apart.graph");
     let scans: Vec<Scan> = [(0.0, 0.0), (2000.0, 2000.0)]
@@ -299,19 +300,42 @@ fn a_failure_after_the_map_is_built_writes_nothing_and_its_memory_error_names_th
     write_graph(&input, &scans).expect("graph");
     let out = dir.join("out");
     let o = map_at(&input, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for image in [
+        "occupancy.png",
+        "elevation.png",
+        "variance.png",
+        "traversability.png",
+    ] {
+        assert!(out.join(image).is_file(), "{image}");
+    }
+    assert!(!out.join("planner").exists(), "planner files only when asked for");
+
+    let out = dir.join("out_planner");
+    let o = oeg(&[
+        "map",
+        input.to_str().expect("utf8"),
+        "--resolution",
+        "0.05",
+        "--planner-files",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("memory limit"), "{err}");
     assert!(
-        err.contains("drawing the layer images") && err.contains("apart.graph") && err.contains("out:"),
+        err.contains("writing the planner files")
+            && err.contains("apart.graph")
+            && err.contains("out_planner:"),
         "the error names the inputs and the output folder: {err}"
     );
-    assert!(!out.exists(), "no map.oeg without its images");
+    assert!(!out.exists(), "no map.oeg without its planner files");
     let left: Vec<_> = std::fs::read_dir(&dir)
         .expect("dir")
         .map(|e| e.expect("entry").file_name())
         .collect();
-    assert_eq!(left.len(), 1, "no staging left: {left:?}");
+    assert_eq!(left.len(), 2, "no staging left: {left:?}");
 }
 
 #[test]

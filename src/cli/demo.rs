@@ -21,6 +21,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         resolution: 0.05,
         out: args.out.clone(),
         overrides: vec!["map.model.max_height_m=0.5".into()],
+        planner_files: true,
         memory_limit_mib: oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20,
     };
     let report = oeg_eval::jobs::map::demo::run(map_args.job()?, &Progress::new(0, "scans"))?;

@@ -26,6 +26,11 @@ pub struct MapArgs {
     /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true). README, "Settings".
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
+    /// Also write the files a planner reads over the observed region, in `planner/`: the decisions as a nav2
+    /// map (PGM and YAML) and every layer as `.npy` (docs/planner-protocol.md). Dense: their size follows the
+    /// region's extent.
+    #[arg(long)]
+    pub planner_files: bool,
     /// Memory limit of the map in MiB.
     #[arg(long, default_value_t = oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20)]
     pub memory_limit_mib: u64,
@@ -53,6 +58,7 @@ impl MapArgs {
             profile: settings.robot,
             rule: settings.map.traversability,
             keep_inputs: false,
+            planner_files: self.planner_files,
         })
     }
 }

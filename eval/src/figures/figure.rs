@@ -87,13 +87,22 @@ impl Figure {
             plot_w,
             plot_h,
         };
-        for py in 0..plot_h {
-            let from_bottom = plot_h - 1 - py;
-            let v = ((from_bottom as f64 + 0.5) / px_per_cell) as u32;
-            for px in 0..plot_w {
-                let u = ((px as f64 + 0.5) / px_per_cell) as u32;
-                let color = cell_color(region.cell_at(u.min(region.num_x - 1), v.min(region.num_y - 1)));
-                fig.canvas.set((LEFT + px) as i64, (TOP + py) as i64, color);
+        // Each cell under the plot is coloured once and fills its block of pixels: a figure costs
+        // min(cells, pixels) colour look-ups, whatever the region's extent.
+        let rows = pixel_runs(plot_h, px_per_cell, region.num_y);
+        let cols = pixel_runs(plot_w, px_per_cell, region.num_x);
+        for &(v, py0, py1) in &rows {
+            for &(u, px0, px1) in &cols {
+                let color = cell_color(region.cell_at(u, v));
+                // Rows count from the bottom of the plot.
+                let top = TOP + plot_h - py1;
+                fig.canvas.fill_rect(
+                    (LEFT + px0) as i64,
+                    top as i64,
+                    (px1 - px0) as i64,
+                    (py1 - py0) as i64,
+                    color,
+                );
             }
         }
         fig.draw_axes();
@@ -229,6 +238,21 @@ impl Figure {
     }
 }
 
+/// The cells sampled along one axis of a plot of `num_px` pixels, `px_per_cell` pixels a cell, over
+/// `num_cells` cells: `(cell, first pixel, end pixel)` for each cell at the centre of at least one pixel, in
+/// order. Pixel `p` shows the cell under its centre.
+fn pixel_runs(num_px: usize, px_per_cell: f64, num_cells: u32) -> Vec<(u32, usize, usize)> {
+    let mut runs: Vec<(u32, usize, usize)> = Vec::new();
+    for p in 0..num_px {
+        let cell = (((p as f64 + 0.5) / px_per_cell) as u32).min(num_cells.saturating_sub(1));
+        match runs.last_mut() {
+            Some(run) if run.0 == cell => run.2 = p + 1,
+            _ => runs.push((cell, p, p + 1)),
+        }
+    }
+    runs
+}
+
 /// "Nice" tick positions (steps of 1, 2 or 5 times a power of ten, about six of them) within `[lo, hi]`, with
 /// their labels.
 pub fn ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
@@ -300,6 +324,18 @@ mod tests {
         let t = ticks(0.0, 0.5);
         assert_eq!(t[1].1, "0.1");
         assert!(ticks(2.0, 2.0).len() == 1);
+    }
+
+    #[test]
+    fn pixel_runs_cover_the_axis_once_in_order() {
+        // Enlarged: 3 cells at 4 pixels each.
+        assert_eq!(pixel_runs(12, 4.0, 3), vec![(0, 0, 4), (1, 4, 8), (2, 8, 12)]);
+        // Sampled: 10 pixels over a million cells look up 10 cells.
+        let runs = pixel_runs(10, 10.0 / 1e6, 1_000_000);
+        assert_eq!(runs.len(), 10);
+        assert_eq!(runs[0], (50_000, 0, 1));
+        assert!(runs.windows(2).all(|w| w[0].2 == w[1].1 && w[0].0 < w[1].0));
+        assert_eq!(runs.last().map(|r| r.2), Some(10));
     }
 
     #[test]

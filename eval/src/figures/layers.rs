@@ -2,7 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use oeg::{Layer, LayerKind, Map, Raster, RobotProfile, Traversability, TraversabilityRule};
+use oeg::{
+    CellIndex, CellRegion, Layer, LayerKind, Map, Raster, RobotProfile, Traversability, TraversabilityRule,
+};
 
 use super::canvas::Rgb;
 use super::colormap::Colormap;
@@ -18,9 +20,30 @@ pub fn scalar_figure(
     colormap: Colormap,
     range: Option<(f32, f32)>,
 ) -> Figure {
-    let (min, max) = range
-        .or_else(|| finite_range(&layer.values))
-        .unwrap_or((0.0, 1.0));
+    let range = range.or_else(|| finite_range(&layer.values));
+    scalar_figure_of(
+        layer.region,
+        layer.resolution_m,
+        title,
+        label,
+        colormap,
+        range,
+        |c| layer.get(c).unwrap_or(f32::NAN),
+    )
+}
+
+/// A continuous quantity over `region`, read cell by cell (only the cells the figure shows are read):
+/// non-finite values in [`NO_DATA`] grey, the rest coloured over `range` (default: 0 to 1).
+pub fn scalar_figure_of(
+    region: CellRegion,
+    resolution_m: f64,
+    title: &str,
+    label: &str,
+    colormap: Colormap,
+    range: Option<(f32, f32)>,
+    value: impl Fn(CellIndex) -> f32,
+) -> Figure {
+    let (min, max) = range.unwrap_or((0.0, 1.0));
     let legend = Legend::ColorBar {
         colormap,
         min,
@@ -28,11 +51,11 @@ pub fn scalar_figure(
         label: label.to_string(),
     };
     Figure::new(
-        layer.region,
-        layer.resolution_m,
+        region,
+        resolution_m,
         title,
-        |c| match layer.get(c) {
-            Some(v) if v.is_finite() => colormap.color((v - min) / (max - min)),
+        |c| match value(c) {
+            v if v.is_finite() => colormap.color((v - min) / (max - min)),
             _ => NO_DATA,
         },
         &legend,
@@ -61,6 +84,19 @@ pub const TRAVERSABILITY_CLASSES: [(Traversability, &str); 5] = [
 
 /// The traversability layer with a class legend.
 pub fn traversability_figure(layer: &Raster<Traversability>, title: &str) -> Figure {
+    traversability_figure_of(layer.region, layer.resolution_m, title, |c| {
+        layer.get(c).unwrap_or(Traversability::Unknown)
+    })
+}
+
+/// The decisions over `region`, read cell by cell (only the cells the figure shows are read), with a class
+/// legend.
+pub fn traversability_figure_of(
+    region: CellRegion,
+    resolution_m: f64,
+    title: &str,
+    class: impl Fn(CellIndex) -> Traversability,
+) -> Figure {
     let legend = Legend::Classes(
         TRAVERSABILITY_CLASSES
             .iter()
@@ -68,25 +104,37 @@ pub fn traversability_figure(layer: &Raster<Traversability>, title: &str) -> Fig
             .collect(),
     );
     Figure::new(
-        layer.region,
-        layer.resolution_m,
+        region,
+        resolution_m,
         title,
-        |c| traversability_color(layer.get(c).unwrap_or(Traversability::Unknown)),
+        |c| traversability_color(class(c)),
         &legend,
     )
 }
 
+/// The finite range of one layer over the observed cells in `region`: the cost follows what the map holds,
+/// not the region's extent.
+fn observed_range(map: &Map, kind: LayerKind, region: CellRegion) -> Option<(f32, f32)> {
+    let values: Vec<f32> = map
+        .observed_cells()
+        .filter(|(c, _)| region.contains(*c))
+        .map(|(_, cell)| kind.value(&cell))
+        .collect();
+    finite_range(&values)
+}
+
 /// Writes `occupancy.png`, `elevation.png`, `variance.png` and `traversability.png` over `region` (default: the
-/// observed region). An empty map with no region given gets no images.
+/// observed region). An empty map with no region given gets no images. The images read only the cells they
+/// show, so their cost follows the image's size and the map's observed cells, never the region's extent.
 ///
 /// # Errors
-/// A failed write, or a region over the map's memory limit.
+/// A failed write.
 pub fn write_layer_images(
     map: &Map,
     out_dir: &Path,
     profile: &RobotProfile,
     rule: TraversabilityRule,
-    region: Option<oeg::CellRegion>,
+    region: Option<CellRegion>,
 ) -> Result<Vec<PathBuf>> {
     let Some(region) = region.or_else(|| map.observed_region()) else {
         return Ok(Vec::new());
@@ -120,19 +168,19 @@ pub fn write_layer_images(
         ),
     ];
     for (name, kind, title, label, colormap, range) in layers {
-        let layer = map.layer(kind, region)?;
+        let range = range.or_else(|| observed_range(map, kind, region));
         let title = format!("{title} ({res} m cells)");
         let path = out_dir.join(name);
-        write_bytes(
-            &path,
-            &scalar_figure(&layer, &title, label, colormap, range).to_png(),
-        )?;
+        let figure = scalar_figure_of(region, res, &title, label, colormap, range, |c| {
+            kind.value(&map.cell(c))
+        });
+        write_bytes(&path, &figure.to_png())?;
         files.push(path);
     }
-    let classes = map.traversability_layer(region, profile, rule)?;
     let title = format!("Traversability (max step {} m)", profile.max_step_m);
     let path = out_dir.join("traversability.png");
-    write_bytes(&path, &traversability_figure(&classes, &title).to_png())?;
+    let figure = traversability_figure_of(region, res, &title, |c| map.traversability(c, profile, rule));
+    write_bytes(&path, &figure.to_png())?;
     files.push(path);
     Ok(files)
 }

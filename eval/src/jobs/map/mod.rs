@@ -83,6 +83,9 @@ pub struct MapJob {
     pub rule: TraversabilityRule,
     /// Copy the input files into the output folder beside the map (the demo keeps its scans there).
     pub keep_inputs: bool,
+    /// Write the files a planner reads (`planner/`: a nav2 map and `.npy` layers) over the observed region.
+    /// Their size follows the region's extent, not what the map holds.
+    pub planner_files: bool,
 }
 
 /// `summary.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
@@ -335,34 +338,38 @@ fn write_map_files(job: &MapJob, map: &Map, stage: &Path) -> Result<(Vec<PathBuf
     let map_file_bytes = map_file.len() as u64;
     drop(map_file);
     files.push(map_path);
-    // The images are drawn from a raster of the observed region at the map's resolution, which counts against
-    // the memory limit with the map: an error there names the images' folder and the region's size.
-    let images = write_layer_images(map, stage, &job.profile, job.rule, None).map_err(|e| match e {
-        EvalError::Map(e @ oeg::Error::MemoryLimit { .. }) => EvalError::Input {
-            path: job.out_dir.clone(),
-            message: format!(
-                "drawing the layer images ({}) of the map of {}: {e}",
-                map.observed_region()
-                    .map(|r| format!("{} x {} cells of the observed region", r.num_x, r.num_y))
-                    .unwrap_or_default(),
-                job.inputs
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        },
-        other => other,
-    })?;
+    let images = write_layer_images(map, stage, &job.profile, job.rule, None)?;
     files.extend(images);
     // The decisions and layers as files a planner reads (`docs/planner-protocol.md`), over the observed
-    // region: a map built from real data can feed a planner too.
-    if let Some(region) = map.observed_region() {
+    // region: a map built from real data can feed a planner too. Dense files follow the region's extent, so
+    // they are written when asked for.
+    if let Some(region) = map.observed_region().filter(|_| job.planner_files) {
         let dir = stage.join("planner");
         crate::output::create_dir(&dir)?;
-        for (name, bytes) in
-            oeg::planner_files(map, region, &job.profile, job.rule, oeg::UncertainCells::Blocked)?
-        {
+        let planner_files = oeg::planner_files(
+            map,
+            region,
+            &job.profile,
+            job.rule,
+            oeg::UncertainCells::Blocked,
+        )
+        .map_err(|e| match e {
+            e @ oeg::Error::MemoryLimit { .. } => EvalError::Input {
+                path: job.out_dir.clone(),
+                message: format!(
+                    "writing the planner files ({} x {} cells of the observed region) of the map of {}: {e}",
+                    region.num_x,
+                    region.num_y,
+                    job.inputs
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            },
+            other => EvalError::Map(other),
+        })?;
+        for (name, bytes) in planner_files {
             let path = dir.join(name);
             write_bytes(&path, &bytes)?;
             files.push(path);
