@@ -330,10 +330,10 @@ mod tests {
     fn pixel_runs_cover_the_axis_once_in_order() {
         // Enlarged: 3 cells at 4 pixels each.
         assert_eq!(pixel_runs(12, 4.0, 3), vec![(0, 0, 4), (1, 4, 8), (2, 8, 12)]);
-        // Sampled: 10 pixels over a million cells look up 10 cells.
-        let runs = pixel_runs(10, 10.0 / 1e6, 1_000_000);
-        assert_eq!(runs.len(), 10);
-        assert_eq!(runs[0], (50_000, 0, 1));
+        // Sampled: 8 pixels over a million cells look up 8 cells, each under a pixel's centre.
+        let runs = pixel_runs(8, 1.0 / 131_072.0, 1_000_000);
+        assert_eq!(runs.len(), 8);
+        assert_eq!(runs[0], (65_536, 0, 1));
         assert!(runs.windows(2).all(|w| w[0].2 == w[1].1 && w[0].0 < w[1].0));
         assert_eq!(runs.last().map(|r| r.2), Some(10));
     }
