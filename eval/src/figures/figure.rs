@@ -335,7 +335,7 @@ mod tests {
         assert_eq!(runs.len(), 8);
         assert_eq!(runs[0], (65_536, 0, 1));
         assert!(runs.windows(2).all(|w| w[0].2 == w[1].1 && w[0].0 < w[1].0));
-        assert_eq!(runs.last().map(|r| r.2), Some(10));
+        assert_eq!(runs.last().map(|r| r.2), Some(8));
     }
 
     #[test]
