@@ -1,5 +1,7 @@
 //! An RGB pixel buffer with the few drawing operations the figures need, and PNG encoding.
 
+use super::font;
+
 /// An RGB colour.
 pub type Rgb = [u8; 3];
 
@@ -7,9 +9,6 @@ pub type Rgb = [u8; 3];
 pub const BLACK: Rgb = [0, 0, 0];
 /// White.
 pub const WHITE: Rgb = [255, 255, 255];
-
-/// Text glyphs are 8 x 8 pixels at scale 1 (the public-domain font8x8 basic Latin set).
-pub const GLYPH_PX: usize = 8;
 
 /// A width x height RGB image, row 0 at the top.
 #[derive(Debug, Clone, PartialEq)]
@@ -149,45 +148,39 @@ impl Canvas {
         }
     }
 
-    /// Text with its top-left corner at `(x, y)`, each glyph pixel drawn `scale` x `scale`. Characters outside
-    /// ASCII are drawn as `?`.
-    pub fn text(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
-        let s = scale.max(1) as i64;
-        for (n, ch) in text.chars().enumerate() {
-            let code = if ch.is_ascii() { ch as usize } else { '?' as usize };
-            let glyph = font8x8::legacy::BASIC_LEGACY[code];
-            let gx = x + n as i64 * GLYPH_PX as i64 * s;
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits & (1 << col) != 0 {
-                        self.fill_rect(gx + col * s, y + row as i64 * s, s, s, color);
-                    }
-                }
+    /// Blends `color` over the pixel at `(x, y)` with opacity `alpha` in [0, 1]; outside the canvas it does
+    /// nothing. Rounded the same way everywhere, so the same drawing gives the same bytes.
+    pub fn blend(&mut self, x: i64, y: i64, color: Rgb, alpha: f32) {
+        if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+            let k = (y as usize * self.width + x as usize) * 3;
+            for (c, dst) in self.pixels[k..k + 3].iter_mut().enumerate() {
+                let mixed = f32::from(*dst) + (f32::from(color[c]) - f32::from(*dst)) * alpha;
+                *dst = mixed.round().clamp(0.0, 255.0) as u8;
             }
         }
+    }
+
+    /// Anti-aliased text (the embedded DejaVu Sans, [`super::font`]) with the top-left corner of its line at
+    /// `(x, y)`; `scale` 1 for labels, 2 for titles.
+    pub fn text(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
+        font::rasterize(text, scale, |gx, gy, c| self.blend(x + gx, y + gy, color, c));
     }
 
     /// Width in pixels of `text` at `scale`.
     pub fn text_width(text: &str, scale: usize) -> usize {
-        text.chars().count() * GLYPH_PX * scale.max(1)
+        font::width(text, scale)
     }
 
-    /// Text rotated 90 degrees counter-clockwise (reading upwards), its glyphs' top-left at `(x, y)` being the
-    /// bottom-left of the string. For vertical axis labels.
+    /// Height in pixels of a line of text at `scale`.
+    pub fn text_height(scale: usize) -> usize {
+        font::line_height(scale)
+    }
+
+    /// Text rotated 90 degrees counter-clockwise (reading upwards), for vertical axis labels: `(x, y)` is the
+    /// bottom-left corner of the rotated line (where the text starts).
     pub fn text_vertical(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
-        let s = scale.max(1) as i64;
-        for (n, ch) in text.chars().enumerate() {
-            let code = if ch.is_ascii() { ch as usize } else { '?' as usize };
-            let glyph = font8x8::legacy::BASIC_LEGACY[code];
-            let gy = y - n as i64 * GLYPH_PX as i64 * s;
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits & (1 << col) != 0 {
-                        self.fill_rect(x + row as i64 * s, gy - col * s, s, s, color);
-                    }
-                }
-            }
-        }
+        // A pixel (gx, gy) of the upright line lands gx up from the start and gy right of the left edge.
+        font::rasterize(text, scale, |gx, gy, c| self.blend(x + gy, y - gx, color, c));
     }
 
     /// `images` side by side, left to right, `gap` white pixels apart, top-aligned on a white background.
@@ -263,14 +256,43 @@ mod tests {
     }
 
     #[test]
-    fn text_draws_glyph_pixels() {
-        let mut c = Canvas::new(40, 10, WHITE);
-        c.text(0, 0, "1", 1, BLACK);
-        let dark = (0..8)
-            .flat_map(|y| (0..8).map(move |x| (x, y)))
-            .filter(|&(x, y)| c.pixel(x, y) == Some(BLACK));
-        assert!(dark.count() > 5);
-        assert_eq!(Canvas::text_width("abc", 2), 48);
+    fn text_draws_inside_its_line_box_and_vertical_text_turns_it() {
+        let (w, h) = (Canvas::text_width("x [m]", 1), Canvas::text_height(1));
+        let mut c = Canvas::new(w + 20, h + 20, WHITE);
+        c.text(10, 10, "x [m]", 1, BLACK);
+        let inked: Vec<(usize, usize)> = (0..c.height())
+            .flat_map(|y| (0..c.width()).map(move |x| (x, y)))
+            .filter(|&(x, y)| c.pixel(x, y) != Some(WHITE))
+            .collect();
+        assert!(inked.len() > 20);
+        assert!(
+            inked
+                .iter()
+                .all(|&(x, y)| (10..10 + w + 1).contains(&x) && (10..10 + h).contains(&y))
+        );
+        // Stems are nearly black, edges in between.
+        assert!(
+            inked
+                .iter()
+                .any(|&(x, y)| c.pixel(x, y).is_some_and(|p| p[0] < 40))
+        );
+        assert!(
+            inked
+                .iter()
+                .any(|&(x, y)| c.pixel(x, y).is_some_and(|p| (80..200).contains(&p[0])))
+        );
+        // Turned: as tall as the line was wide, reading upwards from (x, y).
+        let mut v = Canvas::new(h + 20, w + 20, WHITE);
+        v.text_vertical(10, (w + 10) as i64, "x [m]", 1, BLACK);
+        let inked = (0..v.height())
+            .flat_map(|y| (0..v.width()).map(move |x| (x, y)))
+            .filter(|&(x, y)| v.pixel(x, y) != Some(WHITE));
+        assert!(
+            inked
+                .clone()
+                .all(|(x, y)| (10..10 + h).contains(&x) && (10..=w + 10).contains(&y))
+        );
+        assert!(inked.count() > 20);
     }
 
     #[test]

@@ -114,7 +114,7 @@ impl Chart {
         } else {
             1
         };
-        c.text(8, 12, &self.title, scale, BLACK);
+        c.text(8, 8, &self.title, scale, BLACK);
         c
     }
 
@@ -225,13 +225,14 @@ impl Chart {
 
     /// One swatch and label per series, and the note under them.
     fn draw_legend(&self, c: &mut Canvas) {
+        let th = Canvas::text_height(1) as i64;
         let lx = (LEFT + PLOT_W + LEGEND_GAP) as i64;
         for (k, s) in self.series.iter().enumerate() {
             let y = TOP as i64 + 20 * k as i64;
             let color = SERIES_COLORS[k % SERIES_COLORS.len()];
             c.fill_rect(lx, y + 2, 20, 10, lighten(color));
             c.fill_rect(lx, y + 6, 20, 3, color);
-            c.text(lx + 28, y + 3, &s.label, 1, BLACK);
+            c.text(lx + 28, y + 7 - th / 2, &s.label, 1, BLACK);
         }
         c.text(
             lx,
@@ -243,6 +244,7 @@ impl Chart {
     }
 
     fn draw_axes(&self, c: &mut Canvas, (x0, x1): (f64, f64), (y0, y1): (f64, f64)) {
+        let th = Canvas::text_height(1) as i64;
         let (l, t) = (LEFT as i64, TOP as i64);
         let (w, h) = (PLOT_W as i64, PLOT_H as i64);
         c.stroke_rect(l - 1, t - 1, w + 2, h + 2, BLACK);
@@ -250,16 +252,16 @@ impl Chart {
             let x = l + ((v - x0) / (x1 - x0) * w as f64).round() as i64;
             c.line(x, t + h, x, t + h + 4, BLACK);
             let tw = Canvas::text_width(&label, 1) as i64;
-            c.text(x - tw / 2, t + h + 8, &label, 1, BLACK);
+            c.text(x - tw / 2, t + h + 7, &label, 1, BLACK);
         }
         for (v, label) in ticks(y0, y1) {
             let y = t + h - ((v - y0) / (y1 - y0) * h as f64).round() as i64;
             c.line(l - 5, y, l - 1, y, BLACK);
             let tw = Canvas::text_width(&label, 1) as i64;
-            c.text(l - 8 - tw, y - 4, &label, 1, BLACK);
+            c.text(l - 8 - tw, y - th / 2, &label, 1, BLACK);
         }
         let xw = Canvas::text_width(&self.x_label, 1) as i64;
-        c.text(l + w / 2 - xw / 2, t + h + 30, &self.x_label, 1, BLACK);
+        c.text(l + w / 2 - xw / 2, t + h + 12 + th, &self.x_label, 1, BLACK);
         let yw = Canvas::text_width(&self.y_label, 1) as i64;
         c.text_vertical(8, t + h / 2 + yw / 2, &self.y_label, 1, BLACK);
     }

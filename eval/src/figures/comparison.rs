@@ -7,35 +7,52 @@ use sim::scenario::Scenario;
 use sim::truth::TruthRaster;
 
 use crate::error::Result;
-use crate::figures::{Colormap, DRIVE, Figure, Legend, NO_DATA, PLAN, Rgb, finite_range};
+use crate::figures::{Colormap, DRIVE, Figure, Fill, Legend, NO_DATA, PLAN, Pattern, Rgb, finite_range};
 use crate::judge::Evaluation;
 use crate::judge::verdict::Verdict;
 use crate::output::write_bytes;
 
-/// The verdicts of `decisions.png`, in legend order, with their legend text and colour.
-pub const DECISION_CLASSES: [(Verdict, &str, Rgb); 6] = [
-    (Verdict::NotScored, "not observed", NO_DATA),
-    (Verdict::RightDrivable, "right, drivable", [255, 255, 255]),
-    (Verdict::RightBlocked, "right, blocked", [110, 110, 110]),
-    (Verdict::Unsafe, "UNSAFE (mapped drivable)", [220, 20, 20]),
+/// The verdicts of `decisions.png`, in legend order, with their legend text and fill. The wrong and the
+/// uncertain decisions are textured, so that the classes stay apart in grey scale.
+pub const DECISION_CLASSES: [(Verdict, &str, Fill); 6] = [
+    (
+        Verdict::NotScored,
+        "not observed",
+        Fill::patterned(NO_DATA, Pattern::Solid),
+    ),
+    (
+        Verdict::RightDrivable,
+        "right, drivable",
+        Fill::patterned([255, 255, 255], Pattern::Solid),
+    ),
+    (
+        Verdict::RightBlocked,
+        "right, blocked",
+        Fill::patterned([110, 110, 110], Pattern::Solid),
+    ),
+    (
+        Verdict::Unsafe,
+        "UNSAFE (mapped drivable)",
+        Fill::patterned([220, 20, 20], Pattern::CrossHatch),
+    ),
     (
         Verdict::OverCautious,
         "over-cautious (mapped blocked)",
-        [255, 160, 30],
+        Fill::patterned([255, 160, 30], Pattern::Hatch),
     ),
     (
         Verdict::Uncertain,
         "uncertain (the map cannot tell)",
-        [70, 170, 230],
+        Fill::patterned([70, 170, 230], Pattern::Dots),
     ),
 ];
 
-/// The colour of a verdict on `decisions.png`.
-pub fn verdict_color(v: Verdict) -> Rgb {
+/// The fill of a verdict on `decisions.png`.
+pub fn verdict_fill(v: Verdict) -> Fill {
     DECISION_CLASSES
         .iter()
         .find(|(c, ..)| *c == v)
-        .map_or(NO_DATA, |(_, _, rgb)| *rgb)
+        .map_or(NO_DATA.into(), |(_, _, fill)| *fill)
 }
 
 /// Obstacle footprints and names on `decisions.png`.
@@ -98,12 +115,12 @@ impl Overlay {
     }
 
     /// The legend entries of what [`Overlay::draw`] draws.
-    pub fn legend(&self) -> Vec<(String, Rgb)> {
+    pub fn legend(&self) -> Vec<(String, Fill)> {
         vec![
-            ("driven (true pose)".into(), DRIVEN),
+            ("driven (true pose)".into(), DRIVEN.into()),
             (
                 format!("{} of the paths planned on the way", self.plans.len()),
-                REPLANNED,
+                REPLANNED.into(),
             ),
         ]
     }
@@ -184,19 +201,19 @@ pub fn decisions_figure(
     overlay: Option<&Overlay>,
 ) -> Figure {
     let (metrics, plan, verdicts) = (&evaluation.metrics, &evaluation.plan, &evaluation.verdicts);
-    let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
+    let mut classes: Vec<(String, Fill)> = DECISION_CLASSES
         .iter()
         .map(|(_, n, c)| ((*n).to_string(), *c))
         .collect();
-    classes.push(("drive".into(), DRIVE));
-    classes.push(("obstacle footprint".into(), OUTLINE));
+    classes.push(("drive".into(), DRIVE.into()));
+    classes.push(("obstacle footprint".into(), OUTLINE.into()));
     classes.push((
         if plan.map_plan.is_some() {
             "path planned on the map".into()
         } else {
             "no path on the map".into()
         },
-        PLAN,
+        PLAN.into(),
     ));
     if let Some(o) = overlay {
         classes.extend(o.legend());
@@ -212,7 +229,7 @@ pub fn decisions_figure(
         |c| {
             verdicts
                 .offset(c)
-                .map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k]))
+                .map_or(NO_DATA.into(), |k| verdict_fill(verdicts.verdict[k]))
         },
         &legend,
     );
@@ -250,12 +267,12 @@ pub fn event_figure(
     title: &str,
 ) -> Figure {
     let verdicts = crate::judge::verdict::Verdicts::from_classes(truth, decisions.to_vec());
-    let mut classes: Vec<(String, Rgb)> = DECISION_CLASSES
+    let mut classes: Vec<(String, Fill)> = DECISION_CLASSES
         .iter()
         .map(|(_, n, c)| ((*n).to_string(), *c))
         .collect();
-    classes.push(("driven so far".into(), DRIVEN));
-    classes.push(("obstacle footprint".into(), OUTLINE));
+    classes.push(("driven so far".into(), DRIVEN.into()));
+    classes.push(("obstacle footprint".into(), OUTLINE.into()));
     let mut fig = Figure::new(
         verdicts.region,
         verdicts.resolution_m,
@@ -263,7 +280,7 @@ pub fn event_figure(
         |c| {
             verdicts
                 .offset(c)
-                .map_or(NO_DATA, |k| verdict_color(verdicts.verdict[k]))
+                .map_or(NO_DATA.into(), |k| verdict_fill(verdicts.verdict[k]))
         },
         &Legend::Classes(classes),
     );
@@ -289,12 +306,18 @@ pub fn observability_figure(
     const NEITHER: Rgb = [200, 200, 200];
     const BLIND: Rgb = [150, 0, 150];
     let classes = vec![
-        ("step and clearance observable".to_string(), BOTH),
-        ("step only (a ray ended here)".to_string(), STEP_ONLY),
-        ("clearance only (a ray crossed the band)".to_string(), BAND_ONLY),
-        ("no ray told anything".to_string(), NEITHER),
-        ("truly blocked, no ray could tell (blind)".to_string(), BLIND),
-        ("obstacle footprint".to_string(), OUTLINE),
+        ("step and clearance observable".to_string(), BOTH.into()),
+        ("step only (a ray ended here)".to_string(), STEP_ONLY.into()),
+        (
+            "clearance only (a ray crossed the band)".to_string(),
+            BAND_ONLY.into(),
+        ),
+        ("no ray told anything".to_string(), NEITHER.into()),
+        (
+            "truly blocked, no ray could tell (blind)".to_string(),
+            BLIND.into(),
+        ),
+        ("obstacle footprint".to_string(), OUTLINE.into()),
     ];
     let o = observability;
     let mut fig = Figure::new(

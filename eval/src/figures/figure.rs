@@ -19,6 +19,61 @@ const BOTTOM: usize = 52;
 /// Space between the plot and its legend, pixels.
 const LEGEND_GAP: usize = 24;
 
+/// A texture over a class's colour, so that classes stay apart in grey scale and for readers who do not
+/// tell the colours apart. Drawn in image pixels, the same in the plot and in the legend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pattern {
+    /// The plain colour.
+    Solid,
+    /// Diagonal lines rising to the right, every 6 pixels.
+    Hatch,
+    /// Diagonal lines both ways, every 6 pixels.
+    CrossHatch,
+    /// A dot every 4 pixels.
+    Dots,
+}
+
+/// A class's colour and texture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fill {
+    /// The colour.
+    pub color: Rgb,
+    /// The texture drawn over it, in a darker shade of the colour.
+    pub pattern: Pattern,
+}
+
+impl Fill {
+    /// A colour with a texture.
+    pub const fn patterned(color: Rgb, pattern: Pattern) -> Self {
+        Self { color, pattern }
+    }
+
+    /// The colour of the image pixel `(x, y)`.
+    pub fn at(self, x: usize, y: usize) -> Rgb {
+        let ink = match self.pattern {
+            Pattern::Solid => false,
+            Pattern::Hatch => (x + y) % 6 == 0,
+            Pattern::CrossHatch => (x + y) % 6 == 0 || (x + 6 - y % 6) % 6 == 0,
+            Pattern::Dots => x % 4 == 1 && y % 4 == 1,
+        };
+        if ink {
+            // 55 % of the way to black: dark enough to read on any colour, and still of its hue.
+            self.color.map(|c| (f32::from(c) * 0.45).round() as u8)
+        } else {
+            self.color
+        }
+    }
+}
+
+impl From<Rgb> for Fill {
+    fn from(color: Rgb) -> Self {
+        Self {
+            color,
+            pattern: Pattern::Solid,
+        }
+    }
+}
+
 /// What explains the colours.
 #[derive(Debug, Clone)]
 pub enum Legend {
@@ -33,17 +88,22 @@ pub enum Legend {
         /// Label, with units.
         label: String,
     },
-    /// Discrete classes.
-    Classes(Vec<(String, Rgb)>),
+    /// Discrete classes, each with its colour and texture (a line's colour for overlays).
+    Classes(Vec<(String, Fill)>),
 }
 
 impl Legend {
     /// The legend's width in pixels, so that the figure can make room for its longest label.
     fn width_px(&self) -> usize {
         match self {
-            Legend::ColorBar { label, .. } => (27 + Canvas::text_width("-00.000", 1))
-                .max(Canvas::text_width(label, 1).saturating_sub(4))
-                .max(18 + Canvas::text_width("no data", 1)),
+            Legend::ColorBar { label, min, max, .. } => (27
+                + ticks(f64::from(*min), f64::from(*max))
+                    .iter()
+                    .map(|(_, l)| Canvas::text_width(l, 1))
+                    .max()
+                    .unwrap_or(0))
+            .max(Canvas::text_width(label, 1).saturating_sub(4))
+            .max(18 + Canvas::text_width("no data", 1)),
             Legend::Classes(classes) => classes
                 .iter()
                 .map(|(name, _)| 20 + Canvas::text_width(name, 1))
@@ -65,12 +125,13 @@ pub struct Figure {
 }
 
 impl Figure {
-    /// Draws the raster over `region` (each cell coloured by `cell_color`), its axes, title and legend.
-    pub fn new(
+    /// Draws the raster over `region` (each cell filled by `cell_fill`: a colour, or a [`Fill`] with a
+    /// texture), its axes, title and legend.
+    pub fn new<F: Into<Fill>>(
         region: CellRegion,
         resolution_m: f64,
         title: &str,
-        cell_color: impl Fn(CellIndex) -> Rgb,
+        cell_fill: impl Fn(CellIndex) -> F,
         legend: &Legend,
     ) -> Self {
         let longest = f64::from(region.num_x.max(region.num_y));
@@ -93,16 +154,10 @@ impl Figure {
         let cols = pixel_runs(plot_w, px_per_cell, region.num_x);
         for &(v, py0, py1) in &rows {
             for &(u, px0, px1) in &cols {
-                let color = cell_color(region.cell_at(u, v));
+                let fill: Fill = cell_fill(region.cell_at(u, v)).into();
                 // Rows count from the bottom of the plot.
                 let top = TOP + plot_h - py1;
-                fig.canvas.fill_rect(
-                    (LEFT + px0) as i64,
-                    top as i64,
-                    (px1 - px0) as i64,
-                    (py1 - py0) as i64,
-                    color,
-                );
+                fig.fill_block(fill, (LEFT + px0, top), (px1 - px0, py1 - py0));
             }
         }
         fig.draw_axes();
@@ -116,12 +171,27 @@ impl Figure {
             4,
             (width as i64 - Canvas::text_width(title, scale) as i64 - 4).max(4),
         );
-        fig.canvas.text(title_x, 10, title, scale, BLACK);
+        fig.canvas.text(title_x, 8, title, scale, BLACK);
         fig.draw_legend(legend);
         fig
     }
 
+    /// Fills a `w` x `h` block of pixels from its top-left corner, textured in image coordinates.
+    fn fill_block(&mut self, fill: Fill, (x, y): (usize, usize), (w, h): (usize, usize)) {
+        if fill.pattern == Pattern::Solid {
+            self.canvas
+                .fill_rect(x as i64, y as i64, w as i64, h as i64, fill.color);
+            return;
+        }
+        for yy in y..y + h {
+            for xx in x..x + w {
+                self.canvas.set(xx as i64, yy as i64, fill.at(xx, yy));
+            }
+        }
+    }
+
     fn draw_axes(&mut self) {
+        let th = Canvas::text_height(1) as i64;
         let (x0, y0) = (LEFT as i64, TOP as i64);
         let (w, h) = (self.plot_w as i64, self.plot_h as i64);
         self.canvas.stroke_rect(x0 - 1, y0 - 1, w + 2, h + 2, BLACK);
@@ -135,18 +205,18 @@ impl Figure {
             let px = x0 + ((value - min_x) / span_x * w as f64).round() as i64;
             self.canvas.line(px, y0 + h, px, y0 + h + 4, BLACK);
             let tw = Canvas::text_width(&label, 1) as i64;
-            self.canvas.text(px - tw / 2, y0 + h + 8, &label, 1, BLACK);
+            self.canvas.text(px - tw / 2, y0 + h + 7, &label, 1, BLACK);
         }
         for (value, label) in ticks(min_y, min_y + span_y) {
             let py = y0 + h - ((value - min_y) / span_y * h as f64).round() as i64;
             self.canvas.line(x0 - 5, py, x0 - 1, py, BLACK);
             let tw = Canvas::text_width(&label, 1) as i64;
-            self.canvas.text(x0 - 8 - tw, py - 4, &label, 1, BLACK);
+            self.canvas.text(x0 - 8 - tw, py - th / 2, &label, 1, BLACK);
         }
         let xl = "x [m]";
         self.canvas.text(
             x0 + w / 2 - Canvas::text_width(xl, 1) as i64 / 2,
-            y0 + h + 28,
+            y0 + h + 12 + th,
             xl,
             1,
             BLACK,
@@ -157,6 +227,7 @@ impl Figure {
     }
 
     fn draw_legend(&mut self, legend: &Legend) {
+        let th = Canvas::text_height(1) as i64;
         let x = (LEFT + self.plot_w + LEGEND_GAP) as i64;
         let y = TOP as i64;
         match legend {
@@ -172,25 +243,25 @@ impl Figure {
                     self.canvas.fill_rect(x, y + k, 18, 1, colormap.color(t));
                 }
                 self.canvas.stroke_rect(x - 1, y - 1, 20, bar_h + 2, BLACK);
-                for n in 0..=4 {
-                    let t = n as f32 / 4.0;
-                    let value = min + (max - min) * t;
+                // Ticks at round values inside the bar's range, as on the axes.
+                for (value, label) in ticks(f64::from(*min), f64::from(*max)) {
+                    let t = ((value - f64::from(*min)) / f64::from(max - min)) as f32;
                     let py = y + ((1.0 - t) * (bar_h - 1) as f32).round() as i64;
                     self.canvas.line(x + 19, py, x + 23, py, BLACK);
-                    self.canvas
-                        .text(x + 27, py - 4, &format_value(value, max - min), 1, BLACK);
+                    self.canvas.text(x + 27, py - th / 2, &label, 1, BLACK);
                 }
                 self.canvas.text(x - 4, y + bar_h + 10, label, 1, BLACK);
                 self.canvas.fill_rect(x, y + bar_h + 26, 12, 12, NO_DATA);
                 self.canvas.stroke_rect(x, y + bar_h + 26, 12, 12, BLACK);
-                self.canvas.text(x + 18, y + bar_h + 28, "no data", 1, BLACK);
+                self.canvas
+                    .text(x + 18, y + bar_h + 32 - th / 2, "no data", 1, BLACK);
             }
             Legend::Classes(classes) => {
-                for (n, (name, color)) in classes.iter().enumerate() {
+                for (n, (name, fill)) in classes.iter().enumerate() {
                     let py = y + n as i64 * 20;
-                    self.canvas.fill_rect(x, py, 14, 14, *color);
+                    self.fill_block(*fill, (x as usize, py as usize), (14, 14));
                     self.canvas.stroke_rect(x, py, 14, 14, BLACK);
-                    self.canvas.text(x + 20, py + 3, name, 1, BLACK);
+                    self.canvas.text(x + 20, py + 7 - th / 2, name, 1, BLACK);
                 }
             }
         }
@@ -217,7 +288,8 @@ impl Figure {
     /// A line of text whose lower-left corner is at a world point, clipped to the canvas.
     pub fn label(&mut self, x_m: f64, y_m: f64, text: &str, color: Rgb) {
         let (px, py) = self.world_to_px(x_m, y_m);
-        self.canvas.text(px + 2, py - 10, text, 1, color);
+        self.canvas
+            .text(px + 2, py - Canvas::text_height(1) as i64, text, 1, color);
     }
 
     /// A small filled square marker at a world point.
@@ -279,23 +351,10 @@ pub fn ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
             let v = k as f64 * step;
             // Avoid "-0".
             let v = if v == 0.0 { 0.0 } else { v };
-            (v, format!("{v:.decimals$}"))
+            // The typographic minus sign, as in printed figures.
+            (v, format!("{v:.decimals$}").replace('-', "\u{2212}"))
         })
         .collect()
-}
-
-/// A colour-bar label with as many decimals as the range needs.
-fn format_value(v: f32, range: f32) -> String {
-    let decimals = if range >= 10.0 {
-        1
-    } else if range >= 0.1 {
-        2
-    } else if range >= 0.001 {
-        4
-    } else {
-        6
-    };
-    format!("{v:.decimals$}")
 }
 
 /// The value range to colour: the finite values' minimum and maximum, widened when they are equal. `None`
@@ -327,6 +386,22 @@ mod tests {
     }
 
     #[test]
+    fn textures_differ_in_grey_scale_and_solid_fills_are_plain() {
+        let grey = |c: Rgb| (u32::from(c[0]) * 299 + u32::from(c[1]) * 587 + u32::from(c[2]) * 114) / 1000;
+        let color = [200, 40, 40];
+        let darker = |p: Pattern| {
+            (0..12)
+                .flat_map(|y| (0..12).map(move |x| (x, y)))
+                .filter(|&(x, y)| grey(Fill::patterned(color, p).at(x, y)) < grey(color))
+                .count()
+        };
+        assert_eq!(darker(Pattern::Solid), 0);
+        let counts = [Pattern::Hatch, Pattern::CrossHatch, Pattern::Dots].map(darker);
+        assert!(counts.iter().all(|&n| n > 0), "{counts:?}");
+        assert!(counts[0] != counts[1] && counts[1] != counts[2] && counts[0] != counts[2]);
+    }
+
+    #[test]
     fn pixel_runs_cover_the_axis_once_in_order() {
         // Enlarged: 3 cells at 4 pixels each.
         assert_eq!(pixel_runs(12, 4.0, 3), vec![(0, 0, 4), (1, 4, 8), (2, 8, 12)]);
@@ -349,7 +424,7 @@ mod tests {
     fn the_figure_widens_to_fit_long_legend_labels() {
         let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(9, 9)).expect("valid");
         let name = "over-cautious (mapped blocked, truly drivable), a long label";
-        let legend = Legend::Classes(vec![(name.to_string(), BLACK)]);
+        let legend = Legend::Classes(vec![(name.to_string(), BLACK.into())]);
         let fig = Figure::new(region, 0.1, "t", |_| WHITE, &legend);
         let text_end = LEFT + fig.plot_w + LEGEND_GAP + 20 + Canvas::text_width(name, 1);
         assert!(
@@ -357,11 +432,10 @@ mod tests {
             "{} <= {text_end}",
             fig.canvas().width()
         );
-        // The label's last character is drawn: some pixel in its cell is black.
+        // The label's last character is drawn: some pixel in its cell is inked.
         let last_char_x = text_end - Canvas::text_width("l", 1);
-        let y = TOP + 3;
-        let drawn =
-            (last_char_x..text_end).any(|x| (y..y + 8).any(|y| fig.canvas().pixel(x, y) == Some(BLACK)));
+        let drawn = (last_char_x..text_end)
+            .any(|x| (0..TOP + 20).any(|y| fig.canvas().pixel(x, y).is_some_and(|p| p != WHITE)));
         assert!(drawn, "the end of the label is cut off");
     }
 

@@ -6,9 +6,8 @@ use oeg::{
     CellIndex, CellRegion, Layer, LayerKind, Map, Raster, RobotProfile, Traversability, TraversabilityRule,
 };
 
-use super::canvas::Rgb;
 use super::colormap::Colormap;
-use super::figure::{Figure, Legend, NO_DATA, finite_range};
+use super::figure::{Figure, Fill, Legend, NO_DATA, Pattern, finite_range};
 use crate::error::Result;
 use crate::output::write_bytes;
 
@@ -62,14 +61,15 @@ pub fn scalar_figure_of(
     )
 }
 
-/// The colour of each traversability class.
-pub fn traversability_color(t: Traversability) -> Rgb {
+/// The fill of each traversability class: uncertain cells are hatched, so that they stay apart from unknown
+/// ones in grey scale.
+pub fn traversability_fill(t: Traversability) -> Fill {
     match t {
-        Traversability::Unknown => NO_DATA,
-        Traversability::Free => [255, 255, 255],
-        Traversability::Traversable => [120, 190, 90],
-        Traversability::Blocked => [200, 40, 40],
-        Traversability::Uncertain => [240, 200, 40],
+        Traversability::Unknown => NO_DATA.into(),
+        Traversability::Free => [255, 255, 255].into(),
+        Traversability::Traversable => [120, 190, 90].into(),
+        Traversability::Blocked => [200, 40, 40].into(),
+        Traversability::Uncertain => Fill::patterned([240, 200, 40], Pattern::Hatch),
     }
 }
 
@@ -100,14 +100,14 @@ pub fn traversability_figure_of(
     let legend = Legend::Classes(
         TRAVERSABILITY_CLASSES
             .iter()
-            .map(|(t, name)| (name.to_string(), traversability_color(*t)))
+            .map(|(t, name)| (name.to_string(), traversability_fill(*t)))
             .collect(),
     );
     Figure::new(
         region,
         resolution_m,
         title,
-        |c| traversability_color(class(c)),
+        |c| traversability_fill(class(c)),
         &legend,
     )
 }
@@ -162,7 +162,7 @@ pub fn write_layer_images(
             "variance.png",
             LayerKind::VarianceM2,
             "Elevation variance",
-            "variance [m^2]",
+            "variance [m\u{b2}]",
             Colormap::Inferno,
             None,
         ),

@@ -116,7 +116,7 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let legend = Legend::Classes(
         TRUTH_CLASSES
             .iter()
-            .map(|(_, n, c)| ((*n).to_string(), *c))
+            .map(|(_, n, c)| ((*n).to_string(), (*c).into()))
             .collect(),
     );
     let title = format!(

@@ -530,13 +530,13 @@ fn summarize(runs: &[&Json], metric: &str, is_rate: bool) -> Summary {
 /// An axis label with the unit its key's suffix names (`..._m` metres, `..._px` pixels, ...).
 fn with_unit(key: &str) -> String {
     const UNITS: [(&str, &str); 9] = [
-        ("_m_per_sqrt_m", "m per sqrt(m)"),
-        ("_deg_per_sqrt_m", "deg per sqrt(m)"),
+        ("_m_per_sqrt_m", "m/\u{221a}m"),
+        ("_deg_per_sqrt_m", "\u{b0}/\u{221a}m"),
         ("_m_s", "m/s"),
         ("_s", "s"),
-        ("_m2", "m^2"),
+        ("_m2", "m\u{b2}"),
         ("_px", "px"),
-        ("_deg", "deg"),
+        ("_deg", "\u{b0}"),
         ("_hz", "Hz"),
         ("_m", "m"),
     ];

@@ -1,0 +1,109 @@
+//! The figures' typeface: DejaVu Sans, embedded in the program (a subset of its Latin, Greek and symbol
+//! glyphs, `eval/assets/fonts/`), drawn anti-aliased with `ab_glyph`. No system font is ever read, so the same
+//! text gives the same pixels on every machine.
+
+use std::sync::OnceLock;
+
+use ab_glyph::{Font as _, FontRef, PxScale, ScaleFont as _, point};
+
+/// The embedded font file: DejaVu Sans 2.37, subset (`eval/assets/fonts/README.md`). Its licence is
+/// `eval/assets/fonts/LICENSE-DejaVu.txt`.
+pub const FONT_FILE: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
+
+/// The font's family name, as SVG figures and HTML pages refer to it.
+pub const FONT_FAMILY: &str = "DejaVu Sans";
+
+fn font() -> &'static FontRef<'static> {
+    static FONT: OnceLock<FontRef<'static>> = OnceLock::new();
+    FONT.get_or_init(|| {
+        // The file is part of the program and is checked by a test; it cannot fail to parse.
+        FontRef::try_from_slice(FONT_FILE).expect("the embedded font parses")
+    })
+}
+
+/// The text size of a `scale`, as `ab_glyph` measures it (the line's height, ascent to descent, in pixels;
+/// an em is 0.86 of it): 1 for labels and ticks (an em of 13 pixels), 2 for titles.
+pub fn size_px(scale: usize) -> f32 {
+    match scale {
+        0 | 1 => 15.0,
+        2 => 22.0,
+        s => 11.0 * s as f32,
+    }
+}
+
+/// The height of a line of text at `scale`, pixels: the font's ascent to its descent.
+pub fn line_height(scale: usize) -> usize {
+    let f = font().as_scaled(PxScale::from(size_px(scale)));
+    (f.ascent() - f.descent()).ceil() as usize
+}
+
+/// The width of `text` at `scale`, pixels (advances and kerning).
+pub fn width(text: &str, scale: usize) -> usize {
+    let f = font().as_scaled(PxScale::from(size_px(scale)));
+    let mut caret = 0.0_f32;
+    let mut previous = None;
+    for ch in text.chars() {
+        let id = f.glyph_id(ch);
+        if let Some(p) = previous {
+            caret += f.kern(p, id);
+        }
+        caret += f.h_advance(id);
+        previous = Some(id);
+    }
+    caret.ceil() as usize
+}
+
+/// Calls `coverage(x, y, c)` for each pixel of `text` at `scale` with its coverage `c` in (0, 1], the line's
+/// top-left corner at (0, 0). Characters the font lacks are drawn as its missing-glyph box.
+pub fn rasterize(text: &str, scale: usize, mut coverage: impl FnMut(i64, i64, f32)) {
+    let f = font().as_scaled(PxScale::from(size_px(scale)));
+    let mut caret = 0.0_f32;
+    let mut previous = None;
+    for ch in text.chars() {
+        let id = f.glyph_id(ch);
+        if let Some(p) = previous {
+            caret += f.kern(p, id);
+        }
+        // Each glyph starts on a whole pixel, so the same letter looks the same wherever it falls.
+        let glyph = id.with_scale_and_position(f.scale(), point(caret.round(), f.ascent().round()));
+        caret += f.h_advance(id);
+        previous = Some(id);
+        if let Some(outline) = font().outline_glyph(glyph) {
+            let b = outline.px_bounds();
+            let (x0, y0) = (b.min.x as i64, b.min.y as i64);
+            outline.draw(|gx, gy, c| {
+                if c > 0.0 {
+                    coverage(x0 + i64::from(gx), y0 + i64::from(gy), c.min(1.0));
+                }
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_embedded_font_has_the_glyphs_the_figures_use() {
+        for ch in "0123456789 abcxyz ABC [m] m^2 - + . , ( ) % ° ² σ µ ± ≤ ≥ – —".chars() {
+            assert!(font().glyph_id(ch).0 != 0 || ch == ' ', "no glyph for {ch:?}");
+        }
+        assert!(width("mm", 1) > width("m", 1));
+        assert!(line_height(2) > line_height(1));
+    }
+
+    #[test]
+    fn text_is_anti_aliased() {
+        let mut partial = 0;
+        let mut full = 0;
+        rasterize("Elevation [m]", 1, |_, _, c| {
+            if c < 0.9 {
+                partial += 1;
+            } else {
+                full += 1;
+            }
+        });
+        assert!(partial > 20 && full > 20, "{partial} partial, {full} full pixels");
+    }
+}
