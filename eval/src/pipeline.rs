@@ -21,6 +21,7 @@ use crate::navigation::external::ExternalPlanner;
 use crate::navigation::{NavigationInputs, NavigationLog, PlannerSource, navigate};
 use crate::output::{Staged, create_dir, write_json};
 use crate::progress::Progress;
+use crate::report::page::{ModelRun, RunPage, write_run_page};
 use crate::report::{write_comparison, write_report};
 use crate::settings::SettingError;
 
@@ -400,7 +401,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     if planner_dir.is_dir() {
         files.push(planner_dir.clone());
     }
-    let mut compared_metrics = None;
+    let mut compared_eval = None;
     if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
         // The compared model maps the same scans; the robot decided with the run's own map.
         let other_eval = evaluate(c, &other, &truth, &sensed)?;
@@ -412,7 +413,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
             [(s, &evaluation), (c, &other_eval)],
             &geometry,
         )?);
-        compared_metrics = Some((*preset, other_eval.metrics));
+        compared_eval = Some((*preset, c, other_eval));
     }
     let num_rays = sim_timing.num_rays as f64;
     let (simulation_s, map_s) = (sim_timing.simulation_wall_time_s, sim_timing.map_wall_time_s);
@@ -429,6 +430,31 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     let timing_path = stage.join("timing.json");
     write_json(&timing_path, &timing)?;
     files.push(timing_path);
+    // The page that shows the run, last: it links every file above.
+    let mut models = vec![ModelRun {
+        scenario: s,
+        evaluation: &evaluation,
+        dir: "",
+    }];
+    if let Some((preset, c, e)) = &compared_eval {
+        models.push(ModelRun {
+            scenario: c,
+            evaluation: e,
+            dir: preset.name(),
+        });
+    }
+    let page = RunPage {
+        scenario_file: &options.scenario,
+        models,
+        overrides: &options.overrides,
+        planner_command: options.planner_command.as_deref(),
+        navigation: navigation.as_ref(),
+        files: files
+            .iter()
+            .filter_map(|f| f.strip_prefix(stage).ok().map(Path::to_path_buf))
+            .collect(),
+    };
+    files.push(write_run_page(stage, &page)?);
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     let Evaluation {
@@ -442,7 +468,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         timing,
         failed,
         obstacles,
-        compared: compared_metrics,
+        compared: compared_eval.map(|(preset, _, e)| (preset, e.metrics)),
         out_dir,
         files,
     })

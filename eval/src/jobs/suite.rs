@@ -1,4 +1,4 @@
-//! `oeg suite`: run many scenarios, print a table, write `suite.csv` and `suite.json`, and fail if any
+//! `oeg suite`: run many scenarios, print a table, write `suite.csv`, `suite.json` and `suite.html`, and fail if any
 //! scenario fails its expectations. Several scenarios run at once (`jobs`): a run's ray casts and truth use
 //! every thread, but its map integration is one thread, so a second scenario fills the idle cores. A scenario's
 //! results do not depend on it (the same bytes on any thread count).
@@ -165,17 +165,120 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
     write_json(&stage.join("suite.json"), &rows)?;
     // The table as Markdown for a results page, without what varies from run to run (the wall time).
     write_markdown_rows(&stage.join("suite.md"), &rows, &["file", "wall_time_s"])?;
+    let page = suite_page(&files, &rows, stage);
+    crate::output::write_bytes(&stage.join("suite.html"), page.as_bytes())?;
     staged.commit()?;
     Ok(rows)
+}
+
+/// The run's folder of a scenario file in the suite's folder: its file stem.
+fn run_dir(file: &Path) -> String {
+    file.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// `suite.html`: one row per scenario with its status, key metrics and the thumbnail of its decisions, each
+/// linking to the run's own page (a run that could not complete has neither).
+fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
+    use crate::output::html::{Page, escape, field, href};
+    let passed = rows.iter().filter(|r| r.status == "pass").count();
+    let mut page = Page::new("oeg suite");
+    let (class, verdict) = if passed == rows.len() {
+        ("pass", format!("PASS: all {} scenarios meet their expectations.", rows.len()))
+    } else {
+        (
+            "fail",
+            format!(
+                "FAIL: {} of {} scenarios fail or could not run.",
+                rows.len() - passed,
+                rows.len()
+            ),
+        )
+    };
+    page.raw(&format!("<div class=\"verdict {class}\">{}</div>", escape(&verdict)));
+    page.raw("<p>The same rows as suite.csv (<a href=\"suite.csv\">suite.csv</a>, <a href=\"suite.json\">suite.json</a>).</p>");
+    let header = [
+        "decisions",
+        "scenario",
+        "status",
+        "coverage",
+        "elevation RMSE [m]",
+        "unsafe step cells",
+        "unsafe clearance cells",
+        "over-cautious cells (step + clearance)",
+        "plan length ratio",
+        "plan unsafe cells",
+        "blind cells",
+        "closed loop",
+        "problems",
+    ];
+    let mut table = String::from("<table>\n<thead><tr>");
+    for h in header {
+        table.push_str(&format!("<th>{}</th>", escape(h)));
+    }
+    table.push_str("</tr></thead>\n<tbody>\n");
+    let num = |v: Option<f64>| field(&v.map(|v| v.to_string()).unwrap_or_default());
+    let count = |v: Option<u64>| v.map_or("-".to_string(), |v| v.to_string());
+    for (file, r) in files.iter().zip(rows) {
+        let dir = run_dir(file);
+        let report = Path::new(&dir).join("report.html");
+        let image = Path::new(&dir).join("decisions.png");
+        let (thumb, name) = if stage.join(&report).is_file() && stage.join(&image).is_file() {
+            (
+                format!(
+                    "<a href=\"{r}\"><img class=\"thumb\" src=\"{i}\" alt=\"decisions of {n}\"></a>",
+                    r = escape(&href(&report)),
+                    i = escape(&href(&image)),
+                    n = escape(&r.scenario)
+                ),
+                format!("<a href=\"{}\">{}</a>", escape(&href(&report)), escape(&r.scenario)),
+            )
+        } else {
+            ("-".to_string(), escape(&r.scenario))
+        };
+        let overcautious = match (r.overcautious_step_cells, r.overcautious_clearance_cells) {
+            (Some(a), Some(b)) => (a + b).to_string(),
+            _ => "-".into(),
+        };
+        let closed_loop = match (r.nav_reached, r.nav_contacts) {
+            (Some(reached), contacts) => format!(
+                "{}, {} contacts",
+                if reached { "reached" } else { "not reached" },
+                count(contacts)
+            ),
+            (None, _) => "-".into(),
+        };
+        let cells = [
+            num(r.coverage),
+            num(r.elevation_rmse_m),
+            count(r.unsafe_step_cells),
+            count(r.unsafe_clearance_cells),
+            overcautious,
+            num(r.plan_length_ratio),
+            count(r.plan_unsafe_cells),
+            count(r.blind_cells),
+        ];
+        table.push_str(&format!(
+            "<tr><td>{thumb}</td><td>{name}</td><td class=\"{status}\">{status}</td>{cells}<td>{nav}</td><td>{problems}</td></tr>\n",
+            status = escape(&r.status),
+            cells = cells
+                .iter()
+                .map(|c| format!("<td class=\"num\">{}</td>", escape(c)))
+                .collect::<String>(),
+            nav = escape(&closed_loop),
+            problems = escape(&r.problems),
+        ));
+    }
+    table.push_str("</tbody>\n</table>\n");
+    page.raw(&table);
+    page.finish()
 }
 
 /// Runs one scenario of the suite into `out_dir/<file stem>/` and prints its table line as it finishes.
 fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
     let start = Instant::now();
-    let stem = file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let stem = run_dir(file);
     let options = RunOptions {
         scenario: file.to_path_buf(),
         out_dir: Some(out_dir.join(&stem)),

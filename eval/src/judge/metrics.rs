@@ -379,40 +379,68 @@ fn compute_empty() -> Metrics {
     }
 }
 
-/// Checks `expectations` against the metrics, records the outcome in them, and returns the failures. A NaN
-/// metric (nothing to measure) fails any threshold.
+/// One bound of one expectation, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExpectationResult {
+    /// Metric name.
+    pub metric: String,
+    /// Measured value.
+    pub measured: f64,
+    /// What was required, as text (`>= 0.9`, `<= 0`).
+    pub required: String,
+    /// Whether the measured value meets it. A NaN metric (nothing to measure) fails any bound.
+    pub passed: bool,
+}
+
+/// Every bound of `expectations` checked against the metrics, in the expectations' order (min before max).
+pub fn expectation_results(
+    metrics: &Metrics,
+    expectations: &BTreeMap<String, sim::scenario::Expectation>,
+) -> Vec<ExpectationResult> {
+    let values = numeric(metrics);
+    let mut results = Vec::new();
+    for (name, e) in expectations {
+        let measured = values.get(name).copied().unwrap_or(f64::NAN);
+        // NaN compares as neither: it fails both kinds of bound.
+        if let Some(min) = e.min {
+            results.push(ExpectationResult {
+                metric: name.clone(),
+                measured,
+                required: format!(">= {min}"),
+                passed: measured
+                    .partial_cmp(&min)
+                    .is_some_and(|o| o != std::cmp::Ordering::Less),
+            });
+        }
+        if let Some(max) = e.max {
+            results.push(ExpectationResult {
+                metric: name.clone(),
+                measured,
+                required: format!("<= {max}"),
+                passed: measured
+                    .partial_cmp(&max)
+                    .is_some_and(|o| o != std::cmp::Ordering::Greater),
+            });
+        }
+    }
+    results
+}
+
+/// Checks `expectations` against the metrics ([`expectation_results`]), records the outcome in them, and
+/// returns the failures.
 pub fn check_expectations(
     metrics: &mut Metrics,
     expectations: &BTreeMap<String, sim::scenario::Expectation>,
 ) -> Vec<FailedExpectation> {
-    let values = numeric(metrics);
-    let mut failed = Vec::new();
-    for (name, e) in expectations {
-        let measured = values.get(name).copied().unwrap_or(f64::NAN);
-        // NaN compares as neither: it fails both kinds of threshold.
-        if let Some(min) = e.min
-            && measured
-                .partial_cmp(&min)
-                .is_none_or(|o| o == std::cmp::Ordering::Less)
-        {
-            failed.push(FailedExpectation {
-                metric: name.clone(),
-                measured,
-                required: format!(">= {min}"),
-            });
-        }
-        if let Some(max) = e.max
-            && measured
-                .partial_cmp(&max)
-                .is_none_or(|o| o == std::cmp::Ordering::Greater)
-        {
-            failed.push(FailedExpectation {
-                metric: name.clone(),
-                measured,
-                required: format!("<= {max}"),
-            });
-        }
-    }
+    let failed: Vec<FailedExpectation> = expectation_results(metrics, expectations)
+        .into_iter()
+        .filter(|r| !r.passed)
+        .map(|r| FailedExpectation {
+            metric: r.metric,
+            measured: r.measured,
+            required: r.required,
+        })
+        .collect();
     metrics.num_expectations_failed = failed.len() as u64;
     metrics.expectations_passed = failed.is_empty();
     failed

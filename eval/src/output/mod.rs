@@ -1,6 +1,7 @@
 //! Writing a job's outputs: every file atomically (temporary file, then rename), and every job's folder all
 //! or nothing ([`Staged`]).
 
+pub mod html;
 mod markdown;
 mod staged;
 
@@ -12,6 +13,29 @@ use crate::error::{EvalError, Result};
 
 pub use markdown::{markdown_rows, markdown_table, write_markdown_rows};
 pub use staged::{OUTPUT_MARKER, Staged};
+
+/// The unit a key's suffix names, as the outputs spell their keys (`..._m` metres, `..._m2` square metres,
+/// `..._s` seconds, `..._deg` degrees, `..._cells` cells, ...); `None` for a key without one (fractions,
+/// ratios, flags).
+pub fn unit_of(key: &str) -> Option<&'static str> {
+    const UNITS: [(&str, &str); 11] = [
+        ("_m_per_sqrt_m", "m/\u{221a}m"),
+        ("_deg_per_sqrt_m", "\u{b0}/\u{221a}m"),
+        ("_m_s", "m/s"),
+        ("_rays_per_s", "rays/s"),
+        ("_s", "s"),
+        ("_m2", "m\u{b2}"),
+        ("_px", "px"),
+        ("_deg", "\u{b0}"),
+        ("_hz", "Hz"),
+        ("_m", "m"),
+        ("_cells", "cells"),
+    ];
+    UNITS
+        .iter()
+        .find(|(suffix, _)| key.ends_with(suffix))
+        .map(|(_, unit)| *unit)
+}
 
 /// Creates the output folder (and its parents).
 ///

@@ -227,6 +227,15 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
         message: e.to_string(),
     })?;
     folder.write_bytes(&md_path, md.as_bytes())?;
+    let html_path = dir.join("report.html");
+    let html = study
+        .page(dir, &files, &summary)
+        .map_err(|e| EvalError::Input {
+            path: html_path.clone(),
+            message: e.to_string(),
+        })?;
+    folder.write_bytes(&html_path, html.as_bytes())?;
+    files.insert(0, html_path);
     files.insert(0, md_path);
     files.insert(0, path);
     Ok(ReportSummary {
@@ -253,6 +262,52 @@ struct Study {
 }
 
 impl Study {
+    /// `report.html`: the study's summary table and every plot, with links to its files.
+    fn page(
+        &self,
+        dir: &Path,
+        plots: &[PathBuf],
+        summary: &[SummaryRow],
+    ) -> std::result::Result<String, crate::output::TableError> {
+        use crate::output::html::{Page, href, rows_to_html};
+        let mut page = Page::new(&format!("oeg sweep: {}", self.name));
+        page.paragraph(&format!(
+            "{} of the plan's {} runs have a row; {} finished without error. Means with their 95 % intervals \
+             per axis value; the plots show the same.",
+            self.num_covered,
+            self.num_planned,
+            self.ok.len()
+        ));
+        page.heading("plots", "Plots");
+        let figures: Vec<(String, String)> = plots
+            .iter()
+            .filter_map(|p| p.strip_prefix(dir).ok())
+            .filter(|p| p.extension().is_some_and(|e| e == "png"))
+            .map(|p| {
+                let caption = p
+                    .file_stem()
+                    .map(|n| n.to_string_lossy().replace('_', " "))
+                    .unwrap_or_default();
+                (href(p), caption)
+            })
+            .collect();
+        page.figures(&figures);
+        page.heading("summary", "Summary");
+        page.raw(&rows_to_html(summary, &[])?);
+        page.heading("files", "Files");
+        let mut links = vec![
+            ("summary.csv".to_string(), "summary.csv".to_string()),
+            ("summary.md".to_string(), "summary.md".to_string()),
+        ];
+        for name in ["plan.json", "runs.csv", "runs.jsonl", "obstacles.csv"] {
+            if dir.join(name).is_file() {
+                links.push((name.to_string(), name.to_string()));
+            }
+        }
+        page.links(&links);
+        Ok(page.finish())
+    }
+
     /// Reads the plan, the rows and the obstacles, and checks that the rows cover the plan (unless
     /// `partial`).
     fn read(folder: &SweepFolder, dir: &Path, partial: bool) -> Result<Self> {
@@ -527,23 +582,9 @@ fn summarize(runs: &[&Json], metric: &str, is_rate: bool) -> Summary {
     }
 }
 
-/// An axis label with the unit its key's suffix names (`..._m` metres, `..._px` pixels, ...).
+/// An axis label with the unit its key's suffix names ([`crate::output::unit_of`]).
 fn with_unit(key: &str) -> String {
-    const UNITS: [(&str, &str); 9] = [
-        ("_m_per_sqrt_m", "m/\u{221a}m"),
-        ("_deg_per_sqrt_m", "\u{b0}/\u{221a}m"),
-        ("_m_s", "m/s"),
-        ("_s", "s"),
-        ("_m2", "m\u{b2}"),
-        ("_px", "px"),
-        ("_deg", "\u{b0}"),
-        ("_hz", "Hz"),
-        ("_m", "m"),
-    ];
-    UNITS
-        .iter()
-        .find(|(suffix, _)| key.ends_with(suffix))
-        .map_or_else(|| key.to_string(), |(_, unit)| format!("{key} [{unit}]"))
+    crate::output::unit_of(key).map_or_else(|| key.to_string(), |unit| format!("{key} [{unit}]"))
 }
 
 /// A key as a file name part: `sensors.*.noise.range_sigma_m` -> `sensors_all_noise_range_sigma_m`.

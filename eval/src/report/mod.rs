@@ -1,6 +1,9 @@
 //! A scenario run's report, written into its (staged) output folder: the map, its layer images, the comparison
 //! images, `plan.csv`, `obstacles.csv`, `wrong_cells.csv`, `metrics.json`, and with a compared model
-//! `comparison.csv` (and the same table as `comparison.md`) and `decisions_comparison.png`.
+//! `comparison.csv` (and the same table as `comparison.md`) and `decisions_comparison.png`; and the page that
+//! shows them all, `report.html` ([`page`]).
+
+pub mod page;
 
 use std::path::{Path, PathBuf};
 

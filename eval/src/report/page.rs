@@ -1,0 +1,385 @@
+//! `report.html`: a scenario run on one page, to open and share. The verdict first, then the decisions, the
+//! map against the truth, the closed loop and what the sensors could see where the run has them, the tables
+//! (metrics, obstacles, the plan check), the settings, and a link to every file of the run. Several models of
+//! the same run (`--compare`) stand side by side.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+use sim::scenario::Scenario;
+
+use crate::error::{EvalError, Result};
+use crate::judge::Evaluation;
+use crate::judge::metrics::expectation_results;
+use crate::navigation::NavigationLog;
+use crate::output::html::{Page, escape, field, href, rows_to_html, table_html};
+use crate::output::{unit_of, write_bytes};
+
+/// Where the metrics are defined, for the page's link (the repository's `docs/metrics.md`).
+pub const METRICS_DOC: &str = concat!(env!("CARGO_PKG_REPOSITORY"), "/blob/main/docs/metrics.md");
+
+/// One model of the run: its scenario (with its map settings), its evaluation and its folder inside the run's
+/// (empty for the run's own model).
+#[derive(Debug, Clone, Copy)]
+pub struct ModelRun<'a> {
+    /// The scenario as this model ran it.
+    pub scenario: &'a Scenario,
+    /// The judge's evaluation of its map.
+    pub evaluation: &'a Evaluation,
+    /// Its folder, relative to the run's (`""` or `"robust"`).
+    pub dir: &'a str,
+}
+
+impl ModelRun<'_> {
+    fn name(&self) -> &'static str {
+        self.scenario.map.preset.name()
+    }
+
+    fn file(&self, name: &str) -> String {
+        if self.dir.is_empty() {
+            name.to_string()
+        } else {
+            format!("{}/{name}", self.dir)
+        }
+    }
+}
+
+/// Everything the page shows.
+#[derive(Debug, Clone)]
+pub struct RunPage<'a> {
+    /// The scenario file as given.
+    pub scenario_file: &'a Path,
+    /// The models, the run's own first.
+    pub models: Vec<ModelRun<'a>>,
+    /// Every `--set` of the run, in order.
+    pub overrides: &'a [String],
+    /// The external planner's command line, when the run used one.
+    pub planner_command: Option<&'a [String]>,
+    /// The closed loop's records, when the run navigated.
+    pub navigation: Option<&'a NavigationLog>,
+    /// The run's files, relative to its folder.
+    pub files: Vec<PathBuf>,
+}
+
+/// Writes `report.html` into `out_dir` and returns its path.
+///
+/// # Errors
+/// A table that cannot be written, or a failed write.
+pub fn write_run_page(out_dir: &Path, run: &RunPage) -> Result<PathBuf> {
+    let path = out_dir.join("report.html");
+    let html = run_page(run).map_err(|message| EvalError::Input {
+        path: path.clone(),
+        message,
+    })?;
+    write_bytes(&path, html.as_bytes())?;
+    Ok(path)
+}
+
+/// The page as HTML text, or what kept a table from being written.
+fn run_page(run: &RunPage) -> std::result::Result<String, String> {
+    let own = run.models.first().ok_or("a run page needs a model")?;
+    let s = own.scenario;
+    let mut page = Page::new(&format!("oeg run: {}", s.name));
+    if !s.description.is_empty() {
+        page.paragraph(&s.description);
+    }
+    verdict(&mut page, own);
+    decisions(&mut page, run);
+    if let Some(log) = run.navigation {
+        closed_loop(&mut page, log, &run.files)?;
+    }
+    if run.files.iter().any(|f| f == Path::new("observability.png")) {
+        page.heading("observability", "What the sensors could see");
+        page.paragraph(
+            "Per cell, whether a ray ended on it (its step could be measured) or crossed the band between a \
+             step and the robot's height (its clearance could be measured); truly blocked cells that no ray \
+             could tell about are blind. The blind band per distance is in blind_band.csv.",
+        );
+        page.figures(&[(
+            "observability.png".into(),
+            "What the sensors could see, and the blind cells".into(),
+        )]);
+    }
+    metrics(&mut page, run)?;
+    for m in &run.models {
+        page.heading(
+            &format!("obstacles-{}", m.name()),
+            &format!("Obstacles ({} model)", m.name()),
+        );
+        page.raw(&rows_to_html(&m.evaluation.obstacles, &[]).map_err(|e| e.to_string())?);
+    }
+    plan_check(&mut page, run);
+    settings(&mut page, run)?;
+    page.heading("files", "Files");
+    let links: Vec<(String, String)> = run
+        .files
+        .iter()
+        .map(|f| (href(f), f.display().to_string()))
+        .collect();
+    page.links(&links);
+    Ok(page.finish())
+}
+
+/// The expectations of the run's own model, each with its measured and required value.
+fn verdict(page: &mut Page, own: &ModelRun) {
+    let results = expectation_results(&own.evaluation.metrics, &own.scenario.expectations);
+    let failed = results.iter().filter(|r| !r.passed).count();
+    let (class, text) = if results.is_empty() {
+        (
+            "neutral",
+            "The scenario sets no expectations: nothing to pass or fail.".to_string(),
+        )
+    } else if failed == 0 {
+        (
+            "pass",
+            format!("PASS: all {} expectations hold.", results.len()),
+        )
+    } else {
+        (
+            "fail",
+            format!("FAIL: {failed} of {} expectations do not hold.", results.len()),
+        )
+    };
+    page.raw(&format!(
+        "<div class=\"verdict {class}\" id=\"verdict\">{}</div>",
+        escape(&text)
+    ));
+    if !results.is_empty() {
+        let rows: Vec<Vec<String>> = results
+            .iter()
+            .map(|r| {
+                vec![
+                    r.metric.clone(),
+                    field(&r.measured.to_string()),
+                    r.required.clone(),
+                    if r.passed { "pass" } else { "FAIL" }.to_string(),
+                ]
+            })
+            .collect();
+        page.table(&["expectation", "measured", "required", "result"], &rows);
+    }
+}
+
+/// The decisions of every model side by side, then each model's map, truth and error side by side.
+fn decisions(page: &mut Page, run: &RunPage) {
+    page.heading("decisions", "Decisions");
+    page.paragraph(
+        "Every cell's decision judged against the truth: right, unsafe (mapped drivable where the robot cannot \
+         go), over-cautious (mapped blocked where it can) or uncertain; with the drive, the obstacles and the \
+         path planned on the map.",
+    );
+    let figures: Vec<(String, String)> = run
+        .models
+        .iter()
+        .map(|m| {
+            (
+                m.file("decisions.png"),
+                format!(
+                    "{} model: {} unsafe, {} over-cautious, {} uncertain cells",
+                    m.name(),
+                    m.evaluation.metrics.unsafe_cells,
+                    m.evaluation.metrics.overcautious_cells,
+                    m.evaluation.metrics.uncertain_cells
+                ),
+            )
+        })
+        .collect();
+    page.figures(&figures);
+    page.heading("map", "The map against the truth");
+    for m in &run.models {
+        page.figures(&[
+            (
+                m.file("elevation.png"),
+                format!("{} model: mapped elevation", m.name()),
+            ),
+            (m.file("truth_elevation.png"), "true elevation".into()),
+            (
+                m.file("elevation_error.png"),
+                format!(
+                    "{} model: map - truth (RMSE {:.3} m)",
+                    m.name(),
+                    m.evaluation.metrics.elevation_rmse_m
+                ),
+            ),
+        ]);
+        page.figures(&[
+            (
+                m.file("traversability.png"),
+                format!("{} model: the map's decisions", m.name()),
+            ),
+            (
+                m.file("occupancy.png"),
+                format!("{} model: occupancy probability", m.name()),
+            ),
+            (
+                m.file("variance.png"),
+                format!("{} model: elevation variance", m.name()),
+            ),
+        ]);
+    }
+}
+
+/// A closed-loop run: the outcome, the events and the maps at the events.
+fn closed_loop(page: &mut Page, log: &NavigationLog, files: &[PathBuf]) -> std::result::Result<(), String> {
+    let n = &log.summary;
+    page.heading("navigation", "Closed loop");
+    page.paragraph(&format!(
+        "Outcome: {} after {:.1} s; driven {:.2} m{}; {} replans; the trajectory and some of the plans are on \
+         the decisions image above.",
+        serde_json::to_value(n.outcome)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default(),
+        n.time_s,
+        n.driven_length_m,
+        n.length_ratio
+            .map(|r| format!(" ({r:.2} times the truth's shortest path)"))
+            .unwrap_or_default(),
+        n.replans
+    ));
+    page.raw(&rows_to_html(&n.events, &[]).map_err(|e| e.to_string())?);
+    // The event images (`events/<index>_<kind>.png`, the index the event's row above).
+    let figures: Vec<(String, String)> = files
+        .iter()
+        .filter(|f| f.starts_with("events") && f.extension().is_some_and(|e| e == "png"))
+        .map(|f| {
+            let name = f.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            (href(f), format!("event {}", name.replacen('_', ": ", 1)))
+        })
+        .collect();
+    if !figures.is_empty() {
+        page.paragraph("The map's decisions at the first events:");
+        page.figures(&figures);
+    }
+    Ok(())
+}
+
+/// Every metric, one column per model, with its unit.
+fn metrics(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
+    page.heading("metrics", "Metrics");
+    page.raw(&format!(
+        "<p>Definitions: <a href=\"{}\">docs/metrics.md</a>.</p>",
+        escape(METRICS_DOC)
+    ));
+    let values: Vec<serde_json::Map<String, Value>> = run
+        .models
+        .iter()
+        .map(|m| match serde_json::to_value(&m.evaluation.metrics) {
+            Ok(Value::Object(o)) => Ok(o),
+            _ => Err("the metrics are not an object".to_string()),
+        })
+        .collect::<std::result::Result<_, _>>()?;
+    let mut header = vec!["metric".to_string(), "unit".to_string()];
+    header.extend(run.models.iter().map(|m| m.name().to_string()));
+    let rows: Vec<Vec<String>> = values[0]
+        .keys()
+        .map(|key| {
+            let mut row = vec![key.clone(), unit_of(key).unwrap_or("").to_string()];
+            row.extend(values.iter().map(|v| value_text(v.get(key))));
+            row
+        })
+        .collect();
+    page.raw(&table_html(&header, &rows));
+    Ok(())
+}
+
+/// A JSON value as a table cell.
+fn value_text(v: Option<&Value>) -> String {
+    match v {
+        None | Some(Value::Null) => "-".into(),
+        Some(Value::String(s)) => s.clone(),
+        Some(Value::Number(n)) => field(&n.to_string()),
+        Some(other) => other.to_string(),
+    }
+}
+
+/// The planner check of every model.
+fn plan_check(page: &mut Page, run: &RunPage) {
+    page.heading("plan", "Plan check");
+    page.paragraph(
+        "A* from the start to the goal on the map's decisions, with the robot's inflation, against the same \
+         search on the truth; the path's cells near a truly blocked cell are unsafe. The path is in plan.csv.",
+    );
+    let keys = [
+        "plan_found",
+        "truth_plan_found",
+        "plan_length_ratio",
+        "plan_unsafe_cells",
+        "plan_blind_cells",
+    ];
+    let values: Vec<Option<serde_json::Map<String, Value>>> = run
+        .models
+        .iter()
+        .map(|m| match serde_json::to_value(&m.evaluation.metrics) {
+            Ok(Value::Object(o)) => Some(o),
+            _ => None,
+        })
+        .collect();
+    let mut header = vec!["".to_string()];
+    header.extend(run.models.iter().map(|m| m.name().to_string()));
+    let rows: Vec<Vec<String>> = keys
+        .iter()
+        .filter(|k| values.iter().flatten().any(|v| v.contains_key(**k)))
+        .map(|k| {
+            let mut row = vec![(*k).to_string()];
+            row.extend(
+                values
+                    .iter()
+                    .map(|v| value_text(v.as_ref().and_then(|v| v.get(*k)))),
+            );
+            row
+        })
+        .collect();
+    page.table(&header, &rows);
+}
+
+/// The settings the run used: the scenario file, its seed, every model's preset and options, every `--set`.
+fn settings(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
+    let s = run.models[0].scenario;
+    page.heading("settings", "Settings");
+    let mut rows = vec![
+        vec![
+            "scenario file".to_string(),
+            run.scenario_file.display().to_string(),
+        ],
+        vec!["seed".to_string(), s.seed.to_string()],
+        vec![
+            "region [m]".to_string(),
+            format!(
+                "({}, {}) to ({}, {})",
+                s.map.min_xy_m[0], s.map.min_xy_m[1], s.map.max_xy_m[0], s.map.max_xy_m[1]
+            ),
+        ],
+        vec!["resolution [m]".to_string(), s.map.resolution_m.to_string()],
+        vec![
+            "models".to_string(),
+            run.models
+                .iter()
+                .map(|m| m.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+        ],
+        vec![
+            "--set".to_string(),
+            if run.overrides.is_empty() {
+                "(none)".to_string()
+            } else {
+                run.overrides.join("  ")
+            },
+        ],
+    ];
+    if let Some(command) = run.planner_command {
+        rows.push(vec!["planner command".to_string(), command.join(" ")]);
+    }
+    page.table(&["setting", "value"], &rows);
+    for m in &run.models {
+        let options = serde_json::to_string_pretty(&(&m.scenario.map.model, &m.scenario.map.traversability))
+            .map_err(|e| e.to_string())?;
+        page.raw(&format!(
+            "<p>The {} model's options and traversability rule, after its preset and every <code>--set</code>:</p>\n<pre>{}</pre>",
+            escape(m.name()),
+            escape(&options)
+        ));
+    }
+    Ok(())
+}
