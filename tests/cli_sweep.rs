@@ -10,7 +10,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{err, oeg, ok, root, s, sweep_plan_error, temp_dir};
+use common::{check_page, err, oeg, ok, root, s, sweep_plan_error, temp_dir};
 
 fn smoke() -> PathBuf {
     root().join("sweeps/smoke.toml")
@@ -283,6 +283,15 @@ fn the_report_writes_intervals_and_plots() {
     ] {
         let bytes = std::fs::read(dir.join("plots").join(name)).expect(name);
         assert!(bytes.starts_with(b"\x89PNG"), "{name}");
+    }
+    // The study's page shows every plot and the summary table.
+    let page = check_page(&dir.join("report.html"));
+    for name in [
+        "plots/psychometric_step.png",
+        "summary.csv",
+        "<td>elevation_rmse_m</td>",
+    ] {
+        assert!(page.contains(name), "{name} missing from the page");
     }
 }
 

@@ -10,7 +10,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use common::{err, oeg, oeg_with_threads, ok, root, s, temp_dir};
+use common::{check_page, err, oeg, oeg_with_threads, ok, root, s, temp_dir};
 
 fn scene(name: &str) -> PathBuf {
     root().join("tests/scenes").join(format!("{name}.toml"))
@@ -125,6 +125,13 @@ fn a_curb_the_sensors_cannot_see_is_a_contact_with_its_time_and_place() {
             .any(|e| e.file_name().to_string_lossy().ends_with("_contact.png"))
     );
     assert_eq!(json(&out.join("metrics.json"))["nav_contacts"], nav["contacts"]);
+    // The run's page shows the closed loop: its outcome, the events and the maps at the events.
+    let page = check_page(&out.join("report.html"));
+    assert!(page.contains("id=\"navigation\"") && page.contains("<td>contact</td>"));
+    assert!(
+        page.contains("_contact.png\""),
+        "the contact's image is on the page"
+    );
 }
 
 #[test]

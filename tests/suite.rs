@@ -14,7 +14,7 @@
 
 mod common;
 
-use common::{oeg, root, temp_dir};
+use common::{check_page, oeg, root, temp_dir};
 use std::path::Path;
 
 /// Scenarios whose `metrics.json` is pinned: small, fast, and together they use lasers, drift and spurious
@@ -78,6 +78,19 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     let csv = std::fs::read_to_string(out.join("suite.csv")).expect("suite.csv");
     assert_eq!(csv.lines().count(), rows.len() + 1);
     assert!(csv.starts_with("scenario,file,status,coverage,elevation_rmse_m,unsafe_step_cells"));
+    // The suite's page: one row per scenario, each linking its run's page and its decisions' thumbnail,
+    // and every run's page in turn parses and links only what it wrote.
+    let page = check_page(&out.join("suite.html"));
+    assert!(page.contains("class=\"verdict pass\""));
+    for r in &rows {
+        let name = r["scenario"].as_str().expect("name");
+        assert!(page.contains(&format!(">{name}</a>")), "{name} has no link");
+    }
+    for entry in std::fs::read_dir(&out).expect("suite folder").flatten() {
+        if entry.path().join("report.html").is_file() {
+            check_page(&entry.path().join("report.html"));
+        }
+    }
 
     // The decision-boundary scenes map no truly blocked cell drivable, per scene and per obstacle.
     // The unsafe cells split into those a ray could have told about and the blind ones; the totals are the

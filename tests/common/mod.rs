@@ -72,3 +72,79 @@ pub fn sweep_plan_error(dir: &Path, name: &str, body: &str) -> String {
     std::fs::write(&path, format!("{head}{body}")).expect("write");
     err(&oeg(&["sweep", "plan", s(&path)]))
 }
+
+/// Checks a written HTML page the way a browser reads it: it parses as HTML5 with no parse error, and every
+/// link and image it references (`href`, `src`) that is not a web address or an anchor resolves to a file
+/// written beside it. Returns the page's text.
+pub fn check_page(page: &Path) -> String {
+    use html5ever::tendril::TendrilSink;
+    use markup5ever_rcdom::{Handle, NodeData, RcDom};
+    let text = std::fs::read_to_string(page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
+    let dom = html5ever::parse_document(RcDom::default(), Default::default())
+        .from_utf8()
+        .read_from(&mut text.as_bytes())
+        .expect("reading from memory");
+    let errors = dom.errors.borrow();
+    assert!(
+        errors.is_empty(),
+        "{}: HTML5 parse errors: {errors:?}",
+        page.display()
+    );
+    assert!(text.starts_with("<!DOCTYPE html>"), "{}", page.display());
+    fn references(node: &Handle, out: &mut Vec<String>) {
+        if let NodeData::Element { attrs, .. } = &node.data {
+            for a in attrs.borrow().iter() {
+                let name = &*a.name.local;
+                if name == "href" || name == "src" {
+                    out.push(a.value.to_string());
+                }
+            }
+        }
+        for child in node.children.borrow().iter() {
+            references(child, out);
+        }
+    }
+    let mut refs = Vec::new();
+    references(&dom.document, &mut refs);
+    let dir = page.parent().expect("a page's folder");
+    let mut local = 0;
+    for r in &refs {
+        if r.starts_with("https://") || r.starts_with("http://") || r.starts_with('#') {
+            continue;
+        }
+        assert!(
+            !r.contains(".."),
+            "{}: a link leaves the folder: {r}",
+            page.display()
+        );
+        let decoded = percent_decode(r);
+        assert!(
+            dir.join(&decoded).exists(),
+            "{}: {r} names no written file",
+            page.display()
+        );
+        local += 1;
+    }
+    assert!(local > 0, "{}: no local links at all", page.display());
+    text
+}
+
+/// `%XX` escapes of a link decoded.
+fn percent_decode(text: &str) -> String {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut k = 0;
+    while k < bytes.len() {
+        if bytes[k] == b'%'
+            && k + 2 < bytes.len()
+            && let Ok(v) = u8::from_str_radix(&text[k + 1..k + 3], 16)
+        {
+            out.push(v);
+            k += 3;
+        } else {
+            out.push(bytes[k]);
+            k += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}

@@ -185,7 +185,10 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
     let passed = rows.iter().filter(|r| r.status == "pass").count();
     let mut page = Page::new("oeg suite");
     let (class, verdict) = if passed == rows.len() {
-        ("pass", format!("PASS: all {} scenarios meet their expectations.", rows.len()))
+        (
+            "pass",
+            format!("PASS: all {} scenarios meet their expectations.", rows.len()),
+        )
     } else {
         (
             "fail",
@@ -196,7 +199,10 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
             ),
         )
     };
-    page.raw(&format!("<div class=\"verdict {class}\">{}</div>", escape(&verdict)));
+    page.raw(&format!(
+        "<div class=\"verdict {class}\">{}</div>",
+        escape(&verdict)
+    ));
     page.raw("<p>The same rows as suite.csv (<a href=\"suite.csv\">suite.csv</a>, <a href=\"suite.json\">suite.json</a>).</p>");
     let header = [
         "decisions",
@@ -232,7 +238,11 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
                     i = escape(&href(&image)),
                     n = escape(&r.scenario)
                 ),
-                format!("<a href=\"{}\">{}</a>", escape(&href(&report)), escape(&r.scenario)),
+                format!(
+                    "<a href=\"{}\">{}</a>",
+                    escape(&href(&report)),
+                    escape(&r.scenario)
+                ),
             )
         } else {
             ("-".to_string(), escape(&r.scenario))

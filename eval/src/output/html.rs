@@ -225,7 +225,10 @@ mod tests {
 
     #[test]
     fn text_is_escaped_everywhere() {
-        assert_eq!(escape("a<b & \"c\" 'd'>"), "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;");
+        assert_eq!(
+            escape("a<b & \"c\" 'd'>"),
+            "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;"
+        );
         let mut page = Page::new("<script>");
         page.paragraph("x < y");
         page.table(&["<h>"], &[vec!["1 & 2".into(), "-0.5".into()]]);

@@ -130,10 +130,7 @@ fn verdict(page: &mut Page, own: &ModelRun) {
             "The scenario sets no expectations: nothing to pass or fail.".to_string(),
         )
     } else if failed == 0 {
-        (
-            "pass",
-            format!("PASS: all {} expectations hold.", results.len()),
-        )
+        ("pass", format!("PASS: all {} expectations hold.", results.len()))
     } else {
         (
             "fail",
@@ -186,36 +183,27 @@ fn decisions(page: &mut Page, run: &RunPage) {
         .collect();
     page.figures(&figures);
     page.heading("map", "The map against the truth");
-    for m in &run.models {
-        page.figures(&[
-            (
-                m.file("elevation.png"),
-                format!("{} model: mapped elevation", m.name()),
+    for (k, m) in run.models.iter().enumerate() {
+        let name = m.name();
+        let mut figures = vec![(m.file("elevation.png"), format!("{name} model: mapped elevation"))];
+        // The truth is the same for every model: shown once, in the first row.
+        if k == 0 {
+            figures.push(("truth_elevation.png".into(), "true elevation".into()));
+        }
+        figures.push((
+            m.file("elevation_error.png"),
+            format!(
+                "{name} model: map - truth (RMSE {:.3} m)",
+                m.evaluation.metrics.elevation_rmse_m
             ),
-            (m.file("truth_elevation.png"), "true elevation".into()),
-            (
-                m.file("elevation_error.png"),
-                format!(
-                    "{} model: map - truth (RMSE {:.3} m)",
-                    m.name(),
-                    m.evaluation.metrics.elevation_rmse_m
-                ),
-            ),
-        ]);
-        page.figures(&[
-            (
-                m.file("traversability.png"),
-                format!("{} model: the map's decisions", m.name()),
-            ),
-            (
-                m.file("occupancy.png"),
-                format!("{} model: occupancy probability", m.name()),
-            ),
-            (
-                m.file("variance.png"),
-                format!("{} model: elevation variance", m.name()),
-            ),
-        ]);
+        ));
+        figures.push((m.file("traversability.png"), format!("{name} model: the map's decisions")));
+        figures.push((m.file("occupancy.png"), format!("{name} model: occupancy probability")));
+        figures.push((m.file("variance.png"), format!("{name} model: elevation variance")));
+        // Three a row.
+        for row in figures.chunks(3) {
+            page.figures(row);
+        }
     }
 }
 
@@ -243,7 +231,10 @@ fn closed_loop(page: &mut Page, log: &NavigationLog, files: &[PathBuf]) -> std::
         .iter()
         .filter(|f| f.starts_with("events") && f.extension().is_some_and(|e| e == "png"))
         .map(|f| {
-            let name = f.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let name = f
+                .file_stem()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
             (href(f), format!("event {}", name.replacen('_', ": ", 1)))
         })
         .collect();
@@ -353,11 +344,7 @@ fn settings(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
         vec!["resolution [m]".to_string(), s.map.resolution_m.to_string()],
         vec![
             "models".to_string(),
-            run.models
-                .iter()
-                .map(|m| m.name())
-                .collect::<Vec<_>>()
-                .join(", "),
+            run.models.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "),
         ],
         vec![
             "--set".to_string(),

@@ -228,12 +228,10 @@ pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
     })?;
     folder.write_bytes(&md_path, md.as_bytes())?;
     let html_path = dir.join("report.html");
-    let html = study
-        .page(dir, &files, &summary)
-        .map_err(|e| EvalError::Input {
-            path: html_path.clone(),
-            message: e.to_string(),
-        })?;
+    let html = study.page(dir, &files, &summary).map_err(|e| EvalError::Input {
+        path: html_path.clone(),
+        message: e.to_string(),
+    })?;
     folder.write_bytes(&html_path, html.as_bytes())?;
     files.insert(0, html_path);
     files.insert(0, md_path);

@@ -1,0 +1,119 @@
+//! The pages and figures people look at: `report.html` of a run parses as HTML5 and links only files it wrote,
+//! says pass or fail with the measured and required values, and the figures and pages are the same bytes on
+//! any thread count. (The suite's page is checked by `tests/suite.rs`, the sweep's by `tests/cli_sweep.rs`,
+//! a closed loop's by `tests/navigation.rs`, on the runs they already make.)
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use common::{check_page, oeg_with_threads, root, s, temp_dir};
+
+fn run(out: &Path, extra: &[&str], threads: &str) -> std::process::Output {
+    let scene = root().join("tests/scenes/decisions.toml");
+    let mut args = vec!["run", s(&scene), "--out", s(out), "--set", "duration_s=5.0"];
+    args.extend_from_slice(extra);
+    oeg_with_threads(&args, Some(threads))
+}
+
+/// Every file of a run's folder that a person looks at (figures and pages), by relative path.
+fn looked_at(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    fn walk(base: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
+        for entry in std::fs::read_dir(dir).expect("folder") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                walk(base, &path, out);
+            } else if path
+                .extension()
+                .is_some_and(|e| e == "png" || e == "html" || e == "svg")
+            {
+                let name = path.strip_prefix(base).expect("inside").display().to_string();
+                out.insert(name, std::fs::read(&path).expect("read"));
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+#[test]
+fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_on_any_thread_count() {
+    let dir = temp_dir("reports", "run");
+    let (a, b) = (dir.join("two_threads"), dir.join("one_thread"));
+    for (out, threads) in [(&a, "2"), (&b, "1")] {
+        let o = run(out, &["--compare", "robust"], threads);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let page = check_page(&a.join("report.html"));
+    // The verdict first, then both models side by side, with every section.
+    assert!(page.contains("class=\"verdict pass\""), "the verdict");
+    for section in [
+        "id=\"decisions\"",
+        "id=\"map\"",
+        "id=\"observability\"",
+        "id=\"metrics\"",
+        "id=\"obstacles-paper\"",
+        "id=\"obstacles-robust\"",
+        "id=\"plan\"",
+        "id=\"settings\"",
+        "id=\"files\"",
+        "src=\"decisions.png\"",
+        "src=\"robust/decisions.png\"",
+        "duration_s=5.0",
+        "docs/metrics.md",
+    ] {
+        assert!(page.contains(section), "{section} missing from the page");
+    }
+    // Every file of the run is linked from its page.
+    for file in [
+        "metrics.json",
+        "obstacles.csv",
+        "plan.csv",
+        "robust/metrics.json",
+        "comparison.csv",
+        "map.oeg",
+    ] {
+        assert!(page.contains(&format!("href=\"{file}\"")), "{file} is not linked");
+    }
+    let (one, two) = (looked_at(&b), looked_at(&a));
+    assert!(two.len() >= 15, "{:?}", two.keys());
+    assert_eq!(one.keys().collect::<Vec<_>>(), two.keys().collect::<Vec<_>>());
+    for (name, bytes) in &two {
+        assert!(one[name] == *bytes, "{name} differs between 1 and 2 threads");
+    }
+    // And again on the same thread count.
+    let c = dir.join("again");
+    let o = run(&c, &["--compare", "robust"], "2");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (name, bytes) in looked_at(&c) {
+        assert!(two[&name] == bytes, "{name} differs between two runs");
+    }
+}
+
+#[test]
+fn a_failing_run_page_says_what_failed_with_the_measured_and_required_values() {
+    let dir = temp_dir("reports", "fail");
+    let out = dir.join("out");
+    let o = run(&out, &["--set", "expectations.num_scans={ max = 1 }"], "2");
+    assert!(!o.status.success());
+    let page = check_page(&out.join("report.html"));
+    assert!(page.contains("class=\"verdict fail\""));
+    assert!(page.contains("FAIL: 1 of"), "the count of failures");
+    let row = page
+        .lines()
+        .find(|l| l.contains("<td>num_scans</td>"))
+        .expect("the failed expectation's row");
+    assert!(row.contains("&lt;= 1") && row.contains("FAIL"), "{row}");
+}
+
+#[test]
+fn the_embedded_font_ships_with_its_licence() {
+    let fonts = root().join("eval/assets/fonts");
+    assert!(fonts.join("DejaVuSans-subset.ttf").is_file());
+    let licence = std::fs::read_to_string(fonts.join("LICENSE-DejaVu.txt")).expect("the font's licence");
+    assert!(licence.contains("Bitstream Vera") && licence.contains("Permission is hereby granted"));
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README");
+    assert!(readme.contains("DejaVu Sans") && readme.contains("LICENSE-DejaVu.txt"));
+}
