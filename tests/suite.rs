@@ -82,7 +82,7 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     // and every run's page in turn parses and links only what it wrote.
     let page = check_page(&out.join("suite.html"));
     assert!(page.contains("class=\"verdict pass\""));
-    for r in &rows {
+    for r in rows {
         let name = r["scenario"].as_str().expect("name");
         assert!(page.contains(&format!(">{name}</a>")), "{name} has no link");
     }

@@ -52,8 +52,8 @@ impl Fill {
     pub fn at(self, x: usize, y: usize) -> Rgb {
         let ink = match self.pattern {
             Pattern::Solid => false,
-            Pattern::Hatch => (x + y) % 6 == 0,
-            Pattern::CrossHatch => (x + y) % 6 == 0 || (x + 6 - y % 6) % 6 == 0,
+            Pattern::Hatch => (x + y).is_multiple_of(6),
+            Pattern::CrossHatch => (x + y).is_multiple_of(6) || (x + 6 - y % 6).is_multiple_of(6),
             Pattern::Dots => x % 4 == 1 && y % 4 == 1,
         };
         if ink {

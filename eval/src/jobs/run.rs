@@ -39,13 +39,13 @@ pub fn summary_lines(report: &RunReport) -> Vec<String> {
     }
     let t = &report.timing;
     lines.push(format!(
-        "simulation {:.2} s ({:.2} M rays/s), map {:.2} s ({:.2} M rays/s), truth {:.2} s; report in {}",
+        "simulation {:.2} s ({:.2} M rays/s), map {:.2} s ({:.2} M rays/s), truth {:.2} s; report: {}",
         t.simulation_wall_time_s,
         t.simulation_rays_per_s / 1e6,
         t.map_wall_time_s,
         t.map_rays_per_s / 1e6,
         t.truth_wall_time_s,
-        report.out_dir.display()
+        report.out_dir.join("report.html").display()
     ));
     lines
 }

@@ -197,9 +197,18 @@ fn decisions(page: &mut Page, run: &RunPage) {
                 m.evaluation.metrics.elevation_rmse_m
             ),
         ));
-        figures.push((m.file("traversability.png"), format!("{name} model: the map's decisions")));
-        figures.push((m.file("occupancy.png"), format!("{name} model: occupancy probability")));
-        figures.push((m.file("variance.png"), format!("{name} model: elevation variance")));
+        figures.push((
+            m.file("traversability.png"),
+            format!("{name} model: the map's decisions"),
+        ));
+        figures.push((
+            m.file("occupancy.png"),
+            format!("{name} model: occupancy probability"),
+        ));
+        figures.push((
+            m.file("variance.png"),
+            format!("{name} model: elevation variance"),
+        ));
         // Three a row.
         for row in figures.chunks(3) {
             page.figures(row);
