@@ -15,6 +15,9 @@ pub enum EvalError {
     /// A setting that cannot be used; its message names where it came from (`--set KEY=VALUE: ...`).
     #[error(transparent)]
     Setting(#[from] crate::settings::SettingError),
+    /// The MCAP recording could not be written.
+    #[error(transparent)]
+    Recording(#[from] crate::recording::RecordingError),
     /// Arguments on the command line that the job cannot use (no input files, an impossible `--jobs`).
     #[error("the command line: {message}")]
     CommandLine {

@@ -26,6 +26,7 @@ pub mod navigation;
 pub mod output;
 pub mod pipeline;
 pub mod progress;
+pub mod recording;
 pub mod report;
 pub mod settings;
 #[cfg(test)]

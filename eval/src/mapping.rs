@@ -43,6 +43,17 @@ pub struct Mapping {
     /// The sensors' blind band at the start, on flat ground (`blind_band.csv`).
     pub blind_band: Vec<BlindBandRow>,
     max_range_m: Vec<f64>,
+    /// The recording the scans, poses and the first map's layers go into, when the run records one.
+    recording: Option<Recorded>,
+}
+
+/// A recording with what it needs to draw the first map's decisions.
+#[derive(Debug)]
+struct Recorded {
+    recording: crate::recording::Recording,
+    sensors: Vec<String>,
+    profile: oeg::RobotProfile,
+    rule: oeg::TraversabilityRule,
 }
 
 /// Ranges of the blind band, metres: every half metre.
@@ -104,7 +115,46 @@ impl Mapping {
             last_tick: -1,
             tick_s: loaded.scenario.tick_s,
             duration_s: loaded.scenario.duration_s,
+            recording: None,
         })
+    }
+
+    /// Records every scan from now on into `recording`: the robot's poses once a tick, each scan's returns
+    /// where the map places them, and the first map's layers (its decisions for `profile` under `rule`) at
+    /// the recording's rate.
+    pub fn record(
+        &mut self,
+        recording: crate::recording::Recording,
+        profile: oeg::RobotProfile,
+        rule: oeg::TraversabilityRule,
+    ) {
+        let sensors = self
+            .simulation
+            .sensors()
+            .iter()
+            .map(|x| x.spec.name.clone())
+            .collect();
+        self.recording = Some(Recorded {
+            recording,
+            sensors,
+            profile,
+            rule,
+        });
+    }
+
+    /// The recording, with the first map's layers at the end of what was fed; `None` when not recording.
+    ///
+    /// # Errors
+    /// A layer that cannot be written.
+    pub fn take_recording(&mut self) -> Result<Option<crate::recording::Recording>> {
+        let Some(mut r) = self.recording.take() else {
+            return Ok(None);
+        };
+        if let Some(map) = self.maps.first() {
+            let t = self.simulation.world().time_s();
+            r.recording.map_layers(t, map, &r.profile, r.rule, true)?;
+        }
+        Ok(Some(r.recording))
     }
 
     /// Takes every scan up to `until_s` (and the end of the run) and integrates it into every map.
@@ -118,7 +168,7 @@ impl Mapping {
                 break;
             };
             self.simulation_s += t0.elapsed().as_secs_f64();
-            let stamp_s = scan.stamp_s;
+            let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
             self.observability
                 .observe(&scan, self.max_range_m[scan.sensor_index]);
             let scan = scan.to_scan(PoseSource::Estimated, self.models[scan.sensor_index]);
@@ -142,6 +192,20 @@ impl Mapping {
                     .iter_mut()
                     .zip(self.map_s.iter_mut())
                     .try_for_each(integrate)?;
+            }
+            if let Some(r) = &mut self.recording {
+                let world = self.simulation.world();
+                r.recording.poses(
+                    stamp_s,
+                    &world.world_from_base(),
+                    &world.estimated_world_from_base(),
+                    self.tick_s,
+                )?;
+                let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
+                r.recording.scan(stamp_s, name, &scan)?;
+                if let Some(map) = self.maps.first() {
+                    r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
+                }
             }
             progress.inc(1);
             // The progress line is refreshed once per simulation tick (`tick_s`).

@@ -21,6 +21,7 @@ use crate::navigation::external::ExternalPlanner;
 use crate::navigation::{NavigationInputs, NavigationLog, PlannerSource, navigate};
 use crate::output::{Staged, create_dir, write_json};
 use crate::progress::Progress;
+use crate::recording::{DEFAULT_GRID_PERIOD_S, LogLevel, Recording};
 use crate::report::page::{ModelRun, RunPage, write_run_page};
 use crate::report::{write_comparison, write_report};
 use crate::settings::SettingError;
@@ -46,6 +47,8 @@ pub struct RunOptions {
     /// Whether the scenario's own `[navigation] command` may run (`--allow-scenario-command`). A scenario
     /// file someone sent never runs a program without it.
     pub allow_scenario_command: bool,
+    /// Write `recording.mcap` for Foxglove (`--mcap`, `docs/mcap.md`).
+    pub mcap: bool,
 }
 
 /// `timing.json`: wall times, kept apart from the metrics because they vary from run to run.
@@ -162,10 +165,12 @@ pub fn scenario_message(e: &sim::SimError) -> String {
 pub fn simulate_and_map(
     loaded: &scenario::LoadedScenario,
     maps: &[&scenario::MapSettings],
+    recording: Option<Recording>,
     progress: &Progress,
 ) -> Result<Mapping> {
     let s = &loaded.scenario;
     let mut mapping = Mapping::new(loaded, maps)?;
+    start_recording(&mut mapping, loaded, maps, recording);
     progress.set_length(mapping.simulation.num_scans_total());
     mapping.feed_until(s.duration_s, progress)?;
     progress.finish();
@@ -192,6 +197,23 @@ pub struct Simulated {
     pub observability: sim::observability::Observability,
     /// The sensors' blind band at the start.
     pub blind_band: Vec<sim::observability::BlindBandRow>,
+    /// The recording, when the run records one: the poses, the scans and the first map's layers so far.
+    pub recording: Option<Recording>,
+}
+
+/// Hands `recording` to the mapping, to draw the first map's decisions for the scenario's robot.
+fn start_recording(
+    mapping: &mut Mapping,
+    loaded: &scenario::LoadedScenario,
+    maps: &[&scenario::MapSettings],
+    recording: Option<Recording>,
+) {
+    if let Some(r) = recording {
+        let rule = maps
+            .first()
+            .map_or(loaded.scenario.map.traversability, |m| m.traversability);
+        mapping.record(r, loaded.scenario.robot.profile(), rule);
+    }
 }
 
 /// Simulates `loaded` and maps it into one map per entry of `maps`: the scripted drive, or with
@@ -204,13 +226,16 @@ pub fn simulate(
     loaded: &scenario::LoadedScenario,
     maps: &[&scenario::MapSettings],
     planner: &PlannerSource,
+    recording: Option<Recording>,
     progress: &Progress,
 ) -> Result<Simulated> {
     let s = &loaded.scenario;
     let Some(settings) = &s.navigation else {
-        let mapping = simulate_and_map(loaded, maps, progress)?;
+        let mut mapping = simulate_and_map(loaded, maps, recording, progress)?;
+        let recording = mapping.take_recording()?;
         let timing = mapping.timing();
         return Ok(Simulated {
+            recording,
             simulation: mapping.simulation,
             maps: mapping.maps,
             timing,
@@ -221,6 +246,7 @@ pub fn simulate(
         });
     };
     let mut mapping = Mapping::new(loaded, maps)?;
+    start_recording(&mut mapping, loaded, maps, recording);
     progress.set_length(mapping.simulation.num_scans_total());
     let truth_start = Instant::now();
     // The static world's truth (people and the robot left out) is the same at any time: it is taken before
@@ -236,8 +262,10 @@ pub fn simulate(
     };
     let log = navigate(&mut mapping, &inputs, progress)?;
     progress.finish();
+    let recording = mapping.take_recording()?;
     let timing = mapping.timing();
     Ok(Simulated {
+        recording,
         simulation: mapping.simulation,
         maps: mapping.maps,
         timing,
@@ -318,6 +346,45 @@ pub fn profile_of(s: &scenario::Scenario) -> Result<RobotProfile> {
     Ok(profile)
 }
 
+/// The recording's last parts: the truth once, the planned paths (every replan of a closed loop at its time,
+/// else the plan on the final map at the end) and the events of a closed loop, as log messages.
+fn finish_recording(
+    mut recording: Recording,
+    truth: &TruthRaster,
+    evaluation: &Evaluation,
+    navigation: Option<&NavigationLog>,
+    geometry: &GridGeometry,
+    end_s: f64,
+) -> Result<Vec<u8>> {
+    recording.truth(truth)?;
+    match navigation {
+        Some(log) => {
+            for p in &log.plans {
+                recording.path(p.time_s, &p.points)?;
+            }
+            for e in &log.summary.events {
+                let kind = serde_json::to_value(e.kind)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default();
+                let level = match kind.as_str() {
+                    "contact" | "stuck" | "planner_failed" => LogLevel::Error,
+                    "no_path" | "closest_approach" | "time_limit" => LogLevel::Warning,
+                    _ => LogLevel::Info,
+                };
+                let place = format!("{kind} at ({:.2}, {:.2}) m: {}", e.x_m, e.y_m, e.message);
+                recording.event(e.time_s, level, &place)?;
+            }
+        }
+        None => {
+            if let Some(p) = &evaluation.plan.map_plan {
+                recording.path(end_s, &crate::judge::plan_check::polyline(p, geometry))?;
+            }
+        }
+    }
+    Ok(recording.finish()?)
+}
+
 /// Runs a scenario end to end and writes its report.
 ///
 /// # Errors
@@ -355,6 +422,16 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     if matches!(planner, PlannerSource::External(_)) {
         create_dir(&planner_dir)?;
     }
+    let recording = if options.mcap {
+        let geometry = GridGeometry::new(s.map.resolution_m)?;
+        Some(Recording::new(
+            region_of(s, &geometry)?,
+            s.map.resolution_m,
+            DEFAULT_GRID_PERIOD_S,
+        )?)
+    } else {
+        None
+    };
     let Simulated {
         simulation,
         maps,
@@ -363,7 +440,8 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         navigation,
         observability,
         blind_band,
-    } = simulate(&loaded, &settings, &planner, progress)?;
+        recording,
+    } = simulate(&loaded, &settings, &planner, recording, progress)?;
     let mut maps = maps.into_iter();
     let map = maps.next().ok_or_else(|| EvalError::Input {
         path: options.scenario.clone(),
@@ -400,6 +478,20 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     )?);
     if planner_dir.is_dir() {
         files.push(planner_dir.clone());
+    }
+    if let Some(recording) = recording {
+        let path = stage.join("recording.mcap");
+        let end_s = simulation.world().time_s();
+        let bytes = finish_recording(
+            recording,
+            &truth,
+            &evaluation,
+            navigation.as_ref(),
+            &geometry,
+            end_s,
+        )?;
+        crate::output::write_bytes(&path, &bytes)?;
+        files.push(path);
     }
     let mut compared_eval = None;
     if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {

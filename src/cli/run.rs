@@ -33,6 +33,11 @@ pub struct RunArgs {
     /// Let the scenario's own `[navigation] command` run: a scenario file never runs a program without it.
     #[arg(long)]
     allow_scenario_command: bool,
+    /// Also write recording.mcap, for Foxglove: the robot's true and estimated pose, each sensor's scans, the
+    /// map's layers every second of simulated time, the truth, the planned paths and the events
+    /// (docs/mcap.md).
+    #[arg(long)]
+    mcap: bool,
 }
 
 impl RunArgs {
@@ -47,6 +52,7 @@ impl RunArgs {
             compare: Some(oeg::MapPreset::Robust),
             planner_command: None,
             allow_scenario_command: false,
+            mcap: false,
         }
     }
 }
@@ -71,6 +77,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             .transpose()
             .map_err(|e| anyhow::anyhow!("--planner-command: {e}"))?,
         allow_scenario_command: args.allow_scenario_command,
+        mcap: args.mcap,
     };
     let report = run_scenario(&options, &Progress::new(0, "scans"))?;
     for line in summary_lines(&report) {

@@ -297,6 +297,7 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
         compare: None,
         planner_command: None,
         allow_scenario_command: false,
+        mcap: false,
     };
     let row = match run_scenario(&options, &Progress::hidden()) {
         Ok(r) => SuiteRow {

@@ -302,6 +302,7 @@ fn simulate_group(
         first,
         &settings,
         &crate::navigation::PlannerSource::Builtin,
+        None,
         &Progress::hidden(),
     )
     .map_err(|e| e.to_string())?;

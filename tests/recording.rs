@@ -1,0 +1,170 @@
+//! `oeg run --mcap`: the recording reads back with the `mcap` crate, every message validates against the
+//! JSON schema stored with its channel, the topics and frames are the documented ones (`docs/mcap.md`), and
+//! the file is the same bytes on one and two threads.
+
+mod common;
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use common::{oeg_with_threads, root, s, temp_dir};
+use serde_json::Value;
+
+/// Checks `value` against the subset of JSON Schema the recording's schemas use: `type`, `properties`,
+/// `required`, `items`, `minimum`, `maximum` and `contentEncoding: base64`. Returns the first problem.
+fn validate(value: &Value, schema: &Value, at: &str) -> Result<(), String> {
+    let want = schema["type"].as_str();
+    let ok = match want {
+        Some("object") => value.is_object(),
+        Some("array") => value.is_array(),
+        Some("string") => value.is_string(),
+        Some("integer") => value.is_u64() || value.is_i64(),
+        Some("number") => value.is_number(),
+        Some(other) => return Err(format!("{at}: unknown type {other} in the schema")),
+        None => true,
+    };
+    if !ok {
+        return Err(format!("{at}: {value} is not of type {want:?}"));
+    }
+    if let Some(min) = schema["minimum"].as_f64()
+        && value.as_f64().is_some_and(|v| v < min)
+    {
+        return Err(format!("{at}: {value} < {min}"));
+    }
+    if let Some(max) = schema["maximum"].as_f64()
+        && value.as_f64().is_some_and(|v| v > max)
+    {
+        return Err(format!("{at}: {value} > {max}"));
+    }
+    if schema["contentEncoding"] == "base64" {
+        let text = value.as_str().unwrap_or_default();
+        let valid = text.len().is_multiple_of(4)
+            && text
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b == b'+' || b == b'/' || b == b'=');
+        if !valid {
+            return Err(format!("{at}: not base64"));
+        }
+    }
+    if let Some(required) = schema["required"].as_array() {
+        for r in required {
+            let key = r.as_str().unwrap_or_default();
+            if value.get(key).is_none() {
+                return Err(format!("{at}: {key} is missing"));
+            }
+        }
+    }
+    if let (Some(props), Some(object)) = (schema["properties"].as_object(), value.as_object()) {
+        for (key, v) in object {
+            let Some(sub) = props.get(key) else {
+                return Err(format!("{at}: {key} is not in the schema"));
+            };
+            validate(v, sub, &format!("{at}.{key}"))?;
+        }
+    }
+    if let (Some(items), Some(array)) = (schema.get("items"), value.as_array()) {
+        for (k, v) in array.iter().enumerate() {
+            validate(v, items, &format!("{at}[{k}]"))?;
+        }
+    }
+    Ok(())
+}
+
+fn decoded_len(base64: &str) -> usize {
+    base64.len() / 4 * 3 - base64.bytes().rev().take_while(|b| *b == b'=').count()
+}
+
+#[test]
+fn the_recording_reads_back_validates_against_its_schemas_and_is_the_same_bytes_on_any_thread_count() {
+    let dir = temp_dir("recording", "nav_blind");
+    let scene = root().join("tests/scenes/nav_blind.toml");
+    let mut bytes = Vec::new();
+    for threads in ["2", "1"] {
+        let out = dir.join(format!("threads{threads}"));
+        let o = oeg_with_threads(&["run", s(&scene), "--mcap", "--out", s(&out)], Some(threads));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        bytes.push(std::fs::read(out.join("recording.mcap")).expect("recording.mcap"));
+        assert!(
+            std::fs::read_to_string(out.join("report.html"))
+                .expect("page")
+                .contains("href=\"recording.mcap\""),
+            "the run's page links the recording"
+        );
+    }
+    assert!(bytes[0] == bytes[1], "1 and 2 threads give different recordings");
+
+    let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
+    let mut frames = BTreeSet::new();
+    let mut levels = BTreeSet::new();
+    let mut last_time = 0;
+    for message in mcap::MessageStream::new(&bytes[0]).expect("an MCAP file") {
+        let message = message.expect("a message");
+        let channel = &message.channel;
+        let schema = channel.schema.as_ref().expect("every channel has a schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        assert_eq!(channel.message_encoding, "json");
+        let schema: Value = serde_json::from_slice(&schema.data).expect("the schema is JSON");
+        let value: Value = serde_json::from_slice(&message.data).expect("the message is JSON");
+        validate(&value, &schema, &channel.topic).unwrap_or_else(|e| panic!("{e}"));
+        *per_topic.entry(channel.topic.clone()).or_default() += 1;
+        last_time = last_time.max(message.log_time);
+        match schema["title"].as_str() {
+            Some("foxglove.Grid") => {
+                let (stride, columns) = (value["row_stride"].as_u64(), value["column_count"].as_u64());
+                let cell = value["cell_stride"].as_u64().expect("cell stride");
+                assert_eq!(stride, columns.map(|c| c * cell));
+                let n = decoded_len(value["data"].as_str().expect("data")) as u64;
+                assert!(
+                    n > 0 && n.is_multiple_of(stride.expect("stride")),
+                    "{}: {n} bytes",
+                    channel.topic
+                );
+                assert_eq!(value["frame_id"], "world");
+            }
+            Some("foxglove.PointCloud") => {
+                assert_eq!(decoded_len(value["data"].as_str().expect("data")) % 12, 0);
+            }
+            Some("foxglove.FrameTransform") => {
+                assert_eq!(value["parent_frame_id"], "world");
+                frames.insert(value["child_frame_id"].as_str().expect("frame").to_string());
+            }
+            Some("foxglove.Log") => {
+                levels.insert((
+                    value["level"].as_u64(),
+                    value["message"]
+                        .as_str()
+                        .map(|m| m.split(' ').next().map(str::to_string)),
+                ));
+            }
+            _ => {}
+        }
+    }
+    for topic in [
+        "/tf",
+        "/scans/laser_left",
+        "/scans/laser_right",
+        "/map/elevation",
+        "/map/occupancy_probability",
+        "/map/variance",
+        "/map/decisions",
+        "/truth/elevation",
+        "/truth/truly_blocked",
+        "/plan",
+        "/events",
+    ] {
+        assert!(per_topic.contains_key(topic), "{topic} missing: {per_topic:?}");
+    }
+    assert_eq!(per_topic["/truth/elevation"], 1);
+    // The layers once a simulated second and at the end; every replan's path.
+    assert!(per_topic["/map/decisions"] >= 10, "{per_topic:?}");
+    assert!(per_topic["/plan"] >= 5, "{per_topic:?}");
+    assert_eq!(
+        frames,
+        BTreeSet::from(["base_link".to_string(), "base_link_estimated".to_string()])
+    );
+    // The contact with the curb is an error-level log message.
+    assert!(
+        levels.contains(&(Some(4), Some(Some("contact".to_string())))),
+        "{levels:?}"
+    );
+    assert!(last_time > 10_000_000_000, "the run lasts beyond 10 s");
+}
