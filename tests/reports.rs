@@ -12,7 +12,7 @@ use common::{check_page, oeg_with_threads, root, s, temp_dir};
 
 fn run(out: &Path, extra: &[&str], threads: &str) -> std::process::Output {
     let scene = root().join("tests/scenes/decisions.toml");
-    let mut args = vec!["run", s(&scene), "--out", s(out), "--set", "duration_s=5.0"];
+    let mut args = vec!["run", s(&scene), "--out", s(out), "--set", "duration_s=3.0"];
     args.extend_from_slice(extra);
     oeg_with_threads(&args, Some(threads))
 }
@@ -61,7 +61,7 @@ fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_on_any_threa
         "id=\"files\"",
         "src=\"decisions.png\"",
         "src=\"robust/decisions.png\"",
-        "duration_s=5.0",
+        "duration_s=3.0",
         "docs/metrics.md",
     ] {
         assert!(page.contains(section), "{section} missing from the page");
