@@ -4,7 +4,7 @@
 
 use std::sync::OnceLock;
 
-use ab_glyph::{Font as _, FontRef, PxScale, ScaleFont as _, point};
+use ab_glyph::{Font as _, FontRef, GlyphId, PxScale, ScaleFont as _, point};
 
 /// The embedded font file: DejaVu Sans 2.37, subset (`eval/assets/fonts/README.md`). Its licence is
 /// `eval/assets/fonts/LICENSE-DejaVu.txt`.
@@ -37,37 +37,37 @@ pub fn line_height(scale: usize) -> usize {
     (f.ascent() - f.descent()).ceil() as usize
 }
 
-/// The width of `text` at `scale`, pixels (advances and kerning).
-pub fn width(text: &str, scale: usize) -> usize {
+/// Each glyph of `text` at `scale` with where it starts (pixels from the line's start, advances and kerning),
+/// and where the line ends.
+fn layout(text: &str, scale: usize) -> (Vec<(GlyphId, f32)>, f32) {
     let f = font().as_scaled(PxScale::from(size_px(scale)));
     let mut caret = 0.0_f32;
     let mut previous = None;
+    let mut glyphs = Vec::with_capacity(text.len());
     for ch in text.chars() {
         let id = f.glyph_id(ch);
         if let Some(p) = previous {
             caret += f.kern(p, id);
         }
+        glyphs.push((id, caret));
         caret += f.h_advance(id);
         previous = Some(id);
     }
-    caret.ceil() as usize
+    (glyphs, caret)
+}
+
+/// The width of `text` at `scale`, pixels (advances and kerning).
+pub fn width(text: &str, scale: usize) -> usize {
+    layout(text, scale).1.ceil() as usize
 }
 
 /// Calls `coverage(x, y, c)` for each pixel of `text` at `scale` with its coverage `c` in (0, 1], the line's
 /// top-left corner at (0, 0). Characters the font lacks are drawn as its missing-glyph box.
 pub fn rasterize(text: &str, scale: usize, mut coverage: impl FnMut(i64, i64, f32)) {
     let f = font().as_scaled(PxScale::from(size_px(scale)));
-    let mut caret = 0.0_f32;
-    let mut previous = None;
-    for ch in text.chars() {
-        let id = f.glyph_id(ch);
-        if let Some(p) = previous {
-            caret += f.kern(p, id);
-        }
+    for (id, caret) in layout(text, scale).0 {
         // Each glyph starts on a whole pixel, so the same letter looks the same wherever it falls.
         let glyph = id.with_scale_and_position(f.scale(), point(caret.round(), f.ascent().round()));
-        caret += f.h_advance(id);
-        previous = Some(id);
         if let Some(outline) = font().outline_glyph(glyph) {
             let b = outline.px_bounds();
             let (x0, y0) = (b.min.x as i64, b.min.y as i64);
