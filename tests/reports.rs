@@ -12,7 +12,7 @@ use common::{check_page, oeg_with_threads, root, s, temp_dir};
 
 fn run(out: &Path, extra: &[&str], threads: &str) -> std::process::Output {
     let scene = root().join("tests/scenes/decisions.toml");
-    let mut args = vec!["run", s(&scene), "--out", s(out), "--set", "duration_s=3.0"];
+    let mut args = vec!["run", s(&scene), "--out", s(out), "--set", "duration_s=5.0"];
     args.extend_from_slice(extra);
     oeg_with_threads(&args, Some(threads))
 }
@@ -39,7 +39,7 @@ fn looked_at(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 }
 
 #[test]
-fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_on_any_thread_count() {
+fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_in_two_runs_on_1_and_2_threads() {
     let dir = temp_dir("reports", "run");
     let (a, b) = (dir.join("two_threads"), dir.join("one_thread"));
     for (out, threads) in [(&a, "2"), (&b, "1")] {
@@ -82,13 +82,6 @@ fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_on_any_threa
     assert_eq!(one.keys().collect::<Vec<_>>(), two.keys().collect::<Vec<_>>());
     for (name, bytes) in &two {
         assert!(one[name] == *bytes, "{name} differs between 1 and 2 threads");
-    }
-    // And again on the same thread count.
-    let c = dir.join("again");
-    let o = run(&c, &["--compare", "robust"], "2");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for (name, bytes) in looked_at(&c) {
-        assert!(two[&name] == bytes, "{name} differs between two runs");
     }
 }
 
