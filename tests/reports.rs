@@ -61,7 +61,7 @@ fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_in_two_runs_
         "id=\"files\"",
         "src=\"decisions.png\"",
         "src=\"robust/decisions.png\"",
-        "duration_s=3.0",
+        "duration_s=5.0",
         "docs/metrics.md",
     ] {
         assert!(page.contains(section), "{section} missing from the page");
