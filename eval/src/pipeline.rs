@@ -363,16 +363,21 @@ fn finish_recording(
                 recording.path(p.time_s, &p.points)?;
             }
             for e in &log.summary.events {
-                let kind = serde_json::to_value(e.kind)
-                    .ok()
-                    .and_then(|v| v.as_str().map(str::to_string))
-                    .unwrap_or_default();
-                let level = match kind.as_str() {
-                    "contact" | "stuck" | "planner_failed" => LogLevel::Error,
-                    "no_path" | "closest_approach" | "time_limit" => LogLevel::Warning,
-                    _ => LogLevel::Info,
+                use crate::navigation::record::EventKind;
+                let level = match e.kind {
+                    EventKind::Contact | EventKind::Stuck | EventKind::PlannerFailed => LogLevel::Error,
+                    EventKind::NoPath | EventKind::ClosestApproach | EventKind::TimeLimit => {
+                        LogLevel::Warning
+                    }
+                    EventKind::Reached => LogLevel::Info,
                 };
-                let place = format!("{kind} at ({:.2}, {:.2}) m: {}", e.x_m, e.y_m, e.message);
+                let place = format!(
+                    "{} at ({:.2}, {:.2}) m: {}",
+                    e.kind.name(),
+                    e.x_m,
+                    e.y_m,
+                    e.message
+                );
                 recording.event(e.time_s, level, &place)?;
             }
         }

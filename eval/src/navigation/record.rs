@@ -67,6 +67,21 @@ pub enum EventKind {
     TimeLimit,
 }
 
+impl EventKind {
+    /// The name written in `events.csv` and `navigation.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Contact => "contact",
+            Self::ClosestApproach => "closest_approach",
+            Self::NoPath => "no_path",
+            Self::PlannerFailed => "planner_failed",
+            Self::Stuck => "stuck",
+            Self::Reached => "reached",
+            Self::TimeLimit => "time_limit",
+        }
+    }
+}
+
 /// One row of `events.csv`: an event with its time and the robot's true pose.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Event {
@@ -144,6 +159,17 @@ pub enum Outcome {
     TimeLimit,
 }
 
+impl Outcome {
+    /// The name written in `navigation.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Reached => "reached",
+            Self::Stuck => "stuck",
+            Self::TimeLimit => "time_limit",
+        }
+    }
+}
+
 /// `navigation.json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NavigationSummary {
@@ -207,6 +233,29 @@ impl NavigationSummary {
             contacts: self.contacts,
             closest_approach_m: self.closest_approach_m,
             stuck: self.outcome == Outcome::Stuck,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_the_serialized_ones() {
+        for kind in [
+            EventKind::Contact,
+            EventKind::ClosestApproach,
+            EventKind::NoPath,
+            EventKind::PlannerFailed,
+            EventKind::Stuck,
+            EventKind::Reached,
+            EventKind::TimeLimit,
+        ] {
+            assert_eq!(serde_json::to_value(kind).ok(), Some(kind.name().into()));
+        }
+        for outcome in [Outcome::Reached, Outcome::Stuck, Outcome::TimeLimit] {
+            assert_eq!(serde_json::to_value(outcome).ok(), Some(outcome.name().into()));
         }
     }
 }

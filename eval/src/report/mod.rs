@@ -215,10 +215,7 @@ pub fn write_navigation(
         for snap in &log.snapshots {
             let event = &snap.event;
             let index = log.summary.events.iter().position(|e| e == event).unwrap_or(0);
-            let name = serde_json::to_value(event.kind)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_string))
-                .unwrap_or_default();
+            let name = event.kind.name();
             let fig = comparison::event_figure(
                 s,
                 truth,

@@ -223,10 +223,7 @@ fn closed_loop(page: &mut Page, log: &NavigationLog, files: &[PathBuf]) -> std::
     page.paragraph(&format!(
         "Outcome: {} after {:.1} s; driven {:.2} m{}; {} replans; the trajectory and some of the plans are on \
          the decisions image above.",
-        serde_json::to_value(n.outcome)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_string))
-            .unwrap_or_default(),
+        n.outcome.name(),
         n.time_s,
         n.driven_length_m,
         n.length_ratio
