@@ -1,6 +1,6 @@
 //! The pages and figures people look at: `report.html` of a run parses as HTML5 and links only files it wrote,
-//! says pass or fail with the measured and required values, and the figures and pages are the same bytes on
-//! any thread count. (The suite's page is checked by `tests/suite.rs`, the sweep's by `tests/cli_sweep.rs`,
+//! says pass or fail with the measured and required values, every figure's SVG (`--svg`) is well-formed with
+//! its PNG's size, and the figures, SVGs and pages are the same bytes on any thread count. (The suite's page is checked by `tests/suite.rs`, the sweep's by `tests/cli_sweep.rs`,
 //! a closed loop's by `tests/navigation.rs`, on the runs they already make.)
 
 mod common;
@@ -8,7 +8,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use common::{check_page, oeg_with_threads, root, s, temp_dir};
+use common::{check_page, check_svg, oeg_with_threads, root, s, temp_dir};
 
 fn run(out: &Path, extra: &[&str], threads: &str) -> std::process::Output {
     let scene = root().join("tests/scenes/decisions.toml");
@@ -39,11 +39,12 @@ fn looked_at(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 }
 
 #[test]
-fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_in_two_runs_on_1_and_2_threads() {
+fn a_run_page_parses_links_only_written_files_and_its_figures_and_svgs_are_the_same_bytes_on_1_and_2_threads()
+{
     let dir = temp_dir("reports", "run");
     let (a, b) = (dir.join("two_threads"), dir.join("one_thread"));
     for (out, threads) in [(&a, "2"), (&b, "1")] {
-        let o = run(out, &["--compare", "robust"], threads);
+        let o = run(out, &["--compare", "robust", "--svg"], threads);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let page = check_page(&a.join("report.html"));
@@ -79,6 +80,13 @@ fn a_run_page_parses_links_only_written_files_and_is_the_same_bytes_in_two_runs_
     }
     let (one, two) = (looked_at(&b), looked_at(&a));
     assert!(two.len() >= 15, "{:?}", two.keys());
+    // With --svg, every figure is also an SVG with its text as vectors.
+    let pngs: Vec<&String> = two.keys().filter(|n| n.ends_with(".png")).collect();
+    assert!(pngs.len() >= 10, "{pngs:?}");
+    for png in pngs {
+        let svg = a.join(png.replace(".png", ".svg"));
+        assert!(check_svg(&svg) >= 3, "{}: too little text", svg.display());
+    }
     assert_eq!(one.keys().collect::<Vec<_>>(), two.keys().collect::<Vec<_>>());
     for (name, bytes) in &two {
         assert!(one[name] == *bytes, "{name} differs between 1 and 2 threads");

@@ -49,6 +49,8 @@ pub struct RunOptions {
     pub allow_scenario_command: bool,
     /// Write `recording.mcap` for Foxglove (`--mcap`, `docs/mcap.md`).
     pub mcap: bool,
+    /// The files each figure is written as (`--svg` adds an SVG beside each PNG).
+    pub figures: crate::figures::ImageFormats,
 }
 
 /// `timing.json`: wall times, kept apart from the metrics because they vary from run to run.
@@ -470,9 +472,10 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     let evaluation = evaluate(s, &map, &truth, &sensed)?;
     let overlay = navigation.as_ref().map(crate::report::overlay_of);
 
-    let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref())?;
+    let formats = options.figures;
+    let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref(), formats)?;
     if let Some(log) = &navigation {
-        files.extend(crate::report::write_navigation(stage, s, &truth, log)?);
+        files.extend(crate::report::write_navigation(stage, s, &truth, log, formats)?);
     }
     files.extend(crate::report::write_observability(
         stage,
@@ -480,6 +483,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         &observability,
         &evaluation.verdicts,
         &blind_band,
+        formats,
     )?);
     if planner_dir.is_dir() {
         files.push(planner_dir.clone());
@@ -504,11 +508,12 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         let other_eval = evaluate(c, &other, &truth, &sensed)?;
         let dir = stage.join(preset.name());
         create_dir(&dir)?;
-        files.extend(write_report(&dir, c, &other, &truth, &other_eval, None)?);
+        files.extend(write_report(&dir, c, &other, &truth, &other_eval, None, formats)?);
         files.extend(write_comparison(
             stage,
             [(s, &evaluation), (c, &other_eval)],
             &geometry,
+            formats,
         )?);
         compared_eval = Some((*preset, c, other_eval));
     }

@@ -106,28 +106,6 @@ pub enum LogLevel {
     Error = 4,
 }
 
-/// Standard base64 (RFC 4648, with padding), as Foxglove's JSON encoding carries bytes.
-pub fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            chunk.get(1).copied().unwrap_or(0),
-            chunk.get(2).copied().unwrap_or(0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ALPHABET[((n >> (18 - 6 * k)) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
 fn stamp(t_s: f64) -> Value {
     let ns = nanos(t_s);
     json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
@@ -273,7 +251,7 @@ impl Recording {
             "pose": planar_pose_json(0.0, 0.0, 0.0), "point_stride": 12,
             "fields": [{"name": "x", "offset": 0, "type": 7}, {"name": "y", "offset": 4, "type": 7},
                 {"name": "z", "offset": 8, "type": 7}],
-            "data": base64(&data)});
+            "data": crate::output::base64(&data)});
         self.write(&format!("/scans/{sensor}"), "foxglove.PointCloud", t_s, &message)
     }
 
@@ -295,7 +273,7 @@ impl Recording {
             "cell_size": {"x": self.resolution_m, "y": self.resolution_m},
             "row_stride": cell_stride * r.num_x, "cell_stride": cell_stride,
             "fields": [{"name": name, "offset": 0, "type": numeric_type}],
-            "data": base64(&data)});
+            "data": crate::output::base64(&data)});
         self.write(topic, "foxglove.Grid", t_s, &message)
     }
 
@@ -392,18 +370,4 @@ impl Recording {
 enum GridCells {
     F32(Vec<f32>),
     U8(Vec<u8>),
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn base64_matches_rfc_4648() {
-        assert_eq!(base64(b""), "");
-        assert_eq!(base64(b"f"), "Zg==");
-        assert_eq!(base64(b"fo"), "Zm8=");
-        assert_eq!(base64(b"foo"), "Zm9v");
-        assert_eq!(base64(b"foobar"), "Zm9vYmFy");
-    }
 }

@@ -22,6 +22,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         out: args.out.clone(),
         overrides: vec!["map.model.max_height_m=0.5".into()],
         planner_files: true,
+        svg: false,
         memory_limit_mib: oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20,
     };
     let report = oeg_eval::jobs::map::demo::run(map_args.job()?, &Progress::new(0, "scans"))?;

@@ -31,6 +31,10 @@ pub struct MapArgs {
     /// region's extent.
     #[arg(long)]
     pub planner_files: bool,
+    /// Also write each figure as SVG beside its PNG, for papers: lines and text as vectors, the map's cells
+    /// as an image inside it.
+    #[arg(long)]
+    pub svg: bool,
     /// Memory limit of the map in MiB.
     #[arg(long, default_value_t = oeg::DEFAULT_MEMORY_LIMIT_BYTES >> 20)]
     pub memory_limit_mib: u64,
@@ -59,6 +63,7 @@ impl MapArgs {
             rule: settings.map.traversability,
             keep_inputs: false,
             planner_files: self.planner_files,
+            figures: oeg_eval::figures::ImageFormats { svg: self.svg },
         })
     }
 }

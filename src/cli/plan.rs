@@ -23,6 +23,9 @@ pub struct PlanArgs {
     /// robot.height_m (0.46), map.traversability.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
+    /// Also write each figure as SVG beside its PNG, for papers.
+    #[arg(long)]
+    svg: bool,
 }
 
 /// `X,Y` in metres, as `--from` and `--to` take them.
@@ -53,6 +56,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         options: settings.planner,
         profile: settings.robot,
         rule: settings.map.traversability,
+        figures: oeg_eval::figures::ImageFormats { svg: args.svg },
     };
     let (summary, files) = run_job(&job)?;
     if summary.plan_found {

@@ -10,11 +10,18 @@ pub struct PreviewArgs {
     /// Output folder.
     #[arg(long, default_value = "out/preview")]
     out: PathBuf,
+    /// Also write each figure as SVG beside its PNG, for papers.
+    #[arg(long)]
+    svg: bool,
 }
 
 /// Draws the preview and names the files written.
 pub fn run(args: &PreviewArgs) -> anyhow::Result<()> {
-    for f in oeg_eval::jobs::preview::preview(&args.scenario, &args.out)? {
+    for f in oeg_eval::jobs::preview::preview(
+        &args.scenario,
+        &args.out,
+        oeg_eval::figures::ImageFormats { svg: args.svg },
+    )? {
         say!("wrote {}", f.display());
     }
     Ok(())

@@ -38,6 +38,10 @@ pub struct RunArgs {
     /// (docs/mcap.md).
     #[arg(long)]
     mcap: bool,
+    /// Also write each figure as SVG beside its PNG, for papers: lines and text as vectors, the map's cells
+    /// as an image inside it.
+    #[arg(long)]
+    svg: bool,
 }
 
 impl RunArgs {
@@ -53,6 +57,7 @@ impl RunArgs {
             planner_command: None,
             allow_scenario_command: false,
             mcap: false,
+            svg: false,
         }
     }
 }
@@ -78,6 +83,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("--planner-command: {e}"))?,
         allow_scenario_command: args.allow_scenario_command,
         mcap: args.mcap,
+        figures: oeg_eval::figures::ImageFormats { svg: args.svg },
     };
     let report = run_scenario(&options, &Progress::new(0, "scans"))?;
     for line in summary_lines(&report) {

@@ -20,13 +20,23 @@ pub struct SuiteArgs {
     /// do not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=256))]
     jobs: Option<u16>,
+    /// Also write each figure as SVG beside its PNG, for papers: lines and text as vectors, the map's cells
+    /// as an image inside it.
+    #[arg(long)]
+    svg: bool,
 }
 
 /// Runs the suite, prints its table, fails if any scenario did not pass.
 pub fn run(args: &SuiteArgs) -> anyhow::Result<()> {
     let jobs = args.jobs.map_or_else(oeg_eval::jobs::default_jobs, usize::from);
     eprintln!("{}", suite::table_header());
-    let rows = suite::suite(&args.paths, &args.out, &args.overrides, jobs)?;
+    let rows = suite::suite(
+        &args.paths,
+        &args.out,
+        &args.overrides,
+        jobs,
+        oeg_eval::figures::ImageFormats { svg: args.svg },
+    )?;
     say!("{}", suite::table_header());
     for r in &rows {
         say!("{}", suite::table_line(r));

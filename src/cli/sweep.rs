@@ -80,6 +80,9 @@ pub enum SweepCommand {
         /// Summarise the finished runs of an incomplete study; every plot's title says "partial: N of M runs".
         #[arg(long)]
         partial: bool,
+        /// Also write each plot as SVG beside its PNG, for papers.
+        #[arg(long)]
+        svg: bool,
     },
 }
 
@@ -137,7 +140,7 @@ pub fn run(command: SweepCommand) -> anyhow::Result<()> {
             }
             Ok(())
         }
-        SweepCommand::Report { dir, partial } => write_report(&dir, partial),
+        SweepCommand::Report { dir, partial, svg } => write_report(&dir, partial, svg),
     }
 }
 
@@ -193,8 +196,8 @@ fn run_plan(plan: &SweepPlan, options: &ExecuteOptions) -> anyhow::Result<()> {
 }
 
 /// `oeg sweep report`: the summary and plots, and how much of the plan they cover.
-fn write_report(dir: &Path, partial: bool) -> anyhow::Result<()> {
-    let report = report::report(dir, partial)?;
+fn write_report(dir: &Path, partial: bool, svg: bool) -> anyhow::Result<()> {
+    let report = report::report(dir, partial, oeg_eval::figures::ImageFormats { svg })?;
     say!(
         "{}: {} of the plan's {} runs{}",
         dir.display(),

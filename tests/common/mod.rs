@@ -129,6 +129,51 @@ pub fn check_page(page: &Path) -> String {
     text
 }
 
+/// Checks an SVG figure written beside its PNG: it parses as XML, its root is an `svg` element as wide and
+/// tall as the PNG, every glyph it places is defined in it, and every embedded image is a PNG. Returns the
+/// number of text lines it carries as vectors.
+pub fn check_svg(svg: &Path) -> usize {
+    let text = std::fs::read_to_string(svg).unwrap_or_else(|e| panic!("{}: {e}", svg.display()));
+    let doc = roxmltree::Document::parse(&text).unwrap_or_else(|e| panic!("{}: not XML: {e}", svg.display()));
+    let root = doc.root_element();
+    assert_eq!(root.tag_name().name(), "svg", "{}", svg.display());
+    let png = std::fs::read(svg.with_extension("png")).expect("the PNG beside the SVG");
+    let info = png::Decoder::new(std::io::Cursor::new(png))
+        .read_info()
+        .expect("a PNG")
+        .info()
+        .clone();
+    assert_eq!(root.attribute("width"), Some(info.width.to_string().as_str()));
+    assert_eq!(root.attribute("height"), Some(info.height.to_string().as_str()));
+    let xlink = "http://www.w3.org/1999/xlink";
+    let defined: std::collections::BTreeSet<&str> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("path"))
+        .filter_map(|n| n.attribute("id"))
+        .collect();
+    for node in doc.descendants() {
+        if node.has_tag_name("use") {
+            let target = node.attribute((xlink, "href")).expect("a use names its glyph");
+            assert!(
+                defined.contains(target.trim_start_matches('#')),
+                "{}: {target} is not defined",
+                svg.display()
+            );
+        }
+        if node.has_tag_name("image") {
+            let data = node.attribute((xlink, "href")).expect("an image's data");
+            assert!(
+                data.starts_with("data:image/png;base64,iVBORw0KGgo"),
+                "{}: an image that is not a PNG",
+                svg.display()
+            );
+        }
+    }
+    doc.descendants()
+        .filter(|n| n.has_tag_name("g") && n.attribute("aria-label").is_some())
+        .count()
+}
+
 /// `%XX` escapes of a link decoded.
 fn percent_decode(text: &str) -> String {
     let bytes = text.as_bytes();

@@ -1,4 +1,8 @@
 //! An RGB pixel buffer with the few drawing operations the figures need, and PNG encoding.
+//!
+//! Each drawing operation also records itself as a [`Shape`], so that the same drawing can be written as SVG
+//! ([`super::svg`]): lines, rectangles and text stay vectors, and the parts drawn pixel by pixel (a map's
+//! cells, textures, colour bars) are kept as [`Shape::Image`]s by [`Canvas::freeze`].
 
 use super::font;
 
@@ -10,12 +14,104 @@ pub const BLACK: Rgb = [0, 0, 0];
 /// White.
 pub const WHITE: Rgb = [255, 255, 255];
 
-/// A width x height RGB image, row 0 at the top.
+/// One recorded drawing operation, in pixel coordinates (row 0 at the top); see [`Canvas::shapes`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// A filled rectangle covering the pixels `[x, x + w) x [y, y + h)`.
+    Rect {
+        /// Left pixel.
+        x: i64,
+        /// Top pixel.
+        y: i64,
+        /// Width, pixels.
+        w: i64,
+        /// Height, pixels.
+        h: i64,
+        /// Fill.
+        color: Rgb,
+    },
+    /// A one-pixel line through the centres of the pixels `(x0, y0)` and `(x1, y1)`, both drawn.
+    Line {
+        /// First pixel.
+        from: (i64, i64),
+        /// Last pixel.
+        to: (i64, i64),
+        /// Colour.
+        color: Rgb,
+        /// For a dashed line (4 pixels drawn, 4 left out), the pixels of its pattern cut off before `from`
+        /// (the part of the line off the canvas).
+        dashes: Option<i64>,
+    },
+    /// A line of text; `(x, y)` is the top-left corner of its line box, or for vertical text (reading
+    /// upwards) the bottom-left corner of the turned line.
+    Text {
+        /// Where the line starts.
+        x: i64,
+        /// Where the line starts.
+        y: i64,
+        /// The text.
+        text: String,
+        /// 1 for labels, 2 for titles.
+        scale: usize,
+        /// Colour.
+        color: Rgb,
+        /// Turned 90 degrees counter-clockwise.
+        vertical: bool,
+    },
+    /// A block of pixels, as they were when [`Canvas::freeze`] was called.
+    Image {
+        /// Left pixel.
+        x: usize,
+        /// Top pixel.
+        y: usize,
+        /// The pixels.
+        image: Canvas,
+    },
+}
+
+impl Shape {
+    /// The shape moved `dx` pixels to the right.
+    fn shifted(&self, dx: i64) -> Shape {
+        let mut s = self.clone();
+        match &mut s {
+            Shape::Rect { x, .. } | Shape::Text { x, .. } => *x += dx,
+            Shape::Line { from, to, .. } => {
+                from.0 += dx;
+                to.0 += dx;
+            }
+            Shape::Image { x, .. } => *x = (*x as i64 + dx).max(0) as usize,
+        }
+        s
+    }
+
+    /// Whether the shape lies wholly inside the pixels `[x, x + w) x [y, y + h)`.
+    fn inside(&self, x: i64, y: i64, w: i64, h: i64) -> bool {
+        let within = |px: i64, py: i64| px >= x && py >= y && px < x + w && py < y + h;
+        match self {
+            Shape::Rect {
+                x: rx,
+                y: ry,
+                w: rw,
+                h: rh,
+                ..
+            } => *rw > 0 && *rh > 0 && within(*rx, *ry) && within(rx + rw - 1, ry + rh - 1),
+            Shape::Line { from, to, .. } => within(from.0, from.1) && within(to.0, to.1),
+            Shape::Text { .. } => false,
+            Shape::Image { x: ix, y: iy, image } => {
+                within(*ix as i64, *iy as i64)
+                    && within((*ix + image.width) as i64 - 1, (*iy + image.height) as i64 - 1)
+            }
+        }
+    }
+}
+
+/// A width x height RGB image, row 0 at the top, with the shapes drawn on it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Canvas {
     width: usize,
     height: usize,
     pixels: Vec<u8>,
+    shapes: Vec<Shape>,
 }
 
 impl Canvas {
@@ -25,11 +121,45 @@ impl Canvas {
         for _ in 0..width * height {
             pixels.extend_from_slice(&background);
         }
+        let shapes = vec![Shape::Rect {
+            x: 0,
+            y: 0,
+            w: width as i64,
+            h: height as i64,
+            color: background,
+        }];
         Self {
             width,
             height,
             pixels,
+            shapes,
         }
+    }
+
+    /// What was drawn, in order: the background, then every line, rectangle and text, with the parts drawn
+    /// pixel by pixel as images where [`Canvas::freeze`] kept them.
+    pub fn shapes(&self) -> &[Shape] {
+        &self.shapes
+    }
+
+    /// Keeps the pixels `[x, x + w) x [y, y + h)` (clipped to the canvas) as they are now as one image
+    /// shape, for the parts drawn pixel by pixel ([`Canvas::set`], [`Canvas::fill_pixels`]). Shapes drawn
+    /// before wholly inside the block are dropped: the image holds them.
+    pub fn freeze(&mut self, x: usize, y: usize, w: usize, h: usize) {
+        let (x1, y1) = ((x + w).min(self.width), (y + h).min(self.height));
+        if x >= x1 || y >= y1 {
+            return;
+        }
+        let mut image = Canvas::new(x1 - x, y1 - y, WHITE);
+        image.shapes.clear();
+        for row in y..y1 {
+            let (src, dst) = ((row * self.width + x) * 3, (row - y) * image.width * 3);
+            image.pixels[dst..dst + image.width * 3]
+                .copy_from_slice(&self.pixels[src..src + image.width * 3]);
+        }
+        let (bx, by, bw, bh) = (x as i64, y as i64, image.width as i64, image.height as i64);
+        self.shapes.retain(|s| !s.inside(bx, by, bw, bh));
+        self.shapes.push(Shape::Image { x, y, image });
     }
 
     /// Width in pixels.
@@ -50,7 +180,7 @@ impl Canvas {
         })
     }
 
-    /// Sets one pixel; outside the canvas it does nothing.
+    /// Sets one pixel; outside the canvas it does nothing. Not recorded as a shape: see [`Canvas::freeze`].
     pub fn set(&mut self, x: i64, y: i64, color: Rgb) {
         if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
             let k = (y as usize * self.width + x as usize) * 3;
@@ -60,6 +190,13 @@ impl Canvas {
 
     /// Fills the rectangle `[x, x + w) x [y, y + h)`, clipped to the canvas.
     pub fn fill_rect(&mut self, x: i64, y: i64, w: i64, h: i64, color: Rgb) {
+        self.shapes.push(Shape::Rect { x, y, w, h, color });
+        self.fill_pixels(x, y, w, h, color);
+    }
+
+    /// Fills the rectangle `[x, x + w) x [y, y + h)` pixel by pixel, clipped to the canvas, without recording
+    /// a shape (see [`Canvas::freeze`]).
+    pub fn fill_pixels(&mut self, x: i64, y: i64, w: i64, h: i64, color: Rgb) {
         for yy in y.max(0)..(y + h).min(self.height as i64) {
             for xx in x.max(0)..(x + w).min(self.width as i64) {
                 self.set(xx, yy, color);
@@ -77,7 +214,21 @@ impl Canvas {
 
     /// A one-pixel line (Bresenham), clipped to the canvas.
     pub fn line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb) {
+        self.record_line(x0, y0, x1, y1, color, false);
         self.stroke(x0, y0, x1, y1, color, |_| true);
+    }
+
+    /// Records a line's shape, the part of it on the canvas only (a line from a kilometre-sized obstacle
+    /// would otherwise reach far outside the SVG's view).
+    fn record_line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb, dashed: bool) {
+        if let Some((a0, a1, b0, b1, skipped)) = self.clip(x0, y0, x1, y1) {
+            self.shapes.push(Shape::Line {
+                from: (a0, a1),
+                to: (b0, b1),
+                color,
+                dashes: dashed.then_some(skipped),
+            });
+        }
     }
 
     /// The part of the segment within one pixel of the canvas (Liang-Barsky), and the Bresenham steps cut
@@ -115,6 +266,7 @@ impl Canvas {
 
     /// A dashed one-pixel line: 4 pixels drawn, 4 left out.
     pub fn dashed_line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: Rgb) {
+        self.record_line(x0, y0, x1, y1, color, true);
         self.stroke(x0, y0, x1, y1, color, |k| (k / 4) % 2 == 0);
     }
 
@@ -163,6 +315,14 @@ impl Canvas {
     /// Anti-aliased text (the embedded DejaVu Sans, [`super::font`]) with the top-left corner of its line at
     /// `(x, y)`; `scale` 1 for labels, 2 for titles.
     pub fn text(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
+        self.shapes.push(Shape::Text {
+            x,
+            y,
+            text: text.to_string(),
+            scale,
+            color,
+            vertical: false,
+        });
         font::rasterize(text, scale, |gx, gy, c| self.blend(x + gx, y + gy, color, c));
     }
 
@@ -179,6 +339,14 @@ impl Canvas {
     /// Text rotated 90 degrees counter-clockwise (reading upwards), for vertical axis labels: `(x, y)` is the
     /// bottom-left corner of the rotated line (where the text starts).
     pub fn text_vertical(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
+        self.shapes.push(Shape::Text {
+            x,
+            y,
+            text: text.to_string(),
+            scale,
+            color,
+            vertical: true,
+        });
         // A pixel (gx, gy) of the upright line lands gx up from the start and gy right of the left edge.
         font::rasterize(text, scale, |gx, gy, c| self.blend(x + gy, y - gx, color, c));
     }
@@ -194,9 +362,15 @@ impl Canvas {
                 let (src, dst) = (y * c.width * 3, (y * width + x0) * 3);
                 out.pixels[dst..dst + c.width * 3].copy_from_slice(&c.pixels[src..src + c.width * 3]);
             }
+            out.shapes.extend(c.shapes.iter().map(|s| s.shifted(x0 as i64)));
             x0 += c.width + gap;
         }
         out
+    }
+
+    /// The drawing as an SVG document ([`super::svg`]).
+    pub fn to_svg(&self) -> String {
+        super::svg::to_svg(self)
     }
 
     /// The image as PNG bytes (8-bit RGB). Deterministic: the same pixels give the same bytes.

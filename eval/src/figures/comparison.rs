@@ -8,9 +8,9 @@ use sim::truth::TruthRaster;
 
 use crate::error::Result;
 use crate::figures::{Colormap, DRIVE, Figure, Fill, Legend, NO_DATA, PLAN, Pattern, Rgb, finite_range};
+use crate::figures::{ImageFormats, save};
 use crate::judge::Evaluation;
 use crate::judge::verdict::Verdict;
-use crate::output::write_bytes;
 
 /// The verdicts of `decisions.png`, in legend order, with their legend text and fill. The wrong and the
 /// uncertain decisions are textured, so that the classes stay apart in grey scale.
@@ -138,6 +138,7 @@ pub fn write(
     truth: &TruthRaster,
     evaluation: &Evaluation,
     overlay: Option<&Overlay>,
+    formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let metrics = &evaluation.metrics;
     let region = truth.region;
@@ -150,9 +151,11 @@ pub fn write(
     let mut files = Vec::new();
 
     let fig = truth_elevation_figure(truth, &format!("{}: true elevation (drive in blue)", s.name));
-    let path = out_dir.join("truth_elevation.png");
-    write_bytes(&path, &with_drive(fig).to_png())?;
-    files.push(path);
+    files.extend(save(
+        &out_dir.join("truth_elevation.png"),
+        with_drive(fig).canvas(),
+        formats,
+    )?);
 
     let error_of = |c: oeg::CellIndex| -> Option<f32> {
         let t = truth.get(c)?;
@@ -180,14 +183,14 @@ pub fn write(
         |c| error_of(c).map_or(NO_DATA, |e| Colormap::Diverging.color((e + span) / (2.0 * span))),
         &legend,
     );
-    let path = out_dir.join("elevation_error.png");
-    write_bytes(&path, &with_drive(fig).to_png())?;
-    files.push(path);
+    files.extend(save(
+        &out_dir.join("elevation_error.png"),
+        with_drive(fig).canvas(),
+        formats,
+    )?);
 
     let fig = decisions_figure(s, map.geometry(), evaluation, &s.name, overlay);
-    let path = out_dir.join("decisions.png");
-    write_bytes(&path, &fig.to_png())?;
-    files.push(path);
+    files.extend(save(&out_dir.join("decisions.png"), fig.canvas(), formats)?);
     Ok(files)
 }
 

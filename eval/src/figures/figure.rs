@@ -160,6 +160,7 @@ impl Figure {
                 fig.fill_block(fill, (LEFT + px0, top), (px1 - px0, py1 - py0));
             }
         }
+        fig.canvas.freeze(LEFT, TOP, plot_w, plot_h);
         fig.draw_axes();
         // The title in double size when it fits, else in single size.
         let scale = if Canvas::text_width(title, 2) + 8 <= width {
@@ -176,11 +177,12 @@ impl Figure {
         fig
     }
 
-    /// Fills a `w` x `h` block of pixels from its top-left corner, textured in image coordinates.
+    /// Fills a `w` x `h` block of pixels from its top-left corner, textured in image coordinates; pixels
+    /// only ([`Canvas::freeze`] keeps them for SVG).
     fn fill_block(&mut self, fill: Fill, (x, y): (usize, usize), (w, h): (usize, usize)) {
         if fill.pattern == Pattern::Solid {
             self.canvas
-                .fill_rect(x as i64, y as i64, w as i64, h as i64, fill.color);
+                .fill_pixels(x as i64, y as i64, w as i64, h as i64, fill.color);
             return;
         }
         for yy in y..y + h {
@@ -240,8 +242,9 @@ impl Figure {
                 let bar_h = (self.plot_h as i64).clamp(120, 400);
                 for k in 0..bar_h {
                     let t = 1.0 - k as f32 / (bar_h - 1).max(1) as f32;
-                    self.canvas.fill_rect(x, y + k, 18, 1, colormap.color(t));
+                    self.canvas.fill_pixels(x, y + k, 18, 1, colormap.color(t));
                 }
+                self.canvas.freeze(x as usize, y as usize, 18, bar_h as usize);
                 self.canvas.stroke_rect(x - 1, y - 1, 20, bar_h + 2, BLACK);
                 // Ticks at round values inside the bar's range, as on the axes.
                 for (value, label) in ticks(f64::from(*min), f64::from(*max)) {
@@ -259,7 +262,12 @@ impl Figure {
             Legend::Classes(classes) => {
                 for (n, (name, fill)) in classes.iter().enumerate() {
                     let py = y + n as i64 * 20;
-                    self.fill_block(*fill, (x as usize, py as usize), (14, 14));
+                    if fill.pattern == Pattern::Solid {
+                        self.canvas.fill_rect(x, py, 14, 14, fill.color);
+                    } else {
+                        self.fill_block(*fill, (x as usize, py as usize), (14, 14));
+                        self.canvas.freeze(x as usize, py as usize, 14, 14);
+                    }
                     self.canvas.stroke_rect(x, py, 14, 14, BLACK);
                     self.canvas.text(x + 20, py + 7 - th / 2, name, 1, BLACK);
                 }
@@ -307,6 +315,11 @@ impl Figure {
     /// The finished image as PNG bytes.
     pub fn to_png(&self) -> Vec<u8> {
         self.canvas.to_png()
+    }
+
+    /// The finished image as an SVG document ([`super::svg`]).
+    pub fn to_svg(&self) -> String {
+        super::svg::to_svg(&self.canvas)
     }
 }
 

@@ -61,6 +61,68 @@ pub fn width(text: &str, scale: usize) -> usize {
     layout(text, scale).1.ceil() as usize
 }
 
+/// A glyph where a line of text draws it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlacedGlyph {
+    /// The glyph's id in the embedded font.
+    pub id: u16,
+    /// Its outline's origin (on the baseline), pixels right of the line's left edge.
+    pub x: f32,
+    /// Its outline's origin, pixels below the line's top.
+    pub y: f32,
+}
+
+/// Where each glyph of `text` at `scale` is drawn, with the pixels per font unit. [`rasterize`] places
+/// glyphs the same way.
+pub fn placed_glyphs(text: &str, scale: usize) -> (Vec<PlacedGlyph>, f32) {
+    let f = font().as_scaled(PxScale::from(size_px(scale)));
+    let baseline = f.ascent().round();
+    let glyphs = layout(text, scale)
+        .0
+        .into_iter()
+        .map(|(id, caret)| PlacedGlyph {
+            id: id.0,
+            x: caret.round(),
+            y: baseline,
+        })
+        .collect();
+    (glyphs, f.h_scale_factor())
+}
+
+/// The outline of glyph `id` as SVG path data, in font units with y pointing up; `None` for a glyph with
+/// no outline (a space).
+pub fn outline_path(id: u16) -> Option<String> {
+    use ab_glyph::OutlineCurve::{Cubic, Line, Quad};
+    use std::fmt::Write as _;
+    let outline = font().outline(GlyphId(id))?;
+    let mut d = String::new();
+    let mut at: Option<ab_glyph::Point> = None;
+    for curve in &outline.curves {
+        let start = match curve {
+            Line(a, _) | Quad(a, _, _) | Cubic(a, _, _, _) => *a,
+        };
+        if at != Some(start) {
+            if at.is_some() {
+                d.push('Z');
+            }
+            let _ = write!(d, "M{} {}", start.x, start.y);
+        }
+        // Writing into a String cannot fail.
+        let _ = match curve {
+            Line(_, b) => write!(d, "L{} {}", b.x, b.y),
+            Quad(_, c, b) => write!(d, "Q{} {} {} {}", c.x, c.y, b.x, b.y),
+            Cubic(_, c1, c2, b) => write!(d, "C{} {} {} {} {} {}", c1.x, c1.y, c2.x, c2.y, b.x, b.y),
+        };
+        at = Some(match curve {
+            Line(_, b) | Quad(_, _, b) | Cubic(_, _, _, b) => *b,
+        });
+    }
+    if at.is_some() {
+        d.push('Z');
+    }
+    Some(d)
+}
+
 /// Calls `coverage(x, y, c)` for each pixel of `text` at `scale` with its coverage `c` in (0, 1], the line's
 /// top-left corner at (0, 0). Characters the font lacks are drawn as its missing-glyph box.
 pub fn rasterize(text: &str, scale: usize, mut coverage: impl FnMut(i64, i64, f32)) {

@@ -8,8 +8,8 @@ use oeg::{
 
 use super::colormap::Colormap;
 use super::figure::{Figure, Fill, Legend, NO_DATA, Pattern, finite_range};
+use super::{ImageFormats, save};
 use crate::error::Result;
-use crate::output::write_bytes;
 
 /// A continuous layer: NaN cells in [`NO_DATA`] grey, the rest coloured over `range` (default: the data's).
 pub fn scalar_figure(
@@ -135,6 +135,7 @@ pub fn write_layer_images(
     profile: &RobotProfile,
     rule: TraversabilityRule,
     region: Option<CellRegion>,
+    formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let Some(region) = region.or_else(|| map.observed_region()) else {
         return Ok(Vec::new());
@@ -170,17 +171,17 @@ pub fn write_layer_images(
     for (name, kind, title, label, colormap, range) in layers {
         let range = range.or_else(|| observed_range(map, kind, region));
         let title = format!("{title} ({res} m cells)");
-        let path = out_dir.join(name);
         let figure = scalar_figure_of(region, res, &title, label, colormap, range, |c| {
             kind.value(&map.cell(c))
         });
-        write_bytes(&path, &figure.to_png())?;
-        files.push(path);
+        files.extend(save(&out_dir.join(name), figure.canvas(), formats)?);
     }
     let title = format!("Traversability (max step {} m)", profile.max_step_m);
-    let path = out_dir.join("traversability.png");
     let figure = traversability_figure_of(region, res, &title, |c| map.traversability(c, profile, rule));
-    write_bytes(&path, &figure.to_png())?;
-    files.push(path);
+    files.extend(save(
+        &out_dir.join("traversability.png"),
+        figure.canvas(),
+        formats,
+    )?);
     Ok(files)
 }

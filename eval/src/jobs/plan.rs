@@ -27,6 +27,8 @@ pub struct PlanJob {
     pub profile: RobotProfile,
     /// The step rule.
     pub rule: TraversabilityRule,
+    /// The files the figure is written as (`--svg` adds an SVG beside the PNG).
+    pub figures: crate::figures::ImageFormats,
 }
 
 /// `plan.json` of `oeg plan`: one flat object.
@@ -126,9 +128,11 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     }
     fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::figures::DRIVE);
     fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::figures::PLAN);
-    let png = staged.dir().join("plan.png");
-    crate::output::write_bytes(&png, &fig.to_png())?;
-    files.push(png);
+    files.extend(crate::figures::save(
+        &staged.dir().join("plan.png"),
+        fig.canvas(),
+        job.figures,
+    )?);
     let json = staged.dir().join("plan.json");
     crate::output::write_json(&json, &summary)?;
     files.push(json);

@@ -8,9 +8,9 @@ use sim::truth::TruthRaster;
 use sim::world::{Actors, World};
 
 use crate::error::Result;
-use crate::figures::{Figure, Legend, NO_DATA, Rgb};
+use crate::figures::{Figure, ImageFormats, Legend, NO_DATA, Rgb, save};
 use crate::judge::verdict::TruthClass;
-use crate::output::{Staged, write_bytes};
+use crate::output::Staged;
 
 /// Sample points per cell side for the preview's truth (the evaluation uses more).
 pub const PREVIEW_SAMPLES_PER_SIDE: u32 = 2;
@@ -62,12 +62,12 @@ pub const TRUTH_CLASSES: [(TruthClass, &str, Rgb); 5] = [
     (TruthClass::TooLow, "under structure: too low", [120, 30, 120]),
 ];
 
-/// Writes `preview_elevation.png` and `preview_decisions.png` for a scenario: the truth at time 0 with the
-/// people left out, the drive and the sensor mounts. Returns the files written.
+/// Writes `preview_elevation.png` and `preview_decisions.png` for a scenario (as `formats` asks): the truth
+/// at time 0 with the people left out, the drive and the sensor mounts. Returns the files written.
 ///
 /// # Errors
 /// A bad scenario, or a failed write.
-pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
+pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec<PathBuf>> {
     let loaded = validate(path)?;
     let s = &loaded.scenario;
     let staged = Staged::begin(out_dir)?;
@@ -110,8 +110,7 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let title = format!("{}: true elevation (drive red, sensors yellow)", s.name);
     let mut fig = crate::figures::comparison::truth_elevation_figure(&truth, &title);
     overlay(&mut fig);
-    let elevation_path = staged.dir().join("preview_elevation.png");
-    write_bytes(&elevation_path, &fig.to_png())?;
+    let mut files = save(&staged.dir().join("preview_elevation.png"), fig.canvas(), formats)?;
 
     let legend = Legend::Classes(
         TRUTH_CLASSES
@@ -140,12 +139,12 @@ pub fn preview(path: &Path, out_dir: &Path) -> Result<Vec<PathBuf>> {
         &legend,
     );
     overlay(&mut fig);
-    let decisions_path = staged.dir().join("preview_decisions.png");
-    write_bytes(&decisions_path, &fig.to_png())?;
-    let files = vec![
-        staged.final_path(&elevation_path),
-        staged.final_path(&decisions_path),
-    ];
+    files.extend(save(
+        &staged.dir().join("preview_decisions.png"),
+        fig.canvas(),
+        formats,
+    )?);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(files)
 }

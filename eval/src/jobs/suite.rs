@@ -139,13 +139,22 @@ pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
 /// # Errors
 /// Bad paths, a thread pool that cannot start, or a failed write; a scenario that fails or errors is a row,
 /// not an error.
-pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usize) -> Result<Vec<SuiteRow>> {
+pub fn suite(
+    paths: &[PathBuf],
+    out_dir: &Path,
+    overrides: &[String],
+    jobs: usize,
+    figures: crate::figures::ImageFormats,
+) -> Result<Vec<SuiteRow>> {
     use rayon::prelude::*;
     let files = expand(paths)?;
     let staged = Staged::begin(out_dir)?;
     let stage = staged.dir();
     let rows: Vec<SuiteRow> = if jobs <= 1 {
-        files.iter().map(|f| run_one(f, stage, overrides)).collect()
+        files
+            .iter()
+            .map(|f| run_one(f, stage, overrides, figures))
+            .collect()
     } else {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
@@ -157,7 +166,7 @@ pub fn suite(paths: &[PathBuf], out_dir: &Path, overrides: &[String], jobs: usiz
             files
                 .par_iter()
                 .with_max_len(1)
-                .map(|f| run_one(f, stage, overrides))
+                .map(|f| run_one(f, stage, overrides, figures))
                 .collect()
         })
     };
@@ -286,7 +295,12 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
 }
 
 /// Runs one scenario of the suite into `out_dir/<file stem>/` and prints its table line as it finishes.
-fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
+fn run_one(
+    file: &Path,
+    out_dir: &Path,
+    overrides: &[String],
+    figures: crate::figures::ImageFormats,
+) -> SuiteRow {
     let start = Instant::now();
     let stem = run_dir(file);
     let options = RunOptions {
@@ -298,6 +312,7 @@ fn run_one(file: &Path, out_dir: &Path, overrides: &[String]) -> SuiteRow {
         planner_command: None,
         allow_scenario_command: false,
         mcap: false,
+        figures,
     };
     let row = match run_scenario(&options, &Progress::hidden()) {
         Ok(r) => SuiteRow {

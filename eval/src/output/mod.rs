@@ -1,6 +1,7 @@
 //! Writing a job's outputs: every file atomically (temporary file, then rename), and every job's folder all
 //! or nothing ([`Staged`]).
 
+mod base64;
 pub mod html;
 mod markdown;
 mod staged;
@@ -11,6 +12,7 @@ use serde::Serialize;
 
 use crate::error::{EvalError, Result};
 
+pub use base64::base64;
 pub use markdown::{markdown_rows, markdown_table, write_markdown_rows};
 pub use staged::{OUTPUT_MARKER, Staged};
 

@@ -13,7 +13,7 @@ use sim::scenario;
 use sim::truth::TruthRaster;
 
 use crate::error::Result;
-use crate::figures::{comparison, write_layer_images};
+use crate::figures::{ImageFormats, comparison, save, write_layer_images};
 use crate::judge::Evaluation;
 use crate::navigation::NavigationLog;
 use crate::navigation::record::{Event, PlanPointRow};
@@ -31,6 +31,7 @@ pub fn write_report(
     truth: &TruthRaster,
     evaluation: &Evaluation,
     overlay: Option<&comparison::Overlay>,
+    formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let profile = truth.profile;
     let geometry = *map.geometry();
@@ -44,8 +45,11 @@ pub fn write_report(
         &profile,
         s.map.traversability,
         Some(truth.region),
+        formats,
     )?);
-    files.extend(comparison::write(out_dir, s, map, truth, evaluation, overlay)?);
+    files.extend(comparison::write(
+        out_dir, s, map, truth, evaluation, overlay, formats,
+    )?);
     let plan_path = out_dir.join("plan.csv");
     write_table(
         &plan_path,
@@ -107,6 +111,7 @@ pub fn write_comparison(
     out_dir: &Path,
     runs: [(&scenario::Scenario, &Evaluation); 2],
     geometry: &GridGeometry,
+    formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let rows: Vec<ComparisonRow> = runs
         .iter()
@@ -138,12 +143,13 @@ pub fn write_comparison(
         })
         .collect();
     let canvases: Vec<&crate::figures::Canvas> = figures.iter().map(|f| f.canvas()).collect();
-    let png_path = out_dir.join("decisions_comparison.png");
-    write_bytes(
-        &png_path,
-        &crate::figures::Canvas::side_by_side(&canvases, 24).to_png(),
-    )?;
-    Ok(vec![csv_path, md_path, png_path])
+    let mut files = vec![csv_path, md_path];
+    files.extend(save(
+        &out_dir.join("decisions_comparison.png"),
+        &crate::figures::Canvas::side_by_side(&canvases, 24),
+        formats,
+    )?);
+    Ok(files)
 }
 
 /// The most planned paths drawn on a closed-loop run's decisions image (evenly spread over the run).
@@ -177,6 +183,7 @@ pub fn write_navigation(
     s: &scenario::Scenario,
     truth: &TruthRaster,
     log: &NavigationLog,
+    formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     let path = out_dir.join("navigation.json");
@@ -223,9 +230,11 @@ pub fn write_navigation(
                 event_at(log, event),
                 &format!("{}: {name} at t = {:.1} s", s.name, event.time_s),
             );
-            let path = dir.join(format!("{index:02}_{name}.png"));
-            write_bytes(&path, &fig.to_png())?;
-            files.push(path);
+            files.extend(save(
+                &dir.join(format!("{index:02}_{name}.png")),
+                fig.canvas(),
+                formats,
+            )?);
         }
     }
     Ok(files)
@@ -255,12 +264,10 @@ pub fn write_observability(
     observability: &sim::observability::Observability,
     verdicts: &crate::judge::verdict::Verdicts,
     blind_band: &[sim::observability::BlindBandRow],
+    formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
     let fig = comparison::observability_figure(s, observability, verdicts);
-    let path = out_dir.join("observability.png");
-    write_bytes(&path, &fig.to_png())?;
-    files.push(path);
+    let mut files = save(&out_dir.join("observability.png"), fig.canvas(), formats)?;
     let path = out_dir.join("blind_band.csv");
     write_table(&path, blind_band)?;
     files.push(path);

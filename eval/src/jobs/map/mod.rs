@@ -86,6 +86,8 @@ pub struct MapJob {
     /// Write the files a planner reads (`planner/`: a nav2 map and `.npy` layers) over the observed region.
     /// Their size follows the region's extent, not what the map holds.
     pub planner_files: bool,
+    /// The files each image is written as (`--svg` adds an SVG beside each PNG).
+    pub figures: crate::figures::ImageFormats,
 }
 
 /// `summary.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
@@ -338,7 +340,7 @@ fn write_map_files(job: &MapJob, map: &Map, stage: &Path) -> Result<(Vec<PathBuf
     let map_file_bytes = map_file.len() as u64;
     drop(map_file);
     files.push(map_path);
-    let images = write_layer_images(map, stage, &job.profile, job.rule, None)?;
+    let images = write_layer_images(map, stage, &job.profile, job.rule, None, job.figures)?;
     files.extend(images);
     // The decisions and layers as files a planner reads (`docs/planner-protocol.md`), over the observed
     // region: a map built from real data can feed a planner too. Dense files follow the region's extent, so

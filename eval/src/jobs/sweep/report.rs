@@ -15,6 +15,7 @@ use super::folder::SweepFolder;
 use super::stats::{Summary, mean_interval, rate_interval};
 use crate::error::{EvalError, Result};
 use crate::figures::chart::{Chart, Point, Series};
+use crate::figures::{ImageFormats, save_with};
 
 /// The metrics summarized: `(column, label with units, is a rate)`.
 pub const METRICS: [(&str, &str, bool); 10] = [
@@ -210,14 +211,14 @@ fn check_coverage(dir: &Path, plan: &Json, rows: &[Json]) -> Result<usize> {
 /// Not a sweep's folder ([`SweepFolder::open`]), missing or malformed `plan.json`, `runs.jsonl` or
 /// `obstacles.csv`, a plan with no runs, rows of another plan, an incomplete study without `partial`, or a
 /// failed write.
-pub fn report(dir: &Path, partial: bool) -> Result<ReportSummary> {
+pub fn report(dir: &Path, partial: bool, figures: ImageFormats) -> Result<ReportSummary> {
     let folder = SweepFolder::open(dir)?;
     let study = Study::read(&folder, dir, partial)?;
     let plots = dir.join("plots");
     folder.create_dir(&plots)?;
     let mut summary = Vec::new();
-    let mut files = study.metric_plots(&folder, &plots, &mut summary)?;
-    files.extend(study.decision_plots(&folder, &plots, &mut summary)?);
+    let mut files = study.metric_plots(&folder, &plots, &mut summary, figures)?;
+    files.extend(study.decision_plots(&folder, &plots, &mut summary, figures)?);
     let path = dir.join("summary.csv");
     folder.write_table(&path, &summary)?;
     // The same summary as Markdown, for a study's results page.
@@ -398,6 +399,7 @@ impl Study {
         folder: &SweepFolder,
         plots: &Path,
         summary: &mut Vec<SummaryRow>,
+        figures: ImageFormats,
     ) -> Result<Vec<PathBuf>> {
         let mut files = Vec::new();
         let axis_list: Vec<Option<&Axis>> = if self.axes.is_empty() {
@@ -461,9 +463,12 @@ impl Study {
                             "band: 95 % t interval over runs".into()
                         },
                     };
-                    let path = plots.join(format!("{metric}_vs_{}.png", file_safe(&a.key)));
-                    folder.write_bytes(&path, &chart.to_png())?;
-                    files.push(path);
+                    files.extend(save_with(
+                        &plots.join(format!("{metric}_vs_{}.png", file_safe(&a.key))),
+                        &chart.draw(),
+                        figures,
+                        |p, b| folder.write_bytes(p, b),
+                    )?);
                 }
             }
         }
@@ -477,6 +482,7 @@ impl Study {
         folder: &SweepFolder,
         plots: &Path,
         summary: &mut Vec<SummaryRow>,
+        figures: ImageFormats,
     ) -> Result<Vec<PathBuf>> {
         let mut files = Vec::new();
         for (decides, threshold, bin_m) in [
@@ -493,9 +499,12 @@ impl Study {
                 series,
                 note: "band: 95 % Wilson interval".into(),
             };
-            let path = plots.join(format!("psychometric_{decides}.png"));
-            folder.write_bytes(&path, &chart.to_png())?;
-            files.push(path);
+            files.extend(save_with(
+                &plots.join(format!("psychometric_{decides}.png")),
+                &chart.draw(),
+                figures,
+                |p, b| folder.write_bytes(p, b),
+            )?);
         }
         Ok(files)
     }
