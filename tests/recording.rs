@@ -73,6 +73,73 @@ fn decoded_len(base64: &str) -> usize {
     base64.len() / 4 * 3 - base64.bytes().rev().take_while(|b| *b == b'=').count()
 }
 
+/// A message read back from a recording, checked against its channel's schema.
+struct Message {
+    topic: String,
+    schema_title: String,
+    value: Value,
+    log_time: u64,
+}
+
+/// Every message of an MCAP file, each checked: its channel has a JSON schema, the message is JSON, and it
+/// validates against the schema.
+fn validated_messages(bytes: &[u8]) -> Vec<Message> {
+    mcap::MessageStream::new(bytes)
+        .expect("an MCAP file")
+        .map(|message| {
+            let message = message.expect("a message");
+            let channel = &message.channel;
+            let schema = channel.schema.as_ref().expect("every channel has a schema");
+            assert_eq!(schema.encoding, "jsonschema");
+            assert_eq!(channel.message_encoding, "json");
+            let schema: Value = serde_json::from_slice(&schema.data).expect("the schema is JSON");
+            let value: Value = serde_json::from_slice(&message.data).expect("the message is JSON");
+            validate(&value, &schema, &channel.topic).unwrap_or_else(|e| panic!("{e}"));
+            Message {
+                topic: channel.topic.clone(),
+                schema_title: schema["title"].as_str().unwrap_or_default().to_string(),
+                value,
+                log_time: message.log_time,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn oeg_record_writes_the_poses_scans_and_truth_as_mcap_the_same_bytes_on_any_thread_count() {
+    let dir = temp_dir("recording", "record");
+    let scene = root().join("tests/scenes/person_standing.toml");
+    let mut bytes = Vec::new();
+    for threads in ["2", "1"] {
+        let out = dir.join(format!("threads{threads}.mcap"));
+        let o = oeg_with_threads(
+            &["record", s(&scene), "--format", "mcap", "--out", s(&out)],
+            Some(threads),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        bytes.push(std::fs::read(&out).expect("the recording"));
+    }
+    assert!(bytes[0] == bytes[1], "1 and 2 threads give different recordings");
+    let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
+    for m in validated_messages(&bytes[0]) {
+        *per_topic.entry(m.topic).or_default() += 1;
+    }
+    assert_eq!(per_topic.get("/truth/elevation"), Some(&1), "{per_topic:?}");
+    assert_eq!(per_topic.get("/truth/truly_blocked"), Some(&1));
+    // Three sensors, each at its rate over 6 s; the poses once a tick.
+    let scans: Vec<&String> = per_topic.keys().filter(|t| t.starts_with("/scans/")).collect();
+    assert_eq!(scans.len(), 3, "{per_topic:?}");
+    assert!(scans.iter().all(|t| per_topic[*t] >= 6), "{per_topic:?}");
+    assert!(per_topic["/tf"] >= 2 * 6, "{per_topic:?}");
+    // A recording of the sensors: no map, no plans, no events.
+    assert!(
+        per_topic
+            .keys()
+            .all(|t| !t.starts_with("/map") && t != "/plan" && t != "/events"),
+        "{per_topic:?}"
+    );
+}
+
 #[test]
 fn the_recording_reads_back_validates_against_its_schemas_and_is_the_same_bytes_on_any_thread_count() {
     let dir = temp_dir("recording", "nav_blind");
@@ -96,38 +163,30 @@ fn the_recording_reads_back_validates_against_its_schemas_and_is_the_same_bytes_
     let mut frames = BTreeSet::new();
     let mut levels = BTreeSet::new();
     let mut last_time = 0;
-    for message in mcap::MessageStream::new(&bytes[0]).expect("an MCAP file") {
-        let message = message.expect("a message");
-        let channel = &message.channel;
-        let schema = channel.schema.as_ref().expect("every channel has a schema");
-        assert_eq!(schema.encoding, "jsonschema");
-        assert_eq!(channel.message_encoding, "json");
-        let schema: Value = serde_json::from_slice(&schema.data).expect("the schema is JSON");
-        let value: Value = serde_json::from_slice(&message.data).expect("the message is JSON");
-        validate(&value, &schema, &channel.topic).unwrap_or_else(|e| panic!("{e}"));
-        *per_topic.entry(channel.topic.clone()).or_default() += 1;
-        last_time = last_time.max(message.log_time);
-        match schema["title"].as_str() {
-            Some("foxglove.Grid") => {
+    for m in validated_messages(&bytes[0]) {
+        let (value, topic) = (&m.value, &m.topic);
+        *per_topic.entry(topic.clone()).or_default() += 1;
+        last_time = last_time.max(m.log_time);
+        match m.schema_title.as_str() {
+            "foxglove.Grid" => {
                 let (stride, columns) = (value["row_stride"].as_u64(), value["column_count"].as_u64());
                 let cell = value["cell_stride"].as_u64().expect("cell stride");
                 assert_eq!(stride, columns.map(|c| c * cell));
                 let n = decoded_len(value["data"].as_str().expect("data")) as u64;
                 assert!(
                     n > 0 && n.is_multiple_of(stride.expect("stride")),
-                    "{}: {n} bytes",
-                    channel.topic
+                    "{topic}: {n} bytes"
                 );
                 assert_eq!(value["frame_id"], "world");
             }
-            Some("foxglove.PointCloud") => {
+            "foxglove.PointCloud" => {
                 assert_eq!(decoded_len(value["data"].as_str().expect("data")) % 12, 0);
             }
-            Some("foxglove.FrameTransform") => {
+            "foxglove.FrameTransform" => {
                 assert_eq!(value["parent_frame_id"], "world");
                 frames.insert(value["child_frame_id"].as_str().expect("frame").to_string());
             }
-            Some("foxglove.Log") => {
+            "foxglove.Log" => {
                 levels.insert((
                     value["level"].as_u64(),
                     value["message"]

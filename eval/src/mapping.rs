@@ -194,15 +194,9 @@ impl Mapping {
                     .try_for_each(integrate)?;
             }
             if let Some(r) = &mut self.recording {
-                let world = self.simulation.world();
-                r.recording.poses(
-                    stamp_s,
-                    &world.world_from_base(),
-                    &world.estimated_world_from_base(),
-                    self.tick_s,
-                )?;
                 let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
-                r.recording.scan(stamp_s, name, &scan)?;
+                r.recording
+                    .sensor_scan(self.simulation.world(), name, &scan, self.tick_s)?;
                 if let Some(map) = self.maps.first() {
                     r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
                 }

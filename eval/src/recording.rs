@@ -231,6 +231,27 @@ impl Recording {
         Ok(())
     }
 
+    /// The robot's poses now (at most once per `min_pose_period_s`) and one scan of `sensor` at its stamp: what
+    /// a run and `oeg record` write for every scan.
+    ///
+    /// # Errors
+    /// A failed write.
+    pub fn sensor_scan(
+        &mut self,
+        world: &sim::World,
+        sensor: &str,
+        scan: &oeg::Scan,
+        min_pose_period_s: f64,
+    ) -> Result<(), RecordingError> {
+        self.poses(
+            scan.stamp_s,
+            &world.world_from_base(),
+            &world.estimated_world_from_base(),
+            min_pose_period_s,
+        )?;
+        self.scan(scan.stamp_s, sensor, scan)
+    }
+
     /// One scan's returns as a point cloud in the world frame, where the map placed them (at the estimated
     /// pose), on `/scans/<sensor>`.
     ///

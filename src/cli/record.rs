@@ -11,11 +11,12 @@ use oeg_eval::progress::Progress;
 pub struct RecordArgs {
     /// A scenario file (.toml).
     scenario: PathBuf,
-    /// The file to write (.oeglog, or .graph with --format graph).
+    /// The file to write (.oeglog, .graph with --format graph, .mcap with --format mcap).
     #[arg(long)]
     out: PathBuf,
     /// log: the testbed's sensor log (both poses, no-returns, range errors); graph: OctoMap's scan graph
-    /// (estimated pose, hits only) for other mappers.
+    /// (estimated pose, hits only) for other mappers; mcap: a recording for Foxglove (both poses, each
+    /// sensor's returns, the truth's grid; docs/mcap.md).
     #[arg(long, value_enum, default_value_t = FormatArg::Log)]
     format: FormatArg,
     /// Replace the scenario's seed.
@@ -29,6 +30,7 @@ pub struct RecordArgs {
 enum FormatArg {
     Log,
     Graph,
+    Mcap,
 }
 
 /// Records the scans and says what was written.
@@ -36,6 +38,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     let format = match args.format {
         FormatArg::Log => RecordFormat::Log,
         FormatArg::Graph => RecordFormat::Graph,
+        FormatArg::Mcap => RecordFormat::Mcap,
     };
     let progress = Progress::new(0, "scans");
     let r = record::record(&args.scenario, &args.out, format, args.seed, &progress)?;

@@ -1,4 +1,5 @@
-//! `oeg record`: run a scenario's drive and sensors and write every scan to a log (or an OctoMap scan graph).
+//! `oeg record`: run a scenario's drive and sensors and write every scan to a log, an OctoMap scan graph or an
+//! MCAP recording for Foxglove.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -8,6 +9,7 @@ use sim::sensors::PoseSource;
 use sim::{Simulation, scenario};
 
 use crate::error::{EvalError, Result};
+use crate::recording::{DEFAULT_GRID_PERIOD_S, Recording};
 use crate::progress::Progress;
 
 /// The output format of `oeg record`.
@@ -17,6 +19,9 @@ pub enum RecordFormat {
     Log,
     /// An OctoMap scan graph (`.graph`): one node per scan at the estimated pose, hits only.
     Graph,
+    /// An MCAP recording (`.mcap`, `docs/mcap.md`): the true and estimated poses, each sensor's scans and
+    /// the truth's grid; no map (`oeg run --mcap` adds the map's layers, the plans and the events).
+    Mcap,
 }
 
 /// What a recording produced.
@@ -54,6 +59,33 @@ pub fn log_header(loaded: &scenario::LoadedScenario, sim: &Simulation) -> LogHea
             })
             .collect(),
     }
+}
+
+/// Records every scan of `sim` into an MCAP file at `out`, then the truth's grid over the scenario's map
+/// region; returns the scans written.
+fn record_mcap(
+    loaded: &scenario::LoadedScenario,
+    sim: &mut Simulation,
+    header: &LogHeader,
+    out: &Path,
+    progress: &Progress,
+) -> Result<u64> {
+    let s = &loaded.scenario;
+    let geometry = oeg::GridGeometry::new(s.map.resolution_m)?;
+    let region = crate::mapping::region_of(s, &geometry)?;
+    let mut recording = Recording::new(region, s.map.resolution_m, DEFAULT_GRID_PERIOD_S)?;
+    let mut num_scans = 0;
+    while let Some(scan) = sim.next_scan() {
+        let sensor = &header.sensors[scan.sensor_index];
+        let placed = scan.to_scan(PoseSource::Estimated, sensor.map_model);
+        recording.sensor_scan(sim.world(), &sensor.name, &placed, s.tick_s)?;
+        num_scans += 1;
+        progress.inc(1);
+    }
+    // The static world's truth, people left out, as a run's recording has it.
+    recording.truth(&crate::pipeline::truth_of(s, sim.world(), &geometry)?)?;
+    oeg::write_atomically(out, &recording.finish()?)?;
+    Ok(num_scans)
 }
 
 /// Runs the scenario (its seed replaced by `seed` when given) and records every scan to `out`.
@@ -101,6 +133,7 @@ pub fn record(
             let left_out = oeg::write_graph(out, &scans)?;
             (scans.len() as u64, left_out)
         }
+        RecordFormat::Mcap => (record_mcap(&loaded, &mut sim, &header, out, progress)?, 0),
     };
     progress.finish();
     let wall_time_s = start.elapsed().as_secs_f64();
