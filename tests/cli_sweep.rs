@@ -10,7 +10,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{check_page, err, oeg, ok, root, s, sweep_plan_error, temp_dir};
+use common::{check_page, check_svg, err, oeg, ok, root, s, sweep_plan_error, temp_dir};
 
 fn smoke() -> PathBuf {
     root().join("sweeps/smoke.toml")
@@ -249,7 +249,7 @@ fn shards_merge_into_the_rows_of_a_whole_run_and_gaps_are_named() {
 fn the_report_writes_intervals_and_plots() {
     let dir = temp_dir("sweep", "report");
     ok(&oeg(&["sweep", "run", s(&smoke()), "--out", s(&dir)]));
-    let out = ok(&oeg(&["sweep", "report", s(&dir)]));
+    let out = ok(&oeg(&["sweep", "report", s(&dir), "--svg"]));
     assert!(out.contains("summary.csv"), "{out}");
     let summary = std::fs::read_to_string(dir.join("summary.csv")).expect("summary");
     let mut r = csv::Reader::from_reader(summary.as_bytes());
@@ -283,6 +283,9 @@ fn the_report_writes_intervals_and_plots() {
     ] {
         let bytes = std::fs::read(dir.join("plots").join(name)).expect(name);
         assert!(bytes.starts_with(b"\x89PNG"), "{name}");
+        // With --svg, the plot as SVG beside it: title, axis labels, ticks and legend as vector text.
+        let svg = dir.join("plots").join(name.replace(".png", ".svg"));
+        assert!(check_svg(&svg) >= 5, "{}", svg.display());
     }
     // The study's page shows every plot and the summary table.
     let page = check_page(&dir.join("report.html"));

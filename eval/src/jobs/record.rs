@@ -9,8 +9,8 @@ use sim::sensors::PoseSource;
 use sim::{Simulation, scenario};
 
 use crate::error::{EvalError, Result};
-use crate::recording::{DEFAULT_GRID_PERIOD_S, Recording};
 use crate::progress::Progress;
+use crate::recording::{DEFAULT_GRID_PERIOD_S, Recording};
 
 /// The output format of `oeg record`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
