@@ -56,6 +56,61 @@ pub struct PlanSummary {
     pub max_step_m: f32,
 }
 
+/// A plan on a map, with the decisions it was planned on.
+#[derive(Debug, Clone)]
+pub struct MapPlan {
+    /// The decisions over the planning region: the map's observed region, grown to hold the start and goal.
+    pub classes: oeg::Raster<oeg::Traversability>,
+    /// The path, or `None` when the goal cannot be reached.
+    pub plan: Option<oeg::Plan>,
+}
+
+/// Plans on `map` from `from` to `to` (world x and y, metres) over its observed region, grown to hold both;
+/// `name` names the map in errors.
+///
+/// # Errors
+/// A point that is not finite or off the grid, invalid options, or decisions beyond the memory limit.
+pub fn plan_on_map(
+    map: &oeg::Map,
+    name: &std::path::Path,
+    (from, to): ((f64, f64), (f64, f64)),
+    options: &PlannerOptions,
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+) -> Result<MapPlan> {
+    let geometry = *map.geometry();
+    let point_error = |what: &str, (x, y): (f64, f64)| EvalError::Input {
+        path: name.to_path_buf(),
+        message: format!("the {what} ({x}, {y}) m is not a finite point on the map's grid"),
+    };
+    let start = geometry
+        .cell_of(from.0, from.1)
+        .ok_or_else(|| point_error("start", from))?;
+    let goal = geometry
+        .cell_of(to.0, to.1)
+        .ok_or_else(|| point_error("goal", to))?;
+    let ends = CellRegion::from_corners(
+        CellIndex::new(start.i.min(goal.i), start.j.min(goal.j)),
+        CellIndex::new(start.i.max(goal.i), start.j.max(goal.j)),
+    )
+    .ok_or_else(|| point_error("start", from))?;
+    let region = map.observed_region().map_or(ends, |r| r.union(&ends));
+    let classes = map.traversability_layer(region, profile, rule)?;
+    let plan = oeg::plan(
+        &region,
+        geometry.resolution_m(),
+        &classes.values,
+        start,
+        goal,
+        options,
+    )
+    .map_err(|e| EvalError::Input {
+        path: name.to_path_buf(),
+        message: format!("planner: {e}"),
+    })?;
+    Ok(MapPlan { classes, plan })
+}
+
 /// Plans on a saved map and writes `plan.json`, `path.csv` (one row per path cell: `step,x_m,y_m`) and
 /// `plan.png` (the traversability classes with the path, the start and the goal) into the output folder. The
 /// planning region is the map's observed region, grown to hold the start and the goal.
@@ -66,35 +121,14 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     let staged = crate::output::Staged::begin(&job.out_dir)?;
     let map = oeg::load_map(&job.map)?;
     let geometry = *map.geometry();
-    let point_error = |what: &str, (x, y): (f64, f64)| EvalError::Input {
-        path: job.map.clone(),
-        message: format!("the {what} ({x}, {y}) m is not a finite point on the map's grid"),
-    };
-    let start = geometry
-        .cell_of(job.from_xy_m.0, job.from_xy_m.1)
-        .ok_or_else(|| point_error("start", job.from_xy_m))?;
-    let goal = geometry
-        .cell_of(job.to_xy_m.0, job.to_xy_m.1)
-        .ok_or_else(|| point_error("goal", job.to_xy_m))?;
-    let ends = CellRegion::from_corners(
-        CellIndex::new(start.i.min(goal.i), start.j.min(goal.j)),
-        CellIndex::new(start.i.max(goal.i), start.j.max(goal.j)),
-    )
-    .ok_or_else(|| point_error("start", job.from_xy_m))?;
-    let region = map.observed_region().map_or(ends, |r| r.union(&ends));
-    let classes = map.traversability_layer(region, &job.profile, job.rule)?;
-    let plan = oeg::plan(
-        &region,
-        geometry.resolution_m(),
-        &classes.values,
-        start,
-        goal,
+    let MapPlan { classes, plan } = plan_on_map(
+        &map,
+        &job.map,
+        (job.from_xy_m, job.to_xy_m),
         &job.options,
-    )
-    .map_err(|e| EvalError::Input {
-        path: job.map.clone(),
-        message: format!("planner: {e}"),
-    })?;
+        &job.profile,
+        job.rule,
+    )?;
     let summary = PlanSummary {
         plan_found: plan.is_some(),
         plan_length_m: plan.as_ref().map_or(f64::NAN, |p| p.length_m),

@@ -1,0 +1,584 @@
+//! `oeg._oeg`: the native half of the `oeg` Python package. It wraps the `oeg` and `oeg-eval` crates and holds
+//! no logic of its own: arrays are checked and converted here, everything else is the crates' code. The
+//! Python half (`python/oeg/`) turns results into dicts and DataFrames; `python/oeg/_oeg.pyi` types both.
+//!
+//! Long work (integrating, planning, running a scenario) runs with the GIL released.
+
+use std::path::{Path, PathBuf};
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyFileNotFoundError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
+
+create_exception!(
+    _oeg,
+    OegError,
+    PyException,
+    "A map, scenario or data file the testbed refused: the message names the file, the place and what was expected."
+);
+
+fn oeg_error(e: impl std::fmt::Display) -> PyErr {
+    OegError::new_err(e.to_string())
+}
+
+/// Refuses a path that does not exist with `FileNotFoundError`, before the crates are asked.
+fn existing(path: &Path) -> PyResult<()> {
+    if path.exists() {
+        Ok(())
+    } else {
+        Err(PyFileNotFoundError::new_err(format!(
+            "{}: no such file or folder",
+            path.display()
+        )))
+    }
+}
+
+/// A Python value as a TOML value in an override (`KEY=VALUE`), as the scenario files spell it.
+fn toml_literal(key: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
+    if value.is_instance_of::<PyBool>() {
+        Ok(value.extract::<bool>()?.to_string())
+    } else if value.is_instance_of::<PyInt>() {
+        Ok(value.extract::<i64>()?.to_string())
+    } else if value.is_instance_of::<PyFloat>() {
+        let v = value.extract::<f64>()?;
+        if !v.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "{key}: {v} is not a finite number"
+            )));
+        }
+        Ok(format!("{v:?}"))
+    } else if value.is_instance_of::<PyString>() {
+        Ok(serde_json::Value::String(value.extract::<String>()?).to_string())
+    } else {
+        Err(PyTypeError::new_err(format!(
+            "{key}: expected a bool, int, float or str, got {}",
+            value.get_type().name()?
+        )))
+    }
+}
+
+/// `--set` overrides from a dict of `section.key` prefixed by `prefix` (`map.model`, `robot`).
+fn overrides_of(prefix: &str, table: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String>> {
+    let mut out = Vec::new();
+    if let Some(table) = table {
+        for (k, v) in table.iter() {
+            let key = format!("{prefix}.{}", k.extract::<String>()?);
+            out.push(format!("{key}={}", toml_literal(&key, &v)?));
+        }
+    }
+    Ok(out)
+}
+
+/// The overrides of a map's `model` argument: a preset's name, or a dict in the scenario file's spelling
+/// (`preset` and `traversability` of `[map]`, every other key of `[map.model]`).
+fn model_overrides(model: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+    let Some(model) = model else {
+        return Ok(Vec::new());
+    };
+    if let Ok(name) = model.extract::<String>() {
+        return Ok(vec![format!("map.preset={}", serde_json::Value::String(name))]);
+    }
+    let table = model.cast::<PyDict>().map_err(|_| {
+        PyTypeError::new_err("model: expected a preset's name (str) or a dict of [map.model] keys")
+    })?;
+    let mut out = Vec::new();
+    for (k, v) in table.iter() {
+        let k = k.extract::<String>()?;
+        let key = if k == "preset" || k == "traversability" {
+            format!("map.{k}")
+        } else {
+            format!("map.model.{k}")
+        };
+        out.push(format!("{key}={}", toml_literal(&key, &v)?));
+    }
+    Ok(out)
+}
+
+/// The settings of `oeg map` for these overrides (one resolver, one set of errors).
+fn settings(resolution_m: f64, overrides: &[String]) -> PyResult<oeg_eval::settings::MapJobSettings> {
+    oeg_eval::settings::map_settings(resolution_m, overrides)
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// A float array of shape `(n, cols)` (or `(n,)` when `cols` is `None`), `float32` or `float64`, as f64 rows.
+fn float_rows(name: &str, array: &Bound<'_, PyAny>, cols: Option<usize>) -> PyResult<Vec<f64>> {
+    let shape_error = |dtype: String, shape: Vec<usize>| {
+        PyTypeError::new_err(format!(
+            "{name}: expected a float32 or float64 numpy array of shape {}, got dtype {dtype} and shape {shape:?}",
+            cols.map_or("(n,)".to_string(), |c| format!("(n, {c})"))
+        ))
+    };
+    let ndim = cols.map_or(1, |_| 2);
+    macro_rules! rows_of {
+        ($t:ty) => {
+            if let Ok(a) = array.cast::<numpy::PyArrayDyn<$t>>() {
+                let shape = a.shape().to_vec();
+                if shape.len() != ndim || cols.is_some_and(|c| shape[1] != c) {
+                    return Err(shape_error(stringify!($t).replace("f", "float"), shape));
+                }
+                let ro = a.readonly();
+                // A C-contiguous array is read in place; any other layout is copied once.
+                return Ok(ro.as_array().iter().map(|v| f64::from(*v)).collect());
+            }
+        };
+    }
+    rows_of!(f64);
+    rows_of!(f32);
+    let (dtype, shape) = match array.cast::<numpy::PyUntypedArray>() {
+        Ok(a) => (a.dtype().to_string(), a.shape().to_vec()),
+        Err(_) => (array.get_type().name()?.to_string(), Vec::new()),
+    };
+    Err(shape_error(dtype, shape))
+}
+
+/// An optional per-ray array of `bool` of length `n`.
+fn bool_column(name: &str, array: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<bool>> {
+    let Some(array) = array else {
+        return Ok(vec![false; n]);
+    };
+    let a = array.cast::<PyArray1<bool>>().map_err(|_| {
+        PyTypeError::new_err(format!(
+            "{name}: expected a numpy array of dtype bool and shape ({n},)"
+        ))
+    })?;
+    let values: Vec<bool> = a.readonly().as_array().iter().copied().collect();
+    if values.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "{name}: {} values for {n} points",
+            values.len()
+        )));
+    }
+    Ok(values)
+}
+
+/// A 3-vector of finite floats.
+fn xyz(name: &str, value: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
+    let v: Vec<f64> = value
+        .extract()
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected three floats (x, y, z) in metres")))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(PyValueError::new_err(format!(
+            "{name}: expected three finite floats (x, y, z) in metres, got {v:?}"
+        ))),
+    }
+}
+
+/// `(x_min, x_max, y_min, y_max)` of a region, metres: `matplotlib.pyplot.imshow(extent=...)`.
+fn extent(region: &oeg::CellRegion, geometry: &oeg::GridGeometry) -> Extent {
+    let (x0, y0) = geometry.cell_min_corner(region.min);
+    let res = geometry.resolution_m();
+    (
+        x0,
+        x0 + f64::from(region.num_x) * res,
+        y0,
+        y0 + f64::from(region.num_y) * res,
+    )
+}
+
+/// `(x_min, x_max, y_min, y_max)` in metres.
+type Extent = (f64, f64, f64, f64);
+
+/// A layer as a 2D array with its extent.
+type Grid<'py, T> = (Bound<'py, PyArray2<T>>, Extent);
+
+/// A 2D array of a raster's values: `num_y` rows from the min-y row, `num_x` columns.
+fn grid<'py, T: numpy::Element>(
+    py: Python<'py>,
+    region: &oeg::CellRegion,
+    values: Vec<T>,
+) -> PyResult<Bound<'py, PyArray2<T>>> {
+    let shape = (region.num_y as usize, region.num_x as usize);
+    let array = Array2::from_shape_vec(shape, values).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(array.into_pyarray(py))
+}
+
+/// The Occupancy-Elevation Grid.
+#[pyclass(name = "Map", module = "oeg._oeg")]
+struct PyMap {
+    map: oeg::Map,
+    settings: oeg_eval::settings::MapJobSettings,
+}
+
+#[pymethods]
+impl PyMap {
+    #[new]
+    #[pyo3(signature = (resolution_m, model=None, memory_limit_bytes=None))]
+    fn new(
+        resolution_m: f64,
+        model: Option<&Bound<'_, PyAny>>,
+        memory_limit_bytes: Option<u64>,
+    ) -> PyResult<Self> {
+        let settings = settings(resolution_m, &model_overrides(model)?)?;
+        let config = oeg::MapConfig {
+            resolution_m: settings.map.resolution_m,
+            model: settings.map.model,
+            memory_limit_bytes: memory_limit_bytes.unwrap_or(oeg::DEFAULT_MEMORY_LIMIT_BYTES),
+        };
+        let map = oeg::Map::new(config).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(Self { map, settings })
+    }
+
+    #[getter]
+    fn resolution_m(&self) -> f64 {
+        self.map.geometry().resolution_m()
+    }
+
+    #[getter]
+    fn num_scans(&self) -> u64 {
+        self.map.num_scans()
+    }
+
+    #[getter]
+    fn model(&self) -> PyResult<String> {
+        serde_json::to_string(&self.map.config().model).map_err(oeg_error)
+    }
+
+    #[pyo3(signature = (origin_xyz, points_xyz, no_return=None, range_variance_m2=None, sensor="laser"))]
+    fn integrate(
+        &mut self,
+        py: Python<'_>,
+        origin_xyz: &Bound<'_, PyAny>,
+        points_xyz: &Bound<'_, PyAny>,
+        no_return: Option<&Bound<'_, PyAny>>,
+        range_variance_m2: Option<&Bound<'_, PyAny>>,
+        sensor: &str,
+    ) -> PyResult<(u64, u64, u64)> {
+        let origin = xyz("origin_xyz", origin_xyz)?;
+        let points = float_rows("points_xyz", points_xyz, Some(3))?;
+        let n = points.len() / 3;
+        let no_return = bool_column("no_return", no_return, n)?;
+        let variances = match range_variance_m2 {
+            Some(v) => Some(float_rows("range_variance_m2", v, None)?),
+            None => None,
+        };
+        if let Some(v) = &variances
+            && v.len() != n
+        {
+            return Err(PyValueError::new_err(format!(
+                "range_variance_m2: {} values for {n} points",
+                v.len()
+            )));
+        }
+        let model = match sensor {
+            "laser" => oeg_eval::settings::RangeModel::Laser.model(),
+            "stereo" => oeg_eval::settings::RangeModel::Stereo.model(),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "sensor: expected \"laser\" or \"stereo\", got {other:?}"
+                )));
+            }
+        };
+        let o = nalgebra::Point3::new(origin[0], origin[1], origin[2]);
+        let mut scan = oeg::Scan::new(o, model);
+        for k in 0..n {
+            let p = &points[3 * k..3 * k + 3];
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(PyValueError::new_err(format!(
+                    "points_xyz: row {k} is not finite: {p:?}"
+                )));
+            }
+            let offset = nalgebra::Vector3::new(
+                (p[0] - origin[0]) as f32,
+                (p[1] - origin[1]) as f32,
+                (p[2] - origin[2]) as f32,
+            );
+            let mut ray = if no_return[k] {
+                oeg::Ray::no_return(offset)
+            } else {
+                oeg::Ray::hit(offset)
+            };
+            if let Some(v) = &variances
+                && !no_return[k]
+            {
+                if !(v[k].is_finite() && v[k] > 0.0) {
+                    return Err(PyValueError::new_err(format!(
+                        "range_variance_m2: row {k} is {}, expected a positive finite variance",
+                        v[k]
+                    )));
+                }
+                ray = ray.with_range_sigma_m(v[k].sqrt() as f32);
+            }
+            scan.rays.push(ray);
+        }
+        let map = &mut self.map;
+        let stats = py
+            .detach(|| map.integrate(&scan))
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok((stats.num_rays, stats.num_cell_visits, self.map.num_scans()))
+    }
+
+    #[pyo3(signature = (name, region=None))]
+    fn layer<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+        region: Option<(f64, f64, f64, f64)>,
+    ) -> PyResult<Grid<'py, f32>> {
+        let kind = oeg::LayerKind::ALL
+            .into_iter()
+            .find(|k| k.name() == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = oeg::LayerKind::ALL.iter().map(|k| k.name()).collect();
+                PyValueError::new_err(format!("layer: expected one of {names:?}, got {name:?}"))
+            })?;
+        let region = self.region(region)?;
+        let layer = self.map.layer(kind, region).map_err(oeg_error)?;
+        Ok((
+            grid(py, &region, layer.values)?,
+            extent(&region, self.map.geometry()),
+        ))
+    }
+
+    #[pyo3(signature = (robot=None, region=None))]
+    fn traversability<'py>(
+        &self,
+        py: Python<'py>,
+        robot: Option<&Bound<'_, PyDict>>,
+        region: Option<(f64, f64, f64, f64)>,
+    ) -> PyResult<Grid<'py, u8>> {
+        let s = settings(self.settings.map.resolution_m, &overrides_of("robot", robot)?)?;
+        let region = self.region(region)?;
+        let rule = self.settings.map.traversability;
+        let classes = self
+            .map
+            .traversability_layer(region, &s.robot, rule)
+            .map_err(oeg_error)?;
+        let codes = classes.values.iter().map(|t| *t as u8).collect();
+        Ok((grid(py, &region, codes)?, extent(&region, self.map.geometry())))
+    }
+
+    fn memory_bytes(&self) -> u64 {
+        self.map.memory_bytes()
+    }
+
+    fn num_observed_cells(&self) -> u64 {
+        self.map.num_observed_cells()
+    }
+
+    fn observed_extent(&self) -> Option<Extent> {
+        self.map
+            .observed_region()
+            .map(|r| extent(&r, self.map.geometry()))
+    }
+
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        oeg::save_map(&self.map, &path).map_err(oeg_error)
+    }
+}
+
+impl PyMap {
+    /// The cells of a region given in metres, or the observed region.
+    fn region(&self, region: Option<(f64, f64, f64, f64)>) -> PyResult<oeg::CellRegion> {
+        let g = self.map.geometry();
+        match region {
+            None => self.map.observed_region().ok_or_else(|| {
+                PyValueError::new_err(
+                    "the map has observed nothing yet: give a region (x_min, y_min, x_max, y_max)",
+                )
+            }),
+            Some((x0, y0, x1, y1)) => {
+                let lo = g.cell_of(x0, y0);
+                let hi = g.cell_of(x1, y1);
+                lo.zip(hi)
+                    .and_then(|(lo, hi)| oeg::CellRegion::from_corners(lo, hi))
+                    .ok_or_else(|| {
+                        PyValueError::new_err(format!(
+                            "region: expected finite (x_min, y_min, x_max, y_max) in metres with min <= max, got \
+                             ({x0}, {y0}, {x1}, {y1})"
+                        ))
+                    })
+            }
+        }
+    }
+}
+
+/// Loads a map file (`map.oeg`).
+#[pyfunction]
+#[pyo3(signature = (path, memory_limit_bytes=None))]
+fn load(py: Python<'_>, path: PathBuf, memory_limit_bytes: Option<u64>) -> PyResult<PyMap> {
+    existing(&path)?;
+    let limit = memory_limit_bytes.unwrap_or(oeg::DEFAULT_MEMORY_LIMIT_BYTES);
+    let map = py
+        .detach(|| oeg::load_map_within(&path, limit))
+        .map_err(oeg_error)?;
+    let resolution_m = map.geometry().resolution_m();
+    let mut settings = settings(resolution_m, &[])?;
+    settings.map.model = map.config().model;
+    Ok(PyMap { map, settings })
+}
+
+/// A scan as arrays: the origin `(3,)`, the points `(n, 3)` in the world frame (a no-return ray's point is
+/// the origin plus its unit direction), and the no-return mask `(n,)`.
+type ScanArrays<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<bool>>,
+);
+
+fn scan_arrays<'py>(py: Python<'py>, scan: &oeg::Scan) -> PyResult<ScanArrays<'py>> {
+    let o = scan.origin_in_world;
+    let mut points = Vec::with_capacity(scan.rays.len() * 3);
+    let mut no_return = Vec::with_capacity(scan.rays.len());
+    for ray in &scan.rays {
+        let d = ray.offset_in_world;
+        let d = if ray.kind == oeg::RayKind::NoReturn {
+            d.normalize()
+        } else {
+            d
+        };
+        points.extend([o.x + f64::from(d.x), o.y + f64::from(d.y), o.z + f64::from(d.z)]);
+        no_return.push(ray.kind == oeg::RayKind::NoReturn);
+    }
+    let n = no_return.len();
+    let points = Array2::from_shape_vec((n, 3), points).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok((
+        vec![o.x, o.y, o.z].into_pyarray(py),
+        points.into_pyarray(py),
+        no_return.into_pyarray(py),
+    ))
+}
+
+/// Reads an OctoMap scan graph (`.graph`): one scan per node, at the node's pose.
+#[pyfunction]
+fn read_graph<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Vec<ScanArrays<'py>>> {
+    existing(&path)?;
+    let sensor = oeg::SensorModel::laser();
+    let scans = py
+        .detach(|| oeg::read_graph_scans(&path, sensor))
+        .map_err(oeg_error)?;
+    scans.iter().map(|s| scan_arrays(py, s)).collect()
+}
+
+/// Reads a PCD file as one scan; `settings` are `input.*` keys of `oeg map` (`pcd_frame`, `pcd_invalid`,
+/// `pcd_sensor`).
+#[pyfunction]
+#[pyo3(signature = (path, origin_xyz=None, frame=None, invalid=None))]
+fn read_pcd<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    origin_xyz: Option<&Bound<'_, PyAny>>,
+    frame: Option<&str>,
+    invalid: Option<&str>,
+) -> PyResult<ScanArrays<'py>> {
+    existing(&path)?;
+    let mut overrides = Vec::new();
+    if let Some(f) = frame {
+        overrides.push(format!("input.pcd_frame={}", serde_json::Value::String(f.into())));
+    }
+    if let Some(i) = invalid {
+        overrides.push(format!(
+            "input.pcd_invalid={}",
+            serde_json::Value::String(i.into())
+        ));
+    }
+    let s = settings(0.1, &overrides)?;
+    let options = oeg::PcdOptions {
+        frame: s.input.pcd_frame,
+        invalid_points: s.input.pcd_invalid,
+        sensor: s.input.pcd_sensor.model(),
+    };
+    let mut scan = py
+        .detach(|| oeg::read_pcd_scan(&path, &options))
+        .map_err(oeg_error)?;
+    if let Some(o) = origin_xyz {
+        let [x, y, z] = xyz("origin_xyz", o)?;
+        scan.origin_in_world = nalgebra::Point3::new(x, y, z);
+    }
+    scan_arrays(py, &scan)
+}
+
+/// Plans on `map` from `start` to `goal` (x, y in metres); `None` when no path exists.
+#[pyfunction]
+#[pyo3(signature = (map, start, goal, settings=None))]
+fn plan<'py>(
+    py: Python<'py>,
+    map: &PyMap,
+    start: (f64, f64),
+    goal: (f64, f64),
+    settings: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+    let mut overrides = Vec::new();
+    if let Some(table) = settings {
+        for (k, v) in table.iter() {
+            let key = k.extract::<String>()?;
+            overrides.push(format!("{key}={}", toml_literal(&key, &v)?));
+        }
+    }
+    let s =
+        oeg_eval::settings::plan_settings(&overrides).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let name = Path::new("<map>");
+    let m = &map.map;
+    let planned = py
+        .detach(|| {
+            oeg_eval::jobs::plan::plan_on_map(
+                m,
+                name,
+                (start, goal),
+                &s.planner,
+                &s.robot,
+                s.map.traversability,
+            )
+        })
+        .map_err(oeg_error)?;
+    let Some(p) = planned.plan else {
+        return Ok(None);
+    };
+    let points = oeg_eval::judge::plan_check::polyline(&p, m.geometry());
+    let n = points.len();
+    let flat: Vec<f64> = points.into_iter().flat_map(|(x, y)| [x, y]).collect();
+    let a = Array2::from_shape_vec((n, 2), flat).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(Some(a.into_pyarray(py)))
+}
+
+/// Runs a scenario as `oeg run` does; returns `metrics.json` and `obstacles.csv` as text, and the output folder.
+#[pyfunction]
+#[pyo3(signature = (path, overrides, out=None, seed=None, compare=None))]
+fn run_scenario(
+    py: Python<'_>,
+    path: PathBuf,
+    overrides: Vec<String>,
+    out: Option<PathBuf>,
+    seed: Option<u64>,
+    compare: Option<String>,
+) -> PyResult<(String, String, Vec<String>, String)> {
+    existing(&path)?;
+    let compare = compare
+        .map(|c| {
+            c.parse::<oeg::MapPreset>()
+                .map_err(|e| PyValueError::new_err(format!("compare: {e}")))
+        })
+        .transpose()?;
+    let options = oeg_eval::pipeline::RunOptions {
+        scenario: path,
+        out_dir: out,
+        seed,
+        overrides,
+        compare,
+        ..Default::default()
+    };
+    let report = py
+        .detach(|| oeg_eval::pipeline::run_scenario(&options, &oeg_eval::progress::Progress::hidden()))
+        .map_err(oeg_error)?;
+    let metrics = serde_json::to_string(&report.metrics).map_err(oeg_error)?;
+    let obstacles = std::fs::read_to_string(report.out_dir.join("obstacles.csv")).map_err(oeg_error)?;
+    let failed = report.failed.iter().map(ToString::to_string).collect();
+    Ok((metrics, obstacles, failed, report.out_dir.display().to_string()))
+}
+
+/// The native module.
+#[pymodule]
+fn _oeg(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyMap>()?;
+    m.add("OegError", m.py().get_type::<OegError>())?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(read_graph, m)?)?;
+    m.add_function(wrap_pyfunction!(read_pcd, m)?)?;
+    m.add_function(wrap_pyfunction!(plan, m)?)?;
+    m.add_function(wrap_pyfunction!(run_scenario, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
