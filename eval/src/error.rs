@@ -42,6 +42,9 @@ pub enum EvalError {
         /// What is wrong and what was expected.
         message: String,
     },
+    /// The caller cancelled the job ([`crate::progress::Progress::cancel`]); nothing was written.
+    #[error("cancelled")]
+    Cancelled,
     /// A file or folder could not be created or written.
     #[error("{}: {source}", path.display())]
     Io {

@@ -160,9 +160,10 @@ impl Mapping {
     /// Takes every scan up to `until_s` (and the end of the run) and integrates it into every map.
     ///
     /// # Errors
-    /// A scan a map rejects.
+    /// A scan a map rejects, or `progress` cancelled.
     pub fn feed_until(&mut self, until_s: f64, progress: &Progress) -> Result<()> {
         loop {
+            progress.check_cancelled()?;
             let t0 = Instant::now();
             let Some(scan) = self.simulation.next_scan_until(until_s) else {
                 break;

@@ -51,6 +51,9 @@ pub struct RunOptions {
     pub mcap: bool,
     /// The files each figure is written as (`--svg` adds an SVG beside each PNG).
     pub figures: crate::figures::ImageFormats,
+    /// A closed-loop run's planner in the caller's process (the Python package's `planner=`): it replaces
+    /// the scenario's planner and any command.
+    pub planner_callback: Option<crate::navigation::SharedPlanner>,
 }
 
 /// `timing.json`: wall times, kept apart from the metrics because they vary from run to run.
@@ -295,6 +298,9 @@ pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) 
             dir: dir.to_path_buf(),
         })
     };
+    if let Some(planner) = &options.planner_callback {
+        return Ok(PlannerSource::Callback(planner.clone()));
+    }
     if let Some(command) = &options.planner_command {
         return Ok(external(command.clone()));
     }

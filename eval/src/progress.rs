@@ -1,10 +1,11 @@
 //! Progress of long work on standard error: a bar with the time left on a terminal, and under CI or into a
 //! log file (standard error is not a terminal) a plain line at most every [`PLAIN_INTERVAL`] with the same
-//! figures, so a 36-minute run says how far it is wherever it runs.
+//! figures, so a 36-minute run says how far it is wherever it runs. A caller that can be interrupted (the
+//! Python package on Ctrl-C) cancels the work through the same counter ([`Progress::cancel`]).
 
 use std::io::IsTerminal as _;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -32,6 +33,8 @@ pub struct Progress {
     started: Instant,
     /// Milliseconds after `started` of the last plain line.
     last_line_ms: Arc<AtomicU64>,
+    /// Set by [`Progress::cancel`], shared by every clone.
+    cancelled: Arc<AtomicBool>,
 }
 
 impl Progress {
@@ -69,6 +72,25 @@ impl Progress {
             unit: unit.into(),
             started: Instant::now(),
             last_line_ms: Arc::new(AtomicU64::new(0)),
+            cancelled: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    /// Asks the work counted here (and by every clone) to stop: it ends at its next step with
+    /// [`crate::error::EvalError::Cancelled`], leaving no output behind.
+    pub fn cancel(&self) {
+        self.cancelled.store(true, Ordering::Relaxed);
+    }
+
+    /// `Err(Cancelled)` once [`Progress::cancel`] was called: long loops check it at every step.
+    ///
+    /// # Errors
+    /// The work was cancelled.
+    pub fn check_cancelled(&self) -> crate::error::Result<()> {
+        if self.cancelled.load(Ordering::Relaxed) {
+            Err(crate::error::EvalError::Cancelled)
+        } else {
+            Ok(())
         }
     }
 

@@ -20,7 +20,7 @@ import json
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -50,6 +50,8 @@ PathLike = Union[str, "os.PathLike[str]"]
 Extent = Tuple[float, float, float, float]
 Region = Tuple[float, float, float, float]
 SettingValue = Union[bool, int, float, str]
+#: A closed-loop run's planner: ``planner(layers, start, goal)`` returns a ``(k, 2)`` path or ``None``.
+Planner = Callable[[Dict[str, Any], Tuple[float, float], Tuple[float, float]], Any]
 
 #: The layers :meth:`Map.layer` returns, with their units.
 LAYERS: Dict[str, str] = {
@@ -307,8 +309,11 @@ def run_scenario(
     out: Optional[PathLike] = None,
     seed: Optional[int] = None,
     compare: Optional[str] = None,
+    planner: Optional[Planner] = None,
 ) -> RunResult:
     """Runs a scenario as ``oeg run`` does, with the GIL released, and returns its metrics.
+
+    Ctrl-C stops the run at its next scan and raises ``KeyboardInterrupt``; nothing is left in ``out``.
 
     Args:
         overrides: Scenario values by their dotted keys, as ``--set`` takes them:
@@ -316,17 +321,26 @@ def run_scenario(
         out: The output folder; by default a temporary folder, removed before returning.
         seed: Replaces the scenario's seed.
         compare: Also map with this preset, as ``--compare``.
+        planner: A closed-loop run's planner, replacing the scenario's: at every replanning time it is called
+            as ``planner(layers, start, goal)``. ``layers`` holds the map over the scenario's region as
+            ``(num_y, num_x)`` arrays (row 0 the minimum y): ``decisions`` (``uint8``, :data:`DECISIONS`),
+            ``elevation_m``, ``variance_m2`` and ``occupancy_probability`` (``float32``), and ``extent``
+            ``(x_min, x_max, y_min, y_max)``; ``start`` and ``goal`` are ``(x, y)`` in metres. It returns the
+            path as a ``(k, 2)`` array or a list of ``(x, y)`` inside the extent, or ``None`` when there is no
+            path. An exception it raises, or a path off the map, is a ``planner_failed`` event of the run.
 
     Raises:
         FileNotFoundError: The scenario does not exist.
         OegError: A malformed scenario or override, named with its line and column.
     """
     if out is not None:
-        m, o, failed, out_dir = _oeg.run_scenario(os.fspath(path), _overrides(overrides), os.fspath(out), seed, compare)
+        m, o, failed, out_dir = _oeg.run_scenario(
+            os.fspath(path), _overrides(overrides), os.fspath(out), seed, compare, planner
+        )
         return RunResult(json.loads(m), _table(o), failed, Path(out_dir))
     with tempfile.TemporaryDirectory(prefix="oeg-run-") as tmp:
         m, o, failed, _ = _oeg.run_scenario(
-            os.fspath(path), _overrides(overrides), os.path.join(tmp, "run"), seed, compare
+            os.fspath(path), _overrides(overrides), os.path.join(tmp, "run"), seed, compare, planner
         )
     return RunResult(json.loads(m), _table(o), failed, None)
 

@@ -1,6 +1,6 @@
 """Types of the native module ``oeg._oeg`` (the Rust half of the package). Use the wrappers in ``oeg``."""
 
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -77,5 +77,6 @@ def run_scenario(
     out: Optional[str] = None,
     seed: Optional[int] = None,
     compare: Optional[str] = None,
+    planner: Optional[Callable[..., Any]] = None,
 ) -> Tuple[str, str, List[str], str]:
     """Runs a scenario; returns metrics JSON, obstacles CSV, failed expectations and the output folder."""

@@ -534,9 +534,86 @@ fn plan<'py>(
     Ok(Some(a.into_pyarray(py)))
 }
 
+/// Runs `work` on a thread of its own with the GIL released, while this thread checks Python's signals every
+/// 50 ms: on Ctrl-C the work is cancelled at its next step ([`oeg_eval::progress::Progress::cancel`]) and the
+/// call raises `KeyboardInterrupt` once it has stopped.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&oeg_eval::progress::Progress) -> oeg_eval::error::Result<T> + Send,
+) -> PyResult<T> {
+    let progress = oeg_eval::progress::Progress::hidden();
+    let (result, interrupt) = py.detach(|| {
+        std::thread::scope(|scope| {
+            let worker = scope.spawn(|| work(&progress));
+            let mut interrupt = None;
+            while !worker.is_finished() {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                if interrupt.is_none()
+                    && let Err(e) = Python::attach(|py| py.check_signals())
+                {
+                    progress.cancel();
+                    interrupt = Some(e);
+                }
+            }
+            (worker.join(), interrupt)
+        })
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    match result {
+        Ok(r) => r.map_err(oeg_error),
+        Err(_) => Err(OegError::new_err(
+            "the work panicked: this is a bug, please report it",
+        )),
+    }
+}
+
+/// A Python function as a closed-loop run's planner: called with the map's layers over the region (a dict
+/// of `(num_y, num_x)` arrays, and `extent`), the start and the goal; it returns a `(k, 2)` path, or `None`
+/// for no path. Its exceptions are the run's `planner_failed` events.
+struct PyPlanner(Py<PyAny>);
+
+impl oeg_eval::navigation::PlannerCallback for PyPlanner {
+    fn plan(&self, r: &oeg_eval::navigation::PlanRequest<'_>) -> Result<Option<Vec<(f64, f64)>>, String> {
+        Python::attach(|py| {
+            let call = || -> PyResult<Option<Vec<(f64, f64)>>> {
+                let layers = PyDict::new(py);
+                let codes = r.decisions.iter().map(|t| *t as u8).collect();
+                layers.set_item("decisions", grid(py, &r.region, codes)?)?;
+                for kind in [
+                    oeg::LayerKind::ElevationM,
+                    oeg::LayerKind::VarianceM2,
+                    oeg::LayerKind::OccupancyProbability,
+                ] {
+                    let layer = r.map.layer(kind, r.region).map_err(oeg_error)?;
+                    layers.set_item(kind.name(), grid(py, &r.region, layer.values)?)?;
+                }
+                let [x0, x1, y0, y1] = r.extent;
+                layers.set_item("extent", (x0, x1, y0, y1))?;
+                let path = self.0.call1(py, (layers, r.start, r.goal))?;
+                let path = path.bind(py);
+                if path.is_none() {
+                    return Ok(None);
+                }
+                let flat = match float_rows("the planner's path", path, Some(2)) {
+                    Ok(flat) => flat,
+                    // A list of (x, y) pairs serves as well as an array.
+                    Err(e) => match path.extract::<Vec<(f64, f64)>>() {
+                        Ok(points) => return Ok(Some(points)),
+                        Err(_) => return Err(e),
+                    },
+                };
+                Ok(Some(flat.chunks(2).map(|p| (p[0], p[1])).collect()))
+            };
+            call().map_err(|e| e.to_string())
+        })
+    }
+}
+
 /// Runs a scenario as `oeg run` does; returns `metrics.json` and `obstacles.csv` as text, and the output folder.
 #[pyfunction]
-#[pyo3(signature = (path, overrides, out=None, seed=None, compare=None))]
+#[pyo3(signature = (path, overrides, out=None, seed=None, compare=None, planner=None))]
 fn run_scenario(
     py: Python<'_>,
     path: PathBuf,
@@ -544,6 +621,7 @@ fn run_scenario(
     out: Option<PathBuf>,
     seed: Option<u64>,
     compare: Option<String>,
+    planner: Option<Py<PyAny>>,
 ) -> PyResult<(String, String, Vec<String>, String)> {
     existing(&path)?;
     let compare = compare
@@ -558,11 +636,14 @@ fn run_scenario(
         seed,
         overrides,
         compare,
+        planner_callback: planner.map(|f| {
+            oeg_eval::navigation::SharedPlanner(std::sync::Arc::new(PyPlanner(f)) as std::sync::Arc<_>)
+        }),
         ..Default::default()
     };
-    let report = py
-        .detach(|| oeg_eval::pipeline::run_scenario(&options, &oeg_eval::progress::Progress::hidden()))
-        .map_err(oeg_error)?;
+    let report = interruptible(py, |progress| {
+        oeg_eval::pipeline::run_scenario(&options, progress)
+    })?;
     let metrics = serde_json::to_string(&report.metrics).map_err(oeg_error)?;
     let obstacles = std::fs::read_to_string(report.out_dir.join("obstacles.csv")).map_err(oeg_error)?;
     let failed = report.failed.iter().map(ToString::to_string).collect();

@@ -3,14 +3,18 @@ input raises a named Python exception, and the examples run."""
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
-from typing import List
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
 import pytest
@@ -132,6 +136,73 @@ def test_run_scenario_gives_the_metrics_of_oeg_run_bit_for_bit(tmp_path: Path) -
     # Without `out`, nothing is left behind and the metrics are the same.
     again = oeg.run_scenario(scene, ["duration_s=3.0"])
     assert again.out_dir is None and again.metrics == result.metrics
+
+
+def test_a_python_planner_drives_a_closed_loop_and_its_exceptions_are_events(tmp_path: Path) -> None:
+    scene = ROOT / "tests" / "scenes" / "nav_blind.toml"
+    calls: List[Tuple[float, float]] = []
+
+    def straight(layers: Dict[str, Any], start: Tuple[float, float], goal: Tuple[float, float]) -> np.ndarray:
+        decisions = layers["decisions"]
+        assert decisions.dtype == np.uint8 and decisions.shape == layers["elevation_m"].shape
+        x0, x1, y0, y1 = layers["extent"]
+        assert x0 <= start[0] <= x1 and y0 <= goal[1] <= y1
+        calls.append(start)
+        return np.array([start, goal])
+
+    result = oeg.run_scenario(scene, {"duration_s": 6.0}, out=tmp_path / "ok", planner=straight)
+    assert len(calls) >= 2, "replanned on the way"
+    navigation = json.loads((tmp_path / "ok" / "navigation.json").read_text())
+    assert navigation["planner"] == "callback"
+    assert "nav_reached" in result.metrics
+
+    def broken(layers: Dict[str, Any], start: Tuple[float, float], goal: Tuple[float, float]) -> None:
+        raise ValueError("no map for me")
+
+    oeg.run_scenario(scene, {"duration_s": 3.0}, out=tmp_path / "broken", planner=broken)
+    with open(tmp_path / "broken" / "events.csv", newline="") as f:
+        events = list(csv.DictReader(f))
+    failed = [e for e in events if e["kind"] == "planner_failed"]
+    assert failed and "ValueError: no map for me" in failed[0]["message"], events
+
+
+def test_long_calls_release_the_gil() -> None:
+    scene = ROOT / "tests" / "scenes" / "decisions.toml"
+    worker = threading.Thread(target=oeg.run_scenario, args=(scene, {"duration_s": 3.0}))
+    ticks = 0
+    worker.start()
+    while worker.is_alive():
+        ticks += 1
+        time.sleep(0.001)
+    worker.join()
+    # The run takes seconds; with the GIL held this thread would not have run at all meanwhile.
+    assert ticks > 100, ticks
+
+
+def test_ctrl_c_interrupts_a_run_with_keyboard_interrupt_and_leaves_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    code = (
+        "import sys, oeg\n"
+        "print('started', flush=True)\n"
+        "try:\n"
+        "    oeg.run_scenario(sys.argv[1], out=sys.argv[2])\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted', flush=True)\n"
+        "    sys.exit(3)\n"
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", code, str(ROOT / "scenarios" / "default.toml"), str(out)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None and child.stdout.readline().strip() == "started"
+    time.sleep(2.0)
+    interrupted_at = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    stdout, _ = child.communicate(timeout=60)
+    assert child.returncode == 3 and "interrupted" in stdout, stdout
+    assert time.monotonic() - interrupted_at < 10.0
+    assert not out.exists(), "a cancelled run leaves no output folder"
 
 
 def test_plan_returns_a_path_through_cell_centres(mapped: oeg.Map) -> None:

@@ -84,6 +84,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         allow_scenario_command: args.allow_scenario_command,
         mcap: args.mcap,
         figures: oeg_eval::figures::ImageFormats { svg: args.svg },
+        planner_callback: None,
     };
     let report = run_scenario(&options, &Progress::new(0, "scans"))?;
     for line in summary_lines(&report) {

@@ -313,6 +313,7 @@ fn run_one(
         allow_scenario_command: false,
         mcap: false,
         figures,
+        planner_callback: None,
     };
     let row = match run_scenario(&options, &Progress::hidden()) {
         Ok(r) => SuiteRow {

@@ -188,7 +188,6 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
             e.utf8_error().valid_up_to()
         ))
     })?;
-    let [x0, x1, y0, y1] = extent;
     let mut points = Vec::new();
     let mut header_allowed = true;
     for (k, line) in text.lines().enumerate() {
@@ -220,13 +219,8 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
             })
         };
         let (x, y) = (parse(x, "x")?, parse(y, "y")?);
-        if !(x.is_finite() && y.is_finite()) {
-            return Err(fail(format!("{name}:{at}: ({x}, {y}) is not a finite point")));
-        }
-        if !(x0..=x1).contains(&x) || !(y0..=y1).contains(&y) {
-            return Err(fail(format!(
-                "{name}:{at}: ({x}, {y}) m lies off the map, which spans x {x0} .. {x1} m and y {y0} .. {y1} m"
-            )));
+        if let Some(problem) = point_problem((x, y), extent) {
+            return Err(fail(format!("{name}:{at}: {problem}")));
         }
         points.push((x, y));
     }
@@ -236,6 +230,20 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
         )));
     }
     Ok(points)
+}
+
+/// What is wrong with a path's point: not finite, or off the map's `extent`; `None` for a good point.
+pub fn point_problem((x, y): (f64, f64), extent: Extent) -> Option<String> {
+    let [x0, x1, y0, y1] = extent;
+    if !(x.is_finite() && y.is_finite()) {
+        return Some(format!("({x}, {y}) is not a finite point"));
+    }
+    if !(x0..=x1).contains(&x) || !(y0..=y1).contains(&y) {
+        return Some(format!(
+            "({x}, {y}) m lies off the map, which spans x {x0} .. {x1} m and y {y0} .. {y1} m"
+        ));
+    }
+    None
 }
 
 fn is_number(v: &str) -> bool {

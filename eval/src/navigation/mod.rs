@@ -38,6 +38,52 @@ pub enum PlannerSource {
     Builtin,
     /// An external program.
     External(ExternalPlanner),
+    /// A planner in the caller's own process (a Python function given to the Python package).
+    Callback(SharedPlanner),
+}
+
+/// A planner in the caller's own process, such as a Python function given to the Python package's
+/// `run_scenario`. It sees what an external planner sees, without files.
+pub trait PlannerCallback: Send + Sync {
+    /// Plans from `request.start` to `request.goal`: `Ok(Some(points))` a path of world points in metres,
+    /// `Ok(None)` no path, `Err(message)` a failure, which is an event of the run as an external planner's is.
+    ///
+    /// # Errors
+    /// The planner's own failure, as a message.
+    fn plan(&self, request: &PlanRequest<'_>) -> std::result::Result<Option<Vec<(f64, f64)>>, String>;
+}
+
+/// What a [`PlannerCallback`] is given at each replanning time.
+#[derive(Debug, Clone, Copy)]
+pub struct PlanRequest<'a> {
+    /// The map built so far.
+    pub map: &'a oeg::Map,
+    /// The region planned over (the scenario's map region).
+    pub region: oeg::CellRegion,
+    /// The map's decisions over `region`, row-major from its min corner.
+    pub decisions: &'a [Traversability],
+    /// The estimated position, world x and y, metres.
+    pub start: (f64, f64),
+    /// The goal, world x and y, metres.
+    pub goal: (f64, f64),
+    /// The region's extent, `[x_min, x_max, y_min, y_max]` in metres: the path must stay inside.
+    pub extent: external::Extent,
+}
+
+/// A shared [`PlannerCallback`]; two are equal when they are the same object.
+#[derive(Clone)]
+pub struct SharedPlanner(pub std::sync::Arc<dyn PlannerCallback>);
+
+impl std::fmt::Debug for SharedPlanner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("SharedPlanner(..)")
+    }
+}
+
+impl PartialEq for SharedPlanner {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 /// The map's decisions at an event's time, for its image.
@@ -250,6 +296,7 @@ pub fn navigate(
         planner: match inputs.planner {
             PlannerSource::Builtin => "astar",
             PlannerSource::External(_) => "external",
+            PlannerSource::Callback(_) => "callback",
         },
         start_xy_m: [round(start.x_m), round(start.y_m)],
         goal_xy_m: n.goal_xy_m,
@@ -379,6 +426,35 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
                     return Ok(Replan::Failed {
                         timed_out: f.kind == "timeout",
                         message: f.message,
+                    });
+                }
+            }
+        }
+        PlannerSource::Callback(planner) => {
+            let extent = external::extent_of(&region, geometry.resolution_m());
+            let request = PlanRequest {
+                map,
+                region,
+                decisions: &decisions,
+                start: (from.x_m, from.y_m),
+                goal,
+                extent,
+            };
+            let checked = planner.0.plan(&request).and_then(|path| match path {
+                Some(points) if points.is_empty() => Err("the planner returned an empty path".to_string()),
+                Some(points) => points
+                    .iter()
+                    .enumerate()
+                    .find_map(|(k, p)| external::point_problem(*p, extent).map(|m| format!("point {k}: {m}")))
+                    .map_or(Ok(Some(points)), Err),
+                None => Ok(None),
+            });
+            match checked {
+                Ok(path) => path,
+                Err(message) => {
+                    return Ok(Replan::Failed {
+                        message,
+                        timed_out: false,
                     });
                 }
             }
