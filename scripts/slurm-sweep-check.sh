@@ -11,7 +11,9 @@
 # 3. builds `oeg` and submits sweeps/smoke.toml as an array of 3 tasks (`sbatch --array=1-3 --wait`);
 # 4. merges the shards and checks that the merged runs.csv equals a local `oeg sweep run` of the same file,
 #    byte for byte but for the wall-time column;
-# 5. stops the daemons it started, by their process ids, however the script ends.
+# 5. with OEG_PYTHON set to a Python that has the `oeg` package and submitit, runs
+#    python/examples/submitit_sweep.py against the same cluster;
+# 6. stops the daemons it started, by their process ids, however the script ends.
 #
 # It never writes /etc/slurm or /etc/munge and never signals a daemon it did not start, so it is safe on a
 # machine that runs Slurm for real: the private cluster listens on its own ports (SLURMCTLD_PORT, default
@@ -150,4 +152,9 @@ else
     diff <(strip_wall_time "$WORK/out/merged/runs.csv") <(strip_wall_time "$WORK/out/local/runs.csv") | head -20
     echo "FAILED: the merged rows differ from the local run's" >&2
     exit 1
+fi
+
+if [ -n "${OEG_PYTHON:-}" ]; then
+    echo "== python/examples/submitit_sweep.py against the same cluster"
+    OEG_BIN="$OEG" "$OEG_PYTHON" python/examples/submitit_sweep.py --out "$WORK/out/submitit"
 fi
