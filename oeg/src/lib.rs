@@ -68,7 +68,9 @@ pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_
 pub use io::mapfile::{
     MapFileHeader, load_map, load_map_within, map_from_bytes, map_to_bytes, read_map_header, save_map,
 };
-pub use io::nav2::{PGM_FREE, PGM_OCCUPIED, PGM_UNKNOWN, nav2_grey, nav2_map};
+pub use io::nav2::{
+    Nav2Map, PGM_FREE, PGM_OCCUPIED, PGM_UNKNOWN, nav2_grey, nav2_map, parse_nav2_map, read_nav2_map,
+};
 pub use io::npy::{NpyArray, NpyData};
 pub use io::pcd::{
     InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, parse_pcd, parse_pcd_within, read_pcd,

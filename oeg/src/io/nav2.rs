@@ -1,8 +1,12 @@
 //! The decisions as a ROS / nav2 `map_server` map: a binary PGM image (`P5`, row 0 the max-y edge, as
 //! `map_saver` writes it) and its YAML description (`image`, `mode: trinary`, `resolution`, `origin` of the
 //! lower-left pixel's corner, `negate`, `occupied_thresh`, `free_thresh`). nav2, ROS 1's `map_server` and
-//! most planners read it as it is.
+//! most planners read it as it is. [`read_nav2_map`] reads such a map back (any `trinary` map with a PGM
+//! image, whoever wrote it), so a map made by another tool can be scored (`oeg score --nav2`).
 
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
 use crate::map::Raster;
 use crate::planner::UncertainCells;
 use crate::traversability::Traversability;
@@ -60,6 +64,276 @@ pub fn nav2_map(
     (pgm, yaml)
 }
 
+/// A nav2 map read back: its decisions, row 0 the min-y row (as the testbed's rasters), and where they lie.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Nav2Map {
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// World x and y of the lower-left corner of the min-y, min-x cell, metres.
+    pub origin_xy_m: [f64; 2],
+    /// Rows (the image's height).
+    pub rows: usize,
+    /// Columns (the image's width).
+    pub cols: usize,
+    /// `rows * cols` decisions, row-major from the min-y row: occupied pixels [`Traversability::Blocked`],
+    /// free ones [`Traversability::Free`], the rest [`Traversability::Unknown`].
+    pub decisions: Vec<Traversability>,
+    /// The image file, resolved against the YAML file's folder.
+    pub image: PathBuf,
+}
+
+/// The YAML description of a nav2 map.
+#[derive(Debug, Clone, PartialEq)]
+struct Nav2Yaml {
+    image: String,
+    resolution_m: f64,
+    origin: [f64; 3],
+    negate: bool,
+    occupied_thresh: f64,
+    free_thresh: f64,
+}
+
+/// The keys of a nav2 map's YAML; `mode` must be `trinary` (the default).
+const YAML_KEYS: [&str; 7] = [
+    "image",
+    "mode",
+    "resolution",
+    "origin",
+    "negate",
+    "occupied_thresh",
+    "free_thresh",
+];
+
+/// Parses the YAML text of a nav2 map (`path` is named in errors): `key: value` lines, `#` comments.
+fn parse_nav2_yaml(path: &Path, text: &str) -> Result<Nav2Yaml> {
+    let mut values: Vec<(&str, &str, usize)> = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.split(" #").next().unwrap_or_default().trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fail = |what: String| Error::parse(path, format!("line {}: {what}", n + 1));
+        let (key, value) = line
+            .split_once(':')
+            .ok_or_else(|| fail(format!("expected `key: value`, found `{line}`")))?;
+        let key = key.trim();
+        if !YAML_KEYS.contains(&key) {
+            return Err(fail(format!(
+                "unknown key `{key}`, expected one of {}",
+                YAML_KEYS.join(", ")
+            )));
+        }
+        if values.iter().any(|(k, ..)| *k == key) {
+            return Err(fail(format!("`{key}` is given twice")));
+        }
+        values.push((key, value.trim(), n + 1));
+    }
+    let get = |key: &str| values.iter().find(|(k, ..)| *k == key).map(|(_, v, n)| (*v, *n));
+    let number = |key: &str, default: Option<f64>| -> Result<f64> {
+        match get(key) {
+            None => default.ok_or_else(|| Error::parse(path, format!("the key `{key}` is missing"))),
+            Some((v, n)) => v
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| Error::parse(path, format!("line {n}: `{key}: {v}`, expected a number"))),
+        }
+    };
+    if let Some((mode, n)) = get("mode")
+        && mode != "trinary"
+    {
+        return Err(Error::parse(
+            path,
+            format!("line {n}: `mode: {mode}`: only `trinary` maps hold decisions (free, occupied, unknown)"),
+        ));
+    }
+    let (image, _) = get("image").ok_or_else(|| Error::parse(path, "the key `image` is missing"))?;
+    let image = image.trim_matches(|c| c == '"' || c == '\'').to_string();
+    let resolution_m = number("resolution", None)?;
+    if resolution_m <= 0.0 {
+        return Err(Error::parse(
+            path,
+            format!("`resolution: {resolution_m}`, expected metres above 0"),
+        ));
+    }
+    let (origin_text, n) = get("origin").ok_or_else(|| Error::parse(path, "the key `origin` is missing"))?;
+    let origin: Vec<f64> = origin_text
+        .strip_prefix('[')
+        .and_then(|v| v.strip_suffix(']'))
+        .map(|v| {
+            v.split(',')
+                .map(|x| x.trim().parse::<f64>())
+                .collect::<std::result::Result<_, _>>()
+        })
+        .and_then(std::result::Result::ok)
+        .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
+        .ok_or_else(|| {
+            Error::parse(
+                path,
+                format!("line {n}: `origin: {origin_text}`, expected [x, y, yaw] in metres and radians"),
+            )
+        })?;
+    if origin[2] != 0.0 {
+        return Err(Error::parse(
+            path,
+            format!(
+                "line {n}: the origin's yaw is {}, only maps aligned with the world's axes (yaw 0) can be read",
+                origin[2]
+            ),
+        ));
+    }
+    let negate = match get("negate") {
+        None | Some(("0", _)) => false,
+        Some(("1", _)) => true,
+        Some((v, n)) => {
+            return Err(Error::parse(
+                path,
+                format!("line {n}: `negate: {v}`, expected 0 or 1"),
+            ));
+        }
+    };
+    let occupied_thresh = number("occupied_thresh", Some(0.65))?;
+    let free_thresh = number("free_thresh", Some(0.196))?;
+    if !(0.0..=1.0).contains(&free_thresh) || !(free_thresh..=1.0).contains(&occupied_thresh) {
+        return Err(Error::parse(
+            path,
+            format!(
+                "free_thresh {free_thresh} and occupied_thresh {occupied_thresh}: expected 0 <= free <= occupied <= 1"
+            ),
+        ));
+    }
+    Ok(Nav2Yaml {
+        image,
+        resolution_m,
+        origin: [origin[0], origin[1], origin[2]],
+        negate,
+        occupied_thresh,
+        free_thresh,
+    })
+}
+
+/// A binary PGM image (`P5`, one byte per pixel): its width, height, largest grey and pixels, row 0 the top.
+/// Images of more than `max_pixels` pixels are refused before their pixels are read.
+fn parse_pgm<'a>(path: &Path, bytes: &'a [u8], max_pixels: u64) -> Result<(usize, usize, u8, &'a [u8])> {
+    let fail = |what: String| Error::parse(path, what);
+    if !bytes.starts_with(b"P5") {
+        return Err(fail(
+            "expected a binary PGM image (magic `P5`); convert other images with `convert map.png map.pgm`"
+                .into(),
+        ));
+    }
+    // Three numbers after the magic, separated by white space and `#` comments, then one white space byte.
+    let mut pos = 2;
+    let mut numbers = [0u64; 3];
+    for (k, number) in numbers.iter_mut().enumerate() {
+        loop {
+            match bytes.get(pos) {
+                Some(b'#') => {
+                    while bytes.get(pos).is_some_and(|b| *b != b'\n') {
+                        pos += 1;
+                    }
+                }
+                Some(b) if b.is_ascii_whitespace() => pos += 1,
+                _ => break,
+            }
+        }
+        let start = pos;
+        while bytes.get(pos).is_some_and(u8::is_ascii_digit) && pos - start < 10 {
+            pos += 1;
+        }
+        *number = std::str::from_utf8(&bytes[start..pos])
+            .ok()
+            .and_then(|t| t.parse().ok())
+            .ok_or_else(|| {
+                fail(format!(
+                    "byte {start}: expected the image's {} as a number",
+                    ["width", "height", "largest grey"][k]
+                ))
+            })?;
+    }
+    if !bytes.get(pos).is_some_and(u8::is_ascii_whitespace) {
+        return Err(fail(format!(
+            "byte {pos}: expected one white space before the pixels"
+        )));
+    }
+    pos += 1;
+    let [w, h, maxval] = numbers;
+    if !(1..=255).contains(&maxval) {
+        return Err(fail(format!(
+            "the largest grey is {maxval}: only 8-bit images (1 to 255) are read"
+        )));
+    }
+    let pixels = w
+        .checked_mul(h)
+        .filter(|n| *n > 0 && *n <= max_pixels)
+        .ok_or_else(|| fail(format!("a {w} x {h} image, expected 1 to {max_pixels} pixels")))?;
+    let data = &bytes[pos..];
+    if data.len() as u64 != pixels {
+        return Err(fail(format!(
+            "{} bytes of pixels for a {w} x {h} image, expected {pixels}",
+            data.len()
+        )));
+    }
+    Ok((w as usize, h as usize, maxval as u8, data))
+}
+
+/// The decision of one grey, as `map_server` reads a `trinary` map: occupancy `(maxval - grey) / maxval`
+/// (`grey / maxval` when negated), occupied above `occupied_thresh`, free below `free_thresh`, unknown between.
+fn decision_of_grey(grey: u8, maxval: u8, yaml: &Nav2Yaml) -> Traversability {
+    let g = f64::from(grey.min(maxval)) / f64::from(maxval);
+    let occupancy = if yaml.negate { g } else { 1.0 - g };
+    if occupancy > yaml.occupied_thresh {
+        Traversability::Blocked
+    } else if occupancy < yaml.free_thresh {
+        Traversability::Free
+    } else {
+        Traversability::Unknown
+    }
+}
+
+/// Reads a nav2 / ROS `map_server` map: the YAML file `yaml_path` and the PGM image it names (relative to the
+/// YAML's folder). At most `max_cells` cells are read; files are read with bounded reads.
+///
+/// # Errors
+/// [`Error::Parse`] naming the file and the place: a YAML key that is unknown, missing or out of range, a
+/// mode other than `trinary`, a rotated origin, an image that is not an 8-bit binary PGM or has more than
+/// `max_cells` pixels, or a truncated image; [`Error::Io`] for a file that cannot be read.
+pub fn read_nav2_map(yaml_path: &Path, max_cells: u64) -> Result<Nav2Map> {
+    let yaml = parse_nav2_yaml(yaml_path, &crate::io::read_text(yaml_path)?)?;
+    let image = yaml_path.parent().unwrap_or(Path::new("")).join(&yaml.image);
+    // The header is a few dozen bytes: a file this long holds at most `max_cells` pixels.
+    let bytes = crate::io::read_bounded(&image, max_cells.saturating_add(4096))?;
+    decode(&yaml, image, &bytes, max_cells)
+}
+
+/// The map of a parsed YAML and its image's bytes.
+fn decode(yaml: &Nav2Yaml, image: PathBuf, bytes: &[u8], max_cells: u64) -> Result<Nav2Map> {
+    let (cols, rows, maxval, pixels) = parse_pgm(&image, bytes, max_cells)?;
+    let decisions = (0..rows)
+        .rev()
+        .flat_map(|r| pixels[r * cols..(r + 1) * cols].iter())
+        .map(|g| decision_of_grey(*g, maxval, yaml))
+        .collect();
+    Ok(Nav2Map {
+        resolution_m: yaml.resolution_m,
+        origin_xy_m: [yaml.origin[0], yaml.origin[1]],
+        rows,
+        cols,
+        decisions,
+        image,
+    })
+}
+
+/// Parses a nav2 map held in memory, the YAML's text and the image's bytes (for the fuzzer and tests).
+///
+/// # Errors
+/// As [`read_nav2_map`].
+pub fn parse_nav2_map(yaml_text: &str, image: &[u8], max_cells: u64) -> Result<Nav2Map> {
+    let yaml = parse_nav2_yaml(Path::new("map.yaml"), yaml_text)?;
+    let image_path = PathBuf::from(&yaml.image);
+    decode(&yaml, image_path, image, max_cells)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -88,5 +362,68 @@ mod tests {
         assert!(occ(PGM_OCCUPIED) > OCCUPIED_THRESH);
         let (drivable, _) = nav2_map(&decisions, UncertainCells::Drivable, "map.pgm");
         assert_eq!(drivable[header.len() + 1], PGM_FREE);
+    }
+
+    #[test]
+    fn a_written_map_reads_back_with_its_decisions_and_origin() {
+        let region = CellRegion::from_corners(CellIndex::new(-2, 4), CellIndex::new(0, 5)).expect("region");
+        use Traversability::*;
+        let decisions = Raster {
+            region,
+            resolution_m: 0.5,
+            values: vec![Free, Blocked, Unknown, Traversable, Uncertain, Free],
+        };
+        let (pgm, yaml) = nav2_map(&decisions, UncertainCells::Blocked, "map.pgm");
+        let back = parse_nav2_map(&yaml, &pgm, 100).expect("reads");
+        assert_eq!((back.rows, back.cols, back.resolution_m), (2, 3, 0.5));
+        assert_eq!(back.origin_xy_m, [-1.0, 2.0]);
+        // Drivable cells read free, uncertain ones blocked (as written), unknown stays unknown.
+        assert_eq!(back.decisions, vec![Free, Blocked, Unknown, Free, Blocked, Free]);
+        // map_saver's defaults, with comments and negate.
+        let yaml = "# saved\nimage: \"m.pgm\"\nresolution: 0.05 # m\norigin: [0.0, 0.0, 0.0]\nnegate: 1\n";
+        let negated = parse_nav2_map(yaml, b"P5 2 1 255 \x00\xff", 100).expect("negated");
+        assert_eq!(negated.decisions, vec![Free, Blocked]);
+    }
+
+    #[test]
+    fn broken_maps_name_the_file_and_the_place() {
+        let pgm = b"P5\n2 1\n255\n\x00\xfe";
+        let yaml = "image: map.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n";
+        assert!(parse_nav2_map(yaml, pgm, 100).is_ok());
+        let cases: [(&str, &[u8], &str); 8] = [
+            (
+                "image: map.pgm\nresolution: 0.1\norigin: [0, 0, 0]\ncolour: red\n",
+                pgm,
+                "line 4: unknown key `colour`",
+            ),
+            (
+                "image: map.pgm\norigin: [0, 0, 0]\n",
+                pgm,
+                "`resolution` is missing",
+            ),
+            (
+                "image: map.pgm\nresolution: -1\norigin: [0, 0, 0]\n",
+                pgm,
+                "above 0",
+            ),
+            (
+                "image: map.pgm\nresolution: 0.1\norigin: [0, 0, 0.5]\n",
+                pgm,
+                "yaw is 0.5",
+            ),
+            (
+                "image: map.pgm\nresolution: 0.1\norigin: [0, 0, 0]\nmode: scale\n",
+                pgm,
+                "only `trinary`",
+            ),
+            (yaml, b"P5\n2 1\n255\n\x00", "1 bytes of pixels"),
+            (yaml, b"P6\n2 1\n255\n\x00\x00", "`P5`"),
+            (yaml, b"P5\n100000 100000\n255\n", "expected 1 to 100 pixels"),
+        ];
+        for (yaml, image, want) in cases {
+            let e = parse_nav2_map(yaml, image, 100).expect_err(want).to_string();
+            assert!(e.contains(want), "{e} lacks {want}");
+            assert!(e.starts_with("map.yaml") || e.starts_with("map.pgm"), "{e}");
+        }
     }
 }

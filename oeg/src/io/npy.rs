@@ -1,7 +1,8 @@
 //! NumPy's `.npy` format, version 1.0 (numpy's `format.py`, NEP 1): a magic string, a header that is a
 //! Python dict literal (`descr`, `fortran_order`, `shape`) padded with spaces to a multiple of 64 bytes and
-//! ending in a newline, then the data in C order. `numpy.load` reads what this writes; the reader takes back
-//! the two element types written here, so the testbed's own tests and tools need no Python.
+//! ending in a newline, then the data in C order. `numpy.load` reads what this writes. The reader takes what
+//! `numpy.save` writes for a 2D array of floats, integers or booleans, in C or Fortran order and either byte
+//! order, so a map made by another tool can be scored (`oeg score`) without Python.
 
 use std::path::Path;
 
@@ -16,6 +17,10 @@ pub enum NpyData {
     F32(Vec<f32>),
     /// Unsigned bytes (`|u1`).
     U8(Vec<u8>),
+    /// 64-bit floats (`<f8`; read from `f8` of either byte order).
+    F64(Vec<f64>),
+    /// Integers (`<i8`; read from every other integer type, and from booleans as 0 and 1).
+    I64(Vec<i64>),
 }
 
 impl NpyData {
@@ -23,6 +28,8 @@ impl NpyData {
         match self {
             Self::F32(_) => "<f4",
             Self::U8(_) => "|u1",
+            Self::F64(_) => "<f8",
+            Self::I64(_) => "<i8",
         }
     }
 
@@ -30,7 +37,93 @@ impl NpyData {
         match self {
             Self::F32(v) => v.len(),
             Self::U8(v) => v.len(),
+            Self::F64(v) => v.len(),
+            Self::I64(v) => v.len(),
         }
+    }
+
+    /// The elements as `f64` (integers exactly up to 2^53).
+    pub fn to_f64(&self) -> Vec<f64> {
+        match self {
+            Self::F32(v) => v.iter().map(|x| f64::from(*x)).collect(),
+            Self::U8(v) => v.iter().map(|x| f64::from(*x)).collect(),
+            Self::F64(v) => v.clone(),
+            Self::I64(v) => v.iter().map(|x| *x as f64).collect(),
+        }
+    }
+
+    /// The elements as integers, or `None` for a float array.
+    pub fn to_i64(&self) -> Option<Vec<i64>> {
+        match self {
+            Self::U8(v) => Some(v.iter().map(|x| i64::from(*x)).collect()),
+            Self::I64(v) => Some(v.clone()),
+            Self::F32(_) | Self::F64(_) => None,
+        }
+    }
+}
+
+/// An element type of a `.npy` header (`descr`): its kind, size and byte order.
+#[derive(Debug, Clone, Copy)]
+struct Element {
+    kind: u8,
+    size: usize,
+    big_endian: bool,
+}
+
+impl Element {
+    /// Parses `<f4`, `|u1`, `>i8`, `|b1` and the like; `None` for anything else (strings, objects,
+    /// complex numbers, structured types).
+    fn parse(descr: &str) -> Option<Self> {
+        let b = descr.as_bytes();
+        let [order, kind, ..] = *b else { return None };
+        let size: usize = descr.get(2..)?.parse().ok()?;
+        let big_endian = match order {
+            b'<' | b'=' | b'|' => false,
+            b'>' => true,
+            _ => return None,
+        };
+        let known = matches!(
+            (kind, size),
+            (b'f', 4 | 8) | (b'i' | b'u', 1 | 2 | 4 | 8) | (b'b', 1)
+        );
+        known.then_some(Self {
+            kind,
+            size,
+            big_endian,
+        })
+    }
+
+    /// The elements of `body`, whose length is a multiple of the size.
+    fn decode(self, body: &[u8]) -> std::result::Result<NpyData, String> {
+        let word = |c: &[u8]| {
+            let mut w = [0u8; 8];
+            if self.big_endian {
+                w[8 - c.len()..].copy_from_slice(c);
+                u64::from_be_bytes(w)
+            } else {
+                w[..c.len()].copy_from_slice(c);
+                u64::from_le_bytes(w)
+            }
+        };
+        let words = body.chunks_exact(self.size).map(word);
+        let bits = (self.size * 8) as u32;
+        Ok(match (self.kind, self.size) {
+            (b'u', 1) => NpyData::U8(body.to_vec()),
+            (b'f', 4) => NpyData::F32(words.map(|w| f32::from_bits(w as u32)).collect()),
+            (b'f', _) => NpyData::F64(words.map(f64::from_bits).collect()),
+            (b'b', _) => NpyData::I64(words.map(|w| i64::from(w != 0)).collect()),
+            (b'i', _) => NpyData::I64(
+                // Sign-extend from the element's width.
+                words
+                    .map(|w| ((w << (64 - bits)) as i64) >> (64 - bits))
+                    .collect(),
+            ),
+            _ => NpyData::I64(
+                words
+                    .map(|w| i64::try_from(w).map_err(|_| format!("the unsigned value {w} is too large")))
+                    .collect::<std::result::Result<_, _>>()?,
+            ),
+        })
     }
 }
 
@@ -72,7 +165,7 @@ impl NpyArray {
         let unpadded = MAGIC.len() + 4 + dict.len() + 1;
         let padding = (64 - unpadded % 64) % 64;
         let header_len = dict.len() + padding + 1;
-        let mut out = Vec::with_capacity(unpadded + padding + self.data.len() * 4);
+        let mut out = Vec::with_capacity(unpadded + padding + self.data.len() * 8);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&[1, 0]);
         out.extend_from_slice(&(header_len as u16).to_le_bytes());
@@ -82,15 +175,20 @@ impl NpyArray {
         match &self.data {
             NpyData::F32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
             NpyData::U8(v) => out.extend_from_slice(v),
+            NpyData::F64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            NpyData::I64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
         }
         Ok(out)
     }
 
-    /// Reads a 2D `<f4` or `|u1` array in C order from the bytes of `path` (named in errors).
+    /// Reads a 2D array from the bytes of `path` (named in errors): floats (`f4`, `f8`), integers (`i1` to
+    /// `i8`, `u1` to `u8`) or booleans (`b1`), little- or big-endian, in C or Fortran order, in `.npy` version
+    /// 1.0, 2.0 or 3.0. Fortran order is turned into C order. `|u1` stays bytes, `f4` stays `f32`, other
+    /// floats are `f64` and other integers `i64` ([`NpyData`]).
     ///
     /// # Errors
     /// [`Error::Parse`] naming the file and what was expected: a wrong magic or version, a header that is
-    /// not the dict written here, another element type, Fortran order, or a data size that does not match.
+    /// not a `.npy` dict, another element type, a shape that is not 2D, or a data size that does not match.
     pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self> {
         let fail = |what: String| Error::parse(path, what);
         if bytes.len() < 10 || &bytes[..6] != MAGIC {
@@ -98,15 +196,22 @@ impl NpyArray {
                 "not a .npy file: expected the magic \\x93NUMPY at byte 0".into(),
             ));
         }
-        if bytes[6] != 1 {
-            return Err(fail(format!(
-                "npy version {}.{}, expected 1.0",
-                bytes[6], bytes[7]
-            )));
-        }
-        let header_len = usize::from(u16::from_le_bytes([bytes[8], bytes[9]]));
-        let header = bytes
-            .get(10..10 + header_len)
+        let (header_len, start): (usize, usize) = match bytes[6] {
+            1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+            2 | 3 if bytes.len() >= 12 => (
+                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+                12,
+            ),
+            major => {
+                return Err(fail(format!(
+                    "npy version {major}.{}, expected 1.0, 2.0 or 3.0",
+                    bytes[7]
+                )));
+            }
+        };
+        let header = start
+            .checked_add(header_len)
+            .and_then(|end| bytes.get(start..end))
             .and_then(|h| std::str::from_utf8(h).ok())
             .ok_or_else(|| {
                 fail(format!(
@@ -120,10 +225,18 @@ impl NpyArray {
         let descr = field("descr")
             .and_then(|v| v.strip_prefix('\''))
             .and_then(|v| v.split('\'').next())
-            .ok_or_else(|| fail("the header has no 'descr'".into()))?;
-        if !field("fortran_order").is_some_and(|v| v.starts_with("False")) {
-            return Err(fail("expected 'fortran_order': False".into()));
-        }
+            .ok_or_else(|| fail("the header has no 'descr' string".into()))?;
+        let element = Element::parse(descr).ok_or_else(|| {
+            fail(format!(
+                "element type '{descr}', expected floats ('<f4', '<f8'), integers ('|u1', '<i8', ...) or \
+                 booleans ('|b1')"
+            ))
+        })?;
+        let fortran = match field("fortran_order") {
+            Some(v) if v.starts_with("False") => false,
+            Some(v) if v.starts_with("True") => true,
+            _ => return Err(fail("expected 'fortran_order': False or True".into())),
+        };
         let shape: Vec<usize> = field("shape")
             .and_then(|v| v.strip_prefix('('))
             .and_then(|v| v.split(')').next())
@@ -139,38 +252,43 @@ impl NpyArray {
             .flatten()
             .ok_or_else(|| fail("the header's 'shape' is not a tuple of sizes".into()))?;
         let [rows, cols] = shape[..] else {
-            return Err(fail(format!("expected a 2D array, the shape is {shape:?}")));
+            return Err(fail(format!(
+                "expected a 2D array (rows, columns), the shape is {shape:?}"
+            )));
         };
-        let body = &bytes[10 + header_len..];
+        let body = &bytes[start + header_len..];
         let n = rows
             .checked_mul(cols)
             .ok_or_else(|| fail(format!("a shape of ({rows}, {cols}) is too large")))?;
-        let size = |elem: usize| {
-            (n.checked_mul(elem) == Some(body.len()))
-                .then_some(())
-                .ok_or_else(|| {
-                    fail(format!(
-                        "{} bytes of data for a ({rows}, {cols}) array of {elem}-byte elements",
-                        body.len()
-                    ))
-                })
-        };
-        let data = match descr {
-            "<f4" => {
-                size(4)?;
-                NpyData::F32(
-                    body.chunks_exact(4)
-                        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                        .collect(),
-                )
-            }
-            "|u1" => {
-                size(1)?;
-                NpyData::U8(body.to_vec())
-            }
-            other => return Err(fail(format!("element type '{other}', expected '<f4' or '|u1'"))),
+        if n.checked_mul(element.size) != Some(body.len()) {
+            return Err(fail(format!(
+                "{} bytes of data for a ({rows}, {cols}) array of {}-byte elements",
+                body.len(),
+                element.size
+            )));
+        }
+        let data = element.decode(body).map_err(fail)?;
+        let data = if fortran && rows > 1 && cols > 1 {
+            transpose(data, rows, cols)
+        } else {
+            data
         };
         Ok(Self { rows, cols, data })
+    }
+}
+
+/// The C-order elements of a `rows` x `cols` array given in Fortran (column-major) order.
+fn transpose(data: NpyData, rows: usize, cols: usize) -> NpyData {
+    fn t<T: Copy>(v: &[T], rows: usize, cols: usize) -> Vec<T> {
+        (0..rows)
+            .flat_map(|r| (0..cols).map(move |c| v[c * rows + r]))
+            .collect()
+    }
+    match data {
+        NpyData::F32(v) => NpyData::F32(t(&v, rows, cols)),
+        NpyData::U8(v) => NpyData::U8(t(&v, rows, cols)),
+        NpyData::F64(v) => NpyData::F64(t(&v, rows, cols)),
+        NpyData::I64(v) => NpyData::I64(t(&v, rows, cols)),
     }
 }
 
@@ -227,5 +345,76 @@ mod tests {
             data: NpyData::U8(vec![0; 4]),
         };
         assert!(mismatched.to_bytes().is_err());
+    }
+
+    /// A `.npy` file with the given header fields and body, as `numpy.save` lays it out.
+    fn npy(version: u8, descr: &str, fortran: bool, shape: &str, body: &[u8]) -> Vec<u8> {
+        let dict = format!(
+            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}\n",
+            if fortran { "True" } else { "False" }
+        );
+        let mut out = MAGIC.to_vec();
+        out.extend_from_slice(&[version, 0]);
+        if version == 1 {
+            out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        } else {
+            out.extend_from_slice(&(dict.len() as u32).to_le_bytes());
+        }
+        out.extend_from_slice(dict.as_bytes());
+        out.extend_from_slice(body);
+        out
+    }
+
+    #[test]
+    fn what_numpy_save_writes_is_read_in_c_order() {
+        let p = Path::new("user.npy");
+        // float64, Fortran order: the array [[1, 2, 3], [4, 5, 6]] is stored by columns.
+        let body: Vec<u8> = [1.0f64, 4.0, 2.0, 5.0, 3.0, 6.0]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let a = NpyArray::from_bytes(p, &npy(1, "<f8", true, "(2, 3)", &body)).expect("f8");
+        assert_eq!((a.rows, a.cols), (2, 3));
+        assert_eq!(a.data, NpyData::F64(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
+        // Big-endian int16 with negative values, version 2.0.
+        let body: Vec<u8> = [-3i16, 0, 4, 32767]
+            .iter()
+            .flat_map(|x| x.to_be_bytes())
+            .collect();
+        let a = NpyArray::from_bytes(p, &npy(2, ">i2", false, "(2, 2)", &body)).expect("i2");
+        assert_eq!(a.data, NpyData::I64(vec![-3, 0, 4, 32767]));
+        assert_eq!(a.data.to_f64(), vec![-3.0, 0.0, 4.0, 32767.0]);
+        // Booleans, and int64 (numpy's default for a list of ints).
+        let a = NpyArray::from_bytes(p, &npy(1, "|b1", false, "(1, 3)", &[1, 0, 1])).expect("b1");
+        assert_eq!(a.data.to_i64(), Some(vec![1, 0, 1]));
+        let body: Vec<u8> = [3i64, 1].iter().flat_map(|x| x.to_le_bytes()).collect();
+        let a = NpyArray::from_bytes(p, &npy(1, "<i8", false, "(2, 1)", &body)).expect("i8");
+        assert_eq!(a.data, NpyData::I64(vec![3, 1]));
+        // What is refused, by name.
+        let e = NpyArray::from_bytes(p, &npy(1, "<U4", false, "(1, 1)", &[0; 16])).expect_err("text");
+        assert!(
+            e.to_string().contains("'<U4'") && e.to_string().contains("user.npy"),
+            "{e}"
+        );
+        let e = NpyArray::from_bytes(p, &npy(1, "<f4", false, "(4,)", &[0; 16])).expect_err("1D");
+        assert!(e.to_string().contains("2D"), "{e}");
+        let big = u64::MAX.to_le_bytes();
+        let e = NpyArray::from_bytes(p, &npy(1, "<u8", false, "(1, 1)", &big)).expect_err("u8");
+        assert!(e.to_string().contains("too large"), "{e}");
+        let e = NpyArray::from_bytes(p, &npy(9, "<f4", false, "(1, 1)", &[0; 4])).expect_err("version");
+        assert!(e.to_string().contains("version 9.0"), "{e}");
+        let e =
+            NpyArray::from_bytes(p, &npy(1, "<f4", false, "(1000000, 1000000)", &[0; 4])).expect_err("size");
+        assert!(e.to_string().contains("4 bytes of data"), "{e}");
+        // What is written reads back, for the new types too.
+        for data in [NpyData::F64(vec![0.5, -1.0]), NpyData::I64(vec![-7, 9])] {
+            let array = NpyArray {
+                rows: 1,
+                cols: 2,
+                data,
+            };
+            let back = NpyArray::from_bytes(p, &array.to_bytes().expect("bytes")).expect("reads");
+            assert_eq!(back, array);
+        }
     }
 }
