@@ -37,6 +37,9 @@ enum Command {
     /// with the robot's footprint: the first contact, the closest approach, the cells crossed; exit non-zero
     /// on a contact.
     CheckPath(cli::check_path::CheckPathArgs),
+    /// Score a map made by another tool (.npy layers, or a nav2 map) against a scenario's truth, as `oeg run`
+    /// scores its own: verdict counts, per-obstacle table, planner check (docs/scoring.md).
+    Score(cli::score::ScoreArgs),
     /// Print a saved map's header and statistics.
     Inspect(cli::inspect::InspectArgs),
     /// Run a scenario end to end: simulate, map, compare with the truth, write the report; exit non-zero when
@@ -79,6 +82,7 @@ fn main() -> ExitCode {
         Some(Command::Plan(args)) => cli::plan::run(&args),
         Some(Command::Inspect(args)) => cli::inspect::run(&args),
         Some(Command::CheckPath(args)) => cli::check_path::run(&args),
+        Some(Command::Score(args)) => cli::score::run(&args),
         Some(Command::Run(args)) => cli::run::run(&args),
         Some(Command::Suite(args)) => cli::suite::run(&args),
         Some(Command::Validate(args)) => cli::validate::run(&args),

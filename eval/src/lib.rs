@@ -28,6 +28,7 @@ pub mod pipeline;
 pub mod progress;
 pub mod recording;
 pub mod report;
+pub mod scoring;
 pub mod settings;
 #[cfg(test)]
 mod test_support;

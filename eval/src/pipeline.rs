@@ -471,7 +471,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     };
     let figures = navigation.as_ref().map(|n| n.summary.figures());
     let sensed = Sensed {
-        returns: simulation.obstacle_returns(),
+        returns: Some(simulation.obstacle_returns()),
         observability: Some(&observability),
         navigation: figures.as_ref(),
     };

@@ -36,12 +36,17 @@ __all__ = [
     "OegError",
     "RunResult",
     "Scan",
+    "Score",
+    "TRUTH_CLASSES",
+    "Truth",
     "load",
     "load_sweep",
     "plan",
     "read_graph",
     "read_pcd",
     "run_scenario",
+    "score",
+    "truth",
 ]
 
 __version__: str = _oeg.__version__
@@ -69,6 +74,16 @@ DECISIONS: Dict[int, str] = {
     2: "traversable",
     3: "blocked",
     4: "uncertain",
+}
+
+
+#: The codes of a truth's ``truth_class`` layer.
+TRUTH_CLASSES: Dict[int, str] = {
+    0: "off_terrain",
+    1: "drivable",
+    2: "passable_under",
+    3: "step",
+    4: "too_low",
 }
 
 
@@ -368,3 +383,165 @@ def load_sweep(path: PathLike) -> Any:
             except json.JSONDecodeError as e:
                 raise OegError(f"{rows_path}:{number}: not a JSON row: {e.msg}") from None
     return pd.DataFrame.from_records(rows)
+
+
+class Truth:
+    """A scenario's truth, as ``oeg run`` judges a map against it: computed from the simulated world alone.
+
+    Made by :func:`truth`; pass it to :func:`score` to judge several maps without computing it again.
+    """
+
+    def __init__(self, native: _oeg.Truth) -> None:
+        self._truth = native
+
+    @property
+    def scenario(self) -> str:
+        """The scenario's name."""
+        return self._truth.scenario
+
+    @property
+    def resolution_m(self) -> float:
+        """Cell size, metres: the scenario's ``map.resolution_m``."""
+        return self._truth.resolution_m
+
+    @property
+    def extent(self) -> Extent:
+        """``(x_min, x_max, y_min, y_max)`` of the scenario's map region, metres."""
+        return self._truth.extent
+
+    @property
+    def origin(self) -> Tuple[float, float]:
+        """World ``(x, y)`` of the lower-left corner of cell ``[0, 0]``, metres."""
+        x0, _, y0, _ = self._truth.extent
+        return (x0, y0)
+
+    @property
+    def has_observability(self) -> bool:
+        """Whether the ``observed_*`` layers exist (the scenario's scripted drive was simulated)."""
+        return self._truth.has_observability
+
+    @property
+    def robot(self) -> Dict[str, Any]:
+        """The robot's decision profile: ``max_step_m``, ``height_m``, ``max_grade``."""
+        robot: Dict[str, Any] = json.loads(self._truth.robot)
+        return robot
+
+    def layers(self) -> Dict[str, npt.NDArray[Any]]:
+        """The truth as ``(num_y, num_x)`` arrays, row 0 the minimum y (``imshow(origin="lower")``).
+
+        * ``elevation_m`` (``float32``): the highest surface below the robot's height, NaN off the terrain;
+        * ``ground_m``: the ground's height; ``step_m``: the largest rise within the robot's contact distance;
+        * ``clearance_m``: the free gap under a structure over the cell, NaN where there is none;
+        * ``step_blocked``, ``truly_blocked`` (``bool``): a step the robot cannot climb; a cell it truly cannot
+          enter (a step, or a structure lower than the robot);
+        * ``truth_class`` (``uint8``, :data:`TRUTH_CLASSES`);
+        * with observability: ``observed_step`` (a ray ended on the cell), ``observed_clearance`` (a ray
+          crossed or ended in the band between a step and the robot's height), ``observed_band_hit`` (a ray
+          ended in that band).
+
+        Each call copies the arrays out of the truth.
+        """
+        layers: Dict[str, npt.NDArray[Any]] = self._truth.layers()
+        return layers
+
+
+class Score(NamedTuple):
+    """What :func:`score` returns: what ``oeg run`` reports for its own map."""
+
+    #: The keys of ``metrics.json`` (``docs/metrics.md``); ``map_bytes``, ``num_scans`` and ``num_rays`` are 0.
+    metrics: Dict[str, Any]
+    #: ``obstacles.csv``'s rows: a pandas DataFrame when pandas is installed, else a list of dicts.
+    obstacles: Any
+    #: ``plan.csv``'s rows, the map's path and the truth's: a DataFrame, else a list of dicts.
+    plan: Any
+
+
+def truth(
+    scenario: PathLike,
+    overrides: Union[Mapping[str, SettingValue], Sequence[str], None] = None,
+    seed: Optional[int] = None,
+    observability: bool = True,
+) -> Truth:
+    """The truth of a scenario over its map region, at its ``map.resolution_m``.
+
+    Args:
+        overrides: Scenario values by their dotted keys, as :func:`run_scenario` takes them.
+        seed: Replaces the scenario's seed.
+        observability: Simulate the scenario's scripted drive with its sensors (the same rays ``oeg run`` and
+            ``oeg record`` cast with this seed) to know what they could see: the ``observed_*`` layers, the blind
+            counts and each obstacle's sensor returns. A closed-loop scenario has none: its rays depend on the
+            map that steered it. Ctrl-C stops it with ``KeyboardInterrupt``.
+
+    Raises:
+        FileNotFoundError: The scenario does not exist.
+        OegError: A malformed scenario or override.
+    """
+    return Truth(_oeg.truth(os.fspath(scenario), _overrides(overrides), seed, observability))
+
+
+def _records(text: str) -> Any:
+    rows = json.loads(text)
+    try:
+        import pandas as pd  # type: ignore[import-untyped, unused-ignore]
+    except ImportError:
+        return rows
+    return pd.DataFrame.from_records(rows)
+
+
+def score(
+    scenario_or_truth: Union[PathLike, Truth],
+    decisions: Any,
+    origin: Tuple[float, float],
+    resolution_m: float,
+    elevation: Optional[Any] = None,
+    variance: Optional[Any] = None,
+    occupancy: Optional[Any] = None,
+) -> Score:
+    """Judges a map made by any mapper against a scenario's truth, as ``oeg run`` judges its own.
+
+    The arrays are ``(rows, cols)``, row 0 the minimum y and column 0 the minimum x, cell ``[r, c]`` covering
+    ``x`` from ``origin[0] + c * resolution_m`` and ``y`` from ``origin[1] + r * resolution_m``. They are
+    resampled onto the truth's grid by the rule of ``docs/scoring.md``: a truth cell takes the user's cells
+    whose centres lie in it (or, when none does, the cell under its centre), their most restrictive decision,
+    their mean elevation, the variance of the mixture of their Gaussians and their mean occupancy.
+
+    Args:
+        scenario_or_truth: A scenario file, whose :func:`truth` is computed with observability, or a
+            :class:`Truth`.
+        decisions: Integer codes, :data:`DECISIONS` (0 unknown, 1 free, 2 traversable, 3 blocked, 4
+            uncertain), of any integer or bool dtype. Cells with code 0 are not scored.
+        origin: World ``(x, y)`` of the lower-left corner of cell ``[0, 0]``, metres.
+        resolution_m: The arrays' cell size, metres.
+        elevation: Elevations, metres, NaN for none (the elevation metrics).
+        variance: Elevation variances, square metres, NaN for none (``elevation_within_2sigma``).
+        occupancy: Occupancy probabilities, NaN for none (``occupancy_brier``).
+
+    Raises:
+        TypeError: An array of the wrong kind (float decisions, non-numeric layers).
+        ValueError: Arrays of different shapes, unknown codes, a negative variance, a bad grid.
+    """
+    t = scenario_or_truth if isinstance(scenario_or_truth, Truth) else truth(scenario_or_truth)
+    codes = np.asarray(decisions)
+    if codes.ndim != 2 or codes.dtype.kind not in "biu":
+        raise TypeError(
+            f"decisions: expected a 2D array of integer codes, got dtype {codes.dtype} and shape {codes.shape}"
+        )
+
+    def floats(name: str, a: Optional[Any]) -> Optional[npt.NDArray[np.float64]]:
+        if a is None:
+            return None
+        values = np.asarray(a)
+        if values.ndim != 2 or values.dtype.kind not in "biuf":
+            raise TypeError(f"{name}: expected a 2D numeric array, got dtype {values.dtype} and shape {values.shape}")
+        return np.ascontiguousarray(values, dtype=np.float64)
+
+    m, o, p = _oeg.score(
+        t._truth,
+        np.ascontiguousarray(codes, dtype=np.int64),
+        (float(origin[0]), float(origin[1])),
+        float(resolution_m),
+        floats("elevation", elevation),
+        floats("variance", variance),
+        floats("occupancy", occupancy),
+    )
+    return Score(json.loads(m), _records(o), _records(p))

@@ -55,6 +55,41 @@ class Map:
     def save(self, path: str) -> None:
         """Writes the map file atomically."""
 
+class Truth:
+    """A scenario's truth; :class:`oeg.Truth` wraps it."""
+
+    @property
+    def scenario(self) -> str:
+        """The scenario's name."""
+    @property
+    def resolution_m(self) -> float:
+        """Cell size, metres."""
+    @property
+    def extent(self) -> Extent:
+        """The region's extent, metres."""
+    @property
+    def has_observability(self) -> bool:
+        """Whether the observability layers exist."""
+    @property
+    def robot(self) -> str:
+        """The robot's decision profile as JSON."""
+    def layers(self) -> Dict[str, npt.NDArray[Any]]:
+        """The truth's layers as ``(num_y, num_x)`` arrays."""
+
+def truth(path: str, overrides: List[str], seed: Optional[int] = None, observability: bool = True) -> Truth:
+    """The truth of a scenario."""
+
+def score(
+    truth: Truth,
+    decisions: npt.NDArray[np.int64],
+    origin: Tuple[float, float],
+    resolution_m: float,
+    elevation: Optional[npt.NDArray[np.float64]] = None,
+    variance: Optional[npt.NDArray[np.float64]] = None,
+    occupancy: Optional[npt.NDArray[np.float64]] = None,
+) -> Tuple[str, str, str]:
+    """Scores another mapper's arrays; returns the metrics, the obstacles and the plan rows as JSON."""
+
 def load(path: str, memory_limit_bytes: Optional[int] = None) -> Map:
     """Loads a map file."""
 

@@ -650,16 +650,190 @@ fn run_scenario(
     Ok((metrics, obstacles, failed, report.out_dir.display().to_string()))
 }
 
+/// A scenario's truth, as `oeg run` judges a map against it ([`oeg_eval::scoring::ScoringTruth`]).
+#[pyclass(name = "Truth", module = "oeg._oeg", frozen)]
+struct PyTruth {
+    inner: oeg_eval::scoring::ScoringTruth,
+}
+
+#[pymethods]
+impl PyTruth {
+    /// The scenario's name.
+    #[getter]
+    fn scenario(&self) -> String {
+        self.inner.scenario.name.clone()
+    }
+
+    /// Cell size, metres.
+    #[getter]
+    fn resolution_m(&self) -> f64 {
+        self.inner.raster.resolution_m
+    }
+
+    /// `(x_min, x_max, y_min, y_max)` of the region, metres.
+    #[getter]
+    fn extent(&self) -> PyResult<Extent> {
+        let geometry = oeg::GridGeometry::new(self.inner.raster.resolution_m).map_err(oeg_error)?;
+        Ok(extent(&self.inner.raster.region, &geometry))
+    }
+
+    /// Whether the observability layers exist.
+    #[getter]
+    fn has_observability(&self) -> bool {
+        self.inner.observability.is_some()
+    }
+
+    /// The robot's decision profile as JSON.
+    #[getter]
+    fn robot(&self) -> PyResult<String> {
+        serde_json::to_string(&self.inner.raster.profile).map_err(oeg_error)
+    }
+
+    /// The truth's layers as `(num_y, num_x)` arrays, row 0 the min-y row.
+    fn layers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        use oeg_eval::judge::verdict::TruthClass;
+        let t = &self.inner.raster;
+        let region = &t.region;
+        let out = PyDict::new(py);
+        let cells = &t.cells;
+        let layers: [(&str, Vec<f32>); 4] = [
+            ("elevation_m", cells.iter().map(|c| c.elevation_m).collect()),
+            ("ground_m", cells.iter().map(|c| c.ground_m).collect()),
+            ("step_m", cells.iter().map(|c| c.step_m).collect()),
+            ("clearance_m", cells.iter().map(|c| c.structure_gap_m).collect()),
+        ];
+        for (name, values) in layers {
+            out.set_item(name, grid(py, region, values)?)?;
+        }
+        out.set_item(
+            "step_blocked",
+            grid(py, region, t.cells.iter().map(|c| c.step_blocked).collect())?,
+        )?;
+        let classes: Vec<TruthClass> = (0..t.cells.len()).map(|k| TruthClass::of(t, k)).collect();
+        out.set_item(
+            "truly_blocked",
+            grid(py, region, classes.iter().map(|c| c.is_blocked()).collect())?,
+        )?;
+        out.set_item(
+            "truth_class",
+            grid(py, region, classes.iter().map(|c| *c as u8).collect())?,
+        )?;
+        if let Some(o) = &self.inner.observability {
+            out.set_item("observed_step", grid(py, region, o.step.clone())?)?;
+            out.set_item("observed_clearance", grid(py, region, o.clearance.clone())?)?;
+            out.set_item("observed_band_hit", grid(py, region, o.band_hit.clone())?)?;
+        }
+        Ok(out)
+    }
+}
+
+/// The truth of a scenario; with `observability`, its scripted drive is simulated with its sensors.
+#[pyfunction]
+#[pyo3(signature = (path, overrides, seed=None, observability=true))]
+fn truth(
+    py: Python<'_>,
+    path: PathBuf,
+    overrides: Vec<String>,
+    seed: Option<u64>,
+    observability: bool,
+) -> PyResult<PyTruth> {
+    existing(&path)?;
+    let options = oeg_eval::pipeline::RunOptions {
+        scenario: path,
+        seed,
+        overrides,
+        ..Default::default()
+    };
+    let inner = interruptible(py, |progress| {
+        let loaded = oeg_eval::pipeline::load(&options)?;
+        oeg_eval::scoring::ScoringTruth::of(&loaded, observability, progress)
+    })?;
+    Ok(PyTruth { inner })
+}
+
+/// A 2D float64 array of `shape` as its values, or `None`.
+fn float_grid(
+    name: &str,
+    array: Option<&Bound<'_, PyAny>>,
+    shape: (usize, usize),
+) -> PyResult<Option<Vec<f64>>> {
+    let Some(array) = array else { return Ok(None) };
+    let a = array
+        .cast::<PyArray2<f64>>()
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected a 2D float64 numpy array")))?;
+    let ro = a.readonly();
+    let got = (ro.shape()[0], ro.shape()[1]);
+    if got != shape {
+        return Err(PyValueError::new_err(format!(
+            "{name}: shape {got:?}, expected the decisions' shape {shape:?}"
+        )));
+    }
+    Ok(Some(ro.as_array().iter().copied().collect()))
+}
+
+/// Scores another mapper's arrays against `truth`; returns `metrics.json`, the obstacles and the plan
+/// rows as JSON.
+#[pyfunction]
+#[pyo3(signature = (truth, decisions, origin, resolution_m, elevation=None, variance=None, occupancy=None))]
+#[allow(clippy::too_many_arguments)]
+fn score(
+    py: Python<'_>,
+    truth: &PyTruth,
+    decisions: &Bound<'_, PyAny>,
+    origin: (f64, f64),
+    resolution_m: f64,
+    elevation: Option<&Bound<'_, PyAny>>,
+    variance: Option<&Bound<'_, PyAny>>,
+    occupancy: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(String, String, String)> {
+    let codes = decisions
+        .cast::<PyArray2<i64>>()
+        .map_err(|_| PyTypeError::new_err("decisions: expected a 2D int64 numpy array of decision codes"))?;
+    let ro = codes.readonly();
+    let (rows, cols) = (ro.shape()[0], ro.shape()[1]);
+    let codes: Vec<i64> = ro.as_array().iter().copied().collect();
+    let decisions = oeg_eval::judge::estimate::decisions_from_codes(&codes)
+        .map_err(|e| PyValueError::new_err(format!("decisions: {e}")))?;
+    let shape = (rows, cols);
+    let elevation_m = float_grid("elevation", elevation, shape)?;
+    let variance_m2 = float_grid("variance", variance, shape)?;
+    let occupancy = float_grid("occupancy", occupancy, shape)?;
+    let foreign = oeg_eval::judge::estimate::ForeignMap {
+        origin_xy_m: [origin.0, origin.1],
+        resolution_m,
+        rows,
+        cols,
+        decisions,
+        elevation_m,
+        variance_m2,
+        occupancy,
+    };
+    foreign
+        .check(Path::new("the arrays"))
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let evaluation = py.detach(|| truth.inner.score(&foreign)).map_err(oeg_error)?;
+    let geometry = evaluation.estimate.geometry;
+    let plan = oeg_eval::judge::plan_check::rows(&evaluation.plan, &geometry);
+    Ok((
+        serde_json::to_string(&evaluation.metrics).map_err(oeg_error)?,
+        serde_json::to_string(&evaluation.obstacles).map_err(oeg_error)?,
+        serde_json::to_string(&plan).map_err(oeg_error)?,
+    ))
+}
+
 /// The native module.
 #[pymodule]
 fn _oeg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMap>()?;
+    m.add_class::<PyTruth>()?;
     m.add("OegError", m.py().get_type::<OegError>())?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
     m.add_function(wrap_pyfunction!(read_pcd, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
     m.add_function(wrap_pyfunction!(run_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(truth, m)?)?;
+    m.add_function(wrap_pyfunction!(score, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -9,6 +9,7 @@ pub mod plan;
 pub mod preview;
 pub mod record;
 pub mod run;
+pub mod score;
 pub mod suite;
 pub mod sweep;
 pub mod validate;

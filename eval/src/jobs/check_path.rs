@@ -131,10 +131,9 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let mut cells_by_verdict = verdicts.as_ref().map(|_| BTreeMap::new());
     for c in &crossed {
         let Some(k) = region.offset(*c) else { continue };
-        let name = serde_json::to_value(classes.truth[k])
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_string));
-        *cells_by_truth.entry(name.unwrap_or_default()).or_insert(0) += 1;
+        *cells_by_truth
+            .entry(classes.truth[k].name().to_string())
+            .or_insert(0) += 1;
         if let (Some(v), Some(by)) = (&verdicts, cells_by_verdict.as_mut()) {
             *by.entry(v.verdict[k].name().to_string()).or_insert(0) += 1;
         }

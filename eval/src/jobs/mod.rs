@@ -10,6 +10,7 @@ pub mod plan;
 pub mod preview;
 pub mod record;
 pub mod run;
+pub mod score;
 pub mod suite;
 pub mod sweep;
 

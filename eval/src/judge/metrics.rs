@@ -3,10 +3,10 @@
 
 use std::collections::BTreeMap;
 
-use oeg::Map;
 use serde::Serialize;
 use sim::truth::TruthRaster;
 
+use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
 
 /// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
@@ -122,28 +122,34 @@ pub struct Metrics {
 
 /// Computes every metric except the expectation and plan fields: the elevation against the truth, and the
 /// decisions from the verdict raster.
-pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Metrics {
+pub fn compute(
+    scenario: &str,
+    seed: u64,
+    estimate: &Estimate,
+    truth: &TruthRaster,
+    verdicts: &Verdicts,
+) -> Metrics {
     let (mut observed, mut brier_sum, mut num_brier) = (0u64, 0.0f64, 0u64);
     let mut errors: Vec<f64> = Vec::new();
     let mut within = 0u64;
-    for (k, cell) in truth.region.cells().enumerate() {
-        let t = &truth.cells[k];
-        let c = map.cell(cell);
-        if !c.is_observed() {
+    for (k, t) in truth.cells.iter().enumerate() {
+        if !estimate.observed[k] {
             continue;
         }
         observed += 1;
         if t.elevation_m.is_nan() {
             continue;
         }
-        let p = f64::from(oeg::probability_from_log_odds(c.log_odds));
-        let o = if verdicts.truth[k].is_blocked() { 1.0 } else { 0.0 };
-        brier_sum += (p - o) * (p - o);
-        num_brier += 1;
-        if let Some(e) = c.elevation() {
-            let err = f64::from(e.mean_m) - f64::from(t.elevation_m);
+        let p = estimate.occupancy[k];
+        if !p.is_nan() {
+            let o = if verdicts.truth[k].is_blocked() { 1.0 } else { 0.0 };
+            brier_sum += (p - o) * (p - o);
+            num_brier += 1;
+        }
+        if let Some((e, var)) = estimate.elevation(k) {
+            let err = e - f64::from(t.elevation_m);
             errors.push(err);
-            if err.abs() <= 2.0 * f64::from(e.var_m2).sqrt() {
+            if err.abs() <= 2.0 * var.sqrt() {
                 within += 1;
             }
         }
@@ -201,9 +207,9 @@ pub fn compute(scenario: &str, seed: u64, map: &Map, truth: &TruthRaster, verdic
         unsafe_observable_cells: counts.unsafe_cells() - counts.blind_cells(),
         uncertain_truly_blocked_cells: counts.uncertain_truly_blocked_cells,
         num_clearance_cells: counts.num_clearance_cells,
-        map_bytes: map.memory_bytes(),
-        num_scans: map.num_scans(),
-        num_rays: map.totals().num_rays,
+        map_bytes: estimate.totals.map_bytes,
+        num_scans: estimate.totals.num_scans,
+        num_rays: estimate.totals.num_rays,
         plan_found: false,
         plan_length_m: f64::NAN,
         plan_unsafe_cells: 0,
@@ -451,7 +457,7 @@ mod tests {
     use super::*;
     use crate::test_support::{truth_cell, truth_raster};
     use nalgebra::Point3;
-    use oeg::{CellIndex, CellRegion, MapConfig, Scan, SensorModel, TraversabilityRule};
+    use oeg::{CellIndex, CellRegion, Map, MapConfig, Scan, SensorModel, TraversabilityRule};
 
     /// Four 1 m cells: ground seen at 0 (truly flat), a 0.2 m block seen at 0.2, a 0.1 m block seen at 0.01
     /// (unsafe), and one cell never observed; the third lies under a 0.3 m structure.
@@ -481,7 +487,8 @@ mod tests {
     fn metrics_match_hand_computed_values() {
         let (map, truth) = tiny();
         let verdicts = Verdicts::new(&map, &truth, TraversabilityRule::Absolute).expect("verdicts");
-        let m = compute("tiny", 3, &map, &truth, &verdicts);
+        let estimate = Estimate::of_map(&map, &truth, TraversabilityRule::Absolute).expect("estimate");
+        let m = compute("tiny", 3, &estimate, &truth, &verdicts);
         assert_eq!((m.num_cells, m.num_observed_cells), (4, 3));
         assert!((m.coverage - 0.75).abs() < 1e-12);
         // Errors 0, 0, -0.09 (to f32 precision).
@@ -530,7 +537,8 @@ mod tests {
     fn expectations_pass_and_fail_with_the_measured_and_required_values() {
         let (map, truth) = tiny();
         let verdicts = Verdicts::new(&map, &truth, TraversabilityRule::Absolute).expect("verdicts");
-        let mut m = compute("tiny", 3, &map, &truth, &verdicts);
+        let estimate = Estimate::of_map(&map, &truth, TraversabilityRule::Absolute).expect("estimate");
+        let mut m = compute("tiny", 3, &estimate, &truth, &verdicts);
         let mut e = BTreeMap::new();
         e.insert(
             "coverage".to_string(),

@@ -1,9 +1,14 @@
 //! A map judged against the truth: the verdict raster, and everything read from it (the metrics, the planner
 //! check, the per-obstacle decisions, the expectations).
 //!
-//! The modules depend one way: [`verdict`] <- [`metrics`], [`plan_check`], [`obstacles`], [`wrong_cells`] <-
-//! [`Evaluation`] <- the figures and the report.
+//! The judge reads a map only through an [`estimate::Estimate`], what the map says about each cell of the
+//! truth's region: the testbed's own map and another mapper's arrays are judged by the same code
+//! ([`evaluate`], [`score`]).
+//!
+//! The modules depend one way: [`estimate`], [`verdict`] <- [`metrics`], [`plan_check`], [`obstacles`],
+//! [`wrong_cells`] <- [`Evaluation`] <- the figures and the report.
 
+pub mod estimate;
 pub mod metrics;
 pub mod obstacles;
 pub mod plan_check;
@@ -16,6 +21,7 @@ use sim::sensors::ObstacleReturns;
 use sim::truth::TruthRaster;
 
 use crate::error::Result;
+use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
 use metrics::{FailedExpectation, Metrics};
 
@@ -33,13 +39,15 @@ pub struct Evaluation {
     pub obstacles: Vec<obstacles::ObstacleDecision>,
     /// The verdict raster every one of the above was read from.
     pub verdicts: Verdicts,
+    /// What the map said about each cell, which the verdicts judged.
+    pub estimate: Estimate,
 }
 
 /// What the run's sensors and robot did, beside the map: the judge reads it with the truth.
 #[derive(Debug, Clone, Copy)]
 pub struct Sensed<'a> {
-    /// The readings each obstacle gave the sensors (whether it was seen at all).
-    pub returns: &'a ObstacleReturns,
+    /// The readings each obstacle gave the sensors (whether it was seen at all); `None` when unknown.
+    pub returns: Option<&'a ObstacleReturns>,
     /// What the sensors' rays could have told, cell by cell (`None`: a replayed log).
     pub observability: Option<&'a sim::observability::Observability>,
     /// A closed-loop run's figures (the `nav_*` metrics, which the expectations may name).
@@ -56,22 +64,38 @@ pub fn evaluate(
     truth: &TruthRaster,
     sensed: &Sensed<'_>,
 ) -> Result<Evaluation> {
-    let verdicts = Verdicts::new(map, truth, s.map.traversability)?.with_observability(sensed.observability);
-    let mut metrics = metrics::compute(&s.name, s.seed, map, truth, &verdicts);
-    let plan = plan_check::check(s, map.geometry(), &verdicts)?;
+    let estimate = Estimate::of_map(map, truth, s.map.traversability)?;
+    score(s, estimate, truth, sensed)
+}
+
+/// Judges what a map says, `estimate` (the testbed's map or another mapper's arrays), against `truth`, with
+/// what the run `sensed`.
+///
+/// # Errors
+/// A planner check that cannot run (a start or goal outside the region).
+pub fn score(
+    s: &scenario::Scenario,
+    estimate: Estimate,
+    truth: &TruthRaster,
+    sensed: &Sensed<'_>,
+) -> Result<Evaluation> {
+    let verdicts =
+        Verdicts::from_classes(truth, estimate.decisions.clone()).with_observability(sensed.observability);
+    let mut metrics = metrics::compute(&s.name, s.seed, &estimate, truth, &verdicts);
+    let plan = plan_check::check(s, &estimate.geometry, &verdicts)?;
     record_plan(&mut metrics, &plan);
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }
-    let returns = sensed.returns;
     let failed = metrics::check_expectations(&mut metrics, &s.expectations);
-    let obstacles = obstacles::decisions(s, map, truth, &verdicts, returns);
+    let obstacles = obstacles::decisions(s, &estimate, truth, &verdicts, sensed.returns);
     Ok(Evaluation {
         metrics,
         failed,
         plan,
         obstacles,
         verdicts,
+        estimate,
     })
 }
 

@@ -3,12 +3,13 @@
 //! mapped blocked, which boards the robot was allowed under).
 
 use nalgebra::{Isometry2, Point2, Vector2};
-use oeg::{Map, Traversability};
+use oeg::Traversability;
 use serde::Serialize;
 use sim::scenario::{Obstacle, Scenario};
 use sim::sensors::ObstacleReturns;
 use sim::truth::TruthRaster;
 
+use crate::judge::estimate::Estimate;
 use crate::judge::verdict::{Verdict, Verdicts};
 
 /// One row of `obstacles.csv`.
@@ -25,8 +26,9 @@ pub struct ObstacleDecision {
     pub height_m: f64,
     /// Readings the sensors got from the obstacle over the run (its own returns, spurious ones left out). 0: no
     /// beam ever reached it (between a lidar's beams, over or under every beam), so no map of these readings
-    /// can hold it, whatever its model.
-    pub sensor_returns: u64,
+    /// can hold it, whatever its model. Empty when the readings are not known (a map scored without the
+    /// scenario's sensors, `oeg score --no-observability`).
+    pub sensor_returns: Option<u64>,
     /// Cells whose centre lies in the footprint, plus the cell of the obstacle's centre.
     pub num_cells: u64,
     /// Of those, observed by the map.
@@ -152,10 +154,10 @@ fn deciding_height(o: &Obstacle) -> f64 {
 /// uncertain, `passable` otherwise, and `unseen` when none was observed.
 pub fn decisions(
     s: &Scenario,
-    map: &Map,
+    estimate: &Estimate,
     truth: &TruthRaster,
     verdicts: &Verdicts,
-    returns: &ObstacleReturns,
+    returns: Option<&ObstacleReturns>,
 ) -> Vec<ObstacleDecision> {
     s.obstacles
         .iter()
@@ -167,7 +169,7 @@ pub fn decisions(
                 kind: o.kind().to_string(),
                 // Rounded to the micrometre: 0.036, not 0.036000000000000004.
                 height_m: (deciding_height(o) * 1e6).round() / 1e6,
-                sensor_returns: returns.of(index),
+                sensor_returns: returns.map(|r| r.of(index)),
                 num_cells: 0,
                 num_observed_cells: 0,
                 true_blocked_cells: 0,
@@ -183,7 +185,7 @@ pub fn decisions(
                 decision: "unseen",
                 decision_right: false,
             };
-            let tally = tally_footprint(o, map, truth, verdicts, &mut row);
+            let tally = tally_footprint(o, estimate, truth, verdicts, &mut row);
             conclude(&mut row, &tally);
             row
         })
@@ -208,12 +210,12 @@ struct Tally {
 /// of the obstacle's centre (a 2 cm pole covers no cell centre).
 fn tally_footprint(
     o: &Obstacle,
-    map: &Map,
+    estimate: &Estimate,
     truth: &TruthRaster,
     verdicts: &Verdicts,
     row: &mut ObstacleDecision,
 ) -> Tally {
-    let geometry = *map.geometry();
+    let geometry = estimate.geometry;
     let [cx, cy] = o.center_xy_m();
     let center_cell = geometry.cell_of(cx, cy);
     let mut t = Tally {
@@ -256,8 +258,8 @@ fn tally_footprint(
         row.blind_cells += u64::from(verdict == Verdict::Unsafe && verdicts.unobservable[k]);
         row.overcautious_cells += u64::from(verdict == Verdict::OverCautious);
         t.true_sum += f64::from(truth.cells[k].elevation_m);
-        if let Some(e) = map.cell(cell).elevation() {
-            t.mapped_sum += f64::from(e.mean_m);
+        if let Some((e, _)) = estimate.elevation(k) {
+            t.mapped_sum += e;
             t.num_mapped += 1;
         }
     }

@@ -12,6 +12,7 @@ use crate::error::Result;
 /// classes partition the cells, so counts add up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
+#[repr(u8)]
 pub enum TruthClass {
     /// No terrain under the cell.
     OffTerrain,
@@ -26,6 +27,26 @@ pub enum TruthClass {
 }
 
 impl TruthClass {
+    /// Every class, in the order of their codes (`as u8`).
+    pub const ALL: [TruthClass; 5] = [
+        Self::OffTerrain,
+        Self::Drivable,
+        Self::PassableUnder,
+        Self::Step,
+        Self::TooLow,
+    ];
+
+    /// The snake_case name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::OffTerrain => "off_terrain",
+            Self::Drivable => "drivable",
+            Self::PassableUnder => "passable_under",
+            Self::Step => "step",
+            Self::TooLow => "too_low",
+        }
+    }
+
     /// Whether the robot truly cannot enter the cell.
     pub fn is_blocked(self) -> bool {
         matches!(self, Self::Step | Self::TooLow)

@@ -2,10 +2,10 @@
 //! says, so a user can see why: a board top never seen, a curb edge averaged with the road, a person not yet
 //! cleared.
 
-use oeg::Map;
 use serde::Serialize;
 use sim::truth::TruthRaster;
 
+use crate::judge::estimate::Estimate;
 use crate::judge::verdict::{Verdict, Verdicts};
 
 /// One row of `wrong_cells.csv`. Empty fields are values that do not exist (no elevation estimate, no
@@ -42,8 +42,8 @@ pub struct WrongCell {
 /// The observed cells of the truth's region whose decision is wrong (verdict `unsafe` or `over_cautious`) or
 /// that the map could not judge (`uncertain`), row-major from the region's min corner, read from the run's
 /// verdict raster.
-pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
-    let geometry = *map.geometry();
+pub fn wrong_cells(estimate: &Estimate, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
+    let geometry = estimate.geometry;
     let mut rows = Vec::new();
     for (k, cell) in truth.region.cells().enumerate() {
         let error = match verdicts.verdict[k] {
@@ -53,17 +53,17 @@ pub fn wrong_cells(map: &Map, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<W
             _ => continue,
         };
         let t = &truth.cells[k];
-        let c = map.cell(cell);
-        let e = c.elevation();
+        // The map's layers are f32: the file keeps their precision.
+        let e = estimate.elevation(k).map(|(e, var)| (e as f32, var as f32));
         let (x_m, y_m) = geometry.cell_center(cell);
         rows.push(WrongCell {
             x_m: crate::output::round_m(x_m),
             y_m: crate::output::round_m(y_m),
             error,
             mapped: verdicts.mapped[k].name(),
-            occupancy_probability: c.occupancy_probability().unwrap_or(f32::NAN),
-            elevation_m: e.map(|e| e.mean_m),
-            elevation_std_m: e.map(|e| e.var_m2.sqrt()),
+            occupancy_probability: estimate.occupancy[k] as f32,
+            elevation_m: e.map(|(e, _)| e),
+            elevation_std_m: e.and_then(|(_, var)| (!var.is_nan()).then(|| var.sqrt())),
             true_elevation_m: t.elevation_m,
             true_ground_m: t.ground_m,
             true_step_m: t.step_m,

@@ -211,7 +211,7 @@ mod tests {
             name: "curb".into(),
             kind: "box".into(),
             height_m: 0.03,
-            sensor_returns: 12,
+            sensor_returns: Some(12),
             num_cells: 1,
             num_observed_cells: 1,
             true_blocked_cells: 0,

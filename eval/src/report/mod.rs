@@ -59,7 +59,7 @@ pub fn write_report(
     let obstacles_path = out_dir.join("obstacles.csv");
     write_table(&obstacles_path, &evaluation.obstacles)?;
     files.push(obstacles_path);
-    let wrong = crate::judge::wrong_cells::wrong_cells(map, truth, &evaluation.verdicts);
+    let wrong = crate::judge::wrong_cells::wrong_cells(&evaluation.estimate, truth, &evaluation.verdicts);
     let wrong_path = out_dir.join("wrong_cells.csv");
     write_table(&wrong_path, &wrong)?;
     files.push(wrong_path);

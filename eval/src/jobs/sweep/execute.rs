@@ -339,7 +339,7 @@ fn simulate_group(
                 map,
                 truth,
                 &crate::judge::Sensed {
-                    returns: simulation.obstacle_returns(),
+                    returns: Some(simulation.obstacle_returns()),
                     observability: Some(&simulated.observability),
                     navigation: figures.as_ref(),
                 },

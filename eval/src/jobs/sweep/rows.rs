@@ -75,7 +75,7 @@ pub fn metric_columns(row: &mut JsonMap<String, Json>, o: &Outcome) {
         .evaluation
         .obstacles
         .iter()
-        .filter(|d| d.sensor_returns == 0)
+        .filter(|d| d.sensor_returns == Some(0))
         .count();
     row.insert("obstacles_never_returned".into(), Json::from(never_returned));
     // Uncertain obstacles are not errors: the map said it could not tell.

@@ -1,0 +1,251 @@
+//! `oeg score`: a map made by another tool (elevation_mapping, grid_map, a network) judged against a
+//! scenario's truth as `oeg run` judges its own: its arrays as `.npy` files, or its decisions as a nav2 map,
+//! resampled onto the truth's grid ([`crate::judge::estimate`]), then the verdict counts, the per-obstacle
+//! table and the planner check ([`crate::scoring`], `docs/scoring.md`).
+
+use std::path::{Path, PathBuf};
+
+use oeg::NpyArray;
+
+use crate::error::{EvalError, Result};
+use crate::judge::Evaluation;
+use crate::judge::estimate::{ForeignMap, MAX_FOREIGN_CELLS, decisions_from_codes};
+use crate::output::{Staged, write_json, write_table};
+use crate::progress::Progress;
+use crate::scoring::ScoringTruth;
+
+/// Where the map's grid and decisions come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GridSource {
+    /// A `layers.json` sidecar (as `oeg map --planner-files` writes it): the origin, the resolution and the
+    /// files of the layers it names.
+    Layers(PathBuf),
+    /// A nav2 map's YAML file: the origin, the resolution and the decisions of its image.
+    Nav2(PathBuf),
+    /// The decisions as a `.npy` file, on a grid given by hand.
+    Grid {
+        /// The decision codes (`docs/planner-protocol.md`).
+        decisions: PathBuf,
+        /// World x and y of the lower-left corner of cell `[0, 0]`, metres.
+        origin_xy_m: [f64; 2],
+        /// Cell size, metres.
+        resolution_m: f64,
+    },
+}
+
+/// `oeg score`.
+#[derive(Debug, Clone)]
+pub struct ScoreJob {
+    /// The scenario whose truth judges the map.
+    pub scenario: PathBuf,
+    /// `--set` overrides of the scenario.
+    pub overrides: Vec<String>,
+    /// Replaces the scenario's seed.
+    pub seed: Option<u64>,
+    /// The grid and the decisions.
+    pub grid: GridSource,
+    /// Elevation `.npy` (metres), over or instead of the sidecar's.
+    pub elevation: Option<PathBuf>,
+    /// Variance `.npy` (m^2), over or instead of the sidecar's.
+    pub variance: Option<PathBuf>,
+    /// Occupancy probability `.npy`, over or instead of the sidecar's.
+    pub occupancy: Option<PathBuf>,
+    /// Simulate the scenario's sensors to know what they could see (the blind counts).
+    pub observability: bool,
+    /// Output folder.
+    pub out_dir: PathBuf,
+}
+
+/// The bytes a `.npy` of [`MAX_FOREIGN_CELLS`] 8-byte elements may take, with its header.
+const MAX_NPY_BYTES: u64 = MAX_FOREIGN_CELLS * 8 + (1 << 16);
+
+/// Reads a 2D `.npy` file.
+fn read_npy(path: &Path) -> Result<NpyArray> {
+    let bytes = oeg::read_bounded(path, MAX_NPY_BYTES)?;
+    Ok(NpyArray::from_bytes(path, &bytes)?)
+}
+
+/// A float layer of `rows` x `cols` from a `.npy` file.
+fn read_layer(path: &Path, rows: usize, cols: usize) -> Result<Vec<f64>> {
+    let a = read_npy(path)?;
+    if (a.rows, a.cols) != (rows, cols) {
+        return Err(EvalError::Input {
+            path: path.to_path_buf(),
+            message: format!(
+                "a ({}, {}) array, expected the decisions' shape ({rows}, {cols})",
+                a.rows, a.cols
+            ),
+        });
+    }
+    Ok(a.data.to_f64())
+}
+
+/// The decisions of a `.npy` of integer codes, with its shape.
+fn read_decisions(path: &Path) -> Result<(usize, usize, Vec<oeg::Traversability>)> {
+    let a = read_npy(path)?;
+    let fail = |message: String| EvalError::Input {
+        path: path.to_path_buf(),
+        message,
+    };
+    let codes = a.data.to_i64().ok_or_else(|| {
+        fail("the decisions are floats, expected integer codes (0 unknown, 1 free, 2 traversable, 3 blocked, 4 uncertain)".into())
+    })?;
+    let decisions = decisions_from_codes(&codes).map_err(fail)?;
+    Ok((a.rows, a.cols, decisions))
+}
+
+/// What a `layers.json` sidecar says: the grid, and the files of the layers it names (relative to it).
+struct Sidecar {
+    origin_xy_m: [f64; 2],
+    resolution_m: f64,
+    files: Vec<(String, PathBuf)>,
+}
+
+fn read_sidecar(path: &Path) -> Result<Sidecar> {
+    let fail = |message: String| EvalError::Input {
+        path: path.to_path_buf(),
+        message,
+    };
+    let json: serde_json::Value =
+        serde_json::from_str(&oeg::read_text(path)?).map_err(|e| fail(format!("line {}: {e}", e.line())))?;
+    let number = |v: &serde_json::Value, what: &str| {
+        v.as_f64()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| fail(format!("`{what}` is {v}, expected a number")))
+    };
+    let origin = json["origin_xy_m"]
+        .as_array()
+        .filter(|a| a.len() == 2)
+        .ok_or_else(|| fail("expected `origin_xy_m`: [x, y] in metres".into()))?;
+    let origin_xy_m = [
+        number(&origin[0], "origin_xy_m[0]")?,
+        number(&origin[1], "origin_xy_m[1]")?,
+    ];
+    let resolution_m = number(&json["resolution_m"], "resolution_m")?;
+    let layers = json["layers"]
+        .as_object()
+        .ok_or_else(|| fail("expected `layers`: an object of {\"file\": ...} by layer name".into()))?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut files = Vec::new();
+    for (name, entry) in layers {
+        let file = entry["file"]
+            .as_str()
+            .ok_or_else(|| fail(format!("layer `{name}` has no \"file\"")))?;
+        files.push((name.clone(), dir.join(file)));
+    }
+    Ok(Sidecar {
+        origin_xy_m,
+        resolution_m,
+        files,
+    })
+}
+
+/// Reads the map the job names, as arrays, checked ([`ForeignMap::check`]).
+///
+/// # Errors
+/// A file that cannot be read or is malformed, arrays of different shapes, bad values.
+pub fn read_foreign(job: &ScoreJob) -> Result<ForeignMap> {
+    let mut layers: Vec<(String, PathBuf)> = Vec::new();
+    let (source, origin_xy_m, resolution_m, (rows, cols, decisions)) = match &job.grid {
+        GridSource::Layers(path) => {
+            let sidecar = read_sidecar(path)?;
+            let decisions = sidecar
+                .files
+                .iter()
+                .find(|(n, _)| n == "decisions")
+                .map(|(_, f)| f.clone())
+                .ok_or_else(|| EvalError::Input {
+                    path: path.clone(),
+                    message: "the sidecar names no `decisions` layer".into(),
+                })?;
+            layers = sidecar.files.clone();
+            (
+                path.clone(),
+                sidecar.origin_xy_m,
+                sidecar.resolution_m,
+                read_decisions(&decisions)?,
+            )
+        }
+        GridSource::Nav2(path) => {
+            let m = oeg::read_nav2_map(path, MAX_FOREIGN_CELLS)?;
+            (
+                path.clone(),
+                m.origin_xy_m,
+                m.resolution_m,
+                (m.rows, m.cols, m.decisions),
+            )
+        }
+        GridSource::Grid {
+            decisions,
+            origin_xy_m,
+            resolution_m,
+        } => (
+            decisions.clone(),
+            *origin_xy_m,
+            *resolution_m,
+            read_decisions(decisions)?,
+        ),
+    };
+    let file = |name: &str, flag: &Option<PathBuf>| {
+        flag.clone()
+            .or_else(|| layers.iter().find(|(n, _)| n == name).map(|(_, f)| f.clone()))
+    };
+    let layer = |name: &str, flag: &Option<PathBuf>| -> Result<Option<Vec<f64>>> {
+        file(name, flag).map(|f| read_layer(&f, rows, cols)).transpose()
+    };
+    let foreign = ForeignMap {
+        origin_xy_m,
+        resolution_m,
+        rows,
+        cols,
+        decisions,
+        elevation_m: layer("elevation_m", &job.elevation)?,
+        variance_m2: layer("variance_m2", &job.variance)?,
+        occupancy: layer("occupancy_probability", &job.occupancy)?,
+    };
+    foreign.check(&source)?;
+    Ok(foreign)
+}
+
+/// Scores the map and writes `score.json` (the keys of `metrics.json`), `obstacles.csv`, `plan.csv` and
+/// `wrong_cells.csv` into the output folder.
+///
+/// # Errors
+/// A bad scenario or override, a map file that cannot be read or is malformed, a failed write.
+pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<(Evaluation, Vec<PathBuf>)> {
+    let loaded = crate::pipeline::load(&crate::pipeline::RunOptions {
+        scenario: job.scenario.clone(),
+        overrides: job.overrides.clone(),
+        seed: job.seed,
+        ..Default::default()
+    })?;
+    // The inputs are read, and the output folder claimed, before the simulation.
+    let foreign = read_foreign(job)?;
+    let staged = Staged::begin(&job.out_dir)?;
+    let truth = ScoringTruth::of(&loaded, job.observability, progress)?;
+    let evaluation = truth.score(&foreign)?;
+    let dir = staged.dir();
+    let geometry = evaluation.estimate.geometry;
+    let mut files = Vec::new();
+    let plan = dir.join("plan.csv");
+    write_table(
+        &plan,
+        &crate::judge::plan_check::rows(&evaluation.plan, &geometry),
+    )?;
+    files.push(plan);
+    let obstacles = dir.join("obstacles.csv");
+    write_table(&obstacles, &evaluation.obstacles)?;
+    files.push(obstacles);
+    let wrong = dir.join("wrong_cells.csv");
+    write_table(
+        &wrong,
+        &crate::judge::wrong_cells::wrong_cells(&evaluation.estimate, &truth.raster, &evaluation.verdicts),
+    )?;
+    files.push(wrong);
+    let json = dir.join("score.json");
+    write_json(&json, &evaluation.metrics)?;
+    files.push(json);
+    let files = files.iter().map(|f| staged.final_path(f)).collect();
+    staged.commit()?;
+    Ok((evaluation, files))
+}
