@@ -3,8 +3,9 @@
 //!
 //! The targets read from memory through the same code as the files: the scan graph, the PCD cloud (ascii,
 //! binary and binary_compressed), the sensor log, the map file, the scenario TOML, the terrain PNG, the
-//! robot's URDF, the sweep file (read, checked and planned against the shipped base scenarios) and a sweep
-//! run's `row.json`.
+//! robot's URDF, the sweep file (read, checked and planned against the shipped base scenarios), a sweep
+//! run's `row.json`, and the maps `oeg score` reads from other tools: a `.npy` array and a nav2 map (its YAML,
+//! a NUL byte, then its PGM image).
 
 use std::path::{Path, PathBuf};
 
@@ -29,10 +30,14 @@ pub enum Target {
     Sweep,
     /// A sweep run's `row.json`.
     Row,
+    /// A `.npy` array, then its values as decisions or floats.
+    Npy,
+    /// A nav2 map: its YAML text, a NUL byte, its PGM image.
+    Nav2,
 }
 
 /// Every target, in the order of the corpus folders.
-pub const TARGETS: [Target; 9] = [
+pub const TARGETS: [Target; 11] = [
     Target::Graph,
     Target::Pcd,
     Target::Log,
@@ -42,11 +47,16 @@ pub const TARGETS: [Target; 9] = [
     Target::Urdf,
     Target::Sweep,
     Target::Row,
+    Target::Npy,
+    Target::Nav2,
 ];
 
 /// The most runs the sweep target plans: a larger plan loads every run's scenario, which takes longer than
 /// the fuzzer's time limit (it is bounded by `oeg_eval::jobs::sweep::spec::MAX_RUNS`, not a hang).
 pub const SWEEP_MAX_PLANNED_RUNS: usize = 64;
+
+/// The most cells the nav2 target reads: small, so the fuzzer finds reads that ignore it.
+pub const NAV2_MAX_CELLS: u64 = 1 << 20;
 
 /// The memory bound the map target loads under: small, so the fuzzer finds allocations that ignore it.
 pub const MAP_LIMIT_BYTES: u64 = 256 << 20;
@@ -64,6 +74,8 @@ impl Target {
             Self::Urdf => "urdf",
             Self::Sweep => "sweep",
             Self::Row => "row",
+            Self::Npy => "npy",
+            Self::Nav2 => "nav2",
         }
     }
 
@@ -121,5 +133,21 @@ pub fn run(target: Target, data: &[u8]) -> bool {
         }),
         Target::Row => serde_json::from_slice(data)
             .is_ok_and(|json| oeg_eval::jobs::sweep::rows::parse_record(&json, "0123456789abcdef").is_ok()),
+        Target::Npy => match oeg::NpyArray::from_bytes(path, data) {
+            Ok(a) => {
+                // As `oeg score` reads it: integer codes as decisions, anything as floats.
+                if let Some(codes) = a.data.to_i64() {
+                    let _ = oeg_eval::judge::estimate::decisions_from_codes(&codes);
+                }
+                a.data.to_f64().len() == a.rows * a.cols
+            }
+            Err(_) => false,
+        },
+        Target::Nav2 => {
+            let (yaml, image) = data.split_at(data.iter().position(|b| *b == 0).unwrap_or(data.len()));
+            let image = image.get(1..).unwrap_or_default();
+            std::str::from_utf8(yaml)
+                .is_ok_and(|yaml| oeg::parse_nav2_map(yaml, image, NAV2_MAX_CELLS).is_ok())
+        }
     }
 }

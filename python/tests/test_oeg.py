@@ -138,6 +138,70 @@ def test_run_scenario_gives_the_metrics_of_oeg_run_bit_for_bit(tmp_path: Path) -
     assert again.out_dir is None and again.metrics == result.metrics
 
 
+def test_scoring_the_testbeds_own_map_gives_the_counts_of_oeg_run(tmp_path: Path) -> None:
+    scene = ROOT / "tests" / "scenes" / "decisions.toml"
+    short = {"duration_s": 3.0}
+    run = oeg.run_scenario(scene, short, out=tmp_path / "run")
+    truth = oeg.truth(scene, short)
+    assert truth.has_observability and truth.scenario == "decisions"
+    # The map's layers over the truth's region, as another mapper would export them.
+    m = oeg.load(tmp_path / "run" / "map.oeg")
+    x0, x1, y0, y1 = truth.extent
+    h = truth.resolution_m / 2
+    region = (x0 + h, y0 + h, x1 - h, y1 - h)
+    decisions, extent = m.traversability(robot=truth.robot, region=region)
+    assert extent == pytest.approx(truth.extent)
+    layer = {n: m.layer(n, region).values for n in ("elevation_m", "variance_m2", "occupancy_probability")}
+    s = oeg.score(
+        truth,
+        decisions,
+        origin=truth.origin,
+        resolution_m=truth.resolution_m,
+        elevation=layer["elevation_m"],
+        variance=layer["variance_m2"],
+        occupancy=layer["occupancy_probability"],
+    )
+    for key, value in run.metrics.items():
+        expected = 0 if key in ("map_bytes", "num_scans", "num_rays") else value
+        assert s.metrics[key] == expected, key
+    assert s.metrics["num_scored_cells"] > 1000
+    # The per-obstacle table is the run's, row for row.
+    columns = ["name", "sensor_returns", "num_observed_cells", "unsafe_cells", "blind_cells", "decision"]
+    assert s.obstacles[columns].values.tolist() == run.obstacles[columns].values.tolist()
+    assert set(s.plan["path"]) == {"map", "truth"}
+    # The truth's layers agree with the verdicts: every scored truly blocked cell is right, unsafe or uncertain.
+    t = truth.layers()
+    assert t["truly_blocked"].shape == decisions.shape == t["observed_step"].shape
+    scored = (decisions != 0) & ~np.isnan(t["elevation_m"])
+    blocked = int((t["truly_blocked"] & scored).sum())
+    mx = s.metrics
+    assert blocked == mx["right_blocked_cells"] + mx["unsafe_cells"] + mx["uncertain_truly_blocked_cells"]
+    assert set(np.unique(t["truth_class"])) <= set(oeg.TRUTH_CLASSES)
+
+
+def test_a_coarse_map_is_resampled_and_bad_arrays_raise_named_exceptions() -> None:
+    truth = oeg.truth(ROOT / "tests" / "scenes" / "decisions.toml", observability=False)
+    assert not truth.has_observability and "observed_step" not in truth.layers()
+    # One blocked 1 m cell over the start: the 20 x 20 truth cells under it are scored, nothing else.
+    one = oeg.score(truth, np.array([[3]], dtype=np.uint8), origin=(-0.5, -0.5), resolution_m=1.0)
+    assert one.metrics["num_scored_cells"] == 400
+    assert one.metrics["right_blocked_cells"] + one.metrics["overcautious_cells"] == 400
+    assert one.obstacles["sensor_returns"].isna().all()
+    codes = np.ones((2, 2), dtype=np.int64)
+    with pytest.raises(TypeError, match="integer codes"):
+        oeg.score(truth, codes.astype(np.float32), origin=(0, 0), resolution_m=0.05)
+    with pytest.raises(ValueError, match="decision code 7 at element 1"):
+        oeg.score(truth, np.array([[1, 7]]), origin=(0, 0), resolution_m=0.05)
+    with pytest.raises(ValueError, match=r"elevation: shape \(1, 4\)"):
+        oeg.score(truth, codes, origin=(0, 0), resolution_m=0.05, elevation=np.zeros((1, 4)))
+    with pytest.raises(ValueError, match="variances: -1"):
+        oeg.score(truth, codes, origin=(0, 0), resolution_m=0.05, elevation=np.zeros((2, 2)), variance=-np.ones((2, 2)))
+    with pytest.raises(ValueError, match="resolution 0"):
+        oeg.score(truth, codes, origin=(0, 0), resolution_m=0.0)
+    with pytest.raises(FileNotFoundError):
+        oeg.truth(ROOT / "no_such.toml")
+
+
 def test_a_python_planner_drives_a_closed_loop_and_its_exceptions_are_events(tmp_path: Path) -> None:
     scene = ROOT / "tests" / "scenes" / "nav_blind.toml"
     calls: List[Tuple[float, float]] = []

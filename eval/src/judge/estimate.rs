@@ -19,9 +19,9 @@ use sim::truth::TruthRaster;
 
 use crate::error::{EvalError, Result};
 
-/// The most cells a user's arrays may hold (a 20,000 x 20,000 grid): larger ones are refused before they are
-/// resampled.
-pub const MAX_FOREIGN_CELLS: u64 = 400_000_000;
+/// The most cells a user's arrays may hold (a 10,000 x 10,000 grid, 1 km a side at 0.1 m): larger ones are
+/// refused before they are resampled.
+pub const MAX_FOREIGN_CELLS: u64 = 100_000_000;
 
 /// What a map says about each cell of a region: row-major over the truth's region, as the truth raster.
 #[derive(Debug, Clone, PartialEq)]
