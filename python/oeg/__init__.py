@@ -291,22 +291,14 @@ def plan(
     return _oeg.plan(map._map, start, goal, dict(settings) if settings is not None else None)
 
 
-def _overrides(overrides: Union[Mapping[str, SettingValue], Sequence[str], None]) -> List[str]:
+def _overrides(
+    overrides: Union[Mapping[str, SettingValue], Sequence[str], None],
+) -> Union[Dict[str, SettingValue], List[str]]:
+    """A dict for the native side to spell as TOML, or the `KEY=VALUE` strings as they are."""
     if overrides is None:
         return []
     if isinstance(overrides, Mapping):
-        out = []
-        for key, value in overrides.items():
-            if isinstance(value, bool):
-                literal = "true" if value else "false"
-            elif isinstance(value, (int, float)):
-                literal = repr(value)
-            elif isinstance(value, str):
-                literal = json.dumps(value)
-            else:
-                raise TypeError(f"{key}: expected a bool, int, float or str, got {type(value).__name__}")
-            out.append(f"{key}={literal}")
-        return out
+        return dict(overrides)
     return [str(o) for o in overrides]
 
 

@@ -108,7 +108,7 @@ def plan(
 
 def run_scenario(
     path: str,
-    overrides: List[str],
+    overrides: Any,
     out: Optional[str] = None,
     seed: Optional[int] = None,
     compare: Optional[str] = None,

@@ -60,12 +60,13 @@ fn toml_literal(key: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
     }
 }
 
-/// `--set` overrides from a dict of `section.key` prefixed by `prefix` (`map.model`, `robot`).
-fn overrides_of(prefix: &str, table: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String>> {
+/// `--set` overrides from a dict of dotted keys, each under `prefix` when given (`robot`).
+fn overrides_of(prefix: Option<&str>, table: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String>> {
     let mut out = Vec::new();
     if let Some(table) = table {
         for (k, v) in table.iter() {
-            let key = format!("{prefix}.{}", k.extract::<String>()?);
+            let k = k.extract::<String>()?;
+            let key = prefix.map_or_else(|| k.clone(), |p| format!("{p}.{k}"));
             out.push(format!("{key}={}", toml_literal(&key, &v)?));
         }
     }
@@ -340,7 +341,7 @@ impl PyMap {
         robot: Option<&Bound<'_, PyDict>>,
         region: Option<(f64, f64, f64, f64)>,
     ) -> PyResult<Grid<'py, u8>> {
-        let s = settings(self.settings.map.resolution_m, &overrides_of("robot", robot)?)?;
+        let s = settings(self.settings.map.resolution_m, &overrides_of(Some("robot"), robot)?)?;
         let region = self.region(region)?;
         let rule = self.settings.map.traversability;
         let classes = self
@@ -501,13 +502,7 @@ fn plan<'py>(
     goal: (f64, f64),
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-    let mut overrides = Vec::new();
-    if let Some(table) = settings {
-        for (k, v) in table.iter() {
-            let key = k.extract::<String>()?;
-            overrides.push(format!("{key}={}", toml_literal(&key, &v)?));
-        }
-    }
+    let overrides = overrides_of(None, settings)?;
     let s =
         oeg_eval::settings::plan_settings(&overrides).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let name = Path::new("<map>");
@@ -617,13 +612,20 @@ impl oeg_eval::navigation::PlannerCallback for PyPlanner {
 fn run_scenario(
     py: Python<'_>,
     path: PathBuf,
-    overrides: Vec<String>,
+    overrides: &Bound<'_, PyAny>,
     out: Option<PathBuf>,
     seed: Option<u64>,
     compare: Option<String>,
     planner: Option<Py<PyAny>>,
 ) -> PyResult<(String, String, Vec<String>, String)> {
     existing(&path)?;
+    // A dict of dotted keys (values as Python scalars) or a list of `KEY=VALUE` strings, as `--set` takes them.
+    let overrides = match overrides.cast::<PyDict>() {
+        Ok(table) => overrides_of(None, Some(table))?,
+        Err(_) => overrides.extract::<Vec<String>>().map_err(|_| {
+            PyTypeError::new_err("overrides: expected a dict of dotted keys or a list of KEY=VALUE strings")
+        })?,
+    };
     let compare = compare
         .map(|c| {
             c.parse::<oeg::MapPreset>()

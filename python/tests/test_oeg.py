@@ -327,6 +327,9 @@ def test_bad_arguments_and_files_raise_named_exceptions(tmp_path: Path) -> None:
     corrupt.write_bytes(b"OEGMAP\x00\x01" + bytes(40))
     with pytest.raises(oeg.OegError, match="corrupt.oeg"):
         oeg.load(corrupt)
+    scene = ROOT / "tests" / "scenes" / "decisions.toml"
+    with pytest.raises(TypeError, match="duration_s"):
+        oeg.run_scenario(scene, {"duration_s": [3.0]})  # type: ignore[dict-item]
     bad = tmp_path / "bad.toml"
     bad.write_text("name = 'x'\nno_such_key = 1\n")
     with pytest.raises(oeg.OegError, match="bad.toml"):

@@ -18,11 +18,6 @@ fn hex(c: Rgb) -> String {
     format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
 }
 
-/// `text` with `&`, `<`, `>` and `"` escaped for an XML attribute.
-fn escape(text: &str) -> String {
-    crate::output::html::escape(text)
-}
-
 /// The canvas as an SVG document. Deterministic: the same drawing gives the same bytes.
 pub fn to_svg(canvas: &Canvas) -> String {
     let (w, h) = (canvas.width(), canvas.height());
@@ -101,7 +96,8 @@ fn write_shape(out: &mut String, shape: &Shape, (w, h): (i64, i64), glyphs: &BTr
                 out,
                 r#"<g fill="{}" transform="translate({x} {y}){turn}" aria-label="{}">"#,
                 hex(*color),
-                escape(text)
+                // The HTML pages' escaping serves XML attributes too (`&`, `<`, `>`, both quotes).
+                crate::output::html::escape(text)
             );
             let (placed, k) = font::placed_glyphs(text, *scale);
             for g in placed {
