@@ -76,7 +76,7 @@ class Truth:
     def layers(self) -> Dict[str, npt.NDArray[Any]]:
         """The truth's layers as ``(num_y, num_x)`` arrays."""
 
-def truth(path: str, overrides: List[str], seed: Optional[int] = None, observability: bool = True) -> Truth:
+def truth(path: str, overrides: Any, seed: Optional[int] = None, observability: bool = True) -> Truth:
     """The truth of a scenario."""
 
 def score(

@@ -155,6 +155,17 @@ fn bool_column(name: &str, array: Option<&Bound<'_, PyAny>>, n: usize) -> PyResu
     Ok(values)
 }
 
+/// A scenario's overrides: a dict of dotted keys (values as Python scalars) or a list of `KEY=VALUE`
+/// strings, as `--set` takes them.
+fn scenario_overrides(overrides: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    match overrides.cast::<PyDict>() {
+        Ok(table) => overrides_of(None, Some(table)),
+        Err(_) => overrides.extract::<Vec<String>>().map_err(|_| {
+            PyTypeError::new_err("overrides: expected a dict of dotted keys or a list of KEY=VALUE strings")
+        }),
+    }
+}
+
 /// A 3-vector of finite floats.
 fn xyz(name: &str, value: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
     let v: Vec<f64> = value
@@ -341,7 +352,10 @@ impl PyMap {
         robot: Option<&Bound<'_, PyDict>>,
         region: Option<(f64, f64, f64, f64)>,
     ) -> PyResult<Grid<'py, u8>> {
-        let s = settings(self.settings.map.resolution_m, &overrides_of(Some("robot"), robot)?)?;
+        let s = settings(
+            self.settings.map.resolution_m,
+            &overrides_of(Some("robot"), robot)?,
+        )?;
         let region = self.region(region)?;
         let rule = self.settings.map.traversability;
         let classes = self
@@ -619,13 +633,7 @@ fn run_scenario(
     planner: Option<Py<PyAny>>,
 ) -> PyResult<(String, String, Vec<String>, String)> {
     existing(&path)?;
-    // A dict of dotted keys (values as Python scalars) or a list of `KEY=VALUE` strings, as `--set` takes them.
-    let overrides = match overrides.cast::<PyDict>() {
-        Ok(table) => overrides_of(None, Some(table))?,
-        Err(_) => overrides.extract::<Vec<String>>().map_err(|_| {
-            PyTypeError::new_err("overrides: expected a dict of dotted keys or a list of KEY=VALUE strings")
-        })?,
-    };
+    let overrides = scenario_overrides(overrides)?;
     let compare = compare
         .map(|c| {
             c.parse::<oeg::MapPreset>()
@@ -735,11 +743,12 @@ impl PyTruth {
 fn truth(
     py: Python<'_>,
     path: PathBuf,
-    overrides: Vec<String>,
+    overrides: &Bound<'_, PyAny>,
     seed: Option<u64>,
     observability: bool,
 ) -> PyResult<PyTruth> {
     existing(&path)?;
+    let overrides = scenario_overrides(overrides)?;
     let options = oeg_eval::pipeline::RunOptions {
         scenario: path,
         seed,
