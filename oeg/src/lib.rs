@@ -76,7 +76,7 @@ pub use io::pcd::{
     InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, parse_pcd, parse_pcd_within, read_pcd,
     read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd,
 };
-pub use io::planner_files::planner_files;
+pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
 pub use io::{
     AtomicFile, Fnv1a64, MAX_TEXT_INPUT_BYTES, fnv1a64, output_target, read_bounded, read_text, stale_owners,
     unique_suffix, unit_quaternion, write_atomically,

@@ -590,11 +590,7 @@ impl oeg_eval::navigation::PlannerCallback for PyPlanner {
                 let layers = PyDict::new(py);
                 let codes = r.decisions.iter().map(|t| *t as u8).collect();
                 layers.set_item("decisions", grid(py, &r.region, codes)?)?;
-                for kind in [
-                    oeg::LayerKind::ElevationM,
-                    oeg::LayerKind::VarianceM2,
-                    oeg::LayerKind::OccupancyProbability,
-                ] {
+                for (kind, ..) in oeg::PLANNER_FLOAT_LAYERS {
                     let layer = r.map.layer(kind, r.region).map_err(oeg_error)?;
                     layers.set_item(kind.name(), grid(py, &r.region, layer.values)?)?;
                 }

@@ -38,11 +38,6 @@ pub struct ImageFormats {
     pub svg: bool,
 }
 
-impl ImageFormats {
-    /// PNG and SVG.
-    pub const WITH_SVG: Self = Self { svg: true };
-}
-
 /// Writes `canvas` to `png_path` and, when `formats` asks for it, as SVG beside it; returns the files
 /// written.
 ///

@@ -108,7 +108,7 @@ fn run_page(run: &RunPage) -> std::result::Result<String, String> {
         );
         page.raw(&rows_to_html(&m.evaluation.obstacles, &[]).map_err(|e| e.to_string())?);
     }
-    plan_check(&mut page, run);
+    plan_check(&mut page, run)?;
     settings(&mut page, run)?;
     page.heading("files", "Files");
     let links: Vec<(String, String)> = run
@@ -258,14 +258,7 @@ fn metrics(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
         "<p>Definitions: <a href=\"{}\">docs/metrics.md</a>.</p>",
         escape(METRICS_DOC)
     ));
-    let values: Vec<serde_json::Map<String, Value>> = run
-        .models
-        .iter()
-        .map(|m| match serde_json::to_value(&m.evaluation.metrics) {
-            Ok(Value::Object(o)) => Ok(o),
-            _ => Err("the metrics are not an object".to_string()),
-        })
-        .collect::<std::result::Result<_, _>>()?;
+    let values = metric_objects(run)?;
     let mut header = vec!["metric".to_string(), "unit".to_string()];
     header.extend(run.models.iter().map(|m| m.name().to_string()));
     let rows: Vec<Vec<String>> = values[0]
@@ -280,6 +273,17 @@ fn metrics(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// Every model's metrics as JSON objects, in the models' order.
+fn metric_objects(run: &RunPage) -> std::result::Result<Vec<serde_json::Map<String, Value>>, String> {
+    run.models
+        .iter()
+        .map(|m| match serde_json::to_value(&m.evaluation.metrics) {
+            Ok(Value::Object(o)) => Ok(o),
+            _ => Err("the metrics are not an object".to_string()),
+        })
+        .collect()
+}
+
 /// A JSON value as a table cell.
 fn value_text(v: Option<&Value>) -> String {
     match v {
@@ -291,7 +295,7 @@ fn value_text(v: Option<&Value>) -> String {
 }
 
 /// The planner check of every model.
-fn plan_check(page: &mut Page, run: &RunPage) {
+fn plan_check(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
     page.heading("plan", "Plan check");
     page.paragraph(
         "A* from the start to the goal on the map's decisions, with the robot's inflation, against the same \
@@ -304,30 +308,20 @@ fn plan_check(page: &mut Page, run: &RunPage) {
         "plan_unsafe_cells",
         "plan_blind_cells",
     ];
-    let values: Vec<Option<serde_json::Map<String, Value>>> = run
-        .models
-        .iter()
-        .map(|m| match serde_json::to_value(&m.evaluation.metrics) {
-            Ok(Value::Object(o)) => Some(o),
-            _ => None,
-        })
-        .collect();
+    let values = metric_objects(run)?;
     let mut header = vec!["".to_string()];
     header.extend(run.models.iter().map(|m| m.name().to_string()));
     let rows: Vec<Vec<String>> = keys
         .iter()
-        .filter(|k| values.iter().flatten().any(|v| v.contains_key(**k)))
+        .filter(|k| values.iter().any(|v| v.contains_key(**k)))
         .map(|k| {
             let mut row = vec![(*k).to_string()];
-            row.extend(
-                values
-                    .iter()
-                    .map(|v| value_text(v.as_ref().and_then(|v| v.get(*k)))),
-            );
+            row.extend(values.iter().map(|v| value_text(v.get(*k))));
             row
         })
         .collect();
     page.table(&header, &rows);
+    Ok(())
 }
 
 /// The settings the run used: the scenario file, its seed, every model's preset and options, every `--set`.

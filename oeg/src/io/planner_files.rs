@@ -11,8 +11,9 @@ use crate::map::{LayerKind, Map};
 use crate::planner::UncertainCells;
 use crate::traversability::{RobotProfile, Traversability, TraversabilityRule};
 
-/// The float layers written as `.npy`, with their units and the meaning of NaN.
-const FLOAT_LAYERS: [(LayerKind, &str, &str); 3] = [
+/// The float layers a planner gets (as `.npy` files, or as arrays in the Python package's planner callback),
+/// with their units and the meaning of NaN.
+pub const PLANNER_FLOAT_LAYERS: [(LayerKind, &str, &str); 3] = [
     (LayerKind::ElevationM, "m", "no elevation estimate"),
     (LayerKind::VarianceM2, "m^2", "no elevation estimate"),
     (LayerKind::OccupancyProbability, "1", "never observed"),
@@ -63,7 +64,7 @@ pub fn planner_files(
         .collect::<Vec<_>>()
         .join(", ")
     )];
-    for (kind, unit, nan) in FLOAT_LAYERS {
+    for (kind, unit, nan) in PLANNER_FLOAT_LAYERS {
         let layer = map.layer(kind, region)?;
         let file = format!("{}.npy", kind.name());
         files.push((
