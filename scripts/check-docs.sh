@@ -33,7 +33,9 @@ if [ -z "$committed" ]; then
     echo "docs: README.md has no status table between $begin and $end" >&2
     exit 1
 fi
-cargo build --release --quiet
+# The whole workspace, as `cargo test --workspace --release` builds it: the same features, so CI compiles the
+# dependencies once.
+cargo build --release --workspace --quiet
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 ./target/release/oeg run scenarios/default.toml --compare robust --out "$out/default" >/dev/null
