@@ -102,7 +102,7 @@ fn the_testbeds_own_map_scores_to_the_counts_of_oeg_run() {
     // The same decisions as a nav2 map: uncertain cells were written occupied, drivable ones free, and nothing
     // was simulated, so there are no blind counts.
     let nav2 = dir.join("nav2");
-    ok(&oeg(&[
+    let said = ok(&oeg(&[
         "score",
         s(&scene()),
         "--nav2",
@@ -110,7 +110,13 @@ fn the_testbeds_own_map_scores_to_the_counts_of_oeg_run() {
         "--no-observability",
         "--out",
         s(&nav2),
+        SHORT[0],
+        SHORT[1],
     ]));
+    assert!(
+        said.contains("blind cells not counted: --no-observability"),
+        "{said}"
+    );
     let n = json(&nav2.join("score.json"));
     let r = |k: &str| count(&reported, k);
     let uncertain_drivable = r("uncertain_cells") - r("uncertain_truly_blocked_cells");

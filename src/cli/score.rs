@@ -85,8 +85,8 @@ pub fn run(args: &ScoreArgs) -> anyhow::Result<()> {
         observability: !args.no_observability,
         out_dir: args.out.clone(),
     };
-    let (evaluation, files) = run_job(&job, &Progress::new(0, "scans"))?;
-    let m = &evaluation.metrics;
+    let report = run_job(&job, &Progress::new(0, "scans"))?;
+    let m = &report.evaluation.metrics;
     say!(
         "{}: {} of {} cells observed; {} scored: {} right drivable, {} right blocked, {} unsafe ({} blind), \
          {} over-cautious, {} uncertain",
@@ -109,7 +109,17 @@ pub fn run(args: &ScoreArgs) -> anyhow::Result<()> {
         m.elevation_rmse_m,
         m.num_elevation_cells
     );
-    for f in &files {
+    if !report.observability {
+        say!(
+            "blind cells not counted: {}",
+            if args.no_observability {
+                "--no-observability"
+            } else {
+                "a closed-loop scenario's rays depend on the map that steered it"
+            }
+        );
+    }
+    for f in &report.files {
         say!("wrote {}", f.display());
     }
     Ok(())

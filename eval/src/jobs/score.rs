@@ -207,12 +207,23 @@ pub fn read_foreign(job: &ScoreJob) -> Result<ForeignMap> {
     Ok(foreign)
 }
 
+/// What `oeg score` did.
+#[derive(Debug)]
+pub struct ScoreReport {
+    /// The judgement, as `oeg run`'s.
+    pub evaluation: Evaluation,
+    /// The files written.
+    pub files: Vec<PathBuf>,
+    /// Whether the blind counts are known (the scenario's sensors were simulated).
+    pub observability: bool,
+}
+
 /// Scores the map and writes `score.json` (the keys of `metrics.json`), `obstacles.csv`, `plan.csv` and
 /// `wrong_cells.csv` into the output folder.
 ///
 /// # Errors
 /// A bad scenario or override, a map file that cannot be read or is malformed, a failed write.
-pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<(Evaluation, Vec<PathBuf>)> {
+pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<ScoreReport> {
     let loaded = crate::pipeline::load(&crate::pipeline::RunOptions {
         scenario: job.scenario.clone(),
         overrides: job.overrides.clone(),
@@ -247,5 +258,9 @@ pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<(Evaluation, Vec<P
     files.push(json);
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
-    Ok((evaluation, files))
+    Ok(ScoreReport {
+        evaluation,
+        files,
+        observability: truth.observability.is_some(),
+    })
 }
