@@ -10,7 +10,7 @@ use oeg::NpyArray;
 use crate::error::{EvalError, Result};
 use crate::judge::Evaluation;
 use crate::judge::estimate::{ForeignMap, MAX_FOREIGN_CELLS, decisions_from_codes};
-use crate::output::{Staged, write_json, write_table};
+use crate::output::{Staged, write_json};
 use crate::progress::Progress;
 use crate::scoring::ScoringTruth;
 
@@ -236,23 +236,7 @@ pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<ScoreReport> {
     let truth = ScoringTruth::of(&loaded, job.observability, progress)?;
     let evaluation = truth.score(&foreign)?;
     let dir = staged.dir();
-    let geometry = evaluation.estimate.geometry;
-    let mut files = Vec::new();
-    let plan = dir.join("plan.csv");
-    write_table(
-        &plan,
-        &crate::judge::plan_check::rows(&evaluation.plan, &geometry),
-    )?;
-    files.push(plan);
-    let obstacles = dir.join("obstacles.csv");
-    write_table(&obstacles, &evaluation.obstacles)?;
-    files.push(obstacles);
-    let wrong = dir.join("wrong_cells.csv");
-    write_table(
-        &wrong,
-        &crate::judge::wrong_cells::wrong_cells(&evaluation.estimate, &truth.raster, &evaluation.verdicts),
-    )?;
-    files.push(wrong);
+    let mut files = crate::report::write_tables(dir, &truth.raster, &evaluation)?;
     let json = dir.join("score.json");
     write_json(&json, &evaluation.metrics)?;
     files.push(json);

@@ -34,7 +34,6 @@ pub fn write_report(
     formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let profile = truth.profile;
-    let geometry = *map.geometry();
     let mut files = Vec::new();
     let map_path = out_dir.join("map.oeg");
     write_bytes(&map_path, &oeg::map_to_bytes(map))?;
@@ -50,23 +49,33 @@ pub fn write_report(
     files.extend(comparison::write(
         out_dir, s, map, truth, evaluation, overlay, formats,
     )?);
-    let plan_path = out_dir.join("plan.csv");
-    write_table(
-        &plan_path,
-        &crate::judge::plan_check::rows(&evaluation.plan, &geometry),
-    )?;
-    files.push(plan_path);
-    let obstacles_path = out_dir.join("obstacles.csv");
-    write_table(&obstacles_path, &evaluation.obstacles)?;
-    files.push(obstacles_path);
-    let wrong = crate::judge::wrong_cells::wrong_cells(&evaluation.estimate, truth, &evaluation.verdicts);
-    let wrong_path = out_dir.join("wrong_cells.csv");
-    write_table(&wrong_path, &wrong)?;
-    files.push(wrong_path);
+    files.extend(write_tables(out_dir, truth, evaluation)?);
     let metrics_path = out_dir.join("metrics.json");
     write_json(&metrics_path, &evaluation.metrics)?;
     files.push(metrics_path);
     Ok(files)
+}
+
+/// The judgement's tables, for any map: `plan.csv`, `obstacles.csv` and `wrong_cells.csv` (`oeg run`'s
+/// report and `oeg score`).
+///
+/// # Errors
+/// A failed write.
+pub fn write_tables(out_dir: &Path, truth: &TruthRaster, evaluation: &Evaluation) -> Result<Vec<PathBuf>> {
+    let geometry = evaluation.estimate.geometry;
+    let plan = out_dir.join("plan.csv");
+    write_table(
+        &plan,
+        &crate::judge::plan_check::rows(&evaluation.plan, &geometry),
+    )?;
+    let obstacles = out_dir.join("obstacles.csv");
+    write_table(&obstacles, &evaluation.obstacles)?;
+    let wrong = out_dir.join("wrong_cells.csv");
+    write_table(
+        &wrong,
+        &crate::judge::wrong_cells::wrong_cells(&evaluation.estimate, truth, &evaluation.verdicts),
+    )?;
+    Ok(vec![plan, obstacles, wrong])
 }
 
 impl crate::output::CsvRow for ComparisonRow {
