@@ -339,16 +339,20 @@ mod tests {
     use super::*;
     use crate::geometry::{CellIndex, CellRegion};
 
+    /// 3 x 2 cells of 0.5 m from cell (-2, 4). Row y = 4 (bottom): free, blocked, unknown; row y = 5 (top):
+    /// traversable, uncertain, free.
+    fn decisions() -> Raster<Traversability> {
+        use Traversability::*;
+        Raster {
+            region: CellRegion::from_corners(CellIndex::new(-2, 4), CellIndex::new(0, 5)).expect("region"),
+            resolution_m: 0.5,
+            values: vec![Free, Blocked, Unknown, Traversable, Uncertain, Free],
+        }
+    }
+
     #[test]
     fn the_image_runs_from_the_max_y_row_and_the_origin_is_the_lower_left_corner() {
-        let region = CellRegion::from_corners(CellIndex::new(-2, 4), CellIndex::new(0, 5)).expect("region");
-        use Traversability::*;
-        let decisions = Raster {
-            region,
-            resolution_m: 0.5,
-            // Row y = 4 (bottom): free, blocked, unknown; row y = 5 (top): traversable, uncertain, free.
-            values: vec![Free, Blocked, Unknown, Traversable, Uncertain, Free],
-        };
+        let decisions = decisions();
         let (pgm, yaml) = nav2_map(&decisions, UncertainCells::Blocked, "map.pgm");
         let header = "P5\n# CREATOR: oeg 0.5\n3 2\n255\n";
         assert_eq!(&pgm[..header.len()], header.as_bytes());
@@ -366,14 +370,8 @@ mod tests {
 
     #[test]
     fn a_written_map_reads_back_with_its_decisions_and_origin() {
-        let region = CellRegion::from_corners(CellIndex::new(-2, 4), CellIndex::new(0, 5)).expect("region");
         use Traversability::*;
-        let decisions = Raster {
-            region,
-            resolution_m: 0.5,
-            values: vec![Free, Blocked, Unknown, Traversable, Uncertain, Free],
-        };
-        let (pgm, yaml) = nav2_map(&decisions, UncertainCells::Blocked, "map.pgm");
+        let (pgm, yaml) = nav2_map(&decisions(), UncertainCells::Blocked, "map.pgm");
         let back = parse_nav2_map(&yaml, &pgm, 100).expect("reads");
         assert_eq!((back.rows, back.cols, back.resolution_m), (2, 3, 0.5));
         assert_eq!(back.origin_xy_m, [-1.0, 2.0]);
