@@ -256,7 +256,12 @@ pub fn simulate(
     let truth_start = Instant::now();
     // The static world's truth (people and the robot left out) is the same at any time: it is taken before
     // the loop, so the judge can watch the robot's footprint against it at every step.
-    let truth = truth_of(s, mapping.simulation.world(), mapping.maps[0].geometry())?;
+    let truth = truth_of(
+        s,
+        mapping.simulation.world(),
+        mapping.maps[0].geometry(),
+        progress,
+    )?;
     let truth_s = truth_start.elapsed().as_secs_f64();
     let inputs = NavigationInputs {
         scenario: s,
@@ -328,20 +333,42 @@ pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) 
 }
 
 /// The truth over the scenario's map region on `geometry`'s cells, people left out, from the world at the end
-/// of the run.
+/// of the run, with [`DEFAULT_SAMPLES_PER_SIDE`] samples per cell side.
 ///
 /// # Errors
-/// A region that does not fit the grid.
-pub fn truth_of(s: &scenario::Scenario, world: &sim::World, geometry: &GridGeometry) -> Result<TruthRaster> {
+/// A region that does not fit the grid, `progress` cancelled.
+pub fn truth_of(
+    s: &scenario::Scenario,
+    world: &sim::World,
+    geometry: &GridGeometry,
+    progress: &Progress,
+) -> Result<TruthRaster> {
+    truth_sampled(s, world, geometry, DEFAULT_SAMPLES_PER_SIDE, progress)
+}
+
+/// [`truth_of`] with `samples_per_side` samples per cell side; `progress`'s cancellation is checked at every
+/// band of the computation.
+///
+/// # Errors
+/// A region that does not fit the grid, `progress` cancelled.
+pub fn truth_sampled(
+    s: &scenario::Scenario,
+    world: &sim::World,
+    geometry: &GridGeometry,
+    samples_per_side: u32,
+    progress: &Progress,
+) -> Result<TruthRaster> {
     let region = region_of(s, geometry)?;
-    Ok(TruthRaster::compute(
+    TruthRaster::compute(
         world,
         geometry,
         region,
         profile_of(s)?,
         Actors::Excluded,
-        DEFAULT_SAMPLES_PER_SIDE,
-    ))
+        samples_per_side,
+        &|| progress.check_cancelled().is_ok(),
+    )
+    .map_err(|_| EvalError::Cancelled)
 }
 
 /// The robot's decision profile of a scenario.
@@ -465,7 +492,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         Some(t) => t,
         None => {
             let truth_start = Instant::now();
-            let truth = truth_of(s, simulation.world(), &geometry)?;
+            let truth = truth_of(s, simulation.world(), &geometry, progress)?;
             (truth, truth_start.elapsed().as_secs_f64())
         }
     };

@@ -47,7 +47,7 @@ impl ScoringTruth {
             mapping.simulation.world_mut().advance_to(s.duration_s);
             return Ok(Self {
                 scenario: s.clone(),
-                raster: truth_of(s, mapping.simulation.world(), &geometry)?,
+                raster: truth_of(s, mapping.simulation.world(), &geometry, progress)?,
                 returns: Some(mapping.simulation.obstacle_returns().clone()),
                 observability: Some(mapping.observability),
             });
@@ -56,7 +56,7 @@ impl ScoringTruth {
         let world = sim::World::new(loaded)?;
         Ok(Self {
             scenario: s.clone(),
-            raster: truth_of(s, &world, &geometry)?,
+            raster: truth_of(s, &world, &geometry, progress)?,
             observability: None,
             returns: None,
         })

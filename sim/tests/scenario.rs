@@ -57,6 +57,18 @@ fn bad_values_are_errors_at_their_place() {
             8,
         ),
         (
+            "truth_too_fine",
+            common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = 0.003"),
+            "steps of its running minimum, over the limit",
+            8,
+        ),
+        (
+            "truth_contact_too_long",
+            common::scenario_text("").replace("[robot]\n", "[robot]\nmax_grade = 0.0005\n"),
+            "max_step_m / max_grade = 70.000 m",
+            8,
+        ),
+        (
             "waypoint",
             common::scenario_text("").replace("[4.0, 0.0]]", "[40.0, 0.0]]"),
             "outside the map region",

@@ -29,7 +29,8 @@ fn truth_over(
     let geometry = GridGeometry::new(0.05).expect("resolution");
     let region: CellRegion = geometry.region_covering(min, max).expect("region");
     (
-        TruthRaster::compute(&world, &geometry, region, PROFILE, Actors::Excluded, 4),
+        TruthRaster::compute(&world, &geometry, region, PROFILE, Actors::Excluded, 4, &|| true)
+            .expect("never cancelled"),
         geometry,
         world,
     )
@@ -198,8 +199,10 @@ fn people_are_in_the_truth_only_when_asked() {
     let world = World::new(&loaded).expect("world");
     let g = GridGeometry::new(0.05).expect("resolution");
     let region = g.region_covering((2.9, -0.1), (3.1, 0.1)).expect("region");
-    let with = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Included, 2);
-    let without = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 2);
+    let with = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Included, 2, &|| true)
+        .expect("never cancelled");
+    let without = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 2, &|| true)
+        .expect("never cancelled");
     assert!(with.cells.iter().any(|c| c.step_blocked));
     assert!(without.cells.iter().all(|c| !c.step_blocked));
 }
@@ -220,4 +223,42 @@ fn the_truth_is_reproducible() {
     assert_eq!(a.region, b.region);
     assert!(bits(&a) == bits(&b), "the same seed gave a different truth");
     assert!(a.cells.iter().any(|c| c.step_blocked), "the bush blocks");
+}
+
+#[test]
+fn a_cell_s_truth_does_not_depend_on_how_the_region_is_cut_into_bands() {
+    // The truth goes in bands of cell rows that hold about a million samples: a narrow region is one band, a
+    // region 30 m wide at 0.01 m is a band per cell row. Every cell the two share must be the same, bit for bit.
+    let extra = "[[obstacles]]\nkind = \"box\"\ncenter_xy_m = [3.0, -1.0]\nsize_m = [0.3, 1.0, 0.05]\n";
+    let loaded = common::load_text("bands", &common::scenario_text(extra)).expect("valid");
+    let world = World::new(&loaded).expect("world");
+    let g = GridGeometry::new(0.01).expect("resolution");
+    let compute = |min, max| {
+        let region = g.region_covering(min, max).expect("region");
+        TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 4, &|| true)
+            .expect("never cancelled")
+    };
+    let narrow = compute((2.5, -1.2), (3.5, -0.8));
+    let wide = compute((-10.0, -1.2), (20.0, -0.8));
+    let mut blocked = 0;
+    for cell in narrow.region.cells() {
+        let (a, b) = (narrow.get(cell).expect("inside"), wide.get(cell).expect("inside"));
+        assert_eq!(format!("{a:?}"), format!("{b:?}"), "cell {cell:?}");
+        blocked += usize::from(a.step_blocked);
+    }
+    assert!(blocked > 0, "the curb's edges are steps");
+}
+
+#[test]
+fn the_truth_stops_when_asked() {
+    let (_, g, world) = truth_over("cancelled", "", (0.0, -1.0), (1.0, 1.0));
+    let region = g.region_covering((0.0, -1.0), (1.0, 1.0)).expect("region");
+    let asked = std::cell::Cell::new(0);
+    let keep_going = || {
+        asked.set(asked.get() + 1);
+        false
+    };
+    let result = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 4, &keep_going);
+    assert_eq!(result, Err(sim::truth::TruthCancelled));
+    assert_eq!(asked.get(), 1, "asked before the first band");
 }

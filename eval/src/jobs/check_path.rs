@@ -86,7 +86,7 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let staged = Staged::begin(&job.out_dir)?;
     let geometry = oeg::GridGeometry::new(s.map.resolution_m)?;
     let world = sim::World::new(&loaded)?;
-    let truth = crate::pipeline::truth_of(s, &world, &geometry)?;
+    let truth = crate::pipeline::truth_of(s, &world, &geometry, &crate::progress::Progress::hidden())?;
     let region = truth.region;
     let res = geometry.resolution_m();
     let extent = crate::navigation::external::extent_of(&region, res);

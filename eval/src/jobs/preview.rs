@@ -4,8 +4,7 @@ use std::path::{Path, PathBuf};
 
 use oeg::GridGeometry;
 use sim::scenario::{self, LoadedScenario};
-use sim::truth::TruthRaster;
-use sim::world::{Actors, World};
+use sim::world::World;
 
 use crate::error::Result;
 use crate::figures::{Figure, ImageFormats, Legend, NO_DATA, Rgb, save};
@@ -73,22 +72,13 @@ pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec
     let staged = Staged::begin(out_dir)?;
     let world = World::new(&loaded)?;
     let geometry = GridGeometry::new(s.map.resolution_m)?;
-    let region = geometry.region_covering(
-        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
-        (
-            s.map.max_xy_m[0] - s.map.resolution_m * 1e-6,
-            s.map.max_xy_m[1] - s.map.resolution_m * 1e-6,
-        ),
-    )?;
-    let profile = crate::pipeline::profile_of(s)?;
-    let truth = TruthRaster::compute(
+    let truth = crate::pipeline::truth_sampled(
+        s,
         &world,
         &geometry,
-        region,
-        profile,
-        Actors::Excluded,
         PREVIEW_SAMPLES_PER_SIDE,
-    );
+        &crate::progress::Progress::hidden(),
+    )?;
 
     let drive = crate::figures::comparison::drive_polyline(s);
     let mounts: Vec<(f64, f64)> = s
@@ -120,10 +110,10 @@ pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec
     );
     let title = format!(
         "{}: true decisions (step {} m, height {} m)",
-        s.name, profile.max_step_m, profile.height_m
+        s.name, truth.profile.max_step_m, truth.profile.height_m
     );
     let mut fig = Figure::new(
-        region,
+        truth.region,
         geometry.resolution_m(),
         &title,
         |c| {

@@ -83,7 +83,7 @@ fn record_mcap(
         progress.inc(1);
     }
     // The static world's truth, people left out, as a run's recording has it.
-    recording.truth(&crate::pipeline::truth_of(s, sim.world(), &geometry)?)?;
+    recording.truth(&crate::pipeline::truth_of(s, sim.world(), &geometry, progress)?)?;
     oeg::write_atomically(out, &recording.finish()?)?;
     Ok(num_scans)
 }

@@ -5,7 +5,7 @@ use toml::de::DeTable;
 
 use super::load::{
     KeySeg, MAX_CELL_VISITS_PER_RUN, MAX_DURATION_S, MAX_LENGTH_M, MAX_MAP_CELLS, MAX_OBJECTS, MAX_PARTS,
-    MAX_RAYS_PER_RUN, value_offset,
+    MAX_RAYS_PER_RUN, MAX_TRUTH_BYTES, MAX_TRUTH_FILTER_STEPS, MAX_TRUTH_SAMPLES, value_offset,
 };
 use super::schema::{Actor, Obstacle, Scenario, ScenarioSource, Terrain};
 use crate::error::{Result, SimError, TextPosition};
@@ -243,6 +243,59 @@ impl Checker<'_> {
         Ok(())
     }
 
+    /// The truth's cost over the map's region (after `[map]` and the robot's profile are known to make sense):
+    /// its sample points, the steps of its running minimum and its memory, each within its limit.
+    fn validate_truth_cost(&self, s: &Scenario) -> Result<()> {
+        use KeySeg::Key as K;
+        let m = &s.map;
+        let side = |k: usize| ((m.max_xy_m[k] - m.min_xy_m[k]) / m.resolution_m).ceil() as u64;
+        let contact_m = f64::from(s.robot.profile().contact_distance_m());
+        let cost = crate::truth::TruthCost::estimate(
+            side(0),
+            side(1),
+            m.resolution_m,
+            crate::truth::DEFAULT_SAMPLES_PER_SIDE,
+            contact_m,
+        );
+        let why = |what: String| {
+            format!(
+                "the ground truth over the map's region would need {what}; use a coarser [map] resolution_m, a \
+                 smaller region or (for the running minimum) a shorter contact distance, [robot] max_step_m / max_grade \
+                 = {contact_m:.3} m"
+            )
+        };
+        self.check(
+            cost.samples <= MAX_TRUTH_SAMPLES,
+            &[K("map"), K("resolution_m")],
+            || {
+                why(format!(
+                    "{} sample points, over the limit of {MAX_TRUTH_SAMPLES}",
+                    cost.samples
+                ))
+            },
+        )?;
+        self.check(
+            cost.filter_steps <= MAX_TRUTH_FILTER_STEPS,
+            &[K("map"), K("resolution_m")],
+            || {
+                why(format!(
+                    "{} steps of its running minimum, over the limit of {MAX_TRUTH_FILTER_STEPS}",
+                    cost.filter_steps
+                ))
+            },
+        )?;
+        self.check(
+            cost.peak_bytes <= MAX_TRUTH_BYTES,
+            &[K("map"), K("resolution_m")],
+            || {
+                why(format!(
+                    "{} bytes of memory, over the limit of {MAX_TRUTH_BYTES}",
+                    cost.peak_bytes
+                ))
+            },
+        )
+    }
+
     /// `[robot]`: its decision limits, its drive and its odometry.
     fn validate_robot(&self, s: &Scenario) -> Result<()> {
         use KeySeg::{Index as I, Key as K};
@@ -257,6 +310,7 @@ impl Checker<'_> {
         if let Err(e) = r.profile().validate() {
             return Err(self.error(&[K("robot"), K("max_grade")], e.to_string()));
         }
+        self.validate_truth_cost(s)?;
         self.positive(r.max_speed_m_s, &[K("robot"), K("max_speed_m_s")], "speed in m/s")?;
         self.positive(
             r.max_turn_rate_deg_s,

@@ -14,6 +14,16 @@ use crate::robot::RobotModel;
 /// The largest map region a scenario may ask for, in cells: the truth raster and images are dense over it
 /// (25 million cells is 250 m x 250 m at 0.05 m).
 pub const MAX_MAP_CELLS: u64 = 25_000_000;
+/// The most sample points the truth may cast rays from (three rays each): the largest region at 4 x 4 samples a
+/// cell. The truth samples a few million points a second on the reference machine, so the worst valid truth
+/// takes minutes ([`crate::truth::TruthCost`], `docs/guarantees.md`).
+pub const MAX_TRUTH_SAMPLES: u64 = MAX_MAP_CELLS * 16;
+/// The most steps the truth's running minimum may take: the largest region at 0.05 m with the Pioneer 3-AT's
+/// 0.10 m contact distance (51 steps a sample). A long contact distance at a fine resolution (a small
+/// `max_grade`) is caught here.
+pub const MAX_TRUTH_FILTER_STEPS: u64 = MAX_TRUTH_SAMPLES * 51;
+/// The most memory the truth may hold, bytes (4 GiB): its result and one band of samples.
+pub const MAX_TRUTH_BYTES: u64 = 4 << 30;
 /// The longest simulated duration, seconds (one day).
 pub const MAX_DURATION_S: f64 = 86_400.0;
 /// The longest length of an obstacle, an actor or the terrain, metres (100 km): more than any scene, and a

@@ -327,8 +327,9 @@ fn simulate_group(
             {
                 Some(k) => k,
                 None => {
-                    let truth = crate::pipeline::truth_of(s, simulation.world(), &geometry)
-                        .map_err(|e| e.to_string())?;
+                    let truth =
+                        crate::pipeline::truth_of(s, simulation.world(), &geometry, &Progress::hidden())
+                            .map_err(|e| e.to_string())?;
                     truths.push((geometry, truth));
                     truths.len() - 1
                 }
