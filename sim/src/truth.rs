@@ -459,14 +459,14 @@ impl RunningMin {
             }
         };
         self.from_start.clear();
-        self.from_start.extend((0..len).map(|i| padded(i)));
+        self.from_start.extend((0..len).map(&padded));
         for i in 1..len {
             if i % k != 0 {
                 self.from_start[i] = self.from_start[i].min(self.from_start[i - 1]);
             }
         }
         self.to_end.clear();
-        self.to_end.extend((0..len).map(|i| padded(i)));
+        self.to_end.extend((0..len).map(padded));
         for i in (0..len - 1).rev() {
             if (i + 1) % k != 0 {
                 self.to_end[i] = self.to_end[i].min(self.to_end[i + 1]);
