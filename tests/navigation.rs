@@ -386,10 +386,26 @@ fn a_scenario_command_never_runs_unless_allowed() {
     std::fs::write(&scenario, text).expect("scenario");
     let e = err(&oeg(&["run", s(&scenario), "--out", s(&dir.join("refused"))]));
     assert!(
-        e.contains("--allow-scenario-command") && e.contains("touch"),
-        "{e}"
+        e.contains("--allow-scenario-command") && e.contains("[\"sh\", \"-c\", \"touch '"),
+        "the exact argument vector: {e}"
     );
     assert!(!marker.exists(), "the command ran without being allowed");
+    // Control characters in the file cannot hide the command behind another: they show escaped.
+    let hiding = dir.join("hiding.toml");
+    std::fs::write(
+        &hiding,
+        std::fs::read_to_string(&scenario)
+            .expect("scenario")
+            .replace("\"-c\", ", "\"-c\", \"\\u001b[2K\\rsafe-looking\", "),
+    )
+    .expect("scenario");
+    let e = err(&oeg(&["run", s(&hiding), "--out", s(&dir.join("refused"))]));
+    assert!(
+        e.contains(r#"["sh", "-c", "\u{1b}[2K\rsafe-looking", "touch"#)
+            && !e.contains('\u{1b}')
+            && !e.contains('\r'),
+        "{e:?}"
+    );
     assert!(!dir.join("refused").exists(), "refused before any work");
     ok(&oeg(&[
         "run",

@@ -322,9 +322,9 @@ pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) 
             Err(EvalError::Input {
                 path: options.scenario.clone(),
                 message: format!(
-                    "the scenario asks to run the program `{}` as its planner; a scenario file never runs a program \
+                    "the scenario asks to run the command {} as its planner; a scenario file never runs a program \
                  unless allowed: pass --allow-scenario-command to run it, or give your own with --planner-command",
-                    command.join(" ")
+                    crate::navigation::external::shown_command(command)
                 ),
             })
         }

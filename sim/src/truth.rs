@@ -519,7 +519,9 @@ mod tests {
     #[test]
     fn the_disc_rows_are_the_disc() {
         let geometry = GridGeometry::new(0.01).expect("resolution");
-        let region = geometry.region_covering((0.0, 0.0), (0.05, 0.05)).expect("region");
+        let region = geometry
+            .region_covering((0.0, 0.0), (0.05, 0.05))
+            .expect("region");
         let lattice = SampleLattice::new(&geometry, region, 4, 0.1);
         let reach = 0.1 / 0.0025 + 1e-9;
         assert_eq!(lattice.margin, 40);

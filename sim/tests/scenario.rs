@@ -57,6 +57,20 @@ fn bad_values_are_errors_at_their_place() {
             8,
         ),
         (
+            "name_with_control_characters",
+            common::scenario_text("").replace("name = \"test\"", "name = \"te\\u0000st\\u001b[2K\""),
+            "\"te\\0st\\u{1b}[2K\" is used as a folder name",
+            1,
+        ),
+        (
+            "sensor_name_with_control_characters",
+            common::scenario_text(
+                "[[sensors]]\nname = \"lidar\\r\\u001b[2Kok\"\nkind = \"laser2d\"\nmount_link = \"base_link\"\n",
+            ),
+            "the sensor name \"lidar\\r\\u{1b}[2Kok\" is shown in messages",
+            18,
+        ),
+        (
             "truth_too_fine",
             common::scenario_text("").replace("resolution_m = 0.05", "resolution_m = 0.003"),
             "steps of its running minimum, over the limit",

@@ -7,6 +7,7 @@
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::error::Result;
@@ -89,6 +90,7 @@ impl ExternalPlanner {
         goal: (f64, f64),
         path_csv: &Path,
     ) -> std::result::Result<(), PlannerFailure> {
+        use std::os::unix::process::CommandExt as _;
         let program = self.command.first().map_or("", String::as_str);
         let number = |v: f64| format!("{v}");
         let mut child = Command::new(program)
@@ -100,47 +102,54 @@ impl ExternalPlanner {
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
+            // Its own process group, so that the call ends with every process it started.
+            .process_group(0)
             .spawn()
             .map_err(|e| PlannerFailure {
                 kind: "spawn",
                 message: format!(
-                    "the planner command `{}` could not start: {e}",
-                    self.command.join(" ")
+                    "the planner command {} could not start: {e}",
+                    shown_command(&self.command)
                 ),
             })?;
-        // stderr is drained on its own thread, so a chatty planner never blocks on a full pipe.
-        let stderr = child.stderr.take().map(|mut pipe| {
+        // stderr is drained on its own thread into a bounded tail, so a chatty planner never blocks on a full
+        // pipe and never fills the memory.
+        let tail = Arc::new(Mutex::new(StderrTail::default()));
+        let reader = child.stderr.take().map(|mut pipe| {
+            let tail = Arc::clone(&tail);
             std::thread::spawn(move || {
-                let mut all = Vec::new();
-                let _ = pipe.read_to_end(&mut all);
-                all
+                let mut chunk = [0u8; 4096];
+                while let Ok(n @ 1..) = pipe.read(&mut chunk) {
+                    if let Ok(mut t) = tail.lock() {
+                        t.push(&chunk[..n]);
+                    }
+                }
             })
         });
         let started = Instant::now();
         let status = loop {
             match child.try_wait() {
                 Ok(Some(status)) => break Some(status),
-                Ok(None) if started.elapsed() >= self.timeout => {
-                    let _ = child.kill();
-                    let _ = child.wait();
-                    break None;
-                }
+                Ok(None) if started.elapsed() >= self.timeout => break None,
                 Ok(None) => std::thread::sleep(Duration::from_millis(2)),
                 Err(_) => break None,
             }
         };
-        let tail = stderr
-            .and_then(|h| h.join().ok())
-            .map(|bytes| {
-                let text = String::from_utf8_lossy(&bytes);
-                let text = text.trim();
-                let cut = text.len().saturating_sub(STDERR_TAIL_BYTES);
-                let cut = (cut..=text.len())
-                    .find(|k| text.is_char_boundary(*k))
-                    .unwrap_or(text.len());
-                text[cut..].to_string()
-            })
-            .unwrap_or_default();
+        // The call is over: nothing it started outlives it (a child left holding the pipe would otherwise keep
+        // the run waiting).
+        let group = rustix::process::Pid::from_child(&child);
+        let _ = rustix::process::kill_process_group(group, rustix::process::Signal::KILL);
+        let _ = child.kill();
+        let _ = child.wait();
+        // A process that left the group (setsid) may still hold the pipe: its tail is taken as it is, and the
+        // reader ends when the pipe closes.
+        if let Some(reader) = reader {
+            let waited = Instant::now();
+            while !reader.is_finished() && waited.elapsed() < STDERR_GRACE {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+        let tail = tail.lock().map(|t| t.text()).unwrap_or_default();
         let with_stderr = |m: String| {
             if tail.is_empty() {
                 m
@@ -152,21 +161,51 @@ impl ExternalPlanner {
             None => Err(PlannerFailure {
                 kind: "timeout",
                 message: format!(
-                    "the planner `{}` ran over its time-out of {} s and was stopped",
-                    self.command.join(" "),
+                    "the planner {} ran over its time-out of {} s and was stopped with every process it started",
+                    shown_command(&self.command),
                     self.timeout.as_secs_f64()
                 ),
             }),
             Some(s) if !s.success() => Err(PlannerFailure {
                 kind: "exit",
                 message: with_stderr(format!(
-                    "the planner `{}` exited with {s}",
-                    self.command.join(" ")
+                    "the planner {} exited with {s}",
+                    shown_command(&self.command)
                 )),
             }),
             Some(_) => Ok(()),
         }
     }
+}
+
+/// How long the end of a planner's stderr is waited for once the call is over.
+const STDERR_GRACE: Duration = Duration::from_millis(200);
+
+/// The last [`STDERR_TAIL_BYTES`] bytes a planner wrote to stderr.
+#[derive(Default)]
+struct StderrTail {
+    bytes: std::collections::VecDeque<u8>,
+}
+
+impl StderrTail {
+    fn push(&mut self, chunk: &[u8]) {
+        self.bytes.extend(chunk);
+        let over = self.bytes.len().saturating_sub(STDERR_TAIL_BYTES);
+        self.bytes.drain(..over);
+    }
+
+    /// The tail as text, trimmed, starting at a whole character.
+    fn text(&self) -> String {
+        let bytes: Vec<u8> = self.bytes.iter().copied().collect();
+        let text = String::from_utf8_lossy(&bytes);
+        text.trim().trim_start_matches('\u{fffd}').to_string()
+    }
+}
+
+/// A command as it will run: its exact argument vector, quoted, with every control and non-printing character
+/// escaped (`["sh", "-c", "a; b"]`, `"\u{1b}[2K"`), so that what a message shows is what runs.
+pub fn shown_command(command: &[String]) -> String {
+    format!("{command:?}")
 }
 
 /// Reads a path file: one point per line, `x,y` in metres (world frame), an optional header line
@@ -180,8 +219,8 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
         message,
     };
     let name = path.display();
-    let bytes = oeg::read_bounded(path, MAX_PATH_FILE_BYTES)
-        .map_err(|e| fail(format!("the planner wrote no readable path: {e}")))?;
+    let bytes = read_regular(path, MAX_PATH_FILE_BYTES)
+        .map_err(|e| fail(format!("{name}: the planner wrote no readable path: {e}")))?;
     let text = String::from_utf8(bytes).map_err(|e| {
         fail(format!(
             "{name}: byte {}: not UTF-8 text; expected lines of x,y",
@@ -230,6 +269,56 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
         )));
     }
     Ok(points)
+}
+
+/// Reads a whole regular file of at most `limit` bytes. The file is opened without blocking and refused unless
+/// it is a regular file, so a FIFO, a device or a socket put in the file's place never holds the run.
+fn read_regular(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    use rustix::fs::{Mode, OFlags};
+    let fd = rustix::fs::open(
+        path,
+        OFlags::RDONLY | OFlags::NONBLOCK | OFlags::CLOEXEC,
+        Mode::empty(),
+    )?;
+    let file = std::fs::File::from(fd);
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(std::io::Error::other(format!(
+            "is a {}, not a regular file",
+            file_kind(&meta.file_type())
+        )));
+    }
+    if meta.len() > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("is {} bytes, over the limit of {limit} bytes", meta.len()),
+        ));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("grew past the limit of {limit} bytes while read"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// What kind of file a non-regular file is, in words.
+fn file_kind(t: &std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    if t.is_dir() {
+        "folder"
+    } else if t.is_fifo() {
+        "FIFO"
+    } else if t.is_socket() {
+        "socket"
+    } else if t.is_char_device() || t.is_block_device() {
+        "device"
+    } else {
+        "special file"
+    }
 }
 
 /// What is wrong with a path's point: not finite, or off the map's `extent`; `None` for a good point.
@@ -357,6 +446,100 @@ mod tests {
             split_command("sh 'open")
                 .expect_err("unclosed")
                 .contains("unclosed")
+        );
+    }
+
+    /// A planner running `script` with `sh -c`, exchanging files in a fresh folder.
+    fn shell_planner(name: &str, script: &str, timeout: Duration) -> ExternalPlanner {
+        let dir = std::env::temp_dir().join(format!("oeg-planner-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        ExternalPlanner {
+            command: vec!["sh".into(), "-c".into(), script.into(), "planner".into()],
+            timeout,
+            dir,
+        }
+    }
+
+    fn call(planner: &ExternalPlanner) -> std::result::Result<Vec<(f64, f64)>, PlannerFailure> {
+        planner
+            .call(&[], (0.0, 0.0), (1.0, 0.0), EXTENT)
+            .expect("files written")
+    }
+
+    #[test]
+    fn a_planner_s_child_holding_its_stderr_does_not_hold_the_run() {
+        // The planner exits at once and leaves a child with its stderr open for a minute.
+        let planner = shell_planner(
+            "child",
+            "sleep 60 & echo failed >&2; exit 3",
+            Duration::from_secs(30),
+        );
+        let started = Instant::now();
+        let e = call(&planner).expect_err("exit 3");
+        assert!(
+            started.elapsed() < Duration::from_secs(10),
+            "{:?}",
+            started.elapsed()
+        );
+        assert_eq!(e.kind, "exit");
+        assert!(e.message.contains("its stderr ends: failed"), "{}", e.message);
+    }
+
+    #[test]
+    fn a_planner_over_its_time_out_is_stopped_with_every_process_it_started() {
+        let marker = std::env::temp_dir().join(format!("oeg-planner-{}-grandchild", std::process::id()));
+        let _ = std::fs::remove_file(&marker);
+        // A grandchild that would write the marker after the time-out, were it left running.
+        let script = format!("(sleep 2; touch '{}') & sleep 60", marker.display());
+        let planner = shell_planner("timeout", &script, Duration::from_millis(300));
+        let e = call(&planner).expect_err("time-out");
+        assert_eq!(e.kind, "timeout");
+        assert!(e.message.contains("every process it started"), "{}", e.message);
+        std::thread::sleep(Duration::from_secs(3));
+        assert!(!marker.exists(), "the grandchild outlived the time-out");
+    }
+
+    #[test]
+    fn a_planner_s_stderr_is_kept_as_a_bounded_tail() {
+        // 64 MiB of stderr, then the last words.
+        let script = "head -c 67108864 /dev/zero | tr '\\0' x >&2; echo ' the end' >&2; exit 1";
+        let planner = shell_planner("stderr", script, Duration::from_secs(60));
+        let e = call(&planner).expect_err("exit 1");
+        assert!(
+            e.message.ends_with("xx the end"),
+            "{}",
+            &e.message[e.message.len() - 40..]
+        );
+        assert!(
+            e.message.len() < STDERR_TAIL_BYTES + 300,
+            "{} bytes",
+            e.message.len()
+        );
+    }
+
+    #[test]
+    fn a_fifo_as_the_path_file_is_refused_not_waited_on() {
+        // The planner leaves a FIFO where its path should be; reading it would wait for a writer forever.
+        let planner = shell_planner("fifo", "mkfifo \"$7\"", Duration::from_secs(30));
+        let e = call(&planner).expect_err("a FIFO");
+        assert_eq!(e.kind, "malformed_path");
+        assert!(
+            e.message.contains("is a FIFO, not a regular file"),
+            "{}",
+            e.message
+        );
+        let planner = shell_planner("dir", "mkdir \"$7\"", Duration::from_secs(30));
+        let e = call(&planner).expect_err("a folder");
+        assert!(e.message.contains("not a regular file"), "{}", e.message);
+    }
+
+    #[test]
+    fn a_command_is_shown_as_its_exact_argument_vector_with_control_characters_escaped() {
+        let command = ["sh", "-c", "a; b", "rm -rf ~\u{1b}[2K\r\u{202e}ls"].map(String::from);
+        assert_eq!(
+            shown_command(&command),
+            r#"["sh", "-c", "a; b", "rm -rf ~\u{1b}[2K\r\u{202e}ls"]"#
         );
     }
 }

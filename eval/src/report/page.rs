@@ -356,7 +356,10 @@ fn settings(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
         ],
     ];
     if let Some(command) = run.planner_command {
-        rows.push(vec!["planner command".to_string(), command.join(" ")]);
+        rows.push(vec![
+            "planner command".to_string(),
+            crate::navigation::external::shown_command(command),
+        ]);
     }
     page.table(&["setting", "value"], &rows);
     for m in &run.models {

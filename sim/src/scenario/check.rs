@@ -103,7 +103,7 @@ impl Checker<'_> {
             &[K("name")],
             || {
                 format!(
-                    "`{}` is used as a folder name: expected letters, digits, '-', '_' or '.'",
+                    "{:?} is used as a folder name: expected letters, digits, '-', '_' or '.'",
                     s.name
                 )
             },
@@ -412,6 +412,17 @@ impl Checker<'_> {
         let (mut total_rays, mut total_cells) = (0.0_f64, 0.0_f64);
         for (k, sensor) in s.sensors.iter().enumerate() {
             self.check(
+                !sensor.name.is_empty() && !sensor.name.chars().any(is_hidden),
+                &[K("sensors"), I(k), K("name")],
+                || {
+                    format!(
+                        "the sensor name {:?} is shown in messages, tables and recordings: expected a non-empty \
+                         name without control or other non-printing characters",
+                        sensor.name
+                    )
+                },
+            )?;
+            self.check(
                 names.insert(sensor.name.as_str()),
                 &[K("sensors"), I(k), K("name")],
                 || {
@@ -612,4 +623,12 @@ impl Checker<'_> {
             }
         }
     }
+}
+
+/// Whether `c` would not show as itself in a terminal: a control character (NUL, escape, carriage return, ...)
+/// or one that changes how the text around it shows (bidirectional overrides, zero-width characters). Names
+/// that are printed refuse them, so a message shows what the file holds.
+pub(crate) fn is_hidden(c: char) -> bool {
+    c.is_control()
+        || matches!(c, '\u{200b}'..='\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2060}'..='\u{206f}' | '\u{feff}')
 }
