@@ -195,6 +195,41 @@ fn bad_maps_are_refused_with_the_file_and_what_was_expected() {
     let bad_code = write("code9.npy", &npy(1, 1, NpyData::U8(vec![9])));
     let whole = npy(2, 2, NpyData::U8(vec![1; 4]));
     let truncated = write("short.npy", &whole[..whole.len() - 1]);
+    let negative = write(
+        "negative.npy",
+        &npy(2, 2, NpyData::F32(vec![0.0, -1.0, 0.0, 0.0])),
+    );
+    let sidecar = |name: &str, layers: &[&str], extra: &str| {
+        write(
+            name,
+            format!(
+                "{{\"origin_xy_m\": [0, 0], \"resolution_m\": 0.05, {extra} \"layers\": {{{}}}}}",
+                layers.join(", ")
+            )
+            .as_bytes(),
+        )
+    };
+    let unknown_layer = sidecar(
+        "unknown.json",
+        &[
+            "\"decisions\": {\"file\": \"codes.npy\"}",
+            "\"elevation\": {\"file\": \"floats.npy\"}",
+        ],
+        "",
+    );
+    let wrong_shape_sidecar = sidecar(
+        "shape.json",
+        &["\"decisions\": {\"file\": \"codes.npy\", \"dtype\": \"uint8\"}"],
+        "\"shape\": [4, 1],",
+    );
+    let wrong_type_sidecar = sidecar(
+        "dtype.json",
+        &[
+            "\"decisions\": {\"file\": \"codes.npy\"}",
+            "\"elevation_m\": {\"file\": \"codes.npy\", \"dtype\": \"float32\"}",
+        ],
+        "",
+    );
     let (out, scenario, missing) = (dir.join("out"), scene(), dir.join("missing.yaml"));
     let score = |extra: &[&str]| {
         let mut args = vec!["score", s(&scenario), "--no-observability", "--out", s(&out)];
@@ -231,6 +266,33 @@ fn bad_maps_are_refused_with_the_file_and_what_was_expected() {
         (vec![], vec!["--layers"]),
         (vec!["--layers", s(&codes)], vec!["codes.npy"]),
         (vec!["--nav2", s(&missing)], vec!["missing.yaml"]),
+        (
+            [&["--decisions", s(&codes), "--variance", s(&negative)][..], &grid].concat(),
+            vec!["negative.npy", "variances: -1 at row 0, column 1"],
+        ),
+        (
+            vec!["--layers", s(&unknown_layer)],
+            vec![
+                "unknown.json",
+                "\"elevation\", which is not a layer oeg score reads",
+                "elevation_m",
+            ],
+        ),
+        (
+            vec!["--layers", s(&wrong_shape_sidecar)],
+            vec![
+                "shape.json",
+                "codes.npy holds a (2, 2) array, the sidecar's `shape` is [4, 1]",
+            ],
+        ),
+        (
+            vec!["--layers", s(&wrong_type_sidecar)],
+            vec![
+                "dtype.json",
+                "layer `elevation_m`",
+                "holds uint8, the sidecar declares float32",
+            ],
+        ),
     ];
     for (args, wants) in cases {
         let e = score(&args);
@@ -240,4 +302,44 @@ fn bad_maps_are_refused_with_the_file_and_what_was_expected() {
         assert!(!e.contains("panicked"), "{e}");
     }
     assert!(!out.exists(), "a refused score wrote its folder");
+}
+
+#[test]
+fn score_refuses_an_output_folder_that_holds_its_own_inputs() {
+    // A folder a job wrote (it holds the marker), with a map's layers in it: scoring it into itself would
+    // replace the files it has just read.
+    let dir = temp_dir("cli_score", "inputs");
+    let m = dir.join("m");
+    std::fs::create_dir_all(&m).expect("dir");
+    std::fs::write(m.join(".oeg-output"), "written by oeg\n").expect("marker");
+    let codes = NpyArray {
+        rows: 2,
+        cols: 2,
+        data: NpyData::U8(vec![1, 1, 3, 0]),
+    };
+    std::fs::write(m.join("codes.npy"), codes.to_bytes().expect("bytes")).expect("npy");
+    std::fs::write(
+        m.join("layers.json"),
+        "{\"origin_xy_m\": [0, 0], \"resolution_m\": 0.05, \"layers\": {\"decisions\": {\"file\": \"codes.npy\"}}}",
+    )
+    .expect("sidecar");
+    for out in [m.clone(), dir.join("m/../m")] {
+        let e = err(&oeg(&[
+            "score",
+            s(&scene()),
+            "--no-observability",
+            "--layers",
+            s(&m.join("layers.json")),
+            "--out",
+            s(&out),
+        ]));
+        assert!(
+            e.contains("layers.json") && e.contains("is an input of this job and lies in its output folder"),
+            "{e}"
+        );
+        assert!(
+            m.join("codes.npy").is_file() && m.join("layers.json").is_file(),
+            "the inputs are kept"
+        );
+    }
 }

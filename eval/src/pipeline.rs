@@ -439,7 +439,9 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         .unwrap_or_else(|| Path::new("out").join(&s.name));
     // The output folder is checked (and its staging made) before the work: a folder this job may not write
     // costs nothing.
-    let staged = Staged::begin(&out_dir)?;
+    let inputs = loaded.files();
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(&out_dir, &inputs)?;
     // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]` keys,
     // such as height thresholding, still apply), through the same door as `--set map.preset=<preset>`.
     let compared: Option<(oeg::MapPreset, scenario::Scenario)> = match options.compare {

@@ -816,7 +816,7 @@ fn score(
         occupancy,
     };
     foreign
-        .check(Path::new("the arrays"))
+        .check(Path::new("the arrays"), [None; 3])
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let evaluation = py.detach(|| truth.inner.score(&foreign)).map_err(oeg_error)?;
     let geometry = evaluation.estimate.geometry;

@@ -83,7 +83,11 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
         ..Default::default()
     })?;
     let s = &loaded.scenario;
-    let staged = Staged::begin(&job.out_dir)?;
+    let mut inputs = loaded.files();
+    inputs.push(job.path.clone());
+    inputs.extend(job.map.clone());
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(&job.out_dir, &inputs)?;
     let geometry = oeg::GridGeometry::new(s.map.resolution_m)?;
     let world = sim::World::new(&loaded)?;
     let truth = crate::pipeline::truth_of(s, &world, &geometry, &crate::progress::Progress::hidden())?;

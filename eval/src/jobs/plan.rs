@@ -118,7 +118,7 @@ pub fn plan_on_map(
 /// # Errors
 /// The map cannot be read, a point is not finite, the options are invalid, or a write fails.
 pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
-    let staged = crate::output::Staged::begin(&job.out_dir)?;
+    let staged = crate::output::Staged::begin(&job.out_dir, &[&job.map])?;
     let map = oeg::load_map(&job.map)?;
     let geometry = *map.geometry();
     let MapPlan { classes, plan } = plan_on_map(

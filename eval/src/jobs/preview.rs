@@ -69,7 +69,9 @@ pub const TRUTH_CLASSES: [(TruthClass, &str, Rgb); 5] = [
 pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec<PathBuf>> {
     let loaded = validate(path)?;
     let s = &loaded.scenario;
-    let staged = Staged::begin(out_dir)?;
+    let inputs = loaded.files();
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(out_dir, &inputs)?;
     let world = World::new(&loaded)?;
     let geometry = GridGeometry::new(s.map.resolution_m)?;
     let truth = crate::pipeline::truth_sampled(

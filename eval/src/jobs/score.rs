@@ -101,6 +101,16 @@ struct Sidecar {
     files: Vec<(String, PathBuf)>,
 }
 
+/// The layers a sidecar may name, with the type `oeg map --planner-files` writes them in.
+const SIDECAR_LAYERS: [(&str, &str); 4] = [
+    ("decisions", "uint8"),
+    ("elevation_m", "float32"),
+    ("variance_m2", "float32"),
+    ("occupancy_probability", "float32"),
+];
+
+/// Reads a `layers.json` sidecar, strictly: only the layers [`SIDECAR_LAYERS`] names, each file of the shape
+/// and type the sidecar declares (where it declares them).
 fn read_sidecar(path: &Path) -> Result<Sidecar> {
     let fail = |message: String| EvalError::Input {
         path: path.to_path_buf(),
@@ -122,16 +132,63 @@ fn read_sidecar(path: &Path) -> Result<Sidecar> {
         number(&origin[1], "origin_xy_m[1]")?,
     ];
     let resolution_m = number(&json["resolution_m"], "resolution_m")?;
+    let shape = match &json["shape"] {
+        serde_json::Value::Null => None,
+        v => Some(
+            v.as_array()
+                .and_then(|a| match a[..] {
+                    [ref r, ref c] => Some((r.as_u64()? as usize, c.as_u64()? as usize)),
+                    _ => None,
+                })
+                .ok_or_else(|| fail(format!("`shape` is {v}, expected [rows, columns]")))?,
+        ),
+    };
     let layers = json["layers"]
         .as_object()
         .ok_or_else(|| fail("expected `layers`: an object of {\"file\": ...} by layer name".into()))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut files = Vec::new();
     for (name, entry) in layers {
+        let Some((_, dtype)) = SIDECAR_LAYERS.iter().find(|(n, _)| n == name) else {
+            let known: Vec<&str> = SIDECAR_LAYERS.iter().map(|(n, _)| *n).collect();
+            return Err(fail(format!(
+                "`layers` names {name:?}, which is not a layer oeg score reads; expected {}",
+                known.join(", ")
+            )));
+        };
         let file = entry["file"]
             .as_str()
             .ok_or_else(|| fail(format!("layer `{name}` has no \"file\"")))?;
-        files.push((name.clone(), dir.join(file)));
+        let file = dir.join(file);
+        let declared = entry["dtype"].as_str();
+        if let Some(declared) = declared
+            && declared != *dtype
+        {
+            return Err(fail(format!(
+                "layer `{name}` is declared {declared:?}, expected {dtype:?}"
+            )));
+        }
+        if shape.is_some() || declared.is_some() {
+            let a = read_npy(&file)?;
+            if let Some((rows, cols)) = shape
+                && (a.rows, a.cols) != (rows, cols)
+            {
+                return Err(fail(format!(
+                    "layer `{name}`: {} holds a ({}, {}) array, the sidecar's `shape` is [{rows}, {cols}]",
+                    file.display(),
+                    a.rows,
+                    a.cols
+                )));
+            }
+            if declared.is_some() && a.data.dtype() != *dtype {
+                return Err(fail(format!(
+                    "layer `{name}`: {} holds {}, the sidecar declares {dtype}",
+                    file.display(),
+                    a.data.dtype()
+                )));
+            }
+        }
+        files.push((name.clone(), file));
     }
     Ok(Sidecar {
         origin_xy_m,
@@ -140,12 +197,21 @@ fn read_sidecar(path: &Path) -> Result<Sidecar> {
     })
 }
 
+/// A map read for scoring, and every file it was read from.
+pub struct ForeignRead {
+    /// The arrays, checked.
+    pub map: ForeignMap,
+    /// The files read: the sidecar, nav2 YAML or decisions, and each layer's file.
+    pub files: Vec<PathBuf>,
+}
+
 /// Reads the map the job names, as arrays, checked ([`ForeignMap::check`]).
 ///
 /// # Errors
-/// A file that cannot be read or is malformed, arrays of different shapes, bad values.
-pub fn read_foreign(job: &ScoreJob) -> Result<ForeignMap> {
+/// A file that cannot be read or is malformed, arrays of different shapes, bad values; each names its file.
+pub fn read_foreign(job: &ScoreJob) -> Result<ForeignRead> {
     let mut layers: Vec<(String, PathBuf)> = Vec::new();
+    let mut inputs = Vec::new();
     let (source, origin_xy_m, resolution_m, (rows, cols, decisions)) = match &job.grid {
         GridSource::Layers(path) => {
             let sidecar = read_sidecar(path)?;
@@ -159,6 +225,7 @@ pub fn read_foreign(job: &ScoreJob) -> Result<ForeignMap> {
                     message: "the sidecar names no `decisions` layer".into(),
                 })?;
             layers = sidecar.files.clone();
+            inputs.extend(layers.iter().map(|(_, f)| f.clone()));
             (
                 path.clone(),
                 sidecar.origin_xy_m,
@@ -168,6 +235,7 @@ pub fn read_foreign(job: &ScoreJob) -> Result<ForeignMap> {
         }
         GridSource::Nav2(path) => {
             let m = oeg::read_nav2_map(path, MAX_FOREIGN_CELLS)?;
+            inputs.push(m.image.clone());
             (
                 path.clone(),
                 m.origin_xy_m,
@@ -186,25 +254,32 @@ pub fn read_foreign(job: &ScoreJob) -> Result<ForeignMap> {
             read_decisions(decisions)?,
         ),
     };
+    inputs.insert(0, source.clone());
     let file = |name: &str, flag: &Option<PathBuf>| {
         flag.clone()
             .or_else(|| layers.iter().find(|(n, _)| n == name).map(|(_, f)| f.clone()))
     };
-    let layer = |name: &str, flag: &Option<PathBuf>| -> Result<Option<Vec<f64>>> {
-        file(name, flag).map(|f| read_layer(&f, rows, cols)).transpose()
+    let files = [
+        file("elevation_m", &job.elevation),
+        file("variance_m2", &job.variance),
+        file("occupancy_probability", &job.occupancy),
+    ];
+    let layer = |f: &Option<PathBuf>| -> Result<Option<Vec<f64>>> {
+        f.as_ref().map(|f| read_layer(f, rows, cols)).transpose()
     };
-    let foreign = ForeignMap {
+    let map = ForeignMap {
         origin_xy_m,
         resolution_m,
         rows,
         cols,
         decisions,
-        elevation_m: layer("elevation_m", &job.elevation)?,
-        variance_m2: layer("variance_m2", &job.variance)?,
-        occupancy: layer("occupancy_probability", &job.occupancy)?,
+        elevation_m: layer(&files[0])?,
+        variance_m2: layer(&files[1])?,
+        occupancy: layer(&files[2])?,
     };
-    foreign.check(&source)?;
-    Ok(foreign)
+    map.check(&source, [0, 1, 2].map(|k| files[k].as_deref()))?;
+    inputs.extend(files.into_iter().flatten());
+    Ok(ForeignRead { map, files: inputs })
 }
 
 /// What `oeg score` did.
@@ -231,8 +306,13 @@ pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<ScoreReport> {
         ..Default::default()
     })?;
     // The inputs are read, and the output folder claimed, before the simulation.
-    let foreign = read_foreign(job)?;
-    let staged = Staged::begin(&job.out_dir)?;
+    let ForeignRead {
+        map: foreign,
+        files: mut inputs,
+    } = read_foreign(job)?;
+    inputs.extend(loaded.files());
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(&job.out_dir, &inputs)?;
     let truth = ScoringTruth::of(&loaded, job.observability, progress)?;
     let evaluation = truth.score(&foreign)?;
     let dir = staged.dir();

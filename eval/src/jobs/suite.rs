@@ -148,7 +148,8 @@ pub fn suite(
 ) -> Result<Vec<SuiteRow>> {
     use rayon::prelude::*;
     let files = expand(paths)?;
-    let staged = Staged::begin(out_dir)?;
+    let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(out_dir, &inputs)?;
     let stage = staged.dir();
     let rows: Vec<SuiteRow> = if jobs <= 1 {
         files

@@ -111,11 +111,12 @@ pub fn decisions_from_codes(codes: &[i64]) -> std::result::Result<Vec<Traversabi
 impl ForeignMap {
     /// Checks the arrays against each other: every array `rows * cols` long, a resolution above zero, a finite
     /// origin, no more than [`MAX_FOREIGN_CELLS`] cells, no negative variance or occupancy outside `[0, 1]`.
-    /// `source` names where the arrays came from in the error.
+    /// `source` names where the arrays came from in the error, and `layer_files` the files of the elevation,
+    /// variance and occupancy layers where they came from files of their own.
     ///
     /// # Errors
-    /// [`EvalError::Input`] naming `source` and what is wrong.
-    pub fn check(&self, source: &std::path::Path) -> Result<()> {
+    /// [`EvalError::Input`] naming `source` (or the layer's file) and what is wrong.
+    pub fn check(&self, source: &std::path::Path, layer_files: [Option<&std::path::Path>; 3]) -> Result<()> {
         let fail = |message: String| EvalError::Input {
             path: source.to_path_buf(),
             message,
@@ -148,7 +149,7 @@ impl ForeignMap {
             })
         };
         len("decisions", self.decisions.len())?;
-        for (name, layer, valid) in [
+        for ((name, layer, valid), file) in [
             (
                 "elevations",
                 &self.elevation_m,
@@ -156,8 +157,15 @@ impl ForeignMap {
             ),
             ("variances", &self.variance_m2, (0.0, f64::INFINITY)),
             ("occupancy probabilities", &self.occupancy, (0.0, 1.0)),
-        ] {
+        ]
+        .into_iter()
+        .zip(layer_files)
+        {
             let Some(v) = layer else { continue };
+            let fail = |message: String| EvalError::Input {
+                path: file.unwrap_or(source).to_path_buf(),
+                message,
+            };
             len(name, v.len())?;
             if let Some((k, x)) = v
                 .iter()
@@ -415,15 +423,20 @@ mod tests {
         use Traversability::*;
         let p = std::path::Path::new("mine.npy");
         let mut f = foreign(0.5, 2, 2, vec![Free; 3]);
-        assert!(f.check(p).expect_err("short").to_string().contains("3 cells"));
+        assert!(
+            f.check(p, [None; 3])
+                .expect_err("short")
+                .to_string()
+                .contains("3 cells")
+        );
         f.decisions.push(Free);
-        f.check(p).expect("good");
+        f.check(p, [None; 3]).expect("good");
         f.variance_m2 = Some(vec![0.01, -1.0, 0.01, 0.01]);
-        let e = f.check(p).expect_err("negative").to_string();
+        let e = f.check(p, [None; 3]).expect_err("negative").to_string();
         assert!(e.contains("mine.npy") && e.contains("row 0, column 1"), "{e}");
         f.variance_m2 = None;
         f.resolution_m = 0.0;
-        assert!(f.check(p).is_err());
+        assert!(f.check(p, [None; 3]).is_err());
         assert_eq!(
             decisions_from_codes(&[0, 3, 4]),
             Ok(vec![Unknown, Blocked, Uncertain])

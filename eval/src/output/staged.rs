@@ -45,10 +45,14 @@ impl Staged {
     /// staging of killed jobs beside it and creates this job's staging folder (and `target`'s parents). Jobs
     /// call it before their work, so a folder they may not write costs nothing.
     ///
+    /// `inputs` are the files and folders the job reads: a target that holds one of them (or is one) is refused,
+    /// whoever wrote it, since replacing it would destroy what the job has just read.
+    ///
     /// # Errors
     /// [`EvalError::Io`] naming `target` when it is a file or a folder that no job wrote, or when a folder
-    /// cannot be created.
-    pub fn begin(target: &Path) -> Result<Self> {
+    /// cannot be created; [`EvalError::Input`] naming the input that `target` holds.
+    pub fn begin(target: &Path, inputs: &[&Path]) -> Result<Self> {
+        check_not_an_input(target, inputs)?;
         Self::begin_as(target, is_mount_point(target))
     }
 
@@ -353,6 +357,29 @@ fn is_earlier_output(dir: &Path, jobs: &[EarlierJob]) -> bool {
 }
 
 /// Whether a job may replace `target`: absent, an empty folder, or a folder a job wrote.
+/// Refuses a `target` that is one of `inputs` or holds one, comparing the paths with links resolved. An input
+/// that does not exist (yet) cannot be lost; a `target` that does not exist holds nothing.
+fn check_not_an_input(target: &Path, inputs: &[&Path]) -> Result<()> {
+    let Ok(target_real) = std::fs::canonicalize(target) else {
+        return Ok(());
+    };
+    for input in inputs {
+        if let Ok(real) = std::fs::canonicalize(input)
+            && real.starts_with(&target_real)
+        {
+            return Err(EvalError::Input {
+                path: input.to_path_buf(),
+                message: format!(
+                    "is an input of this job and lies in its output folder {}, which the job replaces as a whole; \
+                     write the output to another folder",
+                    target.display()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 fn check_replaceable(target: &Path) -> Result<()> {
     let Ok(meta) = std::fs::symlink_metadata(target) else {
         return Ok(());
@@ -432,7 +459,7 @@ mod tests {
         }
         // A killed job's lock (no process has this id) is taken over.
         write_bytes(&dir.join(".old_run.lock"), b"4294967295").expect("lock");
-        let staged = Staged::begin(&dir.join("old_run")).expect("begins");
+        let staged = Staged::begin(&dir.join("old_run"), &[]).expect("begins");
         write_bytes(&staged.dir().join("metrics.json"), b"new").expect("file");
         let target = staged.commit().expect("committed");
         assert_eq!(std::fs::read(target.join("metrics.json")).expect("read"), b"new");
@@ -441,7 +468,7 @@ mod tests {
         // Killed between its two renames: no output folder, the previous one aside. The next job puts it back
         // first, so its own failure leaves the previous results.
         let aside = folder(".killed.old.4294967295.0", &[OUTPUT_MARKER, "metrics.json"]);
-        let failed = Staged::begin(&dir.join("killed")).expect("begins");
+        let failed = Staged::begin(&dir.join("killed"), &[]).expect("begins");
         drop(failed);
         assert!(
             dir.join("killed/metrics.json").is_file(),
@@ -486,7 +513,7 @@ mod tests {
             folder("plan_and_notes", &["plan.json", "path.csv", "notes.md"]),
             folder("suite_of_theirs", &["suite.csv", "suite.json", "data/raw.csv"]),
         ] {
-            let staged = Staged::begin(&refused);
+            let staged = Staged::begin(&refused, &[]);
             let err = staged.expect_err("someone's folder").to_string();
             assert!(err.contains("no oeg job wrote"), "{err}");
         }

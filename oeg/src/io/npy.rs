@@ -24,6 +24,16 @@ pub enum NpyData {
 }
 
 impl NpyData {
+    /// The type as numpy names it: `float32`, `uint8`, `float64` or `int64`.
+    pub fn dtype(&self) -> &'static str {
+        match self {
+            Self::F32(_) => "float32",
+            Self::U8(_) => "uint8",
+            Self::F64(_) => "float64",
+            Self::I64(_) => "int64",
+        }
+    }
+
     fn descr(&self) -> &'static str {
         match self {
             Self::F32(_) => "<f4",

@@ -63,6 +63,20 @@ pub struct LoadedScenario {
     pub robot: RobotModel,
 }
 
+impl LoadedScenario {
+    /// The files the scenario was read from: the scenario, its robot's URDF and its terrain image, if any.
+    pub fn files(&self) -> Vec<std::path::PathBuf> {
+        let mut files = vec![
+            self.source.path.clone(),
+            self.source.resolve(&self.scenario.robot.urdf),
+        ];
+        if let super::schema::Terrain::Image { path, .. } = &self.scenario.terrain {
+            files.push(self.source.resolve(path));
+        }
+        files
+    }
+}
+
 /// Reads, parses and validates a scenario file, and loads its robot.
 ///
 /// # Errors

@@ -262,7 +262,8 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         });
     }
     job.profile.validate()?;
-    let staged = Staged::begin(&job.out_dir)?;
+    let inputs: Vec<&Path> = job.inputs.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(&job.out_dir, &inputs)?;
     let mut map = Map::new(job.config)?;
     let read_start = Instant::now();
     let scans = read_inputs(job)?;

@@ -114,7 +114,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
             ),
         });
     }
-    let staged = Staged::begin(out)?;
+    let inputs: Vec<&Path> = dirs.iter().map(PathBuf::as_path).collect();
+    let staged = Staged::begin(out, &inputs)?;
     let plan_path = staged.dir().join("plan.json");
     let mut bytes = serde_json::to_vec_pretty(&plan).unwrap_or_default();
     bytes.push(b'\n');
