@@ -468,6 +468,25 @@ fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("expected X,Y in metres"), "{}", stderr(&o));
+    // Far points: the search's arrays over 100 km x 100 km at 0.05 m would pass the memory limit, so the
+    // plan is refused before it allocates them (it used to abort).
+    let o = oeg(&[
+        "plan",
+        map.to_str().expect("utf8"),
+        "--from",
+        "0.5,0",
+        "--to",
+        "100000,100000",
+        "--out",
+        dir.join("far").to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("over the memory limit") && stderr(&o).contains("plan between points nearer the map"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.join("far").exists(), "nothing written");
 }
 
 #[test]

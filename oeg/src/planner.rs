@@ -391,6 +391,11 @@ fn start_clearance(
     (nearest <= options.inflation_radius_m && clearance > 0.0).then_some(clearance)
 }
 
+/// The memory [`plan`] takes per cell of its region, bytes, at most in practice: the decisions' copy and the
+/// forbidden mask (1 each), A*'s cost (8), parent (4) and closed flag (1), and its open list (24 a cell pushed
+/// once; 40 in all, rounded up). A caller bounds a plan's region with it before planning.
+pub const PLANNER_BYTES_PER_CELL: u64 = 40;
+
 /// Octile distance in cost units: exact for 8-connected moves on an empty grid, so A* stays optimal.
 fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
     let (ax, ay) = ((a % nx) as i64, (a / nx) as i64);

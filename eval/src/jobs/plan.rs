@@ -95,6 +95,28 @@ pub fn plan_on_map(
     )
     .ok_or_else(|| point_error("start", from))?;
     let region = map.observed_region().map_or(ends, |r| r.union(&ends));
+    // The search's arrays, beside the decisions' raster (which the map counts itself), within the map's limit.
+    let needed = region
+        .num_cells()
+        .saturating_mul(oeg::PLANNER_BYTES_PER_CELL)
+        .saturating_add(map.memory_bytes());
+    let limit = map.config().memory_limit_bytes;
+    if needed > limit {
+        return Err(EvalError::Input {
+            path: name.to_path_buf(),
+            message: format!(
+                "planning from ({}, {}) to ({}, {}) m searches {} cells ({:.0} m x {:.0} m with the map), which \
+                 needs {needed} bytes, over the memory limit of {limit} bytes; plan between points nearer the map",
+                from.0,
+                from.1,
+                to.0,
+                to.1,
+                region.num_cells(),
+                f64::from(region.num_x) * geometry.resolution_m(),
+                f64::from(region.num_y) * geometry.resolution_m(),
+            ),
+        });
+    }
     let classes = map.traversability_layer(region, profile, rule)?;
     let plan = oeg::plan(
         &region,

@@ -60,7 +60,7 @@ impl GraphNode {
 /// [`Error::Io`](crate::Error::Io) if the file cannot be read; [`Error::Parse`](crate::Error::Parse) naming the byte offset, node and point for a
 /// truncated file, a wrong record tag, a count larger than the file, a non-finite number or a zero quaternion.
 pub fn read_graph(path: &Path) -> Result<Vec<GraphNode>> {
-    let data = read_file(path)?;
+    let data = read_file(path, crate::DEFAULT_MEMORY_LIMIT_BYTES)?;
     parse_graph(path, &data)
 }
 

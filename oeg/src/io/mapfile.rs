@@ -151,7 +151,7 @@ pub fn save_map(map: &Map, path: &Path) -> Result<()> {
 /// # Errors
 /// As [`load_map`].
 pub fn read_map_header(path: &Path) -> Result<MapFileHeader> {
-    let data = read_file(path)?;
+    let data = read_file(path, crate::DEFAULT_MEMORY_LIMIT_BYTES)?;
     parse(path, &data, None).map(|(h, _)| h)
 }
 
@@ -174,7 +174,10 @@ pub fn load_map(path: &Path) -> Result<Map> {
 /// representable grid, a cell value no map holds (an infinite log-odds, a NaN or infinite elevation, a
 /// negative or NaN variance), or tiles that would exceed `limit_bytes`.
 pub fn load_map_within(path: &Path, limit_bytes: u64) -> Result<Map> {
-    let data = read_file(path)?;
+    // A file holds no more than the map it makes (its cells packed, 12 bytes as in memory, its ceilings in 17 of
+    // their 20), plus its header and tile records: one larger than the limit and a megabyte is refused before
+    // it is read.
+    let data = read_file(path, limit_bytes.saturating_add(1 << 20))?;
     map_from_bytes(path, &data, limit_bytes)
 }
 

@@ -40,9 +40,10 @@ pub fn unit_quaternion(w: f64, x: f64, y: f64, z: f64) -> Option<nalgebra::UnitQ
     Some(nalgebra::UnitQuaternion::from_quaternion(q))
 }
 
-/// Reads a whole file, naming it on failure.
-pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+/// Reads a whole file of at most `limit` bytes ([`read_bounded`]), naming it on failure: a binary input (a map,
+/// a scan graph, a PCD) is never read past the memory its caller allows, whatever the file (a device) says.
+pub(crate) fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    read_bounded(path, limit)
 }
 
 /// The largest text input the programs read: a scenario, a sweep file, a sweep's base scenario, a robot's

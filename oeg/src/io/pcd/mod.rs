@@ -204,7 +204,8 @@ pub fn read_pcd(path: &Path) -> Result<PcdCloud> {
 /// # Errors
 /// As [`read_pcd`], and [`Error::Parse`] naming the header's DATA line for a cloud over the limit.
 pub fn read_pcd_within(path: &Path, limit_bytes: u64) -> Result<PcdCloud> {
-    let data = read_file(path)?;
+    // The body, as stored, is never larger than decoded.
+    let data = read_file(path, limit_bytes)?;
     parse_pcd_within(path, &data, limit_bytes)
 }
 
