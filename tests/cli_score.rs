@@ -28,6 +28,17 @@ fn count(m: &serde_json::Map<String, serde_json::Value>, key: &str) -> u64 {
     m[key].as_u64().unwrap_or_else(|| panic!("{key}: {}", m[key]))
 }
 
+/// The standard output of `oeg score`, which exits non-zero exactly when the scenario's expectations fail
+/// (its files written all the same).
+fn stdout_judged(o: &std::process::Output) -> String {
+    let said = String::from_utf8_lossy(&o.stdout).into_owned();
+    if !o.status.success() {
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("of the scenario's expectations failed"), "{said}\n{e}");
+    }
+    said
+}
+
 /// Runs the decision scene, then writes its map's layers over the scenario's region as another mapper would
 /// (`oeg::planner_files`: `.npy` layers, `layers.json`, a nav2 map).
 fn run_and_export(dir: &Path) -> (PathBuf, PathBuf) {
@@ -71,7 +82,7 @@ fn the_testbeds_own_map_scores_to_the_counts_of_oeg_run() {
 
     // The .npy layers on the truth's own grid: every figure is the run's, bit for bit.
     let scored = dir.join("score");
-    let out = ok(&oeg(&[
+    let out = stdout_judged(&oeg(&[
         "score",
         s(&scene()),
         "--layers",
@@ -102,7 +113,7 @@ fn the_testbeds_own_map_scores_to_the_counts_of_oeg_run() {
     // The same decisions as a nav2 map: uncertain cells were written occupied, drivable ones free, and nothing
     // was simulated, so there are no blind counts.
     let nav2 = dir.join("nav2");
-    let said = ok(&oeg(&[
+    let said = stdout_judged(&oeg(&[
         "score",
         s(&scene()),
         "--nav2",
@@ -158,7 +169,9 @@ fn a_coarser_map_is_resampled_onto_the_truths_grid() {
     };
     std::fs::write(&d, array.to_bytes().expect("bytes")).expect("write");
     let out = dir.join("out");
-    ok(&oeg(&[
+    // One cell covers 400 of the scene's 9600: its coverage expectation fails, so the command exits non-zero
+    // after writing its files, as `oeg run` does.
+    let e = err(&oeg(&[
         "score",
         s(&scene()),
         "--decisions",
@@ -170,7 +183,12 @@ fn a_coarser_map_is_resampled_onto_the_truths_grid() {
         "--out",
         s(&out),
     ]));
+    assert!(
+        e.contains("expectation failed: coverage") && e.contains("of the scenario's expectations failed"),
+        "{e}"
+    );
     let m = json(&out.join("score.json"));
+    assert!(count(&m, "num_expectations_failed") >= 1);
     // 1 m / 0.05 m = 20 cells a side.
     assert_eq!(count(&m, "num_observed_cells"), 400);
     assert_eq!(count(&m, "num_scored_cells"), 400);

@@ -13,3 +13,14 @@ pub mod score;
 pub mod suite;
 pub mod sweep;
 pub mod validate;
+
+/// Prints each failed expectation and fails, so that the command exits non-zero (after its files are written).
+fn fail_on_expectations(failed: &[oeg_eval::judge::metrics::FailedExpectation]) -> anyhow::Result<()> {
+    if failed.is_empty() {
+        return Ok(());
+    }
+    for f in failed {
+        eprintln!("expectation failed: {f}");
+    }
+    anyhow::bail!("{} of the scenario's expectations failed", failed.len())
+}

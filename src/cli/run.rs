@@ -90,11 +90,5 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     for line in summary_lines(&report) {
         say!("{line}");
     }
-    if !report.failed.is_empty() {
-        for f in &report.failed {
-            eprintln!("expectation failed: {f}");
-        }
-        anyhow::bail!("{} of the scenario's expectations failed", report.failed.len());
-    }
-    Ok(())
+    super::fail_on_expectations(&report.failed)
 }

@@ -122,5 +122,5 @@ pub fn run(args: &ScoreArgs) -> anyhow::Result<()> {
     for f in &report.files {
         say!("wrote {}", f.display());
     }
-    Ok(())
+    super::fail_on_expectations(&report.evaluation.failed)
 }
