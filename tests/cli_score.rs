@@ -213,6 +213,7 @@ fn bad_maps_are_refused_with_the_file_and_what_was_expected() {
     let bad_code = write("code9.npy", &npy(1, 1, NpyData::U8(vec![9])));
     let whole = npy(2, 2, NpyData::U8(vec![1; 4]));
     let truncated = write("short.npy", &whole[..whole.len() - 1]);
+    let far = write("far.npy", &npy(2, 2, NpyData::F64(vec![0.0, 0.0, 1e300, 0.0])));
     let negative = write(
         "negative.npy",
         &npy(2, 2, NpyData::F32(vec![0.0, -1.0, 0.0, 0.0])),
@@ -287,6 +288,10 @@ fn bad_maps_are_refused_with_the_file_and_what_was_expected() {
         (
             [&["--decisions", s(&codes), "--variance", s(&negative)][..], &grid].concat(),
             vec!["negative.npy", "variances: -1 at row 0, column 1"],
+        ),
+        (
+            [&["--decisions", s(&codes), "--elevation", s(&far)][..], &grid].concat(),
+            vec!["far.npy", "elevations: 1e300 at row 1, column 0", "1000000"],
         ),
         (
             vec!["--layers", s(&unknown_layer)],

@@ -22,6 +22,10 @@ use crate::error::{EvalError, Result};
 /// The most cells a user's arrays may hold (a 10,000 x 10,000 grid, 1 km a side at 0.1 m): larger ones are
 /// refused before they are resampled.
 pub const MAX_FOREIGN_CELLS: u64 = 100_000_000;
+/// The largest elevation another mapper's map may hold, metres either side of zero (1000 km): beyond any terrain,
+/// and small enough that its error squared stays finite, so an elevation metric is never infinite (which JSON
+/// could only write as `null`, the same as "no elevation").
+pub const MAX_ABS_ELEVATION_M: f64 = 1e6;
 
 /// What a map says about each cell of a region: row-major over the truth's region, as the truth raster.
 #[derive(Debug, Clone, PartialEq)]
@@ -153,7 +157,7 @@ impl ForeignMap {
             (
                 "elevations",
                 &self.elevation_m,
-                (f64::NEG_INFINITY, f64::INFINITY),
+                (-MAX_ABS_ELEVATION_M, MAX_ABS_ELEVATION_M),
             ),
             ("variances", &self.variance_m2, (0.0, f64::INFINITY)),
             ("occupancy probabilities", &self.occupancy, (0.0, 1.0)),
@@ -172,6 +176,8 @@ impl ForeignMap {
                 .enumerate()
                 .find(|(_, x)| !(x.is_nan() || (x.is_finite() && (valid.0..=valid.1).contains(*x))))
             {
+                // Huge values in scientific notation, not three hundred digits.
+                let x = if x.abs() < 1e15 { format!("{x}") } else { format!("{x:e}") };
                 return Err(fail(format!(
                     "{name}: {x} at row {}, column {}, expected a finite value in [{}, {}] or NaN for none",
                     k / self.cols,
