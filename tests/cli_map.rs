@@ -482,7 +482,8 @@ fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
     ]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("over the memory limit") && stderr(&o).contains("plan between points nearer the map"),
+        stderr(&o).contains("over the memory limit")
+            && stderr(&o).contains("plan between points nearer the map"),
         "{}",
         stderr(&o)
     );

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{err, oeg, ok, s, temp_dir};
+use common::{err, oeg, s, temp_dir};
 use std::path::{Path, PathBuf};
 
 use oeg::{NpyArray, NpyData, UncertainCells};

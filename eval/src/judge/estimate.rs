@@ -177,7 +177,11 @@ impl ForeignMap {
                 .find(|(_, x)| !(x.is_nan() || (x.is_finite() && (valid.0..=valid.1).contains(*x))))
             {
                 // Huge values in scientific notation, not three hundred digits.
-                let x = if x.abs() < 1e15 { format!("{x}") } else { format!("{x:e}") };
+                let x = if x.abs() < 1e15 {
+                    format!("{x}")
+                } else {
+                    format!("{x:e}")
+                };
                 return Err(fail(format!(
                     "{name}: {x} at row {}, column {}, expected a finite value in [{}, {}] or NaN for none",
                     k / self.cols,

@@ -228,39 +228,15 @@ impl NpyArray {
                     "the header of {header_len} bytes is truncated or not text"
                 ))
             })?;
-        let field = |key: &str| -> Option<&str> {
-            let start = header.find(&format!("'{key}':"))? + key.len() + 3;
-            Some(header[start..].trim_start())
-        };
-        let descr = field("descr")
-            .and_then(|v| v.strip_prefix('\''))
-            .and_then(|v| v.split('\'').next())
-            .ok_or_else(|| fail("the header has no 'descr' string".into()))?;
+        let dict = HeaderDict::parse(header).map_err(|e| fail(format!("the header {e}")))?;
+        let descr = dict.descr.as_str();
         let element = Element::parse(descr).ok_or_else(|| {
             fail(format!(
                 "element type '{descr}', expected floats ('<f4', '<f8'), integers ('|u1', '<i8', ...) or \
                  booleans ('|b1')"
             ))
         })?;
-        let fortran = match field("fortran_order") {
-            Some(v) if v.starts_with("False") => false,
-            Some(v) if v.starts_with("True") => true,
-            _ => return Err(fail("expected 'fortran_order': False or True".into())),
-        };
-        let shape: Vec<usize> = field("shape")
-            .and_then(|v| v.strip_prefix('('))
-            .and_then(|v| v.split(')').next())
-            .map(|v| {
-                v.split(',')
-                    .map(str::trim)
-                    .filter(|s| !s.is_empty())
-                    .map(str::parse)
-                    .collect()
-            })
-            .transpose()
-            .ok()
-            .flatten()
-            .ok_or_else(|| fail("the header's 'shape' is not a tuple of sizes".into()))?;
+        let (fortran, shape) = (dict.fortran_order, dict.shape);
         let [rows, cols] = shape[..] else {
             return Err(fail(format!(
                 "expected a 2D array (rows, columns), the shape is {shape:?}"
@@ -284,6 +260,202 @@ impl NpyArray {
             data
         };
         Ok(Self { rows, cols, data })
+    }
+}
+
+/// The header's dict literal, as numpy reads it (`ast.literal_eval`, then exactly the keys `descr`,
+/// `fortran_order` and `shape`): `{'descr': '<f4', 'fortran_order': False, 'shape': (3, 4), }`.
+struct HeaderDict {
+    descr: String,
+    fortran_order: bool,
+    shape: Vec<usize>,
+}
+
+/// A value of the header's dict.
+enum HeaderValue {
+    Str(String),
+    Bool(bool),
+    Tuple(Vec<usize>),
+}
+
+impl HeaderDict {
+    /// Parses `text` as a Python dict literal of strings, booleans and tuples of sizes, with exactly the three
+    /// keys; the error says what was expected and where (a character offset).
+    fn parse(text: &str) -> std::result::Result<Self, String> {
+        let mut p = Literal {
+            text: text.as_bytes(),
+            at: 0,
+        };
+        p.expect(b'{')?;
+        let (mut descr, mut fortran_order, mut shape) = (None, None, None);
+        loop {
+            p.skip_space();
+            if p.eat(b'}') {
+                break;
+            }
+            let key = p.string()?;
+            p.skip_space();
+            p.expect(b':')?;
+            p.skip_space();
+            let at = p.at;
+            let value = p.value()?;
+            let slot_taken = match (key.as_str(), value) {
+                ("descr", HeaderValue::Str(v)) => descr.replace(v).is_some(),
+                ("fortran_order", HeaderValue::Bool(v)) => fortran_order.replace(v).is_some(),
+                ("shape", HeaderValue::Tuple(v)) => shape.replace(v).is_some(),
+                ("descr" | "fortran_order" | "shape", _) => {
+                    return Err(format!(
+                        "has a '{key}' of the wrong kind at character {at}: expected a string for 'descr', \
+                         True or False for 'fortran_order', a tuple of sizes for 'shape'"
+                    ));
+                }
+                _ => {
+                    return Err(format!(
+                        "has the key {key:?}: expected exactly 'descr', 'fortran_order' and 'shape'"
+                    ));
+                }
+            };
+            if slot_taken {
+                return Err(format!("has the key '{key}' twice"));
+            }
+            p.skip_space();
+            if !p.eat(b',') {
+                p.skip_space();
+                p.expect(b'}')?;
+                break;
+            }
+        }
+        p.skip_space();
+        if p.at != p.text.len() {
+            return Err(format!("has text after its dict at character {}", p.at));
+        }
+        match (descr, fortran_order, shape) {
+            (Some(descr), Some(fortran_order), Some(shape)) => Ok(Self {
+                descr,
+                fortran_order,
+                shape,
+            }),
+            _ => Err("lacks a key: expected exactly 'descr', 'fortran_order' and 'shape'".into()),
+        }
+    }
+}
+
+/// A cursor over a Python literal's bytes.
+struct Literal<'a> {
+    text: &'a [u8],
+    at: usize,
+}
+
+impl Literal<'_> {
+    fn skip_space(&mut self) {
+        while self
+            .text
+            .get(self.at)
+            .is_some_and(|c| matches!(c, b' ' | b'\t' | b'\n' | b'\r'))
+        {
+            self.at += 1;
+        }
+    }
+
+    fn eat(&mut self, c: u8) -> bool {
+        let found = self.text.get(self.at) == Some(&c);
+        self.at += usize::from(found);
+        found
+    }
+
+    fn expect(&mut self, c: u8) -> std::result::Result<(), String> {
+        self.skip_space();
+        if self.eat(c) {
+            Ok(())
+        } else {
+            Err(format!(
+                "is not a .npy dict: expected '{}' at character {}",
+                char::from(c),
+                self.at
+            ))
+        }
+    }
+
+    /// A quoted string without escapes (numpy's keys and type codes have none).
+    fn string(&mut self) -> std::result::Result<String, String> {
+        let start = self.at;
+        let quote = match self.text.get(self.at) {
+            Some(&q @ (b'\'' | b'"')) => q,
+            _ => {
+                return Err(format!(
+                    "is not a .npy dict: expected a quoted key at character {start}"
+                ));
+            }
+        };
+        self.at += 1;
+        let end = self.text[self.at..]
+            .iter()
+            .position(|&c| c == quote || c == b'\\' || c == b'\n')
+            .map(|k| self.at + k)
+            .filter(|&k| self.text[k] == quote)
+            .ok_or_else(|| format!("has an unclosed or escaped string at character {start}"))?;
+        let s = String::from_utf8_lossy(&self.text[self.at..end]).into_owned();
+        self.at = end + 1;
+        Ok(s)
+    }
+
+    fn value(&mut self) -> std::result::Result<HeaderValue, String> {
+        let rest = &self.text[self.at..];
+        if rest.starts_with(b"True") {
+            self.at += 4;
+            return Ok(HeaderValue::Bool(true));
+        }
+        if rest.starts_with(b"False") {
+            self.at += 5;
+            return Ok(HeaderValue::Bool(false));
+        }
+        match rest.first() {
+            Some(b'\'' | b'"') => self.string().map(HeaderValue::Str),
+            Some(b'(') => {
+                self.at += 1;
+                let mut sizes = Vec::new();
+                let mut trailing_comma = false;
+                loop {
+                    self.skip_space();
+                    if self.eat(b')') {
+                        break;
+                    }
+                    sizes.push(self.size()?);
+                    self.skip_space();
+                    trailing_comma = self.eat(b',');
+                    if !trailing_comma {
+                        self.expect(b')')?;
+                        break;
+                    }
+                }
+                // `(5)` is the number 5 in Python, not a tuple.
+                if sizes.len() == 1 && !trailing_comma {
+                    return Err("has a 'shape' that is a number in parentheses, not a tuple".into());
+                }
+                Ok(HeaderValue::Tuple(sizes))
+            }
+            _ => Err(format!(
+                "has a value at character {} that is not a string, True, False or a tuple",
+                self.at
+            )),
+        }
+    }
+
+    /// A size: decimal digits, no leading zero (as Python writes an `int`).
+    fn size(&mut self) -> std::result::Result<usize, String> {
+        let start = self.at;
+        while self.text.get(self.at).is_some_and(u8::is_ascii_digit) {
+            self.at += 1;
+        }
+        let digits = std::str::from_utf8(&self.text[start..self.at]).unwrap_or("");
+        if digits.is_empty() || (digits.len() > 1 && digits.starts_with('0')) {
+            return Err(format!(
+                "has a 'shape' entry at character {start} that is not a size"
+            ));
+        }
+        digits
+            .parse()
+            .map_err(|_| format!("has a 'shape' entry at character {start} too large for this machine"))
     }
 }
 
@@ -425,6 +597,87 @@ mod tests {
             };
             let back = NpyArray::from_bytes(p, &array.to_bytes().expect("bytes")).expect("reads");
             assert_eq!(back, array);
+        }
+    }
+
+    /// A version 1.0 file of four float32 ones with `dict` as its header.
+    fn with_header(dict: &str) -> Vec<u8> {
+        let mut out = MAGIC.to_vec();
+        out.extend_from_slice(&[1, 0]);
+        out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        out.extend_from_slice(dict.as_bytes());
+        out.extend(std::iter::repeat_n(1.0f32.to_le_bytes(), 4).flatten());
+        out
+    }
+
+    #[test]
+    fn the_header_is_parsed_as_the_dict_literal_numpy_reads() {
+        let p = Path::new("h.npy");
+        // What numpy writes, and the same dict spelled otherwise, are read.
+        for dict in [
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2), }      \n",
+            "{\"shape\": (2,2), \"fortran_order\": False, \"descr\": \"<f4\"}",
+            "{ 'descr' : '<f4' ,\n 'fortran_order' : False , 'shape' : ( 2 , 2 , ) }",
+        ] {
+            let a = NpyArray::from_bytes(p, &with_header(dict)).unwrap_or_else(|e| panic!("{dict}: {e}"));
+            assert_eq!((a.rows, a.cols), (2, 2), "{dict}");
+        }
+        // Headers numpy refuses are refused, each saying why (the first `'key':` text anywhere no longer counts).
+        for (dict, why) in [
+            (
+                "{'note': \"'descr': '<f8', 'shape': (1, 2)\", 'descr': '<f4', 'fortran_order': False, 'shape': (2, 2)}",
+                "has the key \"note\"",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2), 'extra': True}",
+                "has the key \"extra\"",
+            ),
+            ("{'descr': '<f4', 'fortran_order': False}", "lacks a key"),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2), 'shape': (4, 1)}",
+                "has the key 'shape' twice",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': 0, 'shape': (2, 2)}",
+                "not a string, True, False",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': 'False', 'shape': (2, 2)}",
+                "of the wrong kind",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (4)}",
+                "not a tuple",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (02, 2)}",
+                "not a size",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (-2, -2)}",
+                "not a size",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2)} # (1, 4)",
+                "text after its dict",
+            ),
+            (
+                "'descr': '<f4', 'fortran_order': False, 'shape': (2, 2)",
+                "expected '{'",
+            ),
+            (
+                "{'descr': '<f\\4', 'fortran_order': False, 'shape': (2, 2)}",
+                "escaped string",
+            ),
+            (
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2)",
+                "expected '}'",
+            ),
+        ] {
+            let e = NpyArray::from_bytes(p, &with_header(dict))
+                .expect_err(dict)
+                .to_string();
+            assert!(e.contains("h.npy") && e.contains(why), "{dict}: {e}");
         }
     }
 }
