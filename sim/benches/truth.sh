@@ -29,7 +29,7 @@ measure() { # measure BIN RESOLUTION: appends "seconds kilobytes" to $tmp/BIN-RE
     /usr/bin/time -f '%e %M' -o "$tmp/time" "$bin" score "$scenario" --decisions "$tmp/one.npy" --origin=0,0 \
         --resolution 1 --no-observability --set "map.resolution_m=$res" --out "$tmp/out" >/dev/null 2>&1 || true
     # (A one-cell map fails the scenario's expectations: `oeg score` then exits non-zero, its work done.)
-    cat "$tmp/time" >>"$tmp/$name-$res"
+    tail -n 1 "$tmp/time" >>"$tmp/$name-$res" # (time first says when the command exited non-zero)
     rm -rf "$tmp/out"
 }
 resolutions="0.05 0.02 0.01"
