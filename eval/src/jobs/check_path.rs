@@ -99,30 +99,30 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
         message: f.message,
     })?;
     let footprint = loaded.robot.footprint();
-    let poses = poses_along(&points, res / 2.0);
     let mut watch = ContactWatch::new(s, &truth, geometry, footprint);
     let (mut first_contact, mut contact_poses) = (None, 0u64);
-    let mut crossed: Vec<CellIndex> = Vec::new();
-    for (along, pose) in &poses {
-        let began = watch.check(*along, *pose);
-        let cells = footprint.cells_under(&geometry, &region, *pose);
-        let touching = cells
-            .iter()
-            .any(|c| region.offset(*c).is_some_and(|k| truth.truly_blocked(k)));
+    // The cells the footprint crossed, one flag a cell of the region (not a list of every pose's cells).
+    let mut crossed = vec![false; truth.cells.len()];
+    let num_poses = for_each_pose(&points, res / 2.0, |along, pose| {
+        let began = watch.check(along, pose);
+        let mut touching = false;
+        for c in footprint.cells_under(&geometry, &region, pose) {
+            if let Some(k) = region.offset(c) {
+                touching |= truth.truly_blocked(k);
+                crossed[k] = true;
+            }
+        }
         contact_poses += u64::from(touching);
         if let (None, Some(c)) = (&first_contact, began) {
             first_contact = Some(Contact {
-                along_m: round(*along),
+                along_m: round(along),
                 x_m: round(pose.x_m),
                 y_m: round(pose.y_m),
                 yaw_deg: round(pose.yaw_rad.to_degrees()),
                 obstacle: c.obstacle,
             });
         }
-        crossed.extend(cells);
-    }
-    crossed.sort_by_key(|c| (c.j, c.i));
-    crossed.dedup();
+    });
     let verdicts = match &job.map {
         Some(path) => {
             let map = oeg::load_map(path)?;
@@ -133,8 +133,7 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let classes = Verdicts::from_classes(&truth, vec![oeg::Traversability::Unknown; truth.cells.len()]);
     let mut cells_by_truth = BTreeMap::new();
     let mut cells_by_verdict = verdicts.as_ref().map(|_| BTreeMap::new());
-    for c in &crossed {
-        let Some(k) = region.offset(*c) else { continue };
+    for k in (0..crossed.len()).filter(|&k| crossed[k]) {
         *cells_by_truth
             .entry(classes.truth[k].name().to_string())
             .or_insert(0) += 1;
@@ -150,7 +149,7 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
         scenario: s.name.clone(),
         num_points: points.len() as u64,
         length_m: round(length_m),
-        num_poses: poses.len() as u64,
+        num_poses,
         first_contact,
         contact_poses,
         closest_approach_m: watch.closest.map(|c| round(c.0)),
@@ -172,37 +171,38 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     Ok((check, files))
 }
 
-/// Poses every `step_m` along the polyline, heading along each segment, with the distance along the path (the
-/// watch's clock). A one-point path is one pose, heading +x.
-fn poses_along(points: &[(f64, f64)], step_m: f64) -> Vec<(f64, Pose2)> {
-    let mut poses = Vec::new();
-    let mut along = 0.0;
+/// Visits the poses every `step_m` along the polyline, heading along each segment, with the distance along
+/// the path (the watch's clock), one at a time: a long path's poses are never held together. A one-point path
+/// is one pose, heading +x. Returns the number of poses.
+fn for_each_pose(points: &[(f64, f64)], step_m: f64, mut visit: impl FnMut(f64, Pose2)) -> u64 {
+    let (mut along, mut yaw_rad, mut count) = (0.0, 0.0, 0u64);
     for w in points.windows(2) {
         let (a, b) = (w[0], w[1]);
         let length = (b.0 - a.0).hypot(b.1 - a.1);
         if length <= 0.0 {
             continue;
         }
-        let yaw_rad = (b.1 - a.1).atan2(b.0 - a.0);
+        yaw_rad = (b.1 - a.1).atan2(b.0 - a.0);
         let n = (length / step_m).ceil() as usize;
         for k in 0..n {
             let f = k as f64 / n as f64;
-            poses.push((
+            visit(
                 along + f * length,
                 Pose2 {
                     x_m: a.0 + f * (b.0 - a.0),
                     y_m: a.1 + f * (b.1 - a.1),
                     yaw_rad,
                 },
-            ));
+            );
+            count += 1;
         }
         along += length;
     }
-    let yaw_rad = poses.last().map_or(0.0, |(_, p)| p.yaw_rad);
     if let Some(&(x_m, y_m)) = points.last() {
-        poses.push((along, Pose2 { x_m, y_m, yaw_rad }));
+        visit(along, Pose2 { x_m, y_m, yaw_rad });
+        count += 1;
     }
-    poses
+    count
 }
 
 fn round(v: f64) -> f64 {
