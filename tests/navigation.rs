@@ -184,7 +184,7 @@ fn every_way_a_planner_fails_is_an_event_with_its_message() {
             "path.csv:2: (500, 0) m lies off the map",
         ),
         ("empty", ": > \"$7\"", "path.csv: the path is empty"),
-        ("no_file", "exit 0", "the planner wrote no readable path"),
+        ("no_file", "exit 0", "path.csv: no readable path"),
         (
             "exit",
             "echo boom >&2; exit 1",
@@ -466,5 +466,42 @@ fn check_path_finds_the_first_contact_and_passes_a_path_round_the_wall() {
         s(&dir.join("c")),
     ]));
     assert!(e.contains("broken.csv:2: y `north` is not a number"), "{e}");
+    assert_eq!(e.matches("broken.csv").count(), 1, "the file named once: {e}");
     assert!(!dir.join("c").exists(), "nothing written for a broken path");
+    // A long path (2,000 points back and forth beside the wall, 4 km) is checked with one flag a cell, not every
+    // pose's cells; one over the pose limit (3,000 km) is refused before the work.
+    let zigzag = |name: &str, n: usize, far: f64| {
+        let mut text = String::from("x_m,y_m\n");
+        for k in 0..n {
+            text.push_str(&format!(
+                "{},{}\n",
+                if k % 2 == 0 { 0.0 } else { far },
+                -3.0 + 0.002 * (k % 2500) as f64
+            ));
+        }
+        write(name, &text)
+    };
+    ok(&oeg(&[
+        "check-path",
+        s(&scene("nav_wall")),
+        s(&zigzag("long.csv", 2000, 2.0)),
+        "--out",
+        s(&dir.join("d")),
+    ]));
+    let long = json(&dir.join("d/path_check.json"));
+    // 1,999 segments of just over 2 m, 81 poses each, and the end.
+    assert_eq!(long["num_poses"], 161_920, "{long:#}");
+    assert_eq!(long["contact_poses"], 0, "{long:#}");
+    let e = err(&oeg(&[
+        "check-path",
+        s(&scene("nav_wall")),
+        s(&zigzag("too_long.csv", 300_000, 6.5)),
+        "--out",
+        s(&dir.join("e")),
+    ]));
+    assert!(
+        e.contains("too_long.csv") && e.contains("over the limit of 1000000"),
+        "{e}"
+    );
+    assert!(!dir.join("e").exists(), "nothing written for a refused path");
 }

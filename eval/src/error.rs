@@ -24,6 +24,13 @@ pub enum EvalError {
         /// What is wrong and what was expected.
         message: String,
     },
+    /// An input the job cannot use, with a message that names the file and the place itself (`path.csv:3:
+    /// ...`), so the file is not named twice.
+    #[error("{message}")]
+    Placed {
+        /// The file and place, then what is wrong and what was expected.
+        message: String,
+    },
     /// An input the job cannot use.
     #[error("{}: {message}", path.display())]
     Input {

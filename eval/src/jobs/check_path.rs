@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use oeg::{CellIndex, Pose2};
+use oeg::Pose2;
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
@@ -94,11 +94,22 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let region = truth.region;
     let res = geometry.resolution_m();
     let extent = crate::navigation::external::extent_of(&region, res);
-    let points = crate::navigation::external::read_path(&job.path, extent).map_err(|f| EvalError::Input {
-        path: job.path.clone(),
-        message: f.message,
-    })?;
+    // Every message of `read_path` names the file and the line.
+    let points = crate::navigation::external::read_path(&job.path, extent)
+        .map_err(|f| EvalError::Placed { message: f.message })?;
     let footprint = loaded.robot.footprint();
+    // Each pose looks at the blocked cells within a few metres: the number of poses is bounded before the work.
+    let planned_poses = count_poses(&points, res / 2.0);
+    if planned_poses > MAX_CHECKED_POSES {
+        return Err(EvalError::Input {
+            path: job.path.clone(),
+            message: format!(
+                "the path needs {planned_poses} poses (one every {} m along it), over the limit of \
+                 {MAX_CHECKED_POSES}; check a shorter path, or its parts one by one",
+                res / 2.0
+            ),
+        });
+    }
     let mut watch = ContactWatch::new(s, &truth, geometry, footprint);
     let (mut first_contact, mut contact_poses) = (None, 0u64);
     // The cells the footprint crossed, one flag a cell of the region (not a list of every pose's cells).
@@ -171,6 +182,28 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     Ok((check, files))
 }
 
+/// The most poses `oeg check-path` checks: a path of 25 km at 0.05 m (a pose every half cell). Each pose looks at
+/// the truly blocked cells within [`crate::navigation::APPROACH_WINDOW_M`] of the footprint.
+pub const MAX_CHECKED_POSES: u64 = 1_000_000;
+
+/// The poses of a segment `length_m` long, one every `step_m` (its last point is the next segment's first).
+fn segment_poses(length_m: f64, step_m: f64) -> u64 {
+    if length_m > 0.0 {
+        (length_m / step_m).ceil() as u64
+    } else {
+        0
+    }
+}
+
+/// The number of poses [`for_each_pose`] visits, without visiting them.
+fn count_poses(points: &[(f64, f64)], step_m: f64) -> u64 {
+    let along: u64 = points
+        .windows(2)
+        .map(|w| segment_poses((w[1].0 - w[0].0).hypot(w[1].1 - w[0].1), step_m))
+        .fold(0, u64::saturating_add);
+    along.saturating_add(u64::from(!points.is_empty()))
+}
+
 /// Visits the poses every `step_m` along the polyline, heading along each segment, with the distance along
 /// the path (the watch's clock), one at a time: a long path's poses are never held together. A one-point path
 /// is one pose, heading +x. Returns the number of poses.
@@ -183,7 +216,7 @@ fn for_each_pose(points: &[(f64, f64)], step_m: f64, mut visit: impl FnMut(f64, 
             continue;
         }
         yaw_rad = (b.1 - a.1).atan2(b.0 - a.0);
-        let n = (length / step_m).ceil() as usize;
+        let n = segment_poses(length, step_m);
         for k in 0..n {
             let f = k as f64 / n as f64;
             visit(

@@ -16,6 +16,9 @@ pub struct ContactWatch<'a> {
     geometry: GridGeometry,
     footprint: Footprint,
     blocked: Vec<bool>,
+    /// The columns (`i`) of the truly blocked cells of each row of the region, ascending: a pose looks only at
+    /// the blocked cells of its window, not at every cell of it.
+    blocked_columns: Vec<Vec<i32>>,
     in_contact: bool,
     /// The closest approach so far: distance, time, pose, the cell.
     pub closest: Option<(f64, f64, Pose2, CellIndex)>,
@@ -38,12 +41,23 @@ impl<'a> ContactWatch<'a> {
         geometry: GridGeometry,
         footprint: Footprint,
     ) -> Self {
+        let blocked: Vec<bool> = (0..truth.cells.len()).map(|k| truth.truly_blocked(k)).collect();
+        let region = truth.region;
+        let blocked_columns = (0..region.num_y)
+            .map(|v| {
+                (0..region.num_x)
+                    .filter(|&u| blocked[v as usize * region.num_x as usize + u as usize])
+                    .map(|u| region.cell_at(u, v).i)
+                    .collect()
+            })
+            .collect();
         Self {
             scenario,
             truth,
             geometry,
             footprint,
-            blocked: (0..truth.cells.len()).map(|k| truth.truly_blocked(k)).collect(),
+            blocked,
+            blocked_columns,
             in_contact: false,
             closest: None,
         }
@@ -63,14 +77,36 @@ impl<'a> ContactWatch<'a> {
             let (wlo, whi, rlo, rhi) = (window.min, window.max(), region.min, region.max());
             let lo = CellIndex::new(wlo.i.max(rlo.i), wlo.j.max(rlo.j));
             let hi = CellIndex::new(whi.i.min(rhi.i), whi.j.min(rhi.j));
+            // The footprint lies within `radius` of the pose, so a cell's distance from the pose less `radius`
+            // is a lower bound of the footprint's: a cell whose bound exceeds the nearest so far is skipped
+            // without the exact distance (the result is the same).
+            let f = &self.footprint;
+            let radius = [
+                (f.min_x_m, f.min_y_m),
+                (f.min_x_m, f.max_y_m),
+                (f.max_x_m, f.min_y_m),
+                (f.max_x_m, f.max_y_m),
+            ]
+            .iter()
+            .fold(0.0_f64, |r, (x, y)| r.max(x.hypot(*y)));
+            let half = self.geometry.resolution_m() / 2.0;
             for j in lo.j..=hi.j {
-                for i in lo.i..=hi.i {
+                let row = &self.blocked_columns[(j - rlo.j) as usize];
+                let first = row.partition_point(|&i| i < lo.i);
+                for &i in row[first..].iter().take_while(|&&i| i <= hi.i) {
                     let cell = CellIndex::new(i, j);
-                    if region.offset(cell).is_some_and(|k| self.blocked[k]) {
-                        let d = self.footprint.distance_to_cell(&self.geometry, cell, pose);
-                        if d <= APPROACH_WINDOW_M && nearest.is_none_or(|(best, _)| d < best) {
-                            nearest = Some((d, cell));
-                        }
+                    let (cx, cy) = self.geometry.cell_center(cell);
+                    let (dx, dy) = (
+                        ((cx - pose.x_m).abs() - half).max(0.0),
+                        ((cy - pose.y_m).abs() - half).max(0.0),
+                    );
+                    let bound = nearest.map_or(APPROACH_WINDOW_M, |(best, _)| best);
+                    if (dx * dx + dy * dy).sqrt() - radius > bound + 1e-9 {
+                        continue;
+                    }
+                    let d = self.footprint.distance_to_cell(&self.geometry, cell, pose);
+                    if d <= APPROACH_WINDOW_M && nearest.is_none_or(|(best, _)| d < best) {
+                        nearest = Some((d, cell));
                     }
                 }
             }

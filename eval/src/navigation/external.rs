@@ -220,7 +220,7 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
     };
     let name = path.display();
     let bytes = read_regular(path, MAX_PATH_FILE_BYTES)
-        .map_err(|e| fail(format!("{name}: the planner wrote no readable path: {e}")))?;
+        .map_err(|e| fail(format!("{name}: no readable path: {e}")))?;
     let text = String::from_utf8(bytes).map_err(|e| {
         fail(format!(
             "{name}: byte {}: not UTF-8 text; expected lines of x,y",
