@@ -104,29 +104,114 @@ const YAML_KEYS: [&str; 7] = [
     "free_thresh",
 ];
 
-/// Parses the YAML text of a nav2 map (`path` is named in errors): `key: value` lines, `#` comments.
+/// A value of the nav2 YAML: a scalar (quotes removed) or a sequence of scalars, written in flow style
+/// (`[0, 0, 0]`) or in block style (`- 0` lines under the key).
+#[derive(Debug, Clone, PartialEq)]
+enum YamlValue {
+    Scalar(String),
+    Sequence(Vec<String>),
+}
+
+/// A scalar without its quotes (`"m.pgm"`, `'0.05'`), as YAML reads it.
+fn unquoted(v: &str) -> &str {
+    let v = v.trim();
+    for q in ['"', '\''] {
+        if let Some(inner) = v.strip_prefix(q).and_then(|v| v.strip_suffix(q)) {
+            return inner;
+        }
+    }
+    v
+}
+
+/// A line without its comment: `#` at the start or after a space, outside quotes.
+fn without_comment(line: &str) -> &str {
+    let mut quote = None;
+    let mut previous = ' ';
+    for (k, c) in line.char_indices() {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (None, '"' | '\'') => quote = Some(c),
+            (None, '#') if previous.is_whitespace() => return &line[..k],
+            _ => {}
+        }
+        previous = c;
+    }
+    line
+}
+
+/// Parses the YAML text of a nav2 map (`path` is named in errors) as `map_server` reads it: a mapping of the
+/// keys it knows ([`YAML_KEYS`]; others are ignored, as `map_server` ignores them), scalars plain or quoted,
+/// the origin as a flow (`[x, y, yaw]`) or block (`- x` lines) sequence, `#` comments, `---` and `...`.
 fn parse_nav2_yaml(path: &Path, text: &str) -> Result<Nav2Yaml> {
-    let mut values: Vec<(&str, &str, usize)> = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.split(" #").next().unwrap_or_default().trim();
-        if line.is_empty() || line.starts_with('#') {
+    let mut entries: Vec<(&str, YamlValue, usize)> = Vec::new();
+    // Whether the last key had no value on its line, so that `- item` lines below it are its sequence.
+    let mut open_block = false;
+    for (n, raw) in text.lines().enumerate() {
+        let fail = |what: String| Error::parse(path, format!("line {}: {what}", n + 1));
+        let line = without_comment(raw);
+        let trimmed = line.trim();
+        if trimmed.is_empty() || trimmed == "---" || trimmed == "..." {
             continue;
         }
-        let fail = |what: String| Error::parse(path, format!("line {}: {what}", n + 1));
-        let (key, value) = line
-            .split_once(':')
-            .ok_or_else(|| fail(format!("expected `key: value`, found `{line}`")))?;
-        let key = key.trim();
-        if !YAML_KEYS.contains(&key) {
+        // An item of the block sequence under the last key.
+        if let Some(item) = trimmed.strip_prefix("- ").or((trimmed == "-").then_some("")) {
+            match entries.last_mut() {
+                Some((_, YamlValue::Sequence(items), _)) if open_block && line.starts_with([' ', '-']) => {
+                    items.push(unquoted(item).to_string());
+                    continue;
+                }
+                _ => return Err(fail(format!("`{trimmed}` is a list item that belongs to no key"))),
+            }
+        }
+        if line.starts_with([' ', '\t']) {
             return Err(fail(format!(
-                "unknown key `{key}`, expected one of {}",
-                YAML_KEYS.join(", ")
+                "`{trimmed}` is indented: expected `key: value` at the start of the line"
             )));
         }
-        if values.iter().any(|(k, ..)| *k == key) {
+        let (key, value) = trimmed
+            .split_once(':')
+            .ok_or_else(|| fail(format!("expected `key: value`, found `{trimmed}`")))?;
+        let (key, value) = (unquoted(key), value.trim());
+        if entries.iter().any(|(k, ..)| *k == key) {
             return Err(fail(format!("`{key}` is given twice")));
         }
-        values.push((key, value.trim(), n + 1));
+        open_block = value.is_empty();
+        let value = if open_block {
+            YamlValue::Sequence(Vec::new())
+        } else if let Some(inner) = value.strip_prefix('[').and_then(|v| v.strip_suffix(']')) {
+            YamlValue::Sequence(inner.split(',').map(|x| unquoted(x).to_string()).collect())
+        } else {
+            YamlValue::Scalar(unquoted(value).to_string())
+        };
+        entries.push((key, value, n + 1));
+    }
+    let mut values: Vec<(&str, &str, usize)> = Vec::new();
+    let mut origin_items: Option<(&[String], usize)> = None;
+    for (key, value, n) in &entries {
+        if !YAML_KEYS.contains(key) {
+            continue;
+        }
+        match (value, *key) {
+            (YamlValue::Sequence(items), "origin") => origin_items = Some((items, *n)),
+            (YamlValue::Scalar(v), "origin") => {
+                return Err(Error::parse(
+                    path,
+                    format!("line {n}: `origin: {v}`, expected [x, y, yaw] in metres and radians"),
+                ));
+            }
+            (YamlValue::Scalar(v), _) => values.push((key, v.as_str(), *n)),
+            (YamlValue::Sequence(items), _) => {
+                let what = if items.is_empty() {
+                    "has no value"
+                } else {
+                    "is a list"
+                };
+                return Err(Error::parse(
+                    path,
+                    format!("line {n}: `{key}` {what}, expected a single value"),
+                ));
+            }
+        }
     }
     let get = |key: &str| values.iter().find(|(k, ..)| *k == key).map(|(_, v, n)| (*v, *n));
     let number = |key: &str, default: Option<f64>| -> Result<f64> {
@@ -148,7 +233,7 @@ fn parse_nav2_yaml(path: &Path, text: &str) -> Result<Nav2Yaml> {
         ));
     }
     let (image, _) = get("image").ok_or_else(|| Error::parse(path, "the key `image` is missing"))?;
-    let image = image.trim_matches(|c| c == '"' || c == '\'').to_string();
+    let image = image.to_string();
     let resolution_m = number("resolution", None)?;
     if resolution_m <= 0.0 {
         return Err(Error::parse(
@@ -156,21 +241,20 @@ fn parse_nav2_yaml(path: &Path, text: &str) -> Result<Nav2Yaml> {
             format!("`resolution: {resolution_m}`, expected metres above 0"),
         ));
     }
-    let (origin_text, n) = get("origin").ok_or_else(|| Error::parse(path, "the key `origin` is missing"))?;
-    let origin: Vec<f64> = origin_text
-        .strip_prefix('[')
-        .and_then(|v| v.strip_suffix(']'))
-        .map(|v| {
-            v.split(',')
-                .map(|x| x.trim().parse::<f64>())
-                .collect::<std::result::Result<_, _>>()
-        })
-        .and_then(std::result::Result::ok)
-        .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
+    let (origin_items, n) = origin_items.ok_or_else(|| Error::parse(path, "the key `origin` is missing"))?;
+    let origin: Vec<f64> = origin_items
+        .iter()
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<std::result::Result<Vec<f64>, _>>()
+        .ok()
+        .filter(|v| v.len() == 3 && v.iter().all(|x| x.is_finite()))
         .ok_or_else(|| {
             Error::parse(
                 path,
-                format!("line {n}: `origin: {origin_text}`, expected [x, y, yaw] in metres and radians"),
+                format!(
+                    "line {n}: `origin: [{}]`, expected [x, y, yaw] in metres and radians",
+                    origin_items.join(", ")
+                ),
             )
         })?;
     if origin[2] != 0.0 {
@@ -390,9 +474,9 @@ mod tests {
         assert!(parse_nav2_map(yaml, pgm, 100).is_ok());
         let cases: [(&str, &[u8], &str); 8] = [
             (
-                "image: map.pgm\nresolution: 0.1\norigin: [0, 0, 0]\ncolour: red\n",
+                "image: map.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n  - 4\n",
                 pgm,
-                "line 4: unknown key `colour`",
+                "line 4: `- 4` is a list item that belongs to no key",
             ),
             (
                 "image: map.pgm\norigin: [0, 0, 0]\n",
@@ -423,5 +507,30 @@ mod tests {
             assert!(e.contains(want), "{e} lacks {want}");
             assert!(e.starts_with("map.yaml") || e.starts_with("map.pgm"), "{e}");
         }
+    }
+
+    #[test]
+    fn the_yaml_map_server_accepts_is_read() {
+        let pgm = b"P5\n2 1\n255\n\x00\xfe";
+        for yaml in [
+            // Block-style origin, quoted values, a document marker, keys map_server ignores, comments.
+            "---\nimage: 'map.pgm'\nmode: \"trinary\"\nresolution: \"0.1\"\norigin:\n  - 0.0\n  - '0'\n  - 0 # yaw\nnegate: '0'\noccupied_thresh: 0.65\nfree_thresh: 0.196\nsaved_by: map_saver\n...\n",
+            "image: map.pgm\nresolution: 0.1\norigin:\n- 0\n- 0\n- 0\n",
+            "\"image\": \"map#1.pgm\"\nresolution: 0.1 # metres\norigin: [ 0 , 0 , 0 ]\n",
+        ] {
+            let m = parse_nav2_map(yaml, pgm, 100).unwrap_or_else(|e| panic!("{yaml}: {e}"));
+            assert_eq!((m.resolution_m, m.origin_xy_m), (0.1, [0.0, 0.0]), "{yaml}");
+        }
+        let e = parse_nav2_map(
+            "image: map.pgm\nresolution: 0.1\norigin:\n  - 0\n  - 0\n",
+            pgm,
+            100,
+        )
+        .expect_err("two numbers")
+        .to_string();
+        assert!(
+            e.contains("line 3: `origin: [0, 0]`, expected [x, y, yaw]"),
+            "{e}"
+        );
     }
 }
