@@ -32,6 +32,9 @@ pub enum Error {
         /// The configured limit.
         limit_bytes: u64,
     },
+    /// The caller stopped the work ([`crate::Map::integrate_unless`]); the map is as it was before it.
+    #[error("cancelled: the map is as it was before this scan")]
+    Cancelled,
     /// A file could not be parsed.
     #[error("{}: {message}", path.display())]
     Parse {

@@ -9,6 +9,7 @@
 //! * saving and loading: [`crate::save_map`], [`crate::load_map`] (`io/mapfile.rs`).
 
 mod integrate;
+pub use integrate::RAYS_BETWEEN_STOP_CHECKS;
 mod layers;
 mod scratch;
 

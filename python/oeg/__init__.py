@@ -192,6 +192,8 @@ class Map:
         Raises:
             TypeError: A wrong dtype or shape, named with what was expected.
             ValueError: A point that is not finite (its row named), a variance that is not positive.
+            MemoryError: The points do not fit in memory once read.
+            KeyboardInterrupt: Ctrl-C, within a few milliseconds; the map is as it was before the scan.
         """
         rays, visits, scans = self._map.integrate(origin_xyz, points_xyz, no_return, range_variance_m2, sensor)
         return {"num_rays": rays, "num_cell_visits": visits, "num_scans": scans}

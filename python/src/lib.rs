@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyFileNotFoundError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyException, PyFileNotFoundError, PyMemoryError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
 
@@ -22,6 +22,21 @@ create_exception!(
 
 fn oeg_error(e: impl std::fmt::Display) -> PyErr {
     OegError::new_err(e.to_string())
+}
+
+/// The items of `values` in a vector allocated up front, or `MemoryError` (naming `name`) when the memory is not
+/// there: a large array never aborts the interpreter.
+fn collected<T>(name: &str, values: impl ExactSizeIterator<Item = T>) -> PyResult<Vec<T>> {
+    let mut out = Vec::new();
+    out.try_reserve_exact(values.len()).map_err(|_| {
+        PyMemoryError::new_err(format!(
+            "{name}: {} values of {} bytes do not fit in memory",
+            values.len(),
+            size_of::<T>()
+        ))
+    })?;
+    out.extend(values);
+    Ok(out)
 }
 
 /// Refuses a path that does not exist with `FileNotFoundError`, before the crates are asked.
@@ -122,7 +137,7 @@ fn float_rows(name: &str, array: &Bound<'_, PyAny>, cols: Option<usize>) -> PyRe
                 }
                 let ro = a.readonly();
                 // A C-contiguous array is read in place; any other layout is copied once.
-                return Ok(ro.as_array().iter().map(|v| f64::from(*v)).collect());
+                return collected(name, ro.as_array().iter().map(|v| f64::from(*v)));
             }
         };
     }
@@ -145,7 +160,7 @@ fn bool_column(name: &str, array: Option<&Bound<'_, PyAny>>, n: usize) -> PyResu
             "{name}: expected a numpy array of dtype bool and shape ({n},)"
         ))
     })?;
-    let values: Vec<bool> = a.readonly().as_array().iter().copied().collect();
+    let values: Vec<bool> = collected(name, a.readonly().as_array().iter().copied())?;
     if values.len() != n {
         return Err(PyValueError::new_err(format!(
             "{name}: {} values for {n} points",
@@ -286,6 +301,9 @@ impl PyMap {
         };
         let o = nalgebra::Point3::new(origin[0], origin[1], origin[2]);
         let mut scan = oeg::Scan::new(o, model);
+        scan.rays
+            .try_reserve_exact(n)
+            .map_err(|_| PyMemoryError::new_err(format!("points_xyz: {n} rays do not fit in memory")))?;
         for k in 0..n {
             let p = &points[3 * k..3 * k + 3];
             if !p.iter().all(|c| c.is_finite()) {
@@ -316,10 +334,12 @@ impl PyMap {
             }
             scan.rays.push(ray);
         }
+        // Ctrl-C stops a long scan within RAYS_BETWEEN_STOP_CHECKS rays, the map as it was before it.
         let map = &mut self.map;
-        let stats = py
-            .detach(|| map.integrate(&scan))
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let stats = interruptible(py, |progress| {
+            Ok(map.integrate_unless(&scan, &|| progress.check_cancelled().is_err()))
+        })?
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok((stats.num_rays, stats.num_cell_visits, self.map.num_scans()))
     }
 

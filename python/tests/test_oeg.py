@@ -409,3 +409,39 @@ def _has_module(name: str) -> bool:
     import importlib.util
 
     return importlib.util.find_spec(name) is not None
+
+
+def test_a_scan_too_large_for_memory_raises_memory_error() -> None:
+    overcommit = Path("/proc/sys/vm/overcommit_memory")
+    if overcommit.exists() and overcommit.read_text().strip() == "1":
+        pytest.skip("the kernel grants every allocation (vm.overcommit_memory = 1): it cannot refuse one")
+    # A view of 10^11 points that costs no memory itself: reading it in would need 2.4 TB.
+    points = np.broadcast_to(np.zeros(3, dtype=np.float32), (10**11, 3))
+    m = oeg.Map(resolution_m=0.1)
+    with pytest.raises(MemoryError, match="points_xyz"):
+        m.integrate(np.zeros(3), points)
+    assert m.num_scans == 0
+
+
+def test_ctrl_c_stops_a_long_scan_with_keyboard_interrupt_and_leaves_the_map_as_it_was() -> None:
+    code = (
+        "import sys, numpy as np, oeg\n"
+        "m = oeg.Map(resolution_m=0.05)\n"
+        "angles = np.linspace(0, 2 * np.pi, 8_000_000, dtype=np.float64)\n"
+        "points = np.stack([20 * np.cos(angles), 20 * np.sin(angles), np.zeros_like(angles)], axis=1)\n"
+        "print('started', flush=True)\n"
+        "try:\n"
+        "    m.integrate(np.array([0.0, 0.0, 0.5]), points)\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted', m.num_scans, m.memory_bytes() < 10_000_000, flush=True)\n"
+        "    sys.exit(3)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    assert child.stdout is not None and child.stdout.readline().strip() == "started"
+    time.sleep(2.0)
+    interrupted_at = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    stdout, _ = child.communicate(timeout=120)
+    assert child.returncode == 3, stdout
+    assert "interrupted 0" in stdout, stdout
+    assert time.monotonic() - interrupted_at < 5.0

@@ -20,6 +20,9 @@ use crate::sensor::MIN_RANGE_SIGMA_M;
 use crate::storage::{TileGrid, TileIndex};
 use crate::traversal::{CellCrossing, GroundTraversal};
 
+/// Rays between two questions of [`Map::integrate_unless`]'s `stop`: a few milliseconds of work.
+pub const RAYS_BETWEEN_STOP_CHECKS: usize = 16_384;
+
 impl Map {
     /// Integrates one scan (the paper's Algorithm 1 for every ray, then one update per touched cell).
     ///
@@ -28,13 +31,28 @@ impl Map {
     /// [`Error::MemoryLimit`] if storing the touched cells would exceed the limit (the map is left without
     /// this scan's updates).
     pub fn integrate(&mut self, scan: &Scan) -> Result<IntegrationStats> {
+        // Never stopped: the check compiles away.
+        self.integrate_stopping(scan, || false)
+    }
+
+    /// [`Map::integrate`], asking `stop` every [`RAYS_BETWEEN_STOP_CHECKS`] rays whether to stop: a long scan
+    /// (millions of rays from Python) can be cancelled within a bounded time.
+    ///
+    /// # Errors
+    /// As [`Map::integrate`], and [`Error::Cancelled`] when `stop` said so (the map is left without this scan's
+    /// updates).
+    pub fn integrate_unless(&mut self, scan: &Scan, stop: &dyn Fn() -> bool) -> Result<IntegrationStats> {
+        self.integrate_stopping(scan, stop)
+    }
+
+    fn integrate_stopping(&mut self, scan: &Scan, stop: impl Fn() -> bool) -> Result<IntegrationStats> {
         scan.validate()?;
         let mut stats = IntegrationStats {
             num_rays: scan.rays.len() as u64,
             ..IntegrationStats::default()
         };
         let gathered = self
-            .gather(scan, &mut stats)
+            .gather(scan, &mut stats, &stop)
             .and_then(|()| self.apply(&mut stats));
         self.scratch.recycle_all();
         gathered?;
@@ -46,13 +64,16 @@ impl Map {
     /// Casts every ray of the scan into the scratch grid: each ray's span ([`RaySpan::of`]), checked against
     /// the grid and the memory limit ([`Map::walk_of`]), then what each crossed cell learns from it, a free
     /// sample ([`free_sample`]) or a sample near the hit ([`hit_sample`]).
-    fn gather(&mut self, scan: &Scan, stats: &mut IntegrationStats) -> Result<()> {
+    fn gather(&mut self, scan: &Scan, stats: &mut IntegrationStats, stop: &impl Fn() -> bool) -> Result<()> {
         let opts = self.config.model;
         let scratch_limit = self
             .config
             .memory_limit_bytes
             .saturating_sub(self.cells.memory_bytes());
         for (index, ray) in scan.rays.iter().enumerate() {
+            if index % RAYS_BETWEEN_STOP_CHECKS == RAYS_BETWEEN_STOP_CHECKS - 1 && stop() {
+                return Err(Error::Cancelled);
+            }
             let Some(span) = RaySpan::of(scan, ray, &opts) else {
                 stats.num_rays_skipped += 1;
                 continue;

@@ -1,0 +1,42 @@
+//! A long scan can be stopped: `Map::integrate_unless` asks its caller every `RAYS_BETWEEN_STOP_CHECKS` rays and
+//! leaves the map as it was.
+
+use std::cell::Cell;
+
+use nalgebra::{Point3, Vector3};
+use oeg::{Error, Map, MapConfig, RAYS_BETWEEN_STOP_CHECKS, Ray, Scan, SensorModel};
+
+/// `n` rays from above the origin to a circle of 10 m.
+fn ring(n: usize) -> Scan {
+    let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
+    scan.rays = (0..n)
+        .map(|k| {
+            let a = k as f32 / n as f32 * std::f32::consts::TAU;
+            Ray::hit(Vector3::new(10.0 * a.cos(), 10.0 * a.sin(), -0.5))
+        })
+        .collect();
+    scan
+}
+
+#[test]
+fn a_stopped_scan_leaves_the_map_as_it_was_and_the_next_one_integrates() {
+    let mut map = Map::new(MapConfig::new(0.05)).expect("map");
+    let scan = ring(5 * RAYS_BETWEEN_STOP_CHECKS);
+    let asked = Cell::new(0);
+    let stop_at_the_third_question = || {
+        asked.set(asked.get() + 1);
+        asked.get() == 3
+    };
+    let e = map
+        .integrate_unless(&scan, &stop_at_the_third_question)
+        .expect_err("stopped");
+    assert!(matches!(e, Error::Cancelled), "{e}");
+    assert_eq!(asked.get(), 3);
+    assert_eq!((map.num_scans(), map.num_observed_cells()), (0, 0));
+    // Not stopped: the same as `integrate`.
+    let mut plain = Map::new(MapConfig::new(0.05)).expect("map");
+    let stats = map.integrate_unless(&scan, &|| false).expect("integrated");
+    assert_eq!(stats, plain.integrate(&scan).expect("integrated"));
+    assert_eq!(map.num_observed_cells(), plain.num_observed_cells());
+    assert!(map.num_observed_cells() > 0);
+}
