@@ -4,8 +4,10 @@
 //! The targets read from memory through the same code as the files: the scan graph, the PCD cloud (ascii,
 //! binary and binary_compressed), the sensor log, the map file, the scenario TOML, the terrain PNG, the
 //! robot's URDF, the sweep file (read, checked and planned against the shipped base scenarios), a sweep
-//! run's `row.json`, and the maps `oeg score` reads from other tools: a `.npy` array and a nav2 map (its YAML,
-//! a NUL byte, then its PGM image).
+//! run's `row.json`, the maps `oeg score` reads from other tools: a `.npy` array and a nav2 map (its YAML,
+//! a NUL byte, then its PGM image), and the new doors of a run: the truth of a scenario (its settings fuzzed:
+//! the region, the resolution, the robot's step and grade), a planner's path file, and `oeg check-path` on a
+//! fixed scene.
 
 use std::path::{Path, PathBuf};
 
@@ -34,10 +36,16 @@ pub enum Target {
     Npy,
     /// A nav2 map: its YAML text, a NUL byte, its PGM image.
     Nav2,
+    /// A scenario file, then its truth when the validated cost is small ([`TRUTH_MAX_SAMPLES`]).
+    Truth,
+    /// A planner's path file (`path.csv`).
+    Path,
+    /// A path file checked by `oeg check-path` against `tests/scenes/nav_wall.toml`.
+    CheckPath,
 }
 
 /// Every target, in the order of the corpus folders.
-pub const TARGETS: [Target; 11] = [
+pub const TARGETS: [Target; 14] = [
     Target::Graph,
     Target::Pcd,
     Target::Log,
@@ -49,7 +57,21 @@ pub const TARGETS: [Target; 11] = [
     Target::Row,
     Target::Npy,
     Target::Nav2,
+    Target::Truth,
+    Target::Path,
+    Target::CheckPath,
 ];
+
+/// The most sample points the truth target computes (a larger valid truth is bounded by validation,
+/// `sim::scenario::MAX_TRUTH_SAMPLES`, and takes longer than the fuzzer's time limit: not a hang).
+pub const TRUTH_MAX_SAMPLES: u64 = 1 << 18;
+
+/// The most poses the check-path target checks (`oeg check-path` allows
+/// `oeg_eval::jobs::check_path::MAX_CHECKED_POSES`, which take longer than the fuzzer's time limit).
+pub const CHECK_PATH_MAX_POSES: u64 = 20_000;
+
+/// The extent the path target reads points in: min x, max x, min y, max y, metres.
+pub const PATH_EXTENT: [f64; 4] = [-1.0, 10.0, -5.0, 5.0];
 
 /// The most runs the sweep target plans: a larger plan loads every run's scenario, which takes longer than
 /// the fuzzer's time limit (it is bounded by `oeg_eval::jobs::sweep::spec::MAX_RUNS`, not a hang).
@@ -76,6 +98,9 @@ impl Target {
             Self::Row => "row",
             Self::Npy => "npy",
             Self::Nav2 => "nav2",
+            Self::Truth => "truth",
+            Self::Path => "path",
+            Self::CheckPath => "check_path",
         }
     }
 
@@ -149,5 +174,87 @@ pub fn run(target: Target, data: &[u8]) -> bool {
             std::str::from_utf8(yaml)
                 .is_ok_and(|yaml| oeg::parse_nav2_map(yaml, image, NAV2_MAX_CELLS).is_ok())
         }
+        Target::Truth => std::str::from_utf8(data).is_ok_and(truth_of_text),
+        Target::Path => oeg_eval::navigation::external::parse_path(path, data, PATH_EXTENT).is_ok(),
+        Target::CheckPath => check_path(path, data),
     }
+}
+
+/// Loads a scenario's text as the scenario target does; when it validates and its truth is small, builds its
+/// world and computes the truth, which must cover the map's region.
+fn truth_of_text(text: &str) -> bool {
+    let at = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/fuzz-input.toml");
+    let Ok(loaded) = sim::scenario::load_str(&at, text) else {
+        return false;
+    };
+    let s = &loaded.scenario;
+    let Ok(geometry) = oeg::GridGeometry::new(s.map.resolution_m) else {
+        return true;
+    };
+    let Ok(region) = oeg_eval::pipeline::region_of(s, &geometry) else {
+        return true;
+    };
+    let cost = sim::truth::TruthCost::estimate(
+        u64::from(region.num_x),
+        u64::from(region.num_y),
+        s.map.resolution_m,
+        sim::truth::DEFAULT_SAMPLES_PER_SIDE,
+        f64::from(s.robot.profile().contact_distance_m()),
+    );
+    if cost.samples > TRUTH_MAX_SAMPLES || s.obstacles.len() > 64 {
+        return true;
+    }
+    let Ok(world) = sim::World::new(&loaded) else {
+        return true;
+    };
+    let progress = oeg_eval::progress::Progress::hidden();
+    let truth = oeg_eval::pipeline::truth_of(s, &world, &geometry, &progress).expect("never cancelled");
+    assert_eq!(
+        truth.cells.len() as u64,
+        region.num_cells(),
+        "the truth covers the region"
+    );
+    true
+}
+
+/// The scene, its truth and robot the check-path target checks paths against, built once.
+struct CheckPathScene {
+    loaded: sim::scenario::LoadedScenario,
+    geometry: oeg::GridGeometry,
+    truth: sim::truth::TruthRaster,
+}
+
+fn check_path(path: &Path, data: &[u8]) -> bool {
+    static SCENE: std::sync::OnceLock<CheckPathScene> = std::sync::OnceLock::new();
+    let scene = SCENE.get_or_init(|| {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/scenes/nav_wall.toml");
+        let loaded = sim::scenario::load(&file).expect("the shipped scene");
+        let geometry = oeg::GridGeometry::new(loaded.scenario.map.resolution_m).expect("its grid");
+        let world = sim::World::new(&loaded).expect("its world");
+        let progress = oeg_eval::progress::Progress::hidden();
+        let truth =
+            oeg_eval::pipeline::truth_of(&loaded.scenario, &world, &geometry, &progress).expect("its truth");
+        CheckPathScene {
+            loaded,
+            geometry,
+            truth,
+        }
+    });
+    let res = scene.geometry.resolution_m();
+    let extent = oeg_eval::navigation::external::extent_of(&scene.truth.region, res);
+    let Ok(points) = oeg_eval::navigation::external::parse_path(path, data, extent) else {
+        return false;
+    };
+    if oeg_eval::jobs::check_path::count_poses(&points, res / 2.0) > CHECK_PATH_MAX_POSES {
+        return true;
+    }
+    let judge = oeg_eval::jobs::check_path::PathJudge {
+        scenario: &scene.loaded.scenario,
+        truth: &scene.truth,
+        geometry: scene.geometry,
+        footprint: scene.loaded.robot.footprint(),
+    };
+    let check = judge.check(path, &points, None).expect("within the pose bound");
+    assert_eq!(check.num_points, points.len() as u64);
+    true
 }

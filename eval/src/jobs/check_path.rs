@@ -13,6 +13,7 @@ use crate::error::{EvalError, Result};
 use crate::judge::verdict::Verdicts;
 use crate::navigation::contact::ContactWatch;
 use crate::output::{Staged, write_json};
+use sim::truth::TruthRaster;
 
 /// `oeg check-path`.
 #[derive(Debug, Clone)]
@@ -97,43 +98,6 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     // Every message of `read_path` names the file and the line.
     let points = crate::navigation::external::read_path(&job.path, extent)
         .map_err(|f| EvalError::Placed { message: f.message })?;
-    let footprint = loaded.robot.footprint();
-    // Each pose looks at the blocked cells within a few metres: the number of poses is bounded before the work.
-    let planned_poses = count_poses(&points, res / 2.0);
-    if planned_poses > MAX_CHECKED_POSES {
-        return Err(EvalError::Input {
-            path: job.path.clone(),
-            message: format!(
-                "the path needs {planned_poses} poses (one every {} m along it), over the limit of \
-                 {MAX_CHECKED_POSES}; check a shorter path, or its parts one by one",
-                res / 2.0
-            ),
-        });
-    }
-    let mut watch = ContactWatch::new(s, &truth, geometry, footprint);
-    let (mut first_contact, mut contact_poses) = (None, 0u64);
-    // The cells the footprint crossed, one flag a cell of the region (not a list of every pose's cells).
-    let mut crossed = vec![false; truth.cells.len()];
-    let num_poses = for_each_pose(&points, res / 2.0, |along, pose| {
-        let began = watch.check(along, pose);
-        let mut touching = false;
-        for c in footprint.cells_under(&geometry, &region, pose) {
-            if let Some(k) = region.offset(c) {
-                touching |= truth.truly_blocked(k);
-                crossed[k] = true;
-            }
-        }
-        contact_poses += u64::from(touching);
-        if let (None, Some(c)) = (&first_contact, began) {
-            first_contact = Some(Contact {
-                along_m: round(along),
-                x_m: round(pose.x_m),
-                y_m: round(pose.y_m),
-                yaw_deg: round(pose.yaw_rad.to_degrees()),
-                obstacle: c.obstacle,
-            });
-        }
-    });
     let verdicts = match &job.map {
         Some(path) => {
             let map = oeg::load_map(path)?;
@@ -141,45 +105,120 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
         }
         None => None,
     };
-    let classes = Verdicts::from_classes(&truth, vec![oeg::Traversability::Unknown; truth.cells.len()]);
-    let mut cells_by_truth = BTreeMap::new();
-    let mut cells_by_verdict = verdicts.as_ref().map(|_| BTreeMap::new());
-    for k in (0..crossed.len()).filter(|&k| crossed[k]) {
-        *cells_by_truth
-            .entry(classes.truth[k].name().to_string())
-            .or_insert(0) += 1;
-        if let (Some(v), Some(by)) = (&verdicts, cells_by_verdict.as_mut()) {
-            *by.entry(v.verdict[k].name().to_string()).or_insert(0) += 1;
-        }
-    }
-    let length_m = points
-        .windows(2)
-        .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
-        .sum::<f64>();
-    let check = PathCheck {
-        scenario: s.name.clone(),
-        num_points: points.len() as u64,
-        length_m: round(length_m),
-        num_poses,
-        first_contact,
-        contact_poses,
-        closest_approach_m: watch.closest.map(|c| round(c.0)),
-        closest_approach_along_m: watch.closest.map(|c| round(c.1)),
-        cells_by_truth,
-        cells_by_verdict,
-        footprint_m: [
-            footprint.min_x_m,
-            footprint.max_x_m,
-            footprint.min_y_m,
-            footprint.max_y_m,
-        ]
-        .map(round),
+    let judge = PathJudge {
+        scenario: s,
+        truth: &truth,
+        geometry,
+        footprint: loaded.robot.footprint(),
     };
+    let check = judge.check(&job.path, &points, verdicts.as_ref())?;
     let json = staged.dir().join("path_check.json");
     write_json(&json, &check)?;
     let files = vec![staged.final_path(&json)];
     staged.commit()?;
     Ok((check, files))
+}
+
+/// What a path is checked against: the scenario, its truth on `geometry`'s cells and the robot's footprint.
+#[derive(Debug, Clone, Copy)]
+pub struct PathJudge<'a> {
+    /// The scenario (its obstacles name the contacts).
+    pub scenario: &'a sim::scenario::Scenario,
+    /// Its truth.
+    pub truth: &'a TruthRaster,
+    /// The truth's grid.
+    pub geometry: oeg::GridGeometry,
+    /// The robot's footprint, base frame.
+    pub footprint: oeg::Footprint,
+}
+
+impl PathJudge<'_> {
+    /// Checks `points` (read from `path`, which errors name): a pose every half cell along them, each against
+    /// the truth, and with `verdicts` the map's verdicts on the cells crossed. The number of poses is bounded
+    /// ([`MAX_CHECKED_POSES`]) before the work.
+    ///
+    /// # Errors
+    /// A path that needs more poses than the bound.
+    pub fn check(
+        &self,
+        path: &std::path::Path,
+        points: &[(f64, f64)],
+        verdicts: Option<&Verdicts>,
+    ) -> Result<PathCheck> {
+        let (s, truth, geometry, footprint) = (self.scenario, self.truth, self.geometry, self.footprint);
+        let region = truth.region;
+        let res = geometry.resolution_m();
+        // Each pose looks at the blocked cells within a few metres: the number of poses is bounded before the work.
+        let planned_poses = count_poses(points, res / 2.0);
+        if planned_poses > MAX_CHECKED_POSES {
+            return Err(EvalError::Input {
+                path: path.to_path_buf(),
+                message: format!(
+                    "the path needs {planned_poses} poses (one every {} m along it), over the limit of \
+                     {MAX_CHECKED_POSES}; check a shorter path, or its parts one by one",
+                    res / 2.0
+                ),
+            });
+        }
+        let mut watch = ContactWatch::new(s, truth, geometry, footprint);
+        let (mut first_contact, mut contact_poses) = (None, 0u64);
+        // The cells the footprint crossed, one flag a cell of the region (not a list of every pose's cells).
+        let mut crossed = vec![false; truth.cells.len()];
+        let num_poses = for_each_pose(points, res / 2.0, |along, pose| {
+            let began = watch.check(along, pose);
+            let mut touching = false;
+            for c in footprint.cells_under(&geometry, &region, pose) {
+                if let Some(k) = region.offset(c) {
+                    touching |= truth.truly_blocked(k);
+                    crossed[k] = true;
+                }
+            }
+            contact_poses += u64::from(touching);
+            if let (None, Some(c)) = (&first_contact, began) {
+                first_contact = Some(Contact {
+                    along_m: round(along),
+                    x_m: round(pose.x_m),
+                    y_m: round(pose.y_m),
+                    yaw_deg: round(pose.yaw_rad.to_degrees()),
+                    obstacle: c.obstacle,
+                });
+            }
+        });
+        let classes = Verdicts::from_classes(truth, vec![oeg::Traversability::Unknown; truth.cells.len()]);
+        let mut cells_by_truth = BTreeMap::new();
+        let mut cells_by_verdict = verdicts.map(|_| BTreeMap::new());
+        for k in (0..crossed.len()).filter(|&k| crossed[k]) {
+            *cells_by_truth
+                .entry(classes.truth[k].name().to_string())
+                .or_insert(0) += 1;
+            if let (Some(v), Some(by)) = (verdicts, cells_by_verdict.as_mut()) {
+                *by.entry(v.verdict[k].name().to_string()).or_insert(0) += 1;
+            }
+        }
+        let length_m = points
+            .windows(2)
+            .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+            .sum::<f64>();
+        Ok(PathCheck {
+            scenario: s.name.clone(),
+            num_points: points.len() as u64,
+            length_m: round(length_m),
+            num_poses,
+            first_contact,
+            contact_poses,
+            closest_approach_m: watch.closest.map(|c| round(c.0)),
+            closest_approach_along_m: watch.closest.map(|c| round(c.1)),
+            cells_by_truth,
+            cells_by_verdict,
+            footprint_m: [
+                footprint.min_x_m,
+                footprint.max_x_m,
+                footprint.min_y_m,
+                footprint.max_y_m,
+            ]
+            .map(round),
+        })
+    }
 }
 
 /// The most poses `oeg check-path` checks: a path of 25 km at 0.05 m (a pose every half cell). Each pose looks at
@@ -195,8 +234,8 @@ fn segment_poses(length_m: f64, step_m: f64) -> u64 {
     }
 }
 
-/// The number of poses [`for_each_pose`] visits, without visiting them.
-fn count_poses(points: &[(f64, f64)], step_m: f64) -> u64 {
+/// The number of poses a check of `points` visits, one every `step_m` (half a cell), without visiting them.
+pub fn count_poses(points: &[(f64, f64)], step_m: f64) -> u64 {
     let along: u64 = points
         .windows(2)
         .map(|w| segment_poses((w[1].0 - w[0].0).hypot(w[1].1 - w[0].1), step_m))

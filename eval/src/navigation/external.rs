@@ -218,13 +218,29 @@ pub fn read_path(path: &Path, extent: Extent) -> std::result::Result<Vec<(f64, f
         kind: "malformed_path",
         message,
     };
-    let name = path.display();
     let bytes = read_regular(path, MAX_PATH_FILE_BYTES)
-        .map_err(|e| fail(format!("{name}: no readable path: {e}")))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
+        .map_err(|e| fail(format!("{}: no readable path: {e}", path.display())))?;
+    parse_path(path, &bytes, extent)
+}
+
+/// A path file's points from its bytes (`path` names it in errors), as [`read_path`] reads them.
+///
+/// # Errors
+/// As [`read_path`].
+pub fn parse_path(
+    path: &Path,
+    bytes: &[u8],
+    extent: Extent,
+) -> std::result::Result<Vec<(f64, f64)>, PlannerFailure> {
+    let fail = |message: String| PlannerFailure {
+        kind: "malformed_path",
+        message,
+    };
+    let name = path.display();
+    let text = std::str::from_utf8(bytes).map_err(|e| {
         fail(format!(
             "{name}: byte {}: not UTF-8 text; expected lines of x,y",
-            e.utf8_error().valid_up_to()
+            e.valid_up_to()
         ))
     })?;
     let mut points = Vec::new();
