@@ -213,6 +213,12 @@ fn every_way_a_planner_fails_is_an_event_with_its_message() {
             .unwrap_or_else(|| panic!("{name}: no planner_failed event"));
         let message = failure["message"].as_str().expect("message");
         assert!(message.contains(expected), "{name}: {message}");
+        // A file is named where it is after the run, never in the staging folder that is gone by then.
+        assert!(!message.contains(".staging."), "{name}: {message}");
+        if message.contains("path.csv") {
+            let shown = out.join("planner").join("path.csv");
+            assert!(message.starts_with(s(&shown)), "{name}: {message}");
+        }
         let nav = json(&out.join("navigation.json"));
         assert_eq!(
             nav["outcome"], "stuck",

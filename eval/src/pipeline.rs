@@ -287,12 +287,17 @@ pub fn simulate(
 }
 
 /// The planner a closed-loop run uses: `--planner-command`, else the scenario's (its command only when
-/// allowed), exchanging files in `dir`.
+/// allowed), exchanging files in `dir`, which messages name as `shown_dir` (where it is once the run is in place).
 ///
 /// # Errors
 /// [`EvalError::Input`] naming the scenario when it asks for an external planner without a command, or for
 /// its own command without `--allow-scenario-command`.
-pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) -> Result<PlannerSource> {
+pub fn planner_source(
+    s: &scenario::Scenario,
+    options: &RunOptions,
+    dir: &Path,
+    shown_dir: &Path,
+) -> Result<PlannerSource> {
     let Some(n) = &s.navigation else {
         return Ok(PlannerSource::Builtin);
     };
@@ -301,6 +306,7 @@ pub fn planner_source(s: &scenario::Scenario, options: &RunOptions, dir: &Path) 
             command,
             timeout: std::time::Duration::from_secs_f64(n.planner_timeout_s),
             dir: dir.to_path_buf(),
+            shown_dir: shown_dir.to_path_buf(),
         })
     };
     if let Some(planner) = &options.planner_callback {
@@ -442,170 +448,183 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     let inputs = loaded.files();
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let staged = Staged::begin(&out_dir, &inputs)?;
-    // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]` keys,
-    // such as height thresholding, still apply), through the same door as `--set map.preset=<preset>`.
-    let compared: Option<(oeg::MapPreset, scenario::Scenario)> = match options.compare {
-        None => None,
-        Some(preset) => {
-            let mut with_preset = options.clone();
-            with_preset
-                .overrides
-                .push(format!("map.preset={}", preset.name()));
-            Some((preset, load(&with_preset)?.scenario))
+    // The work, its errors naming a file where it would be in the output folder, not in the staging that is
+    // removed when the job fails.
+    let work = || -> Result<_> {
+        // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]` keys,
+        // such as height thresholding, still apply), through the same door as `--set map.preset=<preset>`.
+        let compared: Option<(oeg::MapPreset, scenario::Scenario)> = match options.compare {
+            None => None,
+            Some(preset) => {
+                let mut with_preset = options.clone();
+                with_preset
+                    .overrides
+                    .push(format!("map.preset={}", preset.name()));
+                Some((preset, load(&with_preset)?.scenario))
+            }
+        };
+        let mut settings = vec![&s.map];
+        if let Some((_, c)) = &compared {
+            settings.push(&c.map);
         }
-    };
-    let mut settings = vec![&s.map];
-    if let Some((_, c)) = &compared {
-        settings.push(&c.map);
-    }
-    let stage = staged.dir();
-    let planner_dir = stage.join("planner");
-    let planner = planner_source(s, options, &planner_dir)?;
-    if matches!(planner, PlannerSource::External(_)) {
-        create_dir(&planner_dir)?;
-    }
-    let recording = if options.mcap {
-        let geometry = GridGeometry::new(s.map.resolution_m)?;
-        Some(Recording::new(
-            region_of(s, &geometry)?,
-            s.map.resolution_m,
-            DEFAULT_GRID_PERIOD_S,
-        )?)
-    } else {
-        None
-    };
-    let Simulated {
-        simulation,
-        maps,
-        timing: sim_timing,
-        truth,
-        navigation,
-        observability,
-        blind_band,
-        recording,
-    } = simulate(&loaded, &settings, &planner, recording, progress)?;
-    let mut maps = maps.into_iter();
-    let map = maps.next().ok_or_else(|| EvalError::Input {
-        path: options.scenario.clone(),
-        message: "the simulation built no map".into(),
-    })?;
-    let geometry = *map.geometry();
-    let (truth, truth_wall_time_s) = match truth {
-        Some(t) => t,
-        None => {
-            let truth_start = Instant::now();
-            let truth = truth_of(s, simulation.world(), &geometry, progress)?;
-            (truth, truth_start.elapsed().as_secs_f64())
+        let stage = staged.dir();
+        let planner_dir = stage.join("planner");
+        let planner = planner_source(s, options, &planner_dir, &staged.final_path(&planner_dir))?;
+        if matches!(planner, PlannerSource::External(_)) {
+            create_dir(&planner_dir)?;
         }
-    };
-    let figures = navigation.as_ref().map(|n| n.summary.figures());
-    let sensed = Sensed {
-        returns: Some(simulation.obstacle_returns()),
-        observability: Some(&observability),
-        navigation: figures.as_ref(),
-    };
-    let evaluation = evaluate(s, &map, &truth, &sensed)?;
-    let overlay = navigation.as_ref().map(crate::report::overlay_of);
-
-    let formats = options.figures;
-    let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref(), formats)?;
-    if let Some(log) = &navigation {
-        files.extend(crate::report::write_navigation(stage, s, &truth, log, formats)?);
-    }
-    files.extend(crate::report::write_observability(
-        stage,
-        s,
-        &observability,
-        &evaluation.verdicts,
-        &blind_band,
-        formats,
-    )?);
-    if planner_dir.is_dir() {
-        files.push(planner_dir.clone());
-    }
-    if let Some(recording) = recording {
-        let path = stage.join("recording.mcap");
-        let end_s = simulation.world().time_s();
-        let bytes = finish_recording(
+        let recording = if options.mcap {
+            let geometry = GridGeometry::new(s.map.resolution_m)?;
+            Some(Recording::new(
+                region_of(s, &geometry)?,
+                s.map.resolution_m,
+                DEFAULT_GRID_PERIOD_S,
+            )?)
+        } else {
+            None
+        };
+        let Simulated {
+            simulation,
+            maps,
+            timing: sim_timing,
+            truth,
+            navigation,
+            observability,
+            blind_band,
             recording,
-            &truth,
-            &evaluation,
-            navigation.as_ref(),
-            &geometry,
-            end_s,
-        )?;
-        crate::output::write_bytes(&path, &bytes)?;
-        files.push(path);
-    }
-    let mut compared_eval = None;
-    if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
-        // The compared model maps the same scans; the robot decided with the run's own map.
-        let other_eval = evaluate(c, &other, &truth, &sensed)?;
-        let dir = stage.join(preset.name());
-        create_dir(&dir)?;
-        files.extend(write_report(&dir, c, &other, &truth, &other_eval, None, formats)?);
-        files.extend(write_comparison(
+        } = simulate(&loaded, &settings, &planner, recording, progress)?;
+        let mut maps = maps.into_iter();
+        let map = maps.next().ok_or_else(|| EvalError::Input {
+            path: options.scenario.clone(),
+            message: "the simulation built no map".into(),
+        })?;
+        let geometry = *map.geometry();
+        let (truth, truth_wall_time_s) = match truth {
+            Some(t) => t,
+            None => {
+                let truth_start = Instant::now();
+                let truth = truth_of(s, simulation.world(), &geometry, progress)?;
+                (truth, truth_start.elapsed().as_secs_f64())
+            }
+        };
+        let figures = navigation.as_ref().map(|n| n.summary.figures());
+        let sensed = Sensed {
+            returns: Some(simulation.obstacle_returns()),
+            observability: Some(&observability),
+            navigation: figures.as_ref(),
+        };
+        let evaluation = evaluate(s, &map, &truth, &sensed)?;
+        let overlay = navigation.as_ref().map(crate::report::overlay_of);
+
+        let formats = options.figures;
+        let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref(), formats)?;
+        if let Some(log) = &navigation {
+            files.extend(crate::report::write_navigation(stage, s, &truth, log, formats)?);
+        }
+        files.extend(crate::report::write_observability(
             stage,
-            [(s, &evaluation), (c, &other_eval)],
-            &geometry,
+            s,
+            &observability,
+            &evaluation.verdicts,
+            &blind_band,
             formats,
         )?);
-        compared_eval = Some((*preset, c, other_eval));
-    }
-    let num_rays = sim_timing.num_rays as f64;
-    let (simulation_s, map_s) = (sim_timing.simulation_wall_time_s, sim_timing.map_wall_time_s);
-    let timing = RunTiming {
-        simulation_wall_time_s: simulation_s,
-        simulation_rays_per_s: num_rays / simulation_s.max(1e-9),
-        map_wall_time_s: map_s,
-        map_rays_per_s: map.totals().num_rays as f64 * settings.len() as f64 / map_s.max(1e-9),
-        truth_wall_time_s,
-        total_wall_time_s: total_start.elapsed().as_secs_f64(),
-        threads: rayon::current_num_threads() as u64,
-        planner_wall_time_s: navigation.as_ref().map(|n| n.planner_wall_time_s),
+        if planner_dir.is_dir() {
+            files.push(planner_dir.clone());
+        }
+        if let Some(recording) = recording {
+            let path = stage.join("recording.mcap");
+            let end_s = simulation.world().time_s();
+            let bytes = finish_recording(
+                recording,
+                &truth,
+                &evaluation,
+                navigation.as_ref(),
+                &geometry,
+                end_s,
+            )?;
+            crate::output::write_bytes(&path, &bytes)?;
+            files.push(path);
+        }
+        let mut compared_eval = None;
+        if let (Some((preset, c)), Some(other)) = (&compared, maps.next()) {
+            // The compared model maps the same scans; the robot decided with the run's own map.
+            let other_eval = evaluate(c, &other, &truth, &sensed)?;
+            let dir = stage.join(preset.name());
+            create_dir(&dir)?;
+            files.extend(write_report(&dir, c, &other, &truth, &other_eval, None, formats)?);
+            files.extend(write_comparison(
+                stage,
+                [(s, &evaluation), (c, &other_eval)],
+                &geometry,
+                formats,
+            )?);
+            compared_eval = Some((*preset, c, other_eval));
+        }
+        let num_rays = sim_timing.num_rays as f64;
+        let (simulation_s, map_s) = (sim_timing.simulation_wall_time_s, sim_timing.map_wall_time_s);
+        let timing = RunTiming {
+            simulation_wall_time_s: simulation_s,
+            simulation_rays_per_s: num_rays / simulation_s.max(1e-9),
+            map_wall_time_s: map_s,
+            map_rays_per_s: map.totals().num_rays as f64 * settings.len() as f64 / map_s.max(1e-9),
+            truth_wall_time_s,
+            total_wall_time_s: total_start.elapsed().as_secs_f64(),
+            threads: rayon::current_num_threads() as u64,
+            planner_wall_time_s: navigation.as_ref().map(|n| n.planner_wall_time_s),
+        };
+        let timing_path = stage.join("timing.json");
+        write_json(&timing_path, &timing)?;
+        files.push(timing_path);
+        // The page that shows the run, last: it links every file above.
+        let mut models = vec![ModelRun {
+            scenario: s,
+            evaluation: &evaluation,
+            dir: "",
+        }];
+        if let Some((preset, c, e)) = &compared_eval {
+            models.push(ModelRun {
+                scenario: c,
+                evaluation: e,
+                dir: preset.name(),
+            });
+        }
+        let page = RunPage {
+            scenario_file: &options.scenario,
+            models,
+            overrides: &options.overrides,
+            planner_command: options.planner_command.as_deref(),
+            navigation: navigation.as_ref(),
+            files: files
+                .iter()
+                .filter_map(|f| f.strip_prefix(stage).ok().map(Path::to_path_buf))
+                .collect(),
+        };
+        files.push(write_run_page(stage, &page)?);
+        let Evaluation {
+            metrics,
+            failed,
+            obstacles,
+            ..
+        } = evaluation;
+        Ok((
+            files,
+            metrics,
+            failed,
+            obstacles,
+            compared_eval.map(|(preset, _, e)| (preset, e.metrics)),
+            timing,
+        ))
     };
-    let timing_path = stage.join("timing.json");
-    write_json(&timing_path, &timing)?;
-    files.push(timing_path);
-    // The page that shows the run, last: it links every file above.
-    let mut models = vec![ModelRun {
-        scenario: s,
-        evaluation: &evaluation,
-        dir: "",
-    }];
-    if let Some((preset, c, e)) = &compared_eval {
-        models.push(ModelRun {
-            scenario: c,
-            evaluation: e,
-            dir: preset.name(),
-        });
-    }
-    let page = RunPage {
-        scenario_file: &options.scenario,
-        models,
-        overrides: &options.overrides,
-        planner_command: options.planner_command.as_deref(),
-        navigation: navigation.as_ref(),
-        files: files
-            .iter()
-            .filter_map(|f| f.strip_prefix(stage).ok().map(Path::to_path_buf))
-            .collect(),
-    };
-    files.push(write_run_page(stage, &page)?);
+    let (files, metrics, failed, obstacles, compared, timing) = staged.explained(work())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
-    let Evaluation {
-        metrics,
-        failed,
-        obstacles,
-        ..
-    } = evaluation;
     Ok(RunReport {
         metrics,
         timing,
         failed,
         obstacles,
-        compared: compared_eval.map(|(preset, _, e)| (preset, e.metrics)),
+        compared,
         out_dir,
         files,
     })

@@ -113,7 +113,7 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     };
     let check = judge.check(&job.path, &points, verdicts.as_ref())?;
     let json = staged.dir().join("path_check.json");
-    write_json(&json, &check)?;
+    staged.explained(write_json(&json, &check))?;
     let files = vec![staged.final_path(&json)];
     staged.commit()?;
     Ok((check, files))

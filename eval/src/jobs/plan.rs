@@ -163,35 +163,39 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         unknown: job.options.unknown,
         max_step_m: job.profile.max_step_m,
     };
-    let mut files = Vec::new();
-    let path_csv = staged.dir().join("path.csv");
-    crate::output::write_csv(
-        &path_csv,
-        &["step", "x_m", "y_m"],
-        plan.iter()
-            .flat_map(|p| polyline(p, &geometry))
-            .enumerate()
-            .map(|(step, (x, y))| (step, x, y)),
-    )?;
-    files.push(path_csv);
-    let title = match &plan {
-        Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
-        None => "No path on the map".to_string(),
+    let work = || -> Result<_> {
+        let mut files = Vec::new();
+        let path_csv = staged.dir().join("path.csv");
+        crate::output::write_csv(
+            &path_csv,
+            &["step", "x_m", "y_m"],
+            plan.iter()
+                .flat_map(|p| polyline(p, &geometry))
+                .enumerate()
+                .map(|(step, (x, y))| (step, x, y)),
+        )?;
+        files.push(path_csv);
+        let title = match &plan {
+            Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
+            None => "No path on the map".to_string(),
+        };
+        let mut fig = crate::figures::traversability_figure(&classes, &title);
+        if let Some(p) = &plan {
+            fig.polyline(&polyline(p, &geometry), crate::figures::PLAN);
+        }
+        fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::figures::DRIVE);
+        fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::figures::PLAN);
+        files.extend(crate::figures::save(
+            &staged.dir().join("plan.png"),
+            fig.canvas(),
+            job.figures,
+        )?);
+        let json = staged.dir().join("plan.json");
+        crate::output::write_json(&json, &summary)?;
+        files.push(json);
+        Ok(files)
     };
-    let mut fig = crate::figures::traversability_figure(&classes, &title);
-    if let Some(p) = &plan {
-        fig.polyline(&polyline(p, &geometry), crate::figures::PLAN);
-    }
-    fig.marker(job.from_xy_m.0, job.from_xy_m.1, crate::figures::DRIVE);
-    fig.marker(job.to_xy_m.0, job.to_xy_m.1, crate::figures::PLAN);
-    files.extend(crate::figures::save(
-        &staged.dir().join("plan.png"),
-        fig.canvas(),
-        job.figures,
-    )?);
-    let json = staged.dir().join("plan.json");
-    crate::output::write_json(&json, &summary)?;
-    files.push(json);
+    let files = staged.explained(work())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok((summary, files))

@@ -102,40 +102,44 @@ pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec
     let title = format!("{}: true elevation (drive red, sensors yellow)", s.name);
     let mut fig = crate::figures::comparison::truth_elevation_figure(&truth, &title);
     overlay(&mut fig);
-    let mut files = save(&staged.dir().join("preview_elevation.png"), fig.canvas(), formats)?;
+    let work = || -> Result<_> {
+        let mut files = save(&staged.dir().join("preview_elevation.png"), fig.canvas(), formats)?;
 
-    let legend = Legend::Classes(
-        TRUTH_CLASSES
-            .iter()
-            .map(|(_, n, c)| ((*n).to_string(), (*c).into()))
-            .collect(),
-    );
-    let title = format!(
-        "{}: true decisions (step {} m, height {} m)",
-        s.name, truth.profile.max_step_m, truth.profile.height_m
-    );
-    let mut fig = Figure::new(
-        truth.region,
-        geometry.resolution_m(),
-        &title,
-        |c| {
-            let Some(k) = truth.region.offset(c) else {
-                return NO_DATA;
-            };
-            let class = TruthClass::of(&truth, k);
+        let legend = Legend::Classes(
             TRUTH_CLASSES
                 .iter()
-                .find(|(t, ..)| *t == class)
-                .map_or(NO_DATA, |(_, _, rgb)| *rgb)
-        },
-        &legend,
-    );
-    overlay(&mut fig);
-    files.extend(save(
-        &staged.dir().join("preview_decisions.png"),
-        fig.canvas(),
-        formats,
-    )?);
+                .map(|(_, n, c)| ((*n).to_string(), (*c).into()))
+                .collect(),
+        );
+        let title = format!(
+            "{}: true decisions (step {} m, height {} m)",
+            s.name, truth.profile.max_step_m, truth.profile.height_m
+        );
+        let mut fig = Figure::new(
+            truth.region,
+            geometry.resolution_m(),
+            &title,
+            |c| {
+                let Some(k) = truth.region.offset(c) else {
+                    return NO_DATA;
+                };
+                let class = TruthClass::of(&truth, k);
+                TRUTH_CLASSES
+                    .iter()
+                    .find(|(t, ..)| *t == class)
+                    .map_or(NO_DATA, |(_, _, rgb)| *rgb)
+            },
+            &legend,
+        );
+        overlay(&mut fig);
+        files.extend(save(
+            &staged.dir().join("preview_decisions.png"),
+            fig.canvas(),
+            formats,
+        )?);
+        Ok(files)
+    };
+    let files = staged.explained(work())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(files)

@@ -316,10 +316,14 @@ pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<ScoreReport> {
     let truth = ScoringTruth::of(&loaded, job.observability, progress)?;
     let evaluation = truth.score(&foreign)?;
     let dir = staged.dir();
-    let mut files = crate::report::write_tables(dir, &truth.raster, &evaluation)?;
-    let json = dir.join("score.json");
-    write_json(&json, &evaluation.metrics)?;
-    files.push(json);
+    let work = || -> Result<_> {
+        let mut files = crate::report::write_tables(dir, &truth.raster, &evaluation)?;
+        let json = dir.join("score.json");
+        write_json(&json, &evaluation.metrics)?;
+        files.push(json);
+        Ok(files)
+    };
+    let files = staged.explained(work())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(ScoreReport {

@@ -28,6 +28,9 @@ pub struct ExternalPlanner {
     pub timeout: Duration,
     /// Where `map.pgm`, `map.yaml`, the `.npy` layers, `layers.json` and `path.csv` are exchanged.
     pub dir: PathBuf,
+    /// Where that folder is once the run's output is in place (`OUT/planner`): messages name the files there,
+    /// never in the staging folder that is gone by the time they are read.
+    pub shown_dir: PathBuf,
 }
 
 /// Why a call gave no path.
@@ -79,9 +82,14 @@ impl ExternalPlanner {
         if path_csv.exists() {
             let _ = std::fs::remove_file(&path_csv);
         }
-        Ok(self
-            .run(start, goal, &path_csv)
-            .and_then(|()| read_path(&path_csv, extent)))
+        let shown = self.shown_dir.join("path.csv");
+        Ok(self.run(start, goal, &path_csv).and_then(|()| {
+            let bytes = read_regular(&path_csv, MAX_PATH_FILE_BYTES).map_err(|e| PlannerFailure {
+                kind: "malformed_path",
+                message: format!("{}: no readable path: {e}", shown.display()),
+            })?;
+            parse_path(&shown, &bytes, extent)
+        }))
     }
 
     fn run(
@@ -473,6 +481,7 @@ mod tests {
         ExternalPlanner {
             command: vec!["sh".into(), "-c".into(), script.into(), "planner".into()],
             timeout,
+            shown_dir: dir.clone(),
             dir,
         }
     }

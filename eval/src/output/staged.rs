@@ -122,6 +122,26 @@ impl Staged {
             .map_or_else(|_| staged.to_path_buf(), |rel| self.target.join(rel))
     }
 
+    /// `work` (the job's writes into [`Staged::dir`]) with its error naming a file where it would be in the
+    /// output folder: the staging folder is removed when the job fails, so a message must not send the user
+    /// there.
+    ///
+    /// # Errors
+    /// `work`'s error.
+    pub fn explained<T>(&self, work: Result<T>) -> Result<T> {
+        work.map_err(|e| match e {
+            EvalError::Io { path, source } => EvalError::Io {
+                path: self.final_path(&path),
+                source,
+            },
+            EvalError::Map(oeg::Error::Io { path, source }) => EvalError::Map(oeg::Error::Io {
+                path: self.final_path(&path),
+                source,
+            }),
+            other => other,
+        })
+    }
+
     /// Puts the staging folder in place of the output folder: the previous output aside, the new one in, the
     /// previous one deleted.
     ///
@@ -550,6 +570,28 @@ mod tests {
             [OUTPUT_MARKER, "metrics.json"],
             "the previous output went whole"
         );
+        std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn a_failed_write_names_the_file_in_the_output_folder_not_in_the_staging() {
+        let dir = std::env::temp_dir().join(format!("oeg-staged-explained-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let target = dir.join("out");
+        let staged = Staged::begin(&target, &[]).expect("begins");
+        // A folder where the job writes a file: the write fails inside the staging folder.
+        create_dir(&staged.dir().join("metrics.json")).expect("dir");
+        let work = write_bytes(&staged.dir().join("metrics.json"), b"{}");
+        let e = staged
+            .explained(work)
+            .expect_err("a folder in the way")
+            .to_string();
+        assert!(
+            e.starts_with(&format!("{}", target.join("metrics.json").display())),
+            "{e}"
+        );
+        assert!(!e.contains(".staging."), "{e}");
+        drop(staged);
         std::fs::remove_dir_all(&dir).expect("cleanup");
     }
 }

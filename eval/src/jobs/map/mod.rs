@@ -286,30 +286,35 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     map.release_scratch();
     drop(scans);
 
-    let stage = staged.dir();
-    let (mut files, map_file_bytes) = write_map_files(job, &map, stage)?;
-    let totals = map.totals();
-    let summary = summarize(job, &map, map_bytes, map_file_bytes);
-    let per_s = |n: u64| {
-        if integrate_wall_time_s > 0.0 {
-            n as f64 / integrate_wall_time_s
-        } else {
-            0.0
-        }
+    // The writes, their errors naming the output folder's files (the staging is gone when the job fails).
+    let work = || -> Result<_> {
+        let stage = staged.dir();
+        let (mut files, map_file_bytes) = write_map_files(job, &map, stage)?;
+        let totals = map.totals();
+        let summary = summarize(job, &map, map_bytes, map_file_bytes);
+        let per_s = |n: u64| {
+            if integrate_wall_time_s > 0.0 {
+                n as f64 / integrate_wall_time_s
+            } else {
+                0.0
+            }
+        };
+        let timing = MapTiming {
+            read_wall_time_s,
+            integrate_wall_time_s,
+            integrate_rays_per_s: per_s(totals.num_rays),
+            integrate_cell_visits_per_s: per_s(totals.num_cell_visits),
+            integrate_threads: 1,
+        };
+        let summary_path = stage.join("summary.json");
+        write_json(&summary_path, &summary)?;
+        files.push(summary_path);
+        let timing_path = stage.join("timing.json");
+        write_json(&timing_path, &timing)?;
+        files.push(timing_path);
+        Ok((files, summary, timing))
     };
-    let timing = MapTiming {
-        read_wall_time_s,
-        integrate_wall_time_s,
-        integrate_rays_per_s: per_s(totals.num_rays),
-        integrate_cell_visits_per_s: per_s(totals.num_cell_visits),
-        integrate_threads: 1,
-    };
-    let summary_path = stage.join("summary.json");
-    write_json(&summary_path, &summary)?;
-    files.push(summary_path);
-    let timing_path = stage.join("timing.json");
-    write_json(&timing_path, &timing)?;
-    files.push(timing_path);
+    let (files, summary, timing) = staged.explained(work())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(MapReport {
