@@ -95,6 +95,41 @@ pub struct Snapshot {
     pub decisions: Vec<Traversability>,
 }
 
+/// The most points of planned paths a closed-loop run keeps (16 MB): later plans keep their time, not their
+/// points (`plans.csv` then lacks their rows, and `navigation.json` counts them in `plan_points_dropped`).
+pub const MAX_KEPT_PLAN_POINTS: u64 = 1_000_000;
+
+/// The points of planned paths a run keeps: every plan is kept with its time, its points only while the total
+/// stays within the budget, so a long run that replans often holds a bounded log.
+#[derive(Debug, Clone, Copy)]
+struct PlanBudget {
+    left: u64,
+    dropped: u64,
+}
+
+impl PlanBudget {
+    fn new(points: u64) -> Self {
+        Self {
+            left: points,
+            dropped: 0,
+        }
+    }
+
+    /// The points of a plan to keep: all of them within the budget, none past it.
+    fn keep(&mut self, points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+        let n = points.len() as u64;
+        if n <= self.left {
+            self.left -= n;
+            points.to_vec()
+        } else {
+            // Spent: this plan and every later one keep no points, so `plans.csv` holds the run's first plans.
+            self.left = 0;
+            self.dropped += n;
+            Vec::new()
+        }
+    }
+}
+
 /// Everything a closed-loop run recorded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NavigationLog {
@@ -177,6 +212,7 @@ pub fn navigate(
     let mut next_replan = t0;
     let mut planner_wall_time_s = 0.0;
     let mut wall_time_dependent = false;
+    let mut plan_budget = PlanBudget::new(MAX_KEPT_PLAN_POINTS);
     let (mut replans, mut no_path_replans, mut failures) = (0u64, 0u64, 0u64);
     let mut k = 0u64;
     let outcome = loop {
@@ -214,7 +250,7 @@ pub fn navigate(
                     plan_index = Some(log.plans.len() as u64);
                     log.plans.push(PlannedPath {
                         time_s: round(t),
-                        points: points.clone(),
+                        points: plan_budget.keep(&points),
                     });
                     (path, progress_index, state, had_path) = (points, 0, "following", true);
                 }
@@ -318,6 +354,7 @@ pub fn navigate(
             round(inputs.footprint.max_y_m),
         ],
         wall_time_dependent,
+        plan_points_dropped: plan_budget.dropped,
         events: log.summary_events,
     };
     Ok(NavigationLog {
@@ -662,5 +699,26 @@ impl Recorder {
         let event = self.summary_events[event].clone();
         self.snapshots.push(Snapshot { event, decisions });
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PlanBudget;
+
+    #[test]
+    fn plans_past_the_budget_keep_their_time_not_their_points() {
+        let mut budget = PlanBudget::new(5);
+        assert_eq!(budget.keep(&[(0.0, 0.0); 3]).len(), 3);
+        assert_eq!(budget.keep(&[(1.0, 1.0); 2]).len(), 2, "exactly the budget");
+        assert!(budget.keep(&[(2.0, 2.0)]).is_empty(), "past it");
+        assert!(budget.keep(&[(3.0, 3.0); 4]).is_empty());
+        assert_eq!(budget.dropped, 5);
+        let mut budget = PlanBudget::new(5);
+        assert!(budget.keep(&[(0.0, 0.0); 6]).is_empty());
+        assert!(
+            budget.keep(&[(1.0, 1.0)]).is_empty(),
+            "once spent, no later plan keeps points"
+        );
     }
 }

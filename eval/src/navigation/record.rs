@@ -216,6 +216,9 @@ pub struct NavigationSummary {
     /// Whether an external planner's time-out (wall time) shaped the run: such a run is not reproducible
     /// byte for byte.
     pub wall_time_dependent: bool,
+    /// Points of planned paths not kept, past [`crate::navigation::MAX_KEPT_PLAN_POINTS`] (absent when none).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub plan_points_dropped: u64,
     /// Every event, in time order.
     pub events: Vec<Event>,
 }
@@ -258,4 +261,9 @@ mod tests {
             assert_eq!(serde_json::to_value(outcome).ok(), Some(outcome.name().into()));
         }
     }
+}
+
+/// Whether a count is zero (a key written only when it says something).
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
