@@ -240,6 +240,11 @@ impl NavigationSummary {
     }
 }
 
+/// Whether a count is zero (a key written only when it says something).
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -261,9 +266,4 @@ mod tests {
             assert_eq!(serde_json::to_value(outcome).ok(), Some(outcome.name().into()));
         }
     }
-}
-
-/// Whether a count is zero (a key written only when it says something).
-fn is_zero(n: &u64) -> bool {
-    *n == 0
 }
