@@ -104,6 +104,16 @@ impl<T: Copy> TileGrid<T> {
         self.num_tiles
     }
 
+    /// Number of tiles kept for reuse: that many tiles can be placed without new memory.
+    pub fn num_pooled(&self) -> usize {
+        self.pool.len()
+    }
+
+    /// Whether `tile` is allocated.
+    pub fn has_tile(&self, tile: TileIndex) -> bool {
+        self.slot(tile).is_some_and(|slot| self.slots[slot].is_some())
+    }
+
     /// Bytes allocated: tiles (in use and pooled), the tile index, and the grid itself.
     pub fn memory_bytes(&self) -> u64 {
         ((self.num_tiles + self.pool.len()) * Self::tile_bytes()

@@ -122,12 +122,38 @@ impl Map {
             }
             _ => 1,
         };
-        let least_bytes = tiles_spanned.saturating_mul(TileGrid::<ScanEvidence>::tile_bytes() as u64);
+        let tile_bytes = TileGrid::<ScanEvidence>::tile_bytes() as u64;
+        let least_bytes = tiles_spanned.saturating_mul(tile_bytes);
         if least_bytes > scratch_limit {
             return Err(Error::MemoryLimit {
                 requested_bytes: least_bytes.saturating_add(self.cells.memory_bytes()),
                 limit_bytes: self.config.memory_limit_bytes,
             });
+        }
+        // The scan's rays together: when this ray may need more than the scratch has left (long rays, such as a
+        // stereo hit's error band far away, add up), count the tiles it needs that the scratch lacks, before
+        // one of them is allocated. Rays are straight, so their tiles come in runs.
+        let in_use = self.scratch.memory_bytes();
+        let left = scratch_limit.saturating_sub(in_use);
+        let pooled = self.scratch.num_pooled() as u64;
+        if least_bytes > left.saturating_add(pooled.saturating_mul(tile_bytes)) {
+            let (mut new_tiles, mut last) = (0u64, None);
+            for crossing in walk.clone() {
+                let tile = TileIndex::of(crossing.cell);
+                if last != Some(tile) {
+                    last = Some(tile);
+                    new_tiles += u64::from(!self.scratch.has_tile(tile));
+                }
+            }
+            let needed = new_tiles.saturating_sub(pooled).saturating_mul(tile_bytes);
+            if needed > left {
+                return Err(Error::MemoryLimit {
+                    requested_bytes: needed
+                        .saturating_add(in_use)
+                        .saturating_add(self.cells.memory_bytes()),
+                    limit_bytes: self.config.memory_limit_bytes,
+                });
+            }
         }
         Ok(walk)
     }

@@ -1,5 +1,6 @@
-//! A long scan can be stopped: `Map::integrate_unless` asks its caller every `RAYS_BETWEEN_STOP_CHECKS` rays and
-//! leaves the map as it was.
+//! Long scans: one can be stopped (`Map::integrate_unless` asks its caller every `RAYS_BETWEEN_STOP_CHECKS` rays
+//! and leaves the map as it was), and long rays that together need more memory than the map may hold are refused
+//! before the memory is taken.
 
 use std::cell::Cell;
 
@@ -39,4 +40,29 @@ fn a_stopped_scan_leaves_the_map_as_it_was_and_the_next_one_integrates() {
     assert_eq!(stats, plain.integrate(&scan).expect("integrated"));
     assert_eq!(map.num_observed_cells(), plain.num_observed_cells());
     assert!(map.num_observed_cells() > 0);
+}
+
+#[test]
+fn far_stereo_hits_whose_bands_together_pass_the_limit_are_refused_before_the_second_is_allocated() {
+    // Two hits 60 m away: a stereo error band of 3 sigma (about 345 m past the hit at 60 m) makes each ray's
+    // scratch (127 tiles, 37 MB) more than half the limit; the two together more than it. The second ray is refused before its tiles are
+    // allocated, so the scratch keeps only the first ray's.
+    let limit = 64 << 20;
+    let config = MapConfig {
+        memory_limit_bytes: limit,
+        ..MapConfig::new(0.05)
+    };
+    let mut map = Map::new(config).expect("map");
+    let mut scan = Scan::new(Point3::origin(), SensorModel::stereo());
+    scan.rays = vec![
+        Ray::hit(Vector3::new(60.0, 0.0, 0.0)),
+        Ray::hit(Vector3::new(0.0, 60.0, 0.0)),
+    ];
+    let e = map.integrate(&scan).expect_err("over the limit");
+    assert!(matches!(e, Error::MemoryLimit { .. }), "{e}");
+    assert!(
+        map.memory_bytes() < limit * 3 / 4,
+        "{} bytes held after the refusal, of a limit of {limit}",
+        map.memory_bytes()
+    );
 }
