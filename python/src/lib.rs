@@ -795,7 +795,7 @@ fn float_grid(
             "{name}: shape {got:?}, expected the decisions' shape {shape:?}"
         )));
     }
-    Ok(Some(ro.as_array().iter().copied().collect()))
+    Ok(Some(collected(name, ro.as_array().iter().copied())?))
 }
 
 /// Scores another mapper's arrays against `truth`; returns `metrics.json`, the obstacles and the plan
@@ -818,7 +818,7 @@ fn score(
         .map_err(|_| PyTypeError::new_err("decisions: expected a 2D int64 numpy array of decision codes"))?;
     let ro = codes.readonly();
     let (rows, cols) = (ro.shape()[0], ro.shape()[1]);
-    let codes: Vec<i64> = ro.as_array().iter().copied().collect();
+    let codes: Vec<i64> = collected("decisions", ro.as_array().iter().copied())?;
     let decisions = oeg_eval::judge::estimate::decisions_from_codes(&codes)
         .map_err(|e| PyValueError::new_err(format!("decisions: {e}")))?;
     let shape = (rows, cols);
