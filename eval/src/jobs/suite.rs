@@ -171,12 +171,15 @@ pub fn suite(
                 .collect()
         })
     };
-    write_table(&stage.join("suite.csv"), &rows)?;
-    write_json(&stage.join("suite.json"), &rows)?;
-    // The table as Markdown for a results page, without what varies from run to run (the wall time).
-    write_markdown_rows(&stage.join("suite.md"), &rows, &["file", "wall_time_s"])?;
-    let page = suite_page(&files, &rows, stage);
-    crate::output::write_bytes(&stage.join("suite.html"), page.as_bytes())?;
+    let write = || -> Result<()> {
+        write_table(&stage.join("suite.csv"), &rows)?;
+        write_json(&stage.join("suite.json"), &rows)?;
+        // The table as Markdown for a results page, without what varies from run to run (the wall time).
+        write_markdown_rows(&stage.join("suite.md"), &rows, &["file", "wall_time_s"])?;
+        let page = suite_page(&files, &rows, stage);
+        crate::output::write_bytes(&stage.join("suite.html"), page.as_bytes())
+    };
+    staged.explained(write())?;
     staged.commit()?;
     Ok(rows)
 }

@@ -19,6 +19,8 @@ pub struct ContactWatch<'a> {
     /// The columns (`i`) of the truly blocked cells of each row of the region, ascending: a pose looks only at
     /// the blocked cells of its window, not at every cell of it.
     blocked_columns: Vec<Vec<i32>>,
+    /// The largest distance from the robot's centre to its footprint's corners, metres.
+    radius_m: f64,
     in_contact: bool,
     /// The closest approach so far: distance, time, pose, the cell.
     pub closest: Option<(f64, f64, Pose2, CellIndex)>,
@@ -58,6 +60,14 @@ impl<'a> ContactWatch<'a> {
             footprint,
             blocked,
             blocked_columns,
+            radius_m: [
+                (footprint.min_x_m, footprint.min_y_m),
+                (footprint.min_x_m, footprint.max_y_m),
+                (footprint.max_x_m, footprint.min_y_m),
+                (footprint.max_x_m, footprint.max_y_m),
+            ]
+            .iter()
+            .fold(0.0_f64, |r, (x, y)| r.max(x.hypot(*y))),
             in_contact: false,
             closest: None,
         }
@@ -80,15 +90,7 @@ impl<'a> ContactWatch<'a> {
             // The footprint lies within `radius` of the pose, so a cell's distance from the pose less `radius`
             // is a lower bound of the footprint's: a cell whose bound exceeds the nearest so far is skipped
             // without the exact distance (the result is the same).
-            let f = &self.footprint;
-            let radius = [
-                (f.min_x_m, f.min_y_m),
-                (f.min_x_m, f.max_y_m),
-                (f.max_x_m, f.min_y_m),
-                (f.max_x_m, f.max_y_m),
-            ]
-            .iter()
-            .fold(0.0_f64, |r, (x, y)| r.max(x.hypot(*y)));
+            let radius = self.radius_m;
             let half = self.geometry.resolution_m() / 2.0;
             for j in lo.j..=hi.j {
                 let row = &self.blocked_columns[(j - rlo.j) as usize];

@@ -116,13 +116,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     }
     let inputs: Vec<&Path> = dirs.iter().map(PathBuf::as_path).collect();
     let staged = Staged::begin(out, &inputs)?;
-    let plan_path = staged.dir().join("plan.json");
-    let mut bytes = serde_json::to_vec_pretty(&plan).unwrap_or_default();
-    bytes.push(b'\n');
-    write_bytes(&plan_path, &bytes)?;
-    let mut files = vec![plan_path];
-    let folder = super::folder::SweepFolder::fresh(staged.dir())?;
-    files.extend(write_row_tables(&plan_axes(&plan), &rows, &folder)?);
+    let write = || -> Result<Vec<PathBuf>> {
+        let plan_path = staged.dir().join("plan.json");
+        let mut bytes = serde_json::to_vec_pretty(&plan).unwrap_or_default();
+        bytes.push(b'\n');
+        write_bytes(&plan_path, &bytes)?;
+        let mut files = vec![plan_path];
+        let folder = super::folder::SweepFolder::fresh(staged.dir())?;
+        files.extend(write_row_tables(&plan_axes(&plan), &rows, &folder)?);
+        Ok(files)
+    };
+    let files = staged.explained(write())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(MergeSummary {
