@@ -334,12 +334,18 @@ impl PyMap {
             }
             scan.rays.push(ray);
         }
-        // Ctrl-C stops a long scan within RAYS_BETWEEN_STOP_CHECKS rays, the map as it was before it.
+        // Ctrl-C stops a long scan within RAYS_BETWEEN_STOP_CHECKS rays, the map as it was before it; a scan no
+        // longer than that is integrated at once (Python sees the signal when it returns), without the worker
+        // thread's cost.
         let map = &mut self.map;
-        let stats = interruptible(py, |progress| {
-            Ok(map.integrate_unless(&scan, &|| progress.check_cancelled().is_err()))
-        })?
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let integrated = if n <= oeg::RAYS_BETWEEN_STOP_CHECKS {
+            py.detach(|| map.integrate(&scan))
+        } else {
+            interruptible(py, |progress| {
+                Ok(map.integrate_unless(&scan, &|| progress.check_cancelled().is_err()))
+            })?
+        };
+        let stats = integrated.map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok((stats.num_rays, stats.num_cell_visits, self.map.num_scans()))
     }
 
@@ -573,10 +579,19 @@ fn interruptible<T: Send>(
     let progress = oeg_eval::progress::Progress::hidden();
     let (result, interrupt) = py.detach(|| {
         std::thread::scope(|scope| {
-            let worker = scope.spawn(|| work(&progress));
+            // The worker says when it is done, so a short call returns at once; signals are checked every 50 ms
+            // while it runs.
+            let (done, finished) = std::sync::mpsc::channel::<()>();
+            let progress = &progress;
+            let worker = scope.spawn(move || {
+                let result = work(progress);
+                let _ = done.send(());
+                result
+            });
             let mut interrupt = None;
-            while !worker.is_finished() {
-                std::thread::sleep(std::time::Duration::from_millis(50));
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
+                finished.recv_timeout(std::time::Duration::from_millis(50))
+            {
                 if interrupt.is_none()
                     && let Err(e) = Python::attach(|py| py.check_signals())
                 {
