@@ -31,7 +31,8 @@ enum Command {
     /// summary.json and timing.json.
     Map(cli::map::MapArgs),
     /// Plan a path on a saved map (map.oeg) from one point to another: write plan.json, path.csv and
-    /// plan.png.
+    /// plan.png. Exit status 0 with a path, 3 with none (the reason is printed and in plan.json), 1 on an
+    /// error.
     Plan(cli::plan::PlanArgs),
     /// Check a path (x,y lines in metres, e.g. one a planner logged in the field) against a scenario's truth
     /// with the robot's footprint: the first contact, the closest approach, the cells crossed; exit non-zero
@@ -94,9 +95,15 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", error_text(&e));
-            ExitCode::FAILURE
-        }
+        Err(e) => match e.downcast_ref::<cli::Status>() {
+            Some(status) => {
+                eprintln!("{status}");
+                ExitCode::from(status.code)
+            }
+            None => {
+                eprintln!("error: {}", error_text(&e));
+                ExitCode::FAILURE
+            }
+        },
     }
 }

@@ -36,6 +36,8 @@ pub struct Mapping {
     simulation_s: f64,
     map_s: Vec<f64>,
     last_tick: i64,
+    /// Whether progress counts simulated seconds rather than scans (a closed loop, whose end is its goal).
+    pub count_simulated_time: bool,
     tick_s: f64,
     duration_s: f64,
     /// What the rays could have told, over the map region on the first map's grid.
@@ -113,6 +115,7 @@ impl Mapping {
             models,
             simulation_s: 0.0,
             last_tick: -1,
+            count_simulated_time: false,
             tick_s: loaded.scenario.tick_s,
             duration_s: loaded.scenario.duration_s,
             recording: None,
@@ -202,7 +205,11 @@ impl Mapping {
                     r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
                 }
             }
-            progress.inc(1);
+            if self.count_simulated_time {
+                progress.set_position(stamp_s.max(0.0) as u64);
+            } else {
+                progress.inc(1);
+            }
             // The progress line is refreshed once per simulation tick (`tick_s`).
             let tick = (stamp_s / self.tick_s).floor() as i64;
             if tick != self.last_tick {

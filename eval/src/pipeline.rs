@@ -91,6 +91,8 @@ pub struct RunReport {
     pub obstacles: Vec<crate::judge::obstacles::ObstacleDecision>,
     /// The compared preset's metrics, if [`RunOptions::compare`] asked for one.
     pub compared: Option<(oeg::MapPreset, Metrics)>,
+    /// What each model's map made the robot do, and its regression bounds: the run's own model first.
+    pub outcomes: Vec<crate::judge::outcome::Outcome>,
     /// The output folder.
     pub out_dir: PathBuf,
     /// Every file written.
@@ -601,6 +603,17 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
                 .collect(),
         };
         files.push(write_run_page(stage, &page)?);
+        let outcomes = page
+            .models
+            .iter()
+            .map(|m| {
+                crate::judge::outcome::Outcome::new(
+                    m.scenario.map.preset.name(),
+                    &m.evaluation.metrics,
+                    &m.scenario.expectations,
+                )
+            })
+            .collect::<Vec<_>>();
         let Evaluation {
             metrics,
             failed,
@@ -613,10 +626,11 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
             failed,
             obstacles,
             compared_eval.map(|(preset, _, e)| (preset, e.metrics)),
+            outcomes,
             timing,
         ))
     };
-    let (files, metrics, failed, obstacles, compared, timing) = staged.explained(work())?;
+    let (files, metrics, failed, obstacles, compared, outcomes, timing) = staged.explained(work())?;
     let files = files.iter().map(|f| staged.final_path(f)).collect();
     staged.commit()?;
     Ok(RunReport {
@@ -625,6 +639,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         failed,
         obstacles,
         compared,
+        outcomes,
         out_dir,
         files,
     })

@@ -29,12 +29,15 @@ enum Mode {
 pub struct Progress {
     bar: ProgressBar,
     mode: Mode,
-    unit: Arc<str>,
+    unit: Arc<std::sync::Mutex<String>>,
     started: Instant,
     /// Milliseconds after `started` of the last plain line.
     last_line_ms: Arc<AtomicU64>,
     /// Set by [`Progress::cancel`], shared by every clone.
     cancelled: Arc<AtomicBool>,
+    /// Every position the counter reached, in order (tests read how work was counted).
+    #[cfg(test)]
+    pub(crate) steps: Arc<std::sync::Mutex<Vec<u64>>>,
 }
 
 impl Progress {
@@ -60,20 +63,46 @@ impl Progress {
             ProgressDrawTarget::hidden()
         };
         let bar = ProgressBar::with_draw_target(Some(len), target);
-        let template = format!(
-            "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit}, ETA {{eta}} {{msg}}"
-        );
-        if let Ok(style) = ProgressStyle::with_template(&template) {
-            bar.set_style(style);
-        }
-        Self {
+        let progress = Self {
             bar,
             mode,
-            unit: unit.into(),
+            unit: Arc::new(std::sync::Mutex::new(unit.to_string())),
             started: Instant::now(),
             last_line_ms: Arc::new(AtomicU64::new(0)),
             cancelled: Arc::new(AtomicBool::new(false)),
+            #[cfg(test)]
+            steps: Arc::default(),
+        };
+        progress.style();
+        progress
+    }
+
+    /// The bar's look: the time left only once a step is done (before that there is nothing to estimate it
+    /// from, and a bar that says "ETA 0s" or "ETA 69m" at its start misleads).
+    fn style(&self) {
+        let unit = self.unit();
+        let eta = if self.bar.position() > 0 {
+            "ETA {eta}"
+        } else {
+            "ETA after the first step"
+        };
+        let template =
+            format!("{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit}, {eta} {{msg}}");
+        if let Ok(style) = ProgressStyle::with_template(&template) {
+            self.bar.set_style(style);
         }
+    }
+
+    fn unit(&self) -> String {
+        self.unit.lock().map(|u| u.clone()).unwrap_or_default()
+    }
+
+    /// Counts in another unit from now on (a closed loop counts simulated time, not scans).
+    pub fn set_unit(&self, unit: &str) {
+        if let Ok(mut u) = self.unit.lock() {
+            *u = unit.to_string();
+        }
+        self.style();
     }
 
     /// Asks the work counted here (and by every clone) to stop: it ends at its next step with
@@ -101,7 +130,27 @@ impl Progress {
 
     /// Advance by `n` steps.
     pub fn inc(&self, n: u64) {
+        let first = self.bar.position() == 0;
         self.bar.inc(n);
+        self.after_step(first);
+    }
+
+    /// Move to step `pos` (a closed loop's simulated time).
+    pub fn set_position(&self, pos: u64) {
+        let first = self.bar.position() == 0;
+        self.bar.set_position(pos);
+        self.after_step(first);
+    }
+
+    /// The time left appears with the first step done; a plain line is due every [`PLAIN_INTERVAL`].
+    fn after_step(&self, first: bool) {
+        #[cfg(test)]
+        if let Ok(mut steps) = self.steps.lock() {
+            steps.push(self.bar.position());
+        }
+        if first && self.bar.position() > 0 && self.mode == Mode::Bar {
+            self.style();
+        }
         if self.mode == Mode::Lines {
             let now_ms = self.started.elapsed().as_millis() as u64;
             let last = self.last_line_ms.load(Ordering::Relaxed);
@@ -125,13 +174,13 @@ impl Progress {
         let left = if pos > 0 && len >= pos {
             hms(elapsed.mul_f64((len - pos) as f64 / pos as f64))
         } else {
-            "unknown".into()
+            "unknown (until the first step is done)".into()
         };
         let percent = (100 * pos).checked_div(len).unwrap_or(0);
         let message = self.bar.message();
         format!(
             "progress: {pos}/{len} {} ({percent} %), {} elapsed, about {left} left{}",
-            self.unit,
+            self.unit(),
             hms(elapsed),
             if message.is_empty() {
                 String::new()
@@ -174,6 +223,11 @@ mod tests {
         assert!(line.ends_with(" left"), "{line}");
         assert_eq!(hms(Duration::from_secs(2 * 3600 + 3 * 60 + 4)), "2:03:04");
         let none = Progress::with_mode(400, "scans", Mode::Lines);
-        assert!(none.line().contains("about unknown left"), "{}", none.line());
+        assert!(
+            none.line()
+                .contains("about unknown (until the first step is done) left"),
+            "{}",
+            none.line()
+        );
     }
 }

@@ -312,6 +312,60 @@ pub fn plan(
     goal: CellIndex,
     options: &PlannerOptions,
 ) -> Result<Option<Plan>> {
+    Ok(plan_or_why(region, resolution_m, decisions, start, goal, options)?.ok())
+}
+
+/// Why [`plan`] found no path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoPath {
+    /// The robot's centre may not stand at the start: the start cell's decision on the map (a drivable
+    /// class means a blocked or uncertain cell lies within the inflation radius).
+    Start(Traversability),
+    /// The robot's centre may not stand at the goal: the goal cell's decision, as for [`NoPath::Start`].
+    Goal(Traversability),
+    /// The robot may stand at both, but every route between them crosses cells it may not enter.
+    NoConnection,
+}
+
+impl NoPath {
+    /// The reason in words, for a message: `the start cell is blocked on the map`.
+    pub fn describe(&self, options: &PlannerOptions) -> String {
+        let end = |name: &str, class: &Traversability| match class {
+            Traversability::Blocked => format!("the {name} cell is blocked on the map"),
+            Traversability::Uncertain => format!(
+                "the {name} cell is uncertain on the map (the planner treats uncertain cells as blocked; \
+                 planner.uncertain=drivable takes the risk)"
+            ),
+            Traversability::Unknown => format!(
+                "the {name} cell was never observed (planner.unknown=drivable plans through unknown cells)"
+            ),
+            Traversability::Free | Traversability::Traversable => format!(
+                "the {name} cell lies within the inflation radius ({} m) of a blocked or uncertain cell",
+                options.inflation_radius_m
+            ),
+        };
+        match self {
+            Self::Start(class) => end("start", class),
+            Self::Goal(class) => end("goal", class),
+            Self::NoConnection => "no connection: every route from the start to the goal crosses blocked, \
+                 uncertain or unobserved cells, or passes within the inflation radius of a blocked one"
+                .to_string(),
+        }
+    }
+}
+
+/// As [`plan`], with the reason when there is no path.
+///
+/// # Errors
+/// As [`plan`].
+pub fn plan_or_why(
+    region: &CellRegion,
+    resolution_m: f64,
+    decisions: &[Traversability],
+    start: CellIndex,
+    goal: CellIndex,
+    options: &PlannerOptions,
+) -> Result<std::result::Result<Plan, NoPath>> {
     let offset_of = |name: &'static str, c: CellIndex| {
         region.offset(c).ok_or_else(|| {
             Error::setting(
@@ -322,6 +376,7 @@ pub fn plan(
     };
     let (s, g) = (offset_of("start", start)?, offset_of("goal", goal)?);
     validate_inputs(region, resolution_m, decisions, options)?;
+    let original = decisions;
     let mut decisions = decisions.to_vec();
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
@@ -340,10 +395,14 @@ pub fn plan(
             },
         )?;
     }
-    if forbidden[s] || forbidden[g] {
-        return Ok(None);
+    if forbidden[s] {
+        return Ok(Err(NoPath::Start(original[s])));
     }
-    Ok(astar(region, &forbidden, s, g).map(|offsets| {
+    if forbidden[g] {
+        return Ok(Err(NoPath::Goal(original[g])));
+    }
+    let found = astar(region, &forbidden, s, g).ok_or(NoPath::NoConnection);
+    Ok(found.map(|offsets| {
         let nx = region.num_x as usize;
         let cells: Vec<CellIndex> = offsets
             .iter()

@@ -559,7 +559,7 @@ fn plan<'py>(
             )
         })
         .map_err(oeg_error)?;
-    let Some(p) = planned.plan else {
+    let Ok(p) = planned.plan else {
         return Ok(None);
     };
     let points = oeg_eval::judge::plan_check::polyline(&p, m.geometry());

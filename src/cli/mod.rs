@@ -14,6 +14,24 @@ pub mod suite;
 pub mod sweep;
 pub mod validate;
 
+/// A command's answer that is not success and not an error, with its own exit status (`oeg plan`'s "no
+/// path" is 3): `main` prints the message and exits with the code.
+#[derive(Debug)]
+pub struct Status {
+    /// The exit status.
+    pub code: u8,
+    /// What to print.
+    pub message: String,
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Status {}
+
 /// Prints each failed expectation and fails, so that the command exits non-zero (after its files are written).
 fn fail_on_expectations(failed: &[oeg_eval::judge::metrics::FailedExpectation]) -> anyhow::Result<()> {
     if failed.is_empty() {

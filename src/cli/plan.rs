@@ -65,17 +65,26 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
             summary.plan_length_m,
             summary.num_path_cells
         );
-    } else {
-        say!(
-            "no path from ({}, {}) to ({}, {}) m",
-            args.from.0,
-            args.from.1,
-            args.to.0,
-            args.to.1
-        );
     }
     for f in files {
         say!("wrote {}", f.display());
     }
-    Ok(())
+    if summary.plan_found {
+        return Ok(());
+    }
+    Err(super::Status {
+        code: NO_PATH_EXIT_CODE,
+        message: format!(
+            "no path from ({}, {}) to ({}, {}) m: {}",
+            args.from.0,
+            args.from.1,
+            args.to.0,
+            args.to.1,
+            summary.no_path_reason.unwrap_or_default()
+        ),
+    }
+    .into())
 }
+
+/// `oeg plan`'s exit status when there is no path (its files are written): 1 is an error, 2 bad arguments.
+pub const NO_PATH_EXIT_CODE: u8 = 3;

@@ -41,6 +41,15 @@ pub fn run(args: &SuiteArgs) -> anyhow::Result<()> {
     for r in &rows {
         say!("{}", suite::table_line(r));
     }
+    let count = |word: &str| rows.iter().filter(|r| r.safety == word).count();
+    say!(
+        "drive: {} safe, {} unsafe, {} with no path; regression bounds: {} of {} scenarios within them",
+        count("safe"),
+        count("unsafe"),
+        count("no path"),
+        rows.iter().filter(|r| r.status == "pass").count(),
+        rows.len()
+    );
     for r in rows.iter().filter(|r| r.status != "pass") {
         eprintln!("{} {}: {}", r.scenario, r.status, r.problems);
     }

@@ -7,9 +7,11 @@ use oeg::{
 };
 
 use super::colormap::Colormap;
-use super::figure::{Figure, Fill, Legend, NO_DATA, Pattern, finite_range};
+use super::comparison::verdict_fill;
+use super::figure::{Figure, Fill, Legend, NO_DATA, finite_range};
 use super::{ImageFormats, save};
 use crate::error::Result;
+use crate::judge::verdict::Verdict;
 
 /// A continuous layer: NaN cells in [`NO_DATA`] grey, the rest coloured over `range` (default: the data's).
 pub fn scalar_figure(
@@ -61,15 +63,16 @@ pub fn scalar_figure_of(
     )
 }
 
-/// The fill of each traversability class: uncertain cells are hatched, so that they stay apart from unknown
-/// ones in grey scale.
+/// The fill of each traversability class. Blocked is the grey and uncertain the dotted blue of the same
+/// decisions on `decisions.png` ([`verdict_fill`]), so that a class looks the same in every figure; red is
+/// kept for unsafe cells, which only a comparison with the truth can tell.
 pub fn traversability_fill(t: Traversability) -> Fill {
     match t {
         Traversability::Unknown => NO_DATA.into(),
         Traversability::Free => [255, 255, 255].into(),
         Traversability::Traversable => [120, 190, 90].into(),
-        Traversability::Blocked => [200, 40, 40].into(),
-        Traversability::Uncertain => Fill::patterned([240, 200, 40], Pattern::Hatch),
+        Traversability::Blocked => verdict_fill(Verdict::RightBlocked),
+        Traversability::Uncertain => verdict_fill(Verdict::Uncertain),
     }
 }
 
@@ -114,11 +117,16 @@ pub fn traversability_figure_of(
 
 /// The finite range of one layer over the observed cells in `region`: the cost follows what the map holds,
 /// not the region's extent.
-fn observed_range(map: &Map, kind: LayerKind, region: CellRegion) -> Option<(f32, f32)> {
+fn observed_range(
+    map: &Map,
+    kind: LayerKind,
+    region: CellRegion,
+    scale: fn(f32) -> f32,
+) -> Option<(f32, f32)> {
     let values: Vec<f32> = map
         .observed_cells()
         .filter(|(c, _)| region.contains(*c))
-        .map(|(_, cell)| kind.value(&cell))
+        .map(|(_, cell)| scale(kind.value(&cell)))
         .collect();
     finite_range(&values)
 }
@@ -142,6 +150,10 @@ pub fn write_layer_images(
     };
     let res = map.geometry().resolution_m();
     let mut files = Vec::new();
+    let same: fn(f32) -> f32 = |v| v;
+    // The variance spans orders of magnitude (a laser's millimetres beside far stereo's metres): on a linear
+    // scale every laser cell is black, so it is drawn as log10.
+    let log10: fn(f32) -> f32 = f32::log10;
     let layers = [
         (
             "occupancy.png",
@@ -150,6 +162,7 @@ pub fn write_layer_images(
             "P(occupied)",
             Colormap::GreysReversed,
             Some((0.0, 1.0)),
+            same,
         ),
         (
             "elevation.png",
@@ -158,21 +171,23 @@ pub fn write_layer_images(
             "elevation [m]",
             Colormap::Viridis,
             None,
+            same,
         ),
         (
             "variance.png",
             LayerKind::VarianceM2,
-            "Elevation variance",
-            "variance [m\u{b2}]",
+            "Elevation variance, log scale",
+            "log10(variance / m\u{b2}): -4 is (1 cm)\u{b2}",
             Colormap::Inferno,
             None,
+            log10,
         ),
     ];
-    for (name, kind, title, label, colormap, range) in layers {
-        let range = range.or_else(|| observed_range(map, kind, region));
+    for (name, kind, title, label, colormap, range, scale) in layers {
+        let range = range.or_else(|| observed_range(map, kind, region, scale));
         let title = format!("{title} ({res} m cells)");
         let figure = scalar_figure_of(region, res, &title, label, colormap, range, |c| {
-            kind.value(&map.cell(c))
+            scale(kind.value(&map.cell(c)))
         });
         files.extend(save(&out_dir.join(name), figure.canvas(), formats)?);
     }

@@ -54,6 +54,9 @@ pub struct PlanSummary {
     pub unknown: UnknownCells,
     /// The robot's step limit, metres.
     pub max_step_m: f32,
+    /// Why there is no path (null when there is one): the start or goal cell blocked, uncertain, never
+    /// observed or within the inflation radius of a blocked cell, or no connection between them.
+    pub no_path_reason: Option<String>,
 }
 
 /// A plan on a map, with the decisions it was planned on.
@@ -61,8 +64,8 @@ pub struct PlanSummary {
 pub struct MapPlan {
     /// The decisions over the planning region: the map's observed region, grown to hold the start and goal.
     pub classes: oeg::Raster<oeg::Traversability>,
-    /// The path, or `None` when the goal cannot be reached.
-    pub plan: Option<oeg::Plan>,
+    /// The path, or why the goal cannot be reached.
+    pub plan: std::result::Result<oeg::Plan, oeg::NoPath>,
 }
 
 /// Plans on `map` from `from` to `to` (world x and y, metres) over its observed region, grown to hold both;
@@ -118,7 +121,7 @@ pub fn plan_on_map(
         });
     }
     let classes = map.traversability_layer(region, profile, rule)?;
-    let plan = oeg::plan(
+    let plan = oeg::plan_or_why(
         &region,
         geometry.resolution_m(),
         &classes.values,
@@ -151,6 +154,8 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         &job.profile,
         job.rule,
     )?;
+    let no_path_reason = plan.as_ref().err().map(|why| why.describe(&job.options));
+    let plan = plan.ok();
     let summary = PlanSummary {
         plan_found: plan.is_some(),
         plan_length_m: plan.as_ref().map_or(f64::NAN, |p| p.length_m),
@@ -162,6 +167,7 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         inflation_radius_m: job.options.inflation_radius_m,
         unknown: job.options.unknown,
         max_step_m: job.profile.max_step_m,
+        no_path_reason,
     };
     let work = || -> Result<_> {
         let mut files = Vec::new();
@@ -177,7 +183,7 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         files.push(path_csv);
         let title = match &plan {
             Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
-            None => "No path on the map".to_string(),
+            None => "No path on the map (plan.json says why)".to_string(),
         };
         let mut fig = crate::figures::traversability_figure(&classes, &title);
         if let Some(p) = &plan {

@@ -9,6 +9,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
+use crate::judge::outcome::Safety;
 use crate::output::{CsvRow, Staged, write_json, write_markdown_rows, write_table};
 use crate::pipeline::{RunOptions, run_scenario};
 use crate::progress::Progress;
@@ -20,8 +21,12 @@ pub struct SuiteRow {
     pub scenario: String,
     /// The scenario file.
     pub file: String,
-    /// `pass`, `fail` (expectations) or `error` (the run could not complete).
+    /// The scenario's regression bounds (its expectations): `pass`, `fail`, or `error` (the run could not
+    /// complete). Bounds set from a measured run catch a change; they do not say the map is right.
     pub status: String,
+    /// What the map made the robot do: `safe`, `unsafe` (the planned path near a truly blocked cell, or a
+    /// closed-loop contact) or `no path` ([`Safety`]); empty for a run that could not complete.
+    pub safety: String,
     /// Coverage of the map region. The metrics are empty for a row with status `error`: the run measured
     /// nothing (an empty CSV field, `null` in JSON).
     pub coverage: Option<f64>,
@@ -40,6 +45,8 @@ pub struct SuiteRow {
     pub plan_length_ratio: Option<f64>,
     /// Cells of the map's path near a true obstacle.
     pub plan_unsafe_cells: Option<u64>,
+    /// Unsafe cells a ray could have told about: the map's own.
+    pub unsafe_observable_cells: Option<u64>,
     /// Unsafe cells no ray could have told about.
     pub blind_cells: Option<u64>,
     /// A closed-loop run: whether it reached its goal (empty without `[navigation]`).
@@ -57,6 +64,7 @@ impl CsvRow for SuiteRow {
         "scenario",
         "file",
         "status",
+        "safety",
         "coverage",
         "elevation_rmse_m",
         "unsafe_step_cells",
@@ -65,6 +73,7 @@ impl CsvRow for SuiteRow {
         "overcautious_clearance_cells",
         "plan_length_ratio",
         "plan_unsafe_cells",
+        "unsafe_observable_cells",
         "blind_cells",
         "nav_reached",
         "nav_contacts",
@@ -196,31 +205,39 @@ fn run_dir(file: &Path) -> String {
 fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
     use crate::output::html::{Page, escape, field, href};
     let passed = rows.iter().filter(|r| r.status == "pass").count();
+    let count_of = |word: &str| rows.iter().filter(|r| r.safety == word).count();
+    let (safe, unsafe_runs, no_path) = (count_of("safe"), count_of("unsafe"), count_of("no path"));
+    let errors = rows.iter().filter(|r| r.status == "error").count();
     let mut page = Page::new("oeg suite");
-    let (class, verdict) = if passed == rows.len() {
-        (
-            "pass",
-            format!("PASS: all {} scenarios meet their expectations.", rows.len()),
-        )
+    let class = if unsafe_runs > 0 || errors > 0 {
+        "fail"
+    } else if no_path > 0 {
+        "neutral"
     } else {
-        (
-            "fail",
-            format!(
-                "FAIL: {} of {} scenarios fail or could not run.",
-                rows.len() - passed,
-                rows.len()
-            ),
-        )
+        "pass"
     };
     page.raw(&format!(
-        "<div class=\"verdict {class}\">{}</div>",
-        escape(&verdict)
+        "<div class=\"verdict {class}\" id=\"verdict\"><p><b>Would the robot have driven safely?</b> {}</p>\
+         <p>Regression bounds (each scenario's expectations, set from a measured run with a margin: they catch a \
+         change, they do not say the map is right): {}.</p></div>",
+        escape(&format!(
+            "{safe} of {n} scenarios safe, {unsafe_runs} unsafe (the planned path near a truly blocked cell, or \
+             a closed-loop contact), {no_path} with no path{}.",
+            if errors > 0 {
+                format!(", {errors} could not run")
+            } else {
+                String::new()
+            },
+            n = rows.len()
+        )),
+        escape(&format!("{passed} of {} scenarios within their bounds", rows.len()))
     ));
     page.raw("<p>The same rows as suite.csv (<a href=\"suite.csv\">suite.csv</a>, <a href=\"suite.json\">suite.json</a>).</p>");
     let header = [
         "decisions",
         "scenario",
-        "status",
+        "drive",
+        "regression bounds",
         "coverage",
         "elevation RMSE [m]",
         "unsafe step cells",
@@ -228,6 +245,7 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
         "over-cautious cells (step + clearance)",
         "plan length ratio",
         "plan unsafe cells",
+        "unsafe cells a ray could have told about",
         "blind cells",
         "closed loop",
         "problems",
@@ -280,10 +298,18 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
             overcautious,
             num(r.plan_length_ratio),
             count(r.plan_unsafe_cells),
+            count(r.unsafe_observable_cells),
             count(r.blind_cells),
         ];
         table.push_str(&format!(
-            "<tr><td>{thumb}</td><td>{name}</td><td class=\"{status}\">{status}</td>{cells}<td>{nav}</td><td>{problems}</td></tr>\n",
+            "<tr><td>{thumb}</td><td>{name}</td><td><span class=\"badge {safety_class}\">{safety}</span></td>\
+             <td class=\"{status}-text\">{status}</td>{cells}<td>{nav}</td><td>{problems}</td></tr>\n",
+            safety_class = match r.safety.as_str() {
+                "safe" => "safe",
+                "unsafe" => "unsafe",
+                _ => "nopath",
+            },
+            safety = escape(if r.safety.is_empty() { "-" } else { &r.safety }),
             status = escape(&r.status),
             cells = cells
                 .iter()
@@ -324,6 +350,7 @@ fn run_one(
             scenario: r.metrics.scenario.clone(),
             file: file.display().to_string(),
             status: if r.failed.is_empty() { "pass" } else { "fail" }.into(),
+            safety: Safety::of(&r.metrics).name().into(),
             coverage: Some(r.metrics.coverage),
             elevation_rmse_m: Some(r.metrics.elevation_rmse_m),
             unsafe_step_cells: Some(r.metrics.unsafe_step_cells),
@@ -332,6 +359,7 @@ fn run_one(
             overcautious_clearance_cells: Some(r.metrics.overcautious_clearance_cells),
             plan_length_ratio: Some(r.metrics.plan_length_ratio).filter(|v| v.is_finite()),
             plan_unsafe_cells: Some(r.metrics.plan_unsafe_cells),
+            unsafe_observable_cells: Some(r.metrics.unsafe_observable_cells),
             blind_cells: Some(r.metrics.blind_cells),
             nav_reached: r.metrics.nav_reached,
             nav_contacts: r.metrics.nav_contacts,
@@ -347,6 +375,7 @@ fn run_one(
             scenario: stem,
             file: file.display().to_string(),
             status: "error".into(),
+            safety: String::new(),
             coverage: None,
             elevation_rmse_m: None,
             unsafe_step_cells: None,
@@ -355,6 +384,7 @@ fn run_one(
             overcautious_clearance_cells: None,
             plan_length_ratio: None,
             plan_unsafe_cells: None,
+            unsafe_observable_cells: None,
             blind_cells: None,
             nav_reached: None,
             nav_contacts: None,
@@ -369,9 +399,10 @@ fn run_one(
 /// The table's header.
 pub fn table_header() -> String {
     format!(
-        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8}",
+        "{:<26} {:>7} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8}",
         "scenario",
-        "status",
+        "drive",
+        "bounds",
         "coverage",
         "rmse [m]",
         "unsafe",
@@ -394,8 +425,9 @@ pub fn table_line(r: &SuiteRow) -> String {
             .map_or_else(|| "none".to_string(), |v| format!("{v:.2}"))
     };
     format!(
-        "{:<26} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8.1}",
+        "{:<26} {:>7} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8.1}",
         r.scenario,
+        if r.safety.is_empty() { "-" } else { &r.safety },
         r.status,
         real(r.coverage),
         real(r.elevation_rmse_m),

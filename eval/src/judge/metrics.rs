@@ -331,6 +331,23 @@ pub fn metric_names() -> Vec<String> {
     numeric(&compute_empty()).into_keys().collect()
 }
 
+/// A safe run's metrics for tests: a path found on the map and the truth, no closed loop.
+#[cfg(test)]
+pub(crate) fn test_metrics() -> Metrics {
+    Metrics {
+        plan_found: true,
+        truth_plan_found: true,
+        plan_length_m: 10.0,
+        truth_plan_length_m: 10.0,
+        plan_length_ratio: 1.0,
+        nav_reached: None,
+        nav_time_s: None,
+        nav_contacts: None,
+        nav_stuck: None,
+        ..compute_empty()
+    }
+}
+
 fn compute_empty() -> Metrics {
     Metrics {
         scenario: String::new(),

@@ -11,6 +11,7 @@
 pub mod estimate;
 pub mod metrics;
 pub mod obstacles;
+pub mod outcome;
 pub mod plan_check;
 pub mod verdict;
 pub mod wrong_cells;

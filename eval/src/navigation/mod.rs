@@ -184,6 +184,10 @@ pub fn navigate(
     let mut log = Recorder::default();
     let dt = s.tick_s;
 
+    // Progress counts simulated seconds: a closed loop's scans do not say how far it is from its goal.
+    mapping.count_simulated_time = true;
+    progress.set_unit("s simulated");
+    progress.set_length(s.duration_s.ceil() as u64);
     // The scripted drive, one tick at a time, so that the trajectory and the watch see all of it.
     let drive_end = mapping.simulation.world().drive_end_s().min(s.duration_s);
     let ticks = (drive_end / dt).ceil() as u64;
@@ -199,6 +203,8 @@ pub fn navigate(
     let end = n
         .time_limit_s
         .map_or(s.duration_s, |l| (t0 + l).min(s.duration_s));
+    // The bar's end is the time limit: the robot may reach its goal sooner, never later.
+    progress.set_length(end.ceil() as u64);
     let controller = PurePursuit {
         lookahead_m: n.lookahead_m,
         speed_m_s: n.speed_m_s,

@@ -12,12 +12,15 @@ const STYLE: &str = "\
 body{font-family:'DejaVu Sans',Verdana,Arial,sans-serif;margin:1.5em auto;max-width:1500px;padding:0 1em;\
 color:#111;line-height:1.4}\
 h1{font-size:1.6em;margin-bottom:.2em}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid #ccc}\
-table{border-collapse:collapse;margin:.5em 0;font-size:.9em}\
+table{border-collapse:collapse;margin:.5em 0;font-size:.9em;display:block;max-width:100%;overflow-x:auto}\
 th,td{border:1px solid #ccc;padding:.2em .5em;text-align:left;vertical-align:top}\
 td.num{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}\
 .verdict{padding:.6em 1em;border:2px solid;margin:1em 0;font-size:1.1em}\
 .pass{border-color:#1a7f37;background:#e9f7ee}.fail{border-color:#c62828;background:#fdecea}\
-.neutral{border-color:#888;background:#f5f5f5}\
+.neutral{border-color:#888;background:#f5f5f5}.verdict ul{margin:.3em 0;padding-left:1.2em}\
+.badge{font-weight:bold;padding:0 .4em;border-radius:3px;color:#fff}.badge.safe{background:#1a7f37}\
+.badge.unsafe{background:#c62828}.badge.nopath{background:#9a6700}\
+.pass-text{color:#1a7f37}.fail-text{color:#c62828;font-weight:bold}\
 .row{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}\
 figure{margin:0;flex:1 1 420px;min-width:0}figure img{max-width:100%;height:auto;border:1px solid #ddd}\
 figcaption{font-size:.85em;color:#444}img.thumb{width:220px;height:auto;border:1px solid #ddd}\

@@ -10,7 +10,7 @@ use sim::scenario::Scenario;
 
 use crate::error::{EvalError, Result};
 use crate::judge::Evaluation;
-use crate::judge::metrics::expectation_results;
+use crate::judge::outcome::{Outcome, Safety};
 use crate::navigation::NavigationLog;
 use crate::output::html::{Page, escape, field, href, rows_to_html, table_html};
 use crate::output::{unit_of, write_bytes};
@@ -83,7 +83,7 @@ fn run_page(run: &RunPage) -> std::result::Result<String, String> {
     if !s.description.is_empty() {
         page.paragraph(&s.description);
     }
-    verdict(&mut page, own);
+    verdict(&mut page, run);
     decisions(&mut page, run);
     if let Some(log) = run.navigation {
         closed_loop(&mut page, log, &run.files)?;
@@ -120,41 +120,87 @@ fn run_page(run: &RunPage) -> std::result::Result<String, String> {
     Ok(page.finish())
 }
 
-/// The expectations of the run's own model, each with its measured and required value.
-fn verdict(page: &mut Page, own: &ModelRun) {
-    let results = expectation_results(&own.evaluation.metrics, &own.scenario.expectations);
-    let failed = results.iter().filter(|r| !r.passed).count();
-    let (class, text) = if results.is_empty() {
-        (
-            "neutral",
-            "The scenario sets no expectations: nothing to pass or fail.".to_string(),
-        )
-    } else if failed == 0 {
-        ("pass", format!("PASS: all {} expectations hold.", results.len()))
-    } else {
-        (
-            "fail",
-            format!("FAIL: {failed} of {} expectations do not hold.", results.len()),
-        )
-    };
-    page.raw(&format!(
-        "<div class=\"verdict {class}\" id=\"verdict\">{}</div>",
-        escape(&text)
-    ));
-    if !results.is_empty() {
-        let rows: Vec<Vec<String>> = results
-            .iter()
-            .map(|r| {
-                vec![
-                    r.metric.clone(),
-                    field(&r.measured.to_string()),
-                    r.required.clone(),
-                    if r.passed { "pass" } else { "FAIL" }.to_string(),
-                ]
-            })
-            .collect();
-        page.table(&["expectation", "measured", "required", "result"], &rows);
+/// The verdict: per model, whether the robot would have driven safely on its map and how its wrong cells split
+/// ([`Outcome`]); then the scenario's expectations, named as the regression bounds they are, for every model.
+fn verdict(page: &mut Page, run: &RunPage) {
+    let outcomes: Vec<Outcome> = run
+        .models
+        .iter()
+        .map(|m| Outcome::new(m.name(), &m.evaluation.metrics, &m.scenario.expectations))
+        .collect();
+    let mut html = String::from(
+        "<div class=\"verdict neutral\" id=\"verdict\">\n<p><b>Would the robot have driven safely on this \
+         map?</b> The path planned on the map from the start to the goal, checked against the truth, and the \
+         map's wrong cells.</p>\n<ul>\n",
+    );
+    for o in &outcomes {
+        let class = match o.safety {
+            Safety::Safe => "safe",
+            Safety::Unsafe => "unsafe",
+            Safety::NoPath => "nopath",
+        };
+        html.push_str(&format!(
+            "<li><b>{model}</b>: <span class=\"badge {class}\">{word}</span> planned path: {path}.",
+            model = escape(&o.model),
+            word = escape(&o.safety.name().to_uppercase()),
+            path = escape(&o.path_text()),
+        ));
+        if let Some(drive) = o.drive_text() {
+            html.push_str(&format!(" Closed loop: {}.", escape(&drive)));
+        }
+        html.push_str(&format!(" Cells: {}.</li>\n", escape(&o.cells_text())));
     }
+    html.push_str("</ul>\n</div>\n");
+    page.raw(&html);
+    if outcomes.iter().all(|o| o.bounds.is_empty()) {
+        page.paragraph("The scenario sets no expectations (regression bounds): nothing to pass or fail.");
+        return;
+    }
+    page.heading("bounds", "Regression bounds");
+    page.paragraph(
+        "The scenario's expectations are regression bounds, set from a measured run with a margin: they catch a \
+         change in the results, they do not say the map is right. The run's exit status follows the first \
+         model's; a compared model is checked against the same bounds and shown, not enforced.",
+    );
+    let mut list = String::from("<ul class=\"bounds\">\n");
+    for o in &outcomes {
+        let class = if o.failed_bounds().next().is_some() {
+            "fail"
+        } else {
+            "pass"
+        };
+        list.push_str(&format!(
+            "<li><b>{}</b>: <span class=\"{class}-text\">{}</span></li>\n",
+            escape(&o.model),
+            escape(&o.bounds_text())
+        ));
+    }
+    list.push_str("</ul>\n");
+    page.raw(&list);
+    let mut header = vec!["expectation".to_string(), "required".to_string()];
+    header.extend(outcomes.iter().map(|o| format!("{} measured", o.model)));
+    let rows: Vec<Vec<String>> = outcomes[0]
+        .bounds
+        .iter()
+        .enumerate()
+        .map(|(k, first)| {
+            let mut row = vec![first.metric.clone(), first.required.clone()];
+            row.extend(outcomes.iter().map(|o| {
+                o.bounds.get(k).map_or("-".into(), |r| {
+                    format!(
+                        "{}{}",
+                        field(&r.measured.to_string()),
+                        if r.passed { "" } else { " FAIL" }
+                    )
+                })
+            }));
+            row
+        })
+        .collect();
+    page.raw(&format!(
+        "<details><summary>Every bound</summary>\n{}</details>\n",
+        table_html(&header, &rows)
+    ));
 }
 
 /// The decisions of every model side by side, then each model's map, truth and error side by side.

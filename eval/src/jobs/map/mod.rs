@@ -37,11 +37,15 @@ impl InputFormat {
         }
     }
 
-    /// The format of `path`, from its extension.
+    /// The format of `path`: a sensor log by its magic bytes whatever its name, anything else by its
+    /// extension.
     ///
     /// # Errors
-    /// [`EvalError::Input`] for any other extension.
+    /// [`EvalError::Input`] for a file that is not a sensor log and has another extension.
     pub fn of(path: &Path) -> Result<Self> {
+        if starts_with(path, sim::log::MAGIC) {
+            return Ok(Self::Log);
+        }
         match path
             .extension()
             .and_then(|e| e.to_str())
@@ -55,11 +59,20 @@ impl InputFormat {
                 path: path.to_path_buf(),
                 message:
                     "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd) \
-                          or a sensor log (.oeglog)"
+                          or a sensor log (`oeg record`'s, recognised by its first bytes)"
                         .into(),
             }),
         }
     }
+}
+
+/// Whether the file at `path` begins with `magic` (false for a file that cannot be read: its reader says why).
+fn starts_with(path: &Path, magic: &[u8]) -> bool {
+    use std::io::Read;
+    let mut head = vec![0u8; magic.len()];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok_and(|()| head == magic)
 }
 
 /// Everything `oeg map` needs.
@@ -439,5 +452,18 @@ mod tests {
             .expect_err("unknown")
             .to_string();
         assert!(err.contains("scan.bt") && err.contains(".graph"), "{err}");
+    }
+
+    #[test]
+    fn a_sensor_log_is_recognised_by_its_magic_bytes_whatever_its_name() {
+        let dir = crate::test_support::scratch_dir("map", "magic");
+        let (no_extension, named_graph) = (dir.join("recorded"), dir.join("log.graph"));
+        for path in [&no_extension, &named_graph] {
+            std::fs::write(path, [&sim::log::MAGIC[..], b"rest of a log"].concat()).expect("write");
+            assert_eq!(InputFormat::of(path).expect("log"), InputFormat::Log);
+        }
+        // Seven bytes of the magic are not a log.
+        std::fs::write(&no_extension, &sim::log::MAGIC[..7]).expect("write");
+        assert!(InputFormat::of(&no_extension).is_err());
     }
 }

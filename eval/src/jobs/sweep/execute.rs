@@ -189,11 +189,7 @@ pub fn run(plan: &SweepPlan, options: &ExecuteOptions, progress: &Progress) -> R
         groups
             .par_iter()
             .with_max_len(1)
-            .map(|(_, runs)| {
-                let n = run_group(runs, &folder)?;
-                progress.inc(runs.len() as u64);
-                Ok(n)
-            })
+            .map(|(_, runs)| run_group(runs, &folder, progress))
             .collect::<Result<Vec<usize>>>()
     })?;
     progress.finish();
@@ -227,8 +223,9 @@ fn check_same_plan(plan: &SweepPlan, out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// One simulation, mapped once per run; writes each run's files, `row.json` last. Returns the error rows.
-fn run_group(runs: &[&Run], folder: &SweepFolder) -> Result<usize> {
+/// One simulation, mapped once per run; writes each run's files, `row.json` last, and counts each run on
+/// `progress` as its row is written. Returns the error rows.
+fn run_group(runs: &[&Run], folder: &SweepFolder, progress: &Progress) -> Result<usize> {
     let out = folder.root();
     let start = Instant::now();
     let loaded: Vec<std::result::Result<sim::LoadedScenario, String>> =
@@ -273,6 +270,7 @@ fn run_group(runs: &[&Run], folder: &SweepFolder) -> Result<usize> {
         );
         let record = serde_json::json!({ "row": row, "obstacles": obstacles });
         folder.write_json(&row_path(out, &run.id), &record)?;
+        progress.inc(1);
     }
     Ok(num_errors)
 }
@@ -359,6 +357,27 @@ fn simulate_group(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn progress_counts_each_run_as_its_row_is_written_shared_simulations_included() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let sweep = crate::jobs::sweep::Sweep::load(&root.join("sweeps/smoke.toml")).expect("smoke");
+        let plan = SweepPlan::new(sweep).expect("plan");
+        let options = ExecuteOptions {
+            out_dir: crate::test_support::scratch_dir("sweep", "progress").join("out"),
+            shard: None,
+            jobs: 1,
+            simulate_each: false,
+        };
+        let progress = Progress::hidden();
+        let summary = run(&plan, &options, &progress).expect("run");
+        // Groups of two runs share each simulation; the counter still moves one run at a time.
+        assert!(summary.num_simulations < summary.num_run, "{summary:?}");
+        let steps = progress.steps.lock().expect("steps").clone();
+        let expected: Vec<u64> = (1..=summary.num_run as u64).collect();
+        assert_eq!(steps, expected);
+        let _ = std::fs::remove_dir_all(&options.out_dir);
+    }
 
     #[test]
     fn shards_are_parsed_from_one() {
