@@ -18,7 +18,10 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "oeg",
     version,
-    about = "Occupancy-Elevation Grid mapping and evaluation"
+    about = "Occupancy-Elevation Grid mapping and evaluation",
+    after_help = "With no command, `oeg` runs scenarios/default.toml with the paper's model and the robust \
+                  preset side by side (`oeg run scenarios/default.toml --compare robust`) and writes \
+                  out/default/report.html. The guide: docs/guide.md."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -59,7 +62,7 @@ enum Command {
     /// (docs/sweep-format.md).
     #[command(subcommand)]
     Sweep(cli::sweep::SweepCommand),
-    /// Map the built-in demonstration scans (what `oeg` with no arguments does).
+    /// Map the built-in demonstration scans: the map on its own, no simulation, in a second.
     Demo(cli::demo::DemoArgs),
 }
 

@@ -48,8 +48,18 @@ fn a_run_page_parses_links_only_written_files_and_its_figures_and_svgs_are_the_s
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let page = check_page(&a.join("report.html"));
-    // The verdict first, then both models side by side, with every section.
-    assert!(page.contains("class=\"verdict pass\""), "the verdict");
+    // The verdict first (each model's drive and cells, then its regression bounds), then both models side by
+    // side, with every section.
+    assert!(page.contains("id=\"verdict\""), "the verdict");
+    assert!(
+        page.contains("<b>paper</b>: <span class=\"badge"),
+        "the paper model's line"
+    );
+    assert!(
+        page.contains("<b>robust</b>: <span class=\"badge"),
+        "the robust model's line"
+    );
+    assert!(page.contains("id=\"bounds\""), "the regression bounds");
     for section in [
         "id=\"decisions\"",
         "id=\"map\"",
@@ -94,14 +104,77 @@ fn a_run_page_parses_links_only_written_files_and_its_figures_and_svgs_are_the_s
 }
 
 #[test]
-fn a_failing_run_page_says_what_failed_with_the_measured_and_required_values() {
+fn each_models_failed_bounds_are_named_in_the_box_and_on_standard_output_apart_from_what_the_map_did() {
     let dir = temp_dir("reports", "fail");
     let out = dir.join("out");
-    let o = run(&out, &["--set", "expectations.num_scans={ max = 1 }"], "2");
+    // The paper's model never answers "uncertain", robust does: the second model fails a bound the first
+    // meets, and both fail the number of scans.
+    let o = run(
+        &out,
+        &[
+            "--compare",
+            "robust",
+            "--set",
+            "expectations.num_scans={ max = 1 }",
+            "--set",
+            "expectations.uncertain_cells={ max = 0 }",
+        ],
+        "2",
+    );
+    // The exit status follows the run's own model.
     assert!(!o.status.success());
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = |model: &str| {
+        stdout
+            .lines()
+            .find(|l| l.starts_with(&format!("{model} model: ")))
+            .unwrap_or_else(|| panic!("no line for {model}: {stdout}"))
+            .to_string()
+    };
+    for model in ["paper", "robust"] {
+        // What the map made the robot do comes first, in its own words.
+        let first = line(model);
+        assert!(
+            ["SAFE", "UNSAFE", "NO PATH"].iter().any(|w| first.contains(w)),
+            "{first}"
+        );
+        assert!(stdout.contains("  cells: "), "{stdout}");
+    }
+    // Each model's bounds on a line of its own, in the models' order.
+    let said: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("  regression bounds: "))
+        .collect();
+    assert_eq!(said.len(), 2, "{stdout}");
+    assert!(
+        said[0].contains("FAIL: num_scans = ") && !said[0].contains("uncertain_cells"),
+        "the paper model's bounds: {stdout}"
+    );
+    assert!(
+        said[1].contains("FAIL: num_scans = ") && said[1].contains("; uncertain_cells = "),
+        "the robust model's bounds: {stdout}"
+    );
     let page = check_page(&out.join("report.html"));
-    assert!(page.contains("class=\"verdict fail\""));
-    assert!(page.contains("FAIL: 1 of"), "the count of failures");
+    assert!(page.contains("id=\"verdict\""));
+    let bounds: Vec<&str> = page
+        .lines()
+        .filter(|l| l.contains("class=\"fail-text\""))
+        .collect();
+    assert_eq!(bounds.len(), 2, "one line of failed bounds per model: {bounds:?}");
+    assert!(
+        bounds[0].contains("<b>paper</b>") && bounds[0].contains("FAIL: num_scans = "),
+        "{}",
+        bounds[0]
+    );
+    assert!(
+        bounds[1].contains("<b>robust</b>") && bounds[1].contains("uncertain_cells = "),
+        "{}",
+        bounds[1]
+    );
+    assert!(
+        page.contains("they do not say the map is right"),
+        "named as regression bounds"
+    );
     let row = page
         .lines()
         .find(|l| l.contains("<td>num_scans</td>"))

@@ -77,11 +77,35 @@ fn every_scenario_meets_its_expectations_and_the_golden_runs_are_unchanged() {
     assert!(rows.iter().all(|r| r["status"] == "pass"), "{stdout}");
     let csv = std::fs::read_to_string(out.join("suite.csv")).expect("suite.csv");
     assert_eq!(csv.lines().count(), rows.len() + 1);
-    assert!(csv.starts_with("scenario,file,status,coverage,elevation_rmse_m,unsafe_step_cells"));
+    assert!(csv.starts_with("scenario,file,status,safety,coverage,elevation_rmse_m,unsafe_step_cells"));
     // The suite's page: one row per scenario, each linking its run's page and its decisions' thumbnail,
     // and every run's page in turn parses and links only what it wrote.
     let page = check_page(&out.join("suite.html"));
-    assert!(page.contains("class=\"verdict pass\""));
+    // The box answers what the maps made the robot do, and only then the regression bounds: a scenario within
+    // its bounds whose path passed near an obstacle counts as unsafe.
+    let safety = |word: &str| rows.iter().filter(|r| r["safety"] == word).count();
+    for r in rows {
+        let m = |k: &str| r[k].as_u64().unwrap_or(0);
+        let unsafe_drive = m("plan_unsafe_cells") > 0 || m("nav_contacts") > 0;
+        assert_eq!(r["safety"] == "unsafe", unsafe_drive, "{r}");
+    }
+    assert!(
+        page.contains(&format!(
+            "{} of {} scenarios safe, {} unsafe",
+            safety("safe"),
+            rows.len(),
+            safety("unsafe")
+        )),
+        "the drive's count in the box"
+    );
+    assert!(
+        page.contains(&format!(
+            "{} of {} scenarios within their bounds",
+            rows.len(),
+            rows.len()
+        )),
+        "the bounds' count in the box"
+    );
     for r in rows {
         let name = r["scenario"].as_str().expect("name");
         assert!(page.contains(&format!(">{name}</a>")), "{name} has no link");

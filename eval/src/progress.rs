@@ -86,8 +86,12 @@ impl Progress {
         } else {
             "ETA after the first step"
         };
-        let template =
-            format!("{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit}, {eta} {{msg}}");
+        let template = if self.bar.length().unwrap_or(0) == 0 {
+            // No total known (yet): the count alone.
+            format!("{{spinner}} [{{elapsed_precise}}] {{pos}} {unit} {{msg}}")
+        } else {
+            format!("{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit}, {eta} {{msg}}")
+        };
         if let Ok(style) = ProgressStyle::with_template(&template) {
             self.bar.set_style(style);
         }
@@ -125,7 +129,11 @@ impl Progress {
 
     /// Set the number of steps.
     pub fn set_length(&self, len: u64) {
+        let had = self.bar.length().unwrap_or(0) > 0;
         self.bar.set_length(len);
+        if had != (len > 0) && self.mode == Mode::Bar {
+            self.style();
+        }
     }
 
     /// Advance by `n` steps.
@@ -171,22 +179,30 @@ impl Progress {
     fn line(&self) -> String {
         let (pos, len) = (self.bar.position(), self.bar.length().unwrap_or(0));
         let elapsed = self.started.elapsed();
+        let message = self.bar.message();
+        let message = if message.is_empty() {
+            String::new()
+        } else {
+            format!(" ({message})")
+        };
+        if len == 0 || pos > len {
+            // The total is not known: the count and the time, no share and no time left.
+            return format!(
+                "progress: {pos} {}, {} elapsed{message}",
+                self.unit(),
+                hms(elapsed)
+            );
+        }
         let left = if pos > 0 && len >= pos {
             hms(elapsed.mul_f64((len - pos) as f64 / pos as f64))
         } else {
             "unknown (until the first step is done)".into()
         };
         let percent = (100 * pos).checked_div(len).unwrap_or(0);
-        let message = self.bar.message();
         format!(
-            "progress: {pos}/{len} {} ({percent} %), {} elapsed, about {left} left{}",
+            "progress: {pos}/{len} {} ({percent} %), {} elapsed, about {left} left{message}",
             self.unit(),
             hms(elapsed),
-            if message.is_empty() {
-                String::new()
-            } else {
-                format!(" ({message})")
-            }
         )
     }
 

@@ -556,6 +556,42 @@ mod tests {
     }
 
     #[test]
+    fn no_path_says_which_end_is_forbidden_or_that_nothing_joins_them() {
+        let r = region(10, 3);
+        let why = |d: &[Traversability], goal: CellIndex, options: &PlannerOptions| {
+            plan_or_why(&r, 0.1, d, CellIndex::new(0, 1), goal, options)
+                .expect("valid")
+                .expect_err("no path")
+        };
+        let avoid = no_inflation(UnknownCells::Avoid);
+        // A wall across the region.
+        let wall = marked(&r, Traversability::Blocked, |c| c.i == 5);
+        assert_eq!(why(&wall, CellIndex::new(9, 1), &avoid), NoPath::NoConnection);
+        // The goal on the wall, or uncertain.
+        assert_eq!(
+            why(&wall, CellIndex::new(5, 1), &avoid),
+            NoPath::Goal(Traversability::Blocked)
+        );
+        let uncertain = marked(&r, Traversability::Uncertain, |c| c.i == 9);
+        let reason = why(&uncertain, CellIndex::new(9, 1), &avoid);
+        assert_eq!(reason, NoPath::Goal(Traversability::Uncertain));
+        assert!(reason.describe(&avoid).contains("uncertain"));
+        // A free goal beside a blocked cell, inside the inflation radius.
+        let inflated = PlannerOptions {
+            inflation_radius_m: 0.15,
+            ..avoid
+        };
+        let post = marked(&r, Traversability::Blocked, |c| c == CellIndex::new(9, 2));
+        let reason = why(&post, CellIndex::new(9, 1), &inflated);
+        assert_eq!(reason, NoPath::Goal(Traversability::Free));
+        assert!(
+            reason
+                .describe(&inflated)
+                .contains("within the inflation radius (0.15 m)")
+        );
+    }
+
+    #[test]
     fn an_open_grid_gives_the_octile_distance() {
         let r = region(10, 6);
         let d = vec![Traversability::Free; 60];

@@ -40,6 +40,9 @@ pub fn run(args: &CheckPathArgs) -> anyhow::Result<()> {
         check.num_poses,
         check.footprint_m
     );
+    if check.first_contact.is_none() {
+        say!("no contact: the footprint never touches a truly blocked cell along the path");
+    }
     match &check.closest_approach_m {
         Some(d) => say!(
             "closest approach to a truly blocked cell: {d:.3} m, {:.2} m along the path",

@@ -23,7 +23,7 @@ pub struct MapArgs {
     /// A setting by its scenario key (repeatable), e.g. --set map.model.max_height_m=0.5 or
     /// --set input.pcd_frame=optical: map.model.* (every model option), map.traversability, robot.max_step_m,
     /// robot.height_m, input.graph_sensor (laser|stereo), input.pcd_sensor (laser|stereo), input.pcd_frame
-    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true). README, "Settings".
+    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true). Every key: docs/guide.md#settings-one-door.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
     /// Also write the files a planner reads over the observed region, in `planner/`: the decisions as a nav2

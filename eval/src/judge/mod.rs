@@ -88,7 +88,7 @@ pub fn score(
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }
-    let failed = metrics::check_expectations(&mut metrics, &s.expectations);
+    let failed = metrics::check_expectations(&mut metrics, &applicable(&s.expectations, &estimate));
     let obstacles = obstacles::decisions(s, &estimate, truth, &verdicts, sensed.returns);
     Ok(Evaluation {
         metrics,
@@ -98,6 +98,24 @@ pub fn score(
         verdicts,
         estimate,
     })
+}
+
+/// The expectations a map can be held to: none on a layer it does not have at all (a nav2 map has decisions
+/// only, so its elevation and occupancy metrics are not measured, not failed).
+fn applicable(
+    expectations: &std::collections::BTreeMap<String, scenario::Expectation>,
+    estimate: &Estimate,
+) -> std::collections::BTreeMap<String, scenario::Expectation> {
+    let has = |layer: &[f64]| layer.iter().any(|v| !v.is_nan());
+    let (elevation, occupancy) = (has(&estimate.elevation_m), has(&estimate.occupancy));
+    expectations
+        .iter()
+        .filter(|(name, _)| {
+            let needs_elevation = name.starts_with("elevation_") || name.as_str() == "num_elevation_cells";
+            (elevation || !needs_elevation) && (occupancy || name.as_str() != "occupancy_brier")
+        })
+        .map(|(name, e)| (name.clone(), *e))
+        .collect()
 }
 
 /// A closed-loop run's figures, as the judge records them (the `nav_*` metrics).

@@ -15,8 +15,32 @@ use crate::navigation::NavigationLog;
 use crate::output::html::{Page, escape, field, href, rows_to_html, table_html};
 use crate::output::{unit_of, write_bytes};
 
-/// Where the metrics are defined, for the page's link (the repository's `docs/metrics.md`).
-pub const METRICS_DOC: &str = concat!(env!("CARGO_PKG_REPOSITORY"), "/blob/main/docs/metrics.md");
+/// The metrics' definitions: `docs/metrics.md`, built into the program so that the page carries them (it
+/// needs no network and no copy of the repository).
+const METRICS_DOC: &str = include_str!("../../../docs/metrics.md");
+
+/// The definition of each metric key, from the table of [`METRICS_DOC`] (`| `key`, `key` | unit | definition |`).
+pub fn metric_definitions() -> std::collections::BTreeMap<String, String> {
+    let mut out = std::collections::BTreeMap::new();
+    for line in METRICS_DOC.lines() {
+        let cells: Vec<&str> = line.trim().trim_matches('|').split('|').map(str::trim).collect();
+        let [keys, _unit, definition] = cells.as_slice() else {
+            continue;
+        };
+        if !keys.starts_with('`') {
+            continue;
+        }
+        for key in keys.split(',') {
+            let key = key.trim().trim_matches('`');
+            // The first table to define a key is the metrics' own (later tables reuse names).
+            if !key.is_empty() {
+                out.entry(key.to_string())
+                    .or_insert_with(|| definition.replace('`', ""));
+            }
+        }
+    }
+    out
+}
 
 /// One model of the run: its scenario (with its map settings), its evaluation and its folder inside the run's
 /// (empty for the run's own model).
@@ -300,18 +324,20 @@ fn closed_loop(page: &mut Page, log: &NavigationLog, files: &[PathBuf]) -> std::
 /// Every metric, one column per model, with its unit.
 fn metrics(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
     page.heading("metrics", "Metrics");
-    page.raw(&format!(
-        "<p>Definitions: <a href=\"{}\">docs/metrics.md</a>.</p>",
-        escape(METRICS_DOC)
-    ));
+    page.paragraph(
+        "Each metric with its unit and its definition (from the testbed's docs/metrics.md, carried by this page).",
+    );
     let values = metric_objects(run)?;
+    let definitions = metric_definitions();
     let mut header = vec!["metric".to_string(), "unit".to_string()];
     header.extend(run.models.iter().map(|m| m.name().to_string()));
+    header.push("definition".to_string());
     let rows: Vec<Vec<String>> = values[0]
         .keys()
         .map(|key| {
             let mut row = vec![key.clone(), unit_of(key).unwrap_or("").to_string()];
             row.extend(values.iter().map(|v| value_text(v.get(key))));
+            row.push(definitions.get(key).cloned().unwrap_or_default());
             row
         })
         .collect();
@@ -418,4 +444,21 @@ fn settings(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_metric_has_a_definition_carried_by_the_page() {
+        let definitions = metric_definitions();
+        for name in crate::judge::metrics::metric_names() {
+            assert!(
+                definitions.get(&name).is_some_and(|d| !d.is_empty()),
+                "docs/metrics.md defines no `{name}`"
+            );
+        }
+        assert!(definitions["coverage"].contains("num_observed_cells / num_cells"));
+    }
 }

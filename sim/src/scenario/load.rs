@@ -39,8 +39,8 @@ pub const MAX_PARTS: usize = 100_000;
 /// machine, so the worst valid scenario finishes, in hours rather than never (`docs/guarantees.md`).
 pub const MAX_RAYS_PER_RUN: f64 = 2e9;
 /// The most cells a run's rays may cross, all sensors together (rays x their longest range / the cell size):
-/// 10^12. The map walks 65-84 million cells a second on one core of the reference machine (README, "Bad
-/// input, bounds and outputs"), so this too keeps the worst valid scenario to hours.
+/// 10^12. The map walks 65-84 million cells a second on one core of the reference machine
+/// (docs/guarantees.md), so this too keeps the worst valid scenario to hours.
 pub const MAX_CELL_VISITS_PER_RUN: f64 = 1e12;
 
 /// One step of a path to a value in the file: a key or an array index.
