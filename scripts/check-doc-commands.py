@@ -97,6 +97,7 @@ def shim(path, body):
 
 
 def main(argv):
+    sys.stdout.reconfigure(line_buffering=True)
     pages = argv or PAGES
     oeg = os.path.join(ROOT, "target", "release", "oeg")
     if not os.path.isfile(oeg):
@@ -148,7 +149,7 @@ exec {shlex.quote(real_cargo)} "$@"
         for _, commands in blocks(page):
             for line, command, comment in commands:
                 where = f"{page}:{line}"
-                reason = None
+                reason, as_written = None, command
                 if command.startswith("cargo test"):
                     reason = "CI runs the test command as its own step"
                 elif "../shared/data" in command and not have_shared:
@@ -174,7 +175,7 @@ exec {shlex.quote(real_cargo)} "$@"
                 if reason is None and key in passed:
                     reason = f"the same command ran and held at {passed[key]}"
                 if reason:
-                    print(f"skip  {where}  {command}\n      ({reason})")
+                    print(f"skip  {where}  {as_written}\n      ({reason})")
                     skipped += 1
                     continue
                 written, printed, status = stated(comment)
@@ -199,7 +200,8 @@ exec {shlex.quote(real_cargo)} "$@"
                     problems.append(f"exit status {code}, expected {status}")
                 problems += [f"{p} was not written" for p in written if not os.path.exists(os.path.join(project, p))]
                 problems += [f'the output does not contain "{t}"' for t in printed if t not in output]
-                print(f"{'FAIL' if problems else 'ok  '}  {seconds:6.1f} s  {where}  {command}")
+                shown = command if command == as_written else f"{command}   (as written: {as_written})"
+                print(f"{'FAIL' if problems else 'ok  '}  {seconds:6.1f} s  {where}  {shown}")
                 if not problems:
                     passed.setdefault(key, where)
                 if problems:

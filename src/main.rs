@@ -62,7 +62,7 @@ enum Command {
     /// (docs/sweep-format.md).
     #[command(subcommand)]
     Sweep(cli::sweep::SweepCommand),
-    /// Map the built-in demonstration scans: the map on its own, no simulation, in a second.
+    /// Map the built-in demonstration scans: the map on its own, with no simulation.
     Demo(cli::demo::DemoArgs),
 }
 
