@@ -1,5 +1,7 @@
 //! Maps a scan graph once and prints the integration totals: `cargo run -p oeg --release --example map_graph --
-//! FILE.graph RESOLUTION_M`. A profiling aid; the `oeg map` command is the user-facing tool.
+//! FILE.graph RESOLUTION_M [PRESET]` (PRESET: `paper`, the default, `static` or `robust`, for the default
+//! robot). A profiling aid and the timed program of `scripts/bench-regression.sh`, whose output line it keeps
+//! as the first version printed it; the `oeg map` command is the user-facing tool.
 
 use std::time::Instant;
 
@@ -12,8 +14,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .next()
         .ok_or("usage: map_graph FILE.graph RESOLUTION_M")?
         .parse()?;
+    let preset: oeg::MapPreset = args.next().as_deref().unwrap_or("paper").parse()?;
     let scans = oeg::read_graph_scans(path.as_ref(), SensorModel::laser())?;
-    let mut map = Map::new(MapConfig::new(resolution_m))?;
+    let mut config = MapConfig::new(resolution_m);
+    config.model = preset.model(&oeg::RobotProfile::default());
+    let mut map = Map::new(config)?;
     let start = Instant::now();
     for scan in &scans {
         map.integrate(scan)?;

@@ -219,7 +219,7 @@ mod tests {
         m.plan_length_ratio = 1.032;
         let o = Outcome::new("robust", &m, &bound(1.02));
         assert_eq!(o.safety, Safety::Unsafe);
-        assert!(o.drive_text().unwrap().contains("1 CONTACT"));
+        assert!(o.drive_text().expect("a closed loop").contains("1 CONTACT"));
         assert_eq!(
             o.bounds_text(),
             "1 of 1 FAIL: plan_length_ratio = 1.032 (required <= 1.02)"

@@ -19,7 +19,7 @@ use crate::output::{unit_of, write_bytes};
 /// needs no network and no copy of the repository).
 const METRICS_DOC: &str = include_str!("../../../docs/metrics.md");
 
-/// The definition of each metric key, from the table of [`METRICS_DOC`] (`| `key`, `key` | unit | definition |`).
+/// The definition of each metric key, from the table of `docs/metrics.md` (a row `| `key`, `key` | unit | definition |`).
 pub fn metric_definitions() -> std::collections::BTreeMap<String, String> {
     let mut out = std::collections::BTreeMap::new();
     for line in METRICS_DOC.lines() {

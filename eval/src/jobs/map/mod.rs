@@ -459,11 +459,11 @@ mod tests {
         let dir = crate::test_support::scratch_dir("map", "magic");
         let (no_extension, named_graph) = (dir.join("recorded"), dir.join("log.graph"));
         for path in [&no_extension, &named_graph] {
-            std::fs::write(path, [&sim::log::MAGIC[..], b"rest of a log"].concat()).expect("write");
+            write_bytes(path, &[&sim::log::MAGIC[..], b"rest of a log"].concat()).expect("write");
             assert_eq!(InputFormat::of(path).expect("log"), InputFormat::Log);
         }
         // Seven bytes of the magic are not a log.
-        std::fs::write(&no_extension, &sim::log::MAGIC[..7]).expect("write");
+        write_bytes(&no_extension, &sim::log::MAGIC[..7]).expect("write");
         assert!(InputFormat::of(&no_extension).is_err());
     }
 }

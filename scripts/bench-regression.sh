@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# The map's speed and memory against a pinned baseline build, measured in one run: the example
+# `oeg/examples/map_graph.rs` is built at BASELINE (in a scratch worktree, its own target folder) and at the
+# working tree, and both map the shared real scans at 0.05, 0.1 and 0.2 m, one thread, alternating
+# baseline / this tree, REPEATS times each. It prints the medians, the ratio per resolution, the maps'
+# `memory_bytes()` and this tree's `robust` preset against its paper model. Run it after every change to the
+# map (the machines are noisy, so CI does not; ratios within one run are what count).
+#
+#   bash scripts/bench-regression.sh                   # baseline c75d7d4 (the first map), 5 repeats
+#   bash scripts/bench-regression.sh bf33cf9 9         # another baseline, 9 repeats
+#   OEG_SHARED_DATA=/path/to/data bash scripts/bench-regression.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+baseline=${1:-c75d7d4}
+repeats=${2:-5}
+data=${OEG_SHARED_DATA:-$root/../shared/data}/3dtk_frames.graph
+if [ ! -f "$data" ]; then
+    echo "skipped: $data is absent (the shared data set lives beside the project, or set OEG_SHARED_DATA)"
+    exit 0
+fi
+work=$(mktemp -d)
+cleanup() {
+    git -C "$root" worktree remove --force "$work/baseline" 2>/dev/null || true
+    rm -rf "$work"
+}
+trap cleanup EXIT
+git -C "$root" worktree add --quiet --detach "$work/baseline" "$baseline"
+echo "building map_graph at $baseline and at this tree ($(git -C "$root" rev-parse --short HEAD)) ..."
+(cd "$work/baseline" && CARGO_TARGET_DIR="$work/target" cargo build --quiet --release -p oeg --example map_graph)
+cargo build --quiet --release -p oeg --example map_graph
+base_bin="$work/target/release/examples/map_graph"
+head_bin="$root/target/release/examples/map_graph"
+
+# run BIN RESOLUTION [PRESET]: "seconds bytes" of one integration (the example's own line: "... N bytes, S s, ...").
+run() {
+    RAYON_NUM_THREADS=1 "$1" "$data" "$2" ${3:+"$3"} |
+        sed -E 's/.* ([0-9]+) bytes, ([0-9.]+) s, .*/\2 \1/'
+}
+median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+printf '\n| resolution | %s: paper | this tree: paper | ratio (this / %s) | %s: memory | this tree: memory | this tree: robust | robust / paper |\n' \
+    "$baseline" "$baseline" "$baseline"
+echo '|---|---|---|---|---|---|---|---|'
+for resolution in 0.05 0.1 0.2; do
+    : >"$work/base" && : >"$work/head" && : >"$work/robust"
+    for _ in $(seq "$repeats"); do
+        run "$base_bin" "$resolution" >>"$work/base"
+        run "$head_bin" "$resolution" paper >>"$work/head"
+        run "$head_bin" "$resolution" robust >>"$work/robust"
+    done
+    b=$(cut -d' ' -f1 "$work/base" | median)
+    h=$(cut -d' ' -f1 "$work/head" | median)
+    r=$(cut -d' ' -f1 "$work/robust" | median)
+    bm=$(head -1 "$work/base" | cut -d' ' -f2)
+    hm=$(head -1 "$work/head" | cut -d' ' -f2)
+    awk -v res="$resolution" -v b="$b" -v h="$h" -v r="$r" -v bm="$bm" -v hm="$hm" 'BEGIN {
+        printf "| %s m | %.4f s | %.4f s | %.2fx | %.2f MB | %.2f MB | %.4f s | %.2fx |\n",
+            res, b, h, h / b, bm / 1e6, hm / 1e6, r, r / h
+    }'
+done
+echo
+echo "Medians of $repeats alternating runs each, one thread, $(nproc) cores, $(basename "$data"); ratio > 1: this tree is slower."
