@@ -66,6 +66,12 @@ impl Map {
     /// sample ([`free_sample`]) or a sample near the hit ([`hit_sample`]).
     fn gather(&mut self, scan: &Scan, stats: &mut IntegrationStats, stop: &impl Fn() -> bool) -> Result<()> {
         let opts = self.config.model;
+        // When no rule judges a free sample against the cell's surface or ceiling (the paper's model), a free
+        // sample is the paper's alone: the probability, and the beam's height in the cell where the ray hit
+        // something. `free_sample` does the same in that case, with look-ups and checks this loop skips.
+        let plain_free = opts.free_space_occupancy != FreeSpaceOccupancy::SurfaceBand
+            && opts.free_space_max_depth_m.is_none()
+            && opts.overhead_hits != OverheadHits::Ceiling;
         let scratch_limit = self
             .config
             .memory_limit_bytes
@@ -84,7 +90,13 @@ impl Map {
             for crossing in walk {
                 let evidence = cursor.at(crossing.cell)?;
                 if crossing.l_exit < span.free_until {
-                    free_sample(&self.cells, &self.ceilings, &opts, &span, &crossing, evidence);
+                    if !plain_free {
+                        free_sample(&self.cells, &self.ceilings, &opts, &span, &crossing, evidence);
+                    } else if span.hit.is_none() {
+                        evidence.raise_p(opts.p_min);
+                    } else {
+                        evidence.add_free(opts.p_min, span.top_and_bottom(&crossing).0, span.s2);
+                    }
                 } else {
                     hit_sample(&self.cells, &opts, &span, &crossing, evidence);
                 }
