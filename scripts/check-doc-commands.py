@@ -144,7 +144,7 @@ exec {shlex.quote(real_cargo)} "$@"
         subprocess.run(["python3", "-c", "import numpy"], env=env, capture_output=True).returncode == 0
     )
 
-    failures, ran, skipped, total_s, passed = [], 0, 0, 0.0, {}
+    failures, ran, skipped, total_s, passed, unwritten = [], 0, 0, 0.0, {}, []
     for page in pages:
         for _, commands in blocks(page):
             for line, command, comment in commands:
@@ -154,6 +154,10 @@ exec {shlex.quote(real_cargo)} "$@"
                     reason = "CI runs the test command as its own step"
                 elif "../shared/data" in command and not have_shared:
                     reason = f"the shared data set is absent ({shared_data})"
+                    # What it would have written is missing too: the commands that read it are skipped.
+                    unwritten.extend(re.findall(r"--out[ =](\S+)", command))
+                elif any(re.search(re.escape(out) + r"(/|\s|$)", command) for out in unwritten):
+                    reason = "it reads what a skipped command would have written"
                 elif "npy_planner.py" in command and not has_numpy:
                     reason = "python3 has no numpy (set OEG_DOCS_VENV to a venv with it)"
                 elif venv and re.match(r"^python3 -m venv \.venv\b", command):
