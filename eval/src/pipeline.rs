@@ -603,17 +603,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
                 .collect(),
         };
         files.push(write_run_page(stage, &page)?);
-        let outcomes = page
-            .models
-            .iter()
-            .map(|m| {
-                crate::judge::outcome::Outcome::new(
-                    m.scenario.map.preset.name(),
-                    &m.evaluation.metrics,
-                    &m.scenario.expectations,
-                )
-            })
-            .collect::<Vec<_>>();
+        let outcomes: Vec<_> = page.models.iter().map(ModelRun::outcome).collect();
         let Evaluation {
             metrics,
             failed,

@@ -10,6 +10,7 @@
 use std::collections::BTreeMap;
 
 use crate::judge::metrics::{ExpectationResult, Metrics, expectation_results};
+use crate::output::html::field;
 
 /// How a drive on the map ends, judged against the truth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -147,7 +148,14 @@ impl Outcome {
     pub fn bounds_text(&self) -> String {
         let failed: Vec<String> = self
             .failed_bounds()
-            .map(|r| format!("{} = {} (required {})", r.metric, short(r.measured), r.required))
+            .map(|r| {
+                format!(
+                    "{} = {} (required {})",
+                    r.metric,
+                    field(&r.measured.to_string()),
+                    r.required
+                )
+            })
             .collect();
         match (self.bounds.len(), failed.len()) {
             (0, _) => "none set".into(),
@@ -171,16 +179,6 @@ impl Outcome {
         lines.push(format!("  regression bounds: {}", self.bounds_text()));
         lines
     }
-}
-
-/// A measured value for a sentence: a whole number as such, anything else to four decimals without trailing
-/// zeros (`1.0324`, `847`, `NaN`).
-fn short(v: f64) -> String {
-    if !v.is_finite() || v.fract() == 0.0 {
-        return v.to_string();
-    }
-    let text = format!("{v:.4}");
-    text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 #[cfg(test)]

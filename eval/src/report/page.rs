@@ -59,6 +59,11 @@ impl ModelRun<'_> {
         self.scenario.map.preset.name()
     }
 
+    /// What this model's map made the robot do, and its regression bounds.
+    pub fn outcome(&self) -> Outcome {
+        Outcome::new(self.name(), &self.evaluation.metrics, &self.scenario.expectations)
+    }
+
     fn file(&self, name: &str) -> String {
         if self.dir.is_empty() {
             name.to_string()
@@ -147,11 +152,7 @@ fn run_page(run: &RunPage) -> std::result::Result<String, String> {
 /// The verdict: per model, whether the robot would have driven safely on its map and how its wrong cells split
 /// ([`Outcome`]); then the scenario's expectations, named as the regression bounds they are, for every model.
 fn verdict(page: &mut Page, run: &RunPage) {
-    let outcomes: Vec<Outcome> = run
-        .models
-        .iter()
-        .map(|m| Outcome::new(m.name(), &m.evaluation.metrics, &m.scenario.expectations))
-        .collect();
+    let outcomes: Vec<Outcome> = run.models.iter().map(ModelRun::outcome).collect();
     let mut html = String::from(
         "<div class=\"verdict neutral\" id=\"verdict\">\n<p><b>Would the robot have driven safely on this \
          map?</b> The path planned on the map from the start to the goal, checked against the truth, and the \
