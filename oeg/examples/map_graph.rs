@@ -1,6 +1,6 @@
 //! Maps a scan graph once and prints the integration totals: `cargo run -p oeg --release --example map_graph --
 //! FILE.graph RESOLUTION_M [PRESET]` (PRESET: `paper`, the default, `static` or `robust`, for the default
-//! robot). A profiling aid and the timed program of `scripts/bench-regression.sh`, whose output line it keeps
+//! robot). Integration uses `RAYON_NUM_THREADS` threads (all cores when unset). A profiling aid and the timed program of `scripts/bench-regression.sh`, whose output line it keeps
 //! as the first version printed it; the `oeg map` command is the user-facing tool.
 
 use std::time::Instant;
@@ -25,14 +25,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let seconds = start.elapsed().as_secs_f64();
     let t = map.totals();
+    // "N bytes" is the map with its scratch, as the first version counted it (its `memory_bytes()`).
     println!(
-        "{} rays, {} cell visits, {} cell updates, {} observed cells, {} bytes, {seconds:.4} s, {:.2} M rays/s",
+        "{} rays, {} cell visits, {} cell updates, {} observed cells, {} bytes, {seconds:.4} s, {:.2} M rays/s; \
+         map {} bytes, scratch {} bytes ({} bytes a cell), {} threads",
         t.num_rays,
         t.num_cell_visits,
         t.num_cells_updated,
         map.num_observed_cells(),
+        map.memory_bytes() + map.scratch_bytes(),
+        t.num_rays as f64 / seconds / 1e6,
         map.memory_bytes(),
-        t.num_rays as f64 / seconds / 1e6
+        map.scratch_bytes(),
+        map.scratch_cell_bytes(),
+        rayon::current_num_threads(),
     );
     Ok(())
 }

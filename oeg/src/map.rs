@@ -1,8 +1,9 @@
 //! The Occupancy-Elevation Grid: its configuration, cells and counters, and everything a map does, found from
 //! here:
 //!
-//! * `integrate` (`map/integrate.rs`): [`Map::integrate`], the paper's Algorithm 1, over the scan scratch of
-//!   `scratch` (`map/scratch.rs`);
+//! * `integrate` (`map/integrate.rs`): [`Map::integrate`], the paper's Algorithm 1, in parallel where threads
+//!   are given: each ray's samples (`map/sample.rs`) gathered into the scan scratch (`map/scratch.rs`), then
+//!   each touched cell updated once (`map/update.rs`);
 //! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);
 //! * the decisions ([`Map::traversability`], [`Map::traversability_layer`], [`Map::traversability_counts`]):
 //!   `traversability/decide.rs`, beside the pure rules they apply;
@@ -11,13 +12,15 @@
 mod integrate;
 pub use integrate::RAYS_BETWEEN_STOP_CHECKS;
 mod layers;
+mod sample;
 mod scratch;
+mod update;
 
 pub use layers::{Layer, LayerKind, Raster};
 
 use serde::{Deserialize, Serialize};
 
-use self::scratch::ScanEvidence;
+use self::scratch::ScanScratch;
 use crate::cell::{Ceiling, Cell};
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
@@ -99,7 +102,7 @@ pub struct Map {
     pub(crate) cells: TileGrid<Cell>,
     /// The ceiling layer ([`crate::OverheadHits::Ceiling`]): tiles only where a ceiling was seen.
     pub(crate) ceilings: TileGrid<Ceiling>,
-    pub(crate) scratch: TileGrid<ScanEvidence>,
+    pub(crate) scratch: ScanScratch,
     /// `L` above which a cell is occupied (the occupancy threshold in log-odds).
     pub(crate) occupied_log_odds: f32,
     /// Eq. 6 of `p_min`, the log-odds of a plain free sample.
@@ -120,7 +123,7 @@ impl Map {
             geometry,
             cells: TileGrid::new(Cell::UNOBSERVED),
             ceilings: TileGrid::new(Ceiling::NONE),
-            scratch: TileGrid::new(ScanEvidence::NONE),
+            scratch: ScanScratch::for_model(&config.model),
             occupied_log_odds: log_odds(config.model.occupied_threshold),
             free_log_odds: log_odds(config.model.p_min),
             totals: IntegrationStats::default(),
@@ -175,20 +178,30 @@ impl Map {
         self.occupied_log_odds
     }
 
-    /// Bytes the map holds: the cells' tiles, the ceiling layer's, their indices and the per-scan scratch kept
-    /// for reuse.
+    /// Bytes the map holds: the cells' tiles, the ceiling layer's, their indices and the map itself. The
+    /// per-scan scratch is apart ([`Map::scratch_bytes`]); the figure is the same on any number of threads.
     pub fn memory_bytes(&self) -> u64 {
-        self.cells.memory_bytes()
-            + self.ceilings.memory_bytes()
-            + self.scratch.memory_bytes()
-            + size_of::<Self>() as u64
+        self.cells.memory_bytes() + self.ceilings.memory_bytes() + size_of::<Self>() as u64
     }
 
-    /// Gives back the per-scan scratch that [`Map::integrate`] keeps for reuse (at fine resolutions most of
-    /// [`Map::memory_bytes`]: 72 bytes a cell of every tile the largest scan touched). The map reads the same;
-    /// the next integration allocates the scratch again.
+    /// Bytes of the per-scan scratch that [`Map::integrate`] keeps for reuse: for every tile the largest scan
+    /// touched, 20 bytes a cell under the paper's rules or 72 under rules that judge samples against the
+    /// surface or the ceiling, once per thread that gathered a long scan's rays. The memory limit counts it
+    /// with [`Map::memory_bytes`].
+    pub fn scratch_bytes(&self) -> u64 {
+        self.scratch.memory_bytes()
+    }
+
+    /// Bytes of one cell's evidence in the per-scan scratch: 20 under the paper's rules, 72 under the rules
+    /// that judge samples against the cell's surface or ceiling or read the spread of its hits.
+    pub fn scratch_cell_bytes(&self) -> usize {
+        self.scratch.cell_bytes()
+    }
+
+    /// Gives back the per-scan scratch ([`Map::scratch_bytes`]). The map reads the same; the next integration
+    /// allocates the scratch again.
     pub fn release_scratch(&mut self) {
-        self.scratch = TileGrid::new(ScanEvidence::NONE);
+        self.scratch = ScanScratch::for_model(&self.config.model);
     }
 
     /// Bytes of the cells alone: 12 per cell of every allocated tile (observed or not).

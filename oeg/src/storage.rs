@@ -55,6 +55,15 @@ pub fn offset_in_tile(cell: CellIndex) -> usize {
     (((cell.j & TILE_MASK) as usize) << TILE_SHIFT) | (cell.i & TILE_MASK) as usize
 }
 
+/// Calls `f` with the index of every row whose bit is set in `rows`, in increasing order.
+#[inline]
+pub fn for_each_row(mut rows: u64, mut f: impl FnMut(usize)) {
+    while rows != 0 {
+        f(rows.trailing_zeros() as usize);
+        rows &= rows - 1;
+    }
+}
+
 /// One tile's cells.
 pub type Tile<T> = Box<[T; TILE_CELLS]>;
 
@@ -67,8 +76,12 @@ pub struct TileGrid<T> {
     tiles_x: usize,
     tiles_y: usize,
     slots: Vec<Option<Tile<T>>>,
+    /// The rows written in each slot's tile since it was placed ([`TileGrid::mark_rows`]), bit `r` for row `r`;
+    /// empty for a grid that never marks (the map's layers), as long as `slots` for one that does (the scan
+    /// scratch).
+    rows: Vec<u64>,
     num_tiles: usize,
-    /// Tiles released by [`TileGrid::recycle_all`], reset to `fill`, reused before allocating.
+    /// Tiles released by [`TileGrid::recycle_marked`], reset to `fill`, reused before allocating.
     pool: Vec<Tile<T>>,
 }
 
@@ -89,6 +102,7 @@ impl<T: Copy> TileGrid<T> {
             tiles_x: 0,
             tiles_y: 0,
             slots: Vec::new(),
+            rows: Vec::new(),
             num_tiles: 0,
             pool: Vec::new(),
         }
@@ -118,6 +132,7 @@ impl<T: Copy> TileGrid<T> {
     pub fn memory_bytes(&self) -> u64 {
         ((self.num_tiles + self.pool.len()) * Self::tile_bytes()
             + self.slots.capacity() * size_of::<Option<Tile<T>>>()
+            + self.rows.capacity() * size_of::<u64>()
             + size_of::<Self>()) as u64
     }
 
@@ -152,7 +167,7 @@ impl<T: Copy> TileGrid<T> {
     }
 
     /// The index slot of `tile`, allocating the tile (filled with `fill`) if needed, for repeated access with
-    /// [`TileGrid::in_slot_mut`] while a walk stays inside one tile. Fails past `limit_bytes`.
+    /// [`TileGrid::slot_tile_mut`] while a walk stays inside one tile. Fails past `limit_bytes`.
     #[inline]
     pub fn slot_or_insert(&mut self, tile: TileIndex, limit_bytes: u64) -> Result<usize, CapacityExceeded> {
         match self.slot(tile) {
@@ -161,12 +176,11 @@ impl<T: Copy> TileGrid<T> {
         }
     }
 
-    /// The cell at `offset` (see [`offset_in_tile`]) of the tile in `slot`, from [`TileGrid::slot_or_insert`]
-    /// with no allocation or re-indexing in between.
+    /// The tile in `slot`, from [`TileGrid::slot_or_insert`] with no allocation or re-indexing in between.
     #[inline]
-    pub fn in_slot_mut(&mut self, slot: usize, offset: usize) -> &mut T {
-        match self.slots[slot].as_mut() {
-            Some(t) => &mut t[offset & (TILE_CELLS - 1)],
+    pub fn slot_tile_mut(&mut self, slot: usize) -> &mut [T; TILE_CELLS] {
+        match self.slots[slot].as_deref_mut() {
+            Some(t) => t,
             None => unreachable!("slots come from slot_or_insert"),
         }
     }
@@ -262,6 +276,8 @@ impl<T: Copy> TileGrid<T> {
         let (new_x, new_y) = (new_x as usize, new_y as usize);
         let mut slots: Vec<Option<Tile<T>>> = Vec::new();
         slots.resize_with(new_x * new_y, || None);
+        let marks = !self.rows.is_empty();
+        let mut rows = vec![0u64; if marks { new_x * new_y } else { 0 }];
         let new_min = TileIndex {
             ti: lo_i as i32,
             tj: lo_j as i32,
@@ -272,10 +288,14 @@ impl<T: Copy> TileGrid<T> {
                     let nu = (i64::from(self.tile_min.ti) + u as i64 - lo_i) as usize;
                     let nv = (i64::from(self.tile_min.tj) + v as i64 - lo_j) as usize;
                     slots[nv * new_x + nu] = Some(t);
+                    if marks {
+                        rows[nv * new_x + nu] = self.rows[v * self.tiles_x + u];
+                    }
                 }
             }
         }
         self.slots = slots;
+        self.rows = rows;
         self.tile_min = new_min;
         self.tiles_x = new_x;
         self.tiles_y = new_y;
@@ -290,6 +310,18 @@ impl<T: Copy> TileGrid<T> {
                 tj: self.tile_min.tj + (slot / self.tiles_x.max(1)) as i32,
             };
             t.as_deref().map(|t| (tile, t))
+        })
+    }
+
+    /// Allocated tiles, mutable, in the order of [`TileGrid::tiles`].
+    pub fn tiles_mut(&mut self) -> impl Iterator<Item = (TileIndex, &mut [T; TILE_CELLS])> + '_ {
+        let (min, tiles_x) = (self.tile_min, self.tiles_x.max(1));
+        self.slots.iter_mut().enumerate().filter_map(move |(slot, t)| {
+            let tile = TileIndex {
+                ti: min.ti + (slot % tiles_x) as i32,
+                tj: min.tj + (slot / tiles_x) as i32,
+            };
+            t.as_deref_mut().map(|t| (tile, t))
         })
     }
 
@@ -319,13 +351,43 @@ impl<T: Copy> TileGrid<T> {
         self.allocate(tile, limit_bytes, Some(cells)).map(|_| ())
     }
 
-    /// Releases every tile into the grid's pool, reset to `fill`: the grid reads as empty again but keeps its
-    /// memory for the next use (the per-scan scratch of [`crate::Map::integrate`]).
-    pub fn recycle_all(&mut self) {
+    /// Records that rows `rows` (bit `r` for row `r`, [`offset_in_tile`] `>> TILE_SHIFT`) of the tile in `slot`
+    /// were written, for [`TileGrid::marked_tiles`] and [`TileGrid::recycle_marked`]: a grid written a few
+    /// cells at a time (the scan scratch) then visits and clears those rows only.
+    #[inline]
+    pub fn mark_rows(&mut self, slot: usize, rows: u64) {
+        if self.rows.len() != self.slots.len() {
+            self.rows.resize(self.slots.len(), 0);
+        }
+        self.rows[slot] |= rows;
+    }
+
+    /// Allocated tiles with rows marked written ([`TileGrid::mark_rows`]), in the order of
+    /// [`TileGrid::tiles`], with their marks.
+    pub fn marked_tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], u64)> + '_ {
+        self.tiles().filter_map(move |(tile, t)| {
+            let rows = self.slot(tile).and_then(|s| self.rows.get(s)).copied().unwrap_or(0);
+            (rows != 0).then_some((tile, t, rows))
+        })
+    }
+
+    /// The tile at `tile` with its row marks, if allocated.
+    pub fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], u64)> {
+        let slot = self.slot(tile)?;
+        let t = self.slots[slot].as_deref()?;
+        Some((t, self.rows.get(slot).copied().unwrap_or(0)))
+    }
+
+    /// Releases every tile into the grid's pool, its marked rows reset to `fill`: the grid reads as empty again
+    /// but keeps its memory for the next use (the per-scan scratch of [`crate::Map::integrate`]). For a grid
+    /// written only through marked rows ([`TileGrid::mark_rows`]), so the cost is that of what was written,
+    /// not of the tiles' size.
+    pub fn recycle_marked(&mut self) {
         let fill = self.fill;
-        for slot in &mut self.slots {
+        for (slot, rows) in self.slots.iter_mut().zip(self.rows.iter_mut()) {
             if let Some(mut t) = slot.take() {
-                t.fill(fill);
+                for_each_row(*rows, |r| t[r * TILE_SIZE..(r + 1) * TILE_SIZE].fill(fill));
+                *rows = 0;
                 self.pool.push(t);
             }
         }
@@ -417,14 +479,47 @@ mod tests {
     #[test]
     fn recycled_tiles_read_as_new_and_keep_their_memory() {
         let mut g = TileGrid::new(0u16);
-        *g.get_or_insert(CellIndex::new(1, 1), u64::MAX).expect("room") = 5;
+        let slot = g
+            .slot_or_insert(TileIndex::of(CellIndex::new(1, 1)), u64::MAX)
+            .expect("room");
+        g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(1, 1))] = 5;
+        g.mark_rows(slot, 1 << 1);
         let bytes = g.memory_bytes();
-        g.recycle_all();
+        g.recycle_marked();
         assert_eq!(g.num_tiles(), 0);
         assert_eq!(g.get(CellIndex::new(1, 1)), None);
         assert_eq!(g.memory_bytes(), bytes);
         // Reuse from the pool needs no room beyond what is held.
         assert_eq!(*g.get_or_insert(CellIndex::new(1, 1), bytes).expect("pooled"), 0);
+    }
+
+    #[test]
+    fn marked_rows_are_the_rows_recycled_and_survive_growth() {
+        let mut g = TileGrid::new(0u8);
+        let tile = TileIndex::of(CellIndex::new(3, 5));
+        let slot = g.slot_or_insert(tile, u64::MAX).expect("room");
+        g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(3, 5))] = 1;
+        g.mark_rows(slot, 1 << 5);
+        // Growing the index far away moves the tile and its marks together.
+        let far = g.slot_or_insert(TileIndex { ti: -40, tj: 30 }, u64::MAX).expect("room");
+        g.slot_tile_mut(far)[0] = 2;
+        g.mark_rows(far, 1);
+        let marked: Vec<_> = g.marked_tiles().map(|(t, _, rows)| (t, rows)).collect();
+        assert_eq!(marked, vec![(tile, 1 << 5), (TileIndex { ti: -40, tj: 30 }, 1)]);
+        g.recycle_marked();
+        assert_eq!(g.marked_tiles().count(), 0);
+        // The pooled tiles read as new.
+        let slot = g.slot_or_insert(tile, u64::MAX).expect("pooled");
+        assert_eq!(g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(3, 5))], 0);
+        let other = g.slot_or_insert(TileIndex { ti: 9, tj: 9 }, u64::MAX).expect("pooled");
+        assert!(g.slot_tile_mut(other).iter().all(|&v| v == 0));
+    }
+
+    #[test]
+    fn rows_are_listed_in_order() {
+        let mut seen = Vec::new();
+        for_each_row((1 << 63) | (1 << 7) | 1, |r| seen.push(r));
+        assert_eq!(seen, vec![0, 7, 63]);
     }
 
     #[test]

@@ -23,6 +23,7 @@ pub struct CellCrossing {
 /// Iterator over the cells crossed by a ray's ground projection. No allocation.
 #[derive(Debug, Clone)]
 pub struct GroundTraversal {
+    start: CellIndex,
     cell: CellIndex,
     end: CellIndex,
     step_i: i32,
@@ -90,6 +91,7 @@ impl GroundTraversal {
         let remaining_steps = (i64::from(end.i) - i64::from(start.i)).unsigned_abs()
             + (i64::from(end.j) - i64::from(start.j)).unsigned_abs();
         Some(Self {
+            start,
             cell: start,
             end,
             step_i,
@@ -103,6 +105,18 @@ impl GroundTraversal {
             remaining_steps,
             done: false,
         })
+    }
+}
+
+impl GroundTraversal {
+    /// The cell the walk starts in (before any step).
+    pub fn first_cell(&self) -> CellIndex {
+        self.start
+    }
+
+    /// The cell the walk ends in.
+    pub fn last_cell(&self) -> CellIndex {
+        self.end
     }
 }
 

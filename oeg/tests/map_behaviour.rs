@@ -279,31 +279,36 @@ fn a_raster_counts_against_the_same_budget_as_the_map() {
 }
 
 #[test]
-fn the_per_scan_scratch_dominates_a_fine_map_and_can_be_given_back() {
-    // `oeg map` at 0.01 m held 2.5 times its cells' bytes: the per-scan scratch (72 bytes a cell of every tile a
-    // scan touched, kept for reuse) is most of `memory_bytes`. Given back, the map reads the same.
-    let mut map = map_with(0.01, ModelOptions::default());
-    map.integrate(&scan_of(
+fn the_per_scan_scratch_is_counted_apart_sized_by_the_rules_and_can_be_given_back() {
+    // The scratch a map keeps for the next scan (every tile a scan touched) is not part of the map's memory,
+    // and costs 20 bytes a cell under the paper's rules, 72 under rules that judge samples against the surface.
+    let scan = scan_of(
         Point3::new(0.0, 0.0, 0.3),
         &[(3.0, 0.0, 0.0), (0.0, 3.0, 0.0), (2.0, 2.0, 0.1)],
-    ))
-    .expect("ok");
-    let before = map.memory_bytes();
+    );
+    let mut map = map_with(0.01, ModelOptions::default());
+    map.integrate(&scan).expect("ok");
+    assert_eq!(map.scratch_cell_bytes(), 20);
+    let (map_bytes, scratch_bytes) = (map.memory_bytes(), map.scratch_bytes());
+    assert!(map_bytes > map.cell_bytes() && map_bytes < map.cell_bytes() * 11 / 10);
+    // The scratch holds the tiles the scan touched, as the cells do: 20 bytes a cell against 12.
     assert!(
-        before > 3 * map.cell_bytes(),
-        "{before} bytes, cells {}",
+        scratch_bytes > map.cell_bytes() * 20 / 12,
+        "{scratch_bytes} bytes of scratch, cells {}",
         map.cell_bytes()
     );
     let cells: Vec<_> = map.observed_cells().collect();
     map.release_scratch();
-    assert!(
-        map.memory_bytes() < before / 2,
-        "{} of {before}",
-        map.memory_bytes()
-    );
+    assert_eq!(map.memory_bytes(), map_bytes);
+    assert!(map.scratch_bytes() < 1024, "{}", map.scratch_bytes());
     assert_eq!(map.observed_cells().collect::<Vec<_>>(), cells);
     map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(1.0, 1.0, 0.0)]))
         .expect("integrates again");
+
+    let mut robust = map_with(0.01, oeg::MapPreset::Robust.model(&oeg::RobotProfile::default()));
+    robust.integrate(&scan).expect("ok");
+    assert_eq!(robust.scratch_cell_bytes(), 72);
+    assert!(robust.scratch_bytes() > robust.cell_bytes() * 72 / 12);
 }
 
 #[test]

@@ -3,16 +3,17 @@
 //! scan.
 
 use crate::cell::SeenFrom;
-use crate::error::{Error, Result};
-use crate::geometry::CellIndex;
 use crate::model::{
-    CeilingHit, Elevation, Level, ScanHitElevation, overhead_significant, spread_variance, surface_level,
+    CeilingHit, Elevation, FreeSpaceOccupancy, Level, ModelOptions, OverheadHits, ScanHitElevation,
+    overhead_significant, spread_variance, surface_level,
 };
-use crate::storage::{TileGrid, TileIndex, offset_in_tile};
+use crate::storage::TileGrid;
 
-/// What one scan says about one cell, gathered over all its rays before the cell is updated once.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct ScanEvidence {
+/// What one scan says about one cell under the paper's rules (eq. 10-12), gathered over all its rays before
+/// the cell is updated once: all a model reads that judges no sample against the cell's surface or ceiling
+/// and fuses a cell's hits by their highest or their weighted mean ([`Evidence::for_model`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PaperEvidence {
     /// The largest inverse-sensor-model probability of any ray's sample in the cell; 0: untouched (a sample's
     /// probability is at least `p_min` > 0).
     pub(super) p_max: f32,
@@ -21,14 +22,86 @@ pub(crate) struct ScanEvidence {
     pub(super) hit_z_m: f32,
     /// Variance of that measurement.
     pub(super) hit_var_m2: f32,
-    /// The scan's hits in the cell as an unweighted sample: their number, mean and sum of squared deviations
-    /// (Welford), and the sum of their variances ([`crate::model::spread_variance`]).
-    pub(super) hits: HitSample,
     /// The lowest height at which a ray passed freely through the cell (the ray's highest point inside it),
     /// from samples more than 3 sigma before their hit (confidently free).
     pub(super) free_z_m: f32,
     /// The smallest measurement variance among the free samples.
     pub(super) free_var_m2: f32,
+}
+
+const _: () = assert!(size_of::<PaperEvidence>() == 20);
+
+impl PaperEvidence {
+    pub(crate) const NONE: Self = Self {
+        p_max: 0.0,
+        hit_z_m: f32::NEG_INFINITY,
+        hit_var_m2: f32::INFINITY,
+        free_z_m: f32::INFINITY,
+        free_var_m2: f32::INFINITY,
+    };
+
+    pub(super) fn is_untouched(&self) -> bool {
+        self.p_max == 0.0
+    }
+
+    // The selects below compile to single min / max instructions: no value here is NaN, so the NaN handling
+    // of f32::min and f32::max is not needed in this, the hottest loop.
+    #[inline(always)]
+    pub(super) fn raise_p(&mut self, p: f32) {
+        self.p_max = if p > self.p_max { p } else { self.p_max };
+    }
+
+    /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12), combined with the scan's others by
+    /// `rule`.
+    #[inline(always)]
+    pub(super) fn add_hit(&mut self, p: f32, z_m: f32, var_m2: f32, rule: ScanHitElevation) {
+        self.raise_p(p);
+        (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
+    }
+
+    /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
+    #[inline(always)]
+    pub(super) fn add_free(&mut self, p: f32, beam_top_m: f32, var_m2: f32) {
+        self.raise_p(p);
+        self.free_z_m = if beam_top_m < self.free_z_m {
+            beam_top_m
+        } else {
+            self.free_z_m
+        };
+        self.free_var_m2 = if var_m2 < self.free_var_m2 {
+            var_m2
+        } else {
+            self.free_var_m2
+        };
+    }
+
+    /// Adds what later rays of the same scan said, gathered apart: afterwards `self` is what gathering both
+    /// in order would have given, bit for bit, under [`ScanHitElevation::Highest`]. Every field is a maximum
+    /// or a minimum, and the highest hit keeps the first of equal heights, as [`ScanHitElevation::combine`]
+    /// does.
+    #[inline]
+    pub(super) fn merge_later(&mut self, later: &Self) {
+        self.raise_p(later.p_max);
+        if later.hit_z_m > self.hit_z_m {
+            (self.hit_z_m, self.hit_var_m2) = (later.hit_z_m, later.hit_var_m2);
+        }
+        if later.free_z_m < self.free_z_m {
+            self.free_z_m = later.free_z_m;
+        }
+        if later.free_var_m2 < self.free_var_m2 {
+            self.free_var_m2 = later.free_var_m2;
+        }
+    }
+}
+
+/// What one scan says about one cell under every rule of [`ModelOptions`]: the paper's evidence, and what the
+/// rules beyond it judge (the surface band, the ceiling layer, the spread of the hits).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ScanEvidence {
+    pub(super) paper: PaperEvidence,
+    /// The scan's hits in the cell as an unweighted sample: their number, mean and sum of squared deviations
+    /// (Welford), and the sum of their variances ([`crate::model::spread_variance`]).
+    pub(super) hits: HitSample,
     /// Whether a free sample passed through the cell's surface band
     /// ([`FreeSpaceOccupancy::SurfaceBand`]).
     pub(super) band_contradicted: bool,
@@ -53,12 +126,8 @@ const _: () = assert!(size_of::<ScanEvidence>() == 72);
 
 impl ScanEvidence {
     pub(crate) const NONE: Self = Self {
-        p_max: 0.0,
-        hit_z_m: f32::NEG_INFINITY,
-        hit_var_m2: f32::INFINITY,
+        paper: PaperEvidence::NONE,
         hits: HitSample::NONE,
-        free_z_m: f32::INFINITY,
-        free_var_m2: f32::INFINITY,
         band_contradicted: false,
         ceiling_contradicted: false,
         ceiling_clear_m: f32::NEG_INFINITY,
@@ -110,17 +179,6 @@ impl ScanEvidence {
         self.overhead.add(z_m, var_m2);
     }
 
-    pub(super) fn is_untouched(&self) -> bool {
-        self.p_max == 0.0
-    }
-
-    // The selects below compile to single min / max instructions: no value here is NaN, so the NaN handling
-    // of f32::min and f32::max is not needed in this, the hottest loop.
-    #[inline(always)]
-    pub(super) fn raise_p(&mut self, p: f32) {
-        self.p_max = if p > self.p_max { p } else { self.p_max };
-    }
-
     /// A sample with `p > l_occ`: an elevation measurement `z_m` (eq. 12). Under
     /// [`ScanHitElevation::HighestLevel`] a hit above the band of the hits so far starts them afresh and one
     /// below it is left out (`band_sigmas` wide).
@@ -133,7 +191,7 @@ impl ScanEvidence {
         rule: ScanHitElevation,
         band_sigmas: f32,
     ) {
-        self.raise_p(p);
+        self.paper.raise_p(p);
         self.num_heights += 1.0;
         if rule == ScanHitElevation::HighestLevel && self.hits.n > 0.0 {
             let level = Elevation {
@@ -143,31 +201,16 @@ impl ScanEvidence {
             match surface_level(level, z_m, var_m2, band_sigmas) {
                 Level::Below => return,
                 Level::Above => {
-                    self.hit_z_m = f32::NEG_INFINITY;
-                    self.hit_var_m2 = f32::INFINITY;
+                    self.paper.hit_z_m = f32::NEG_INFINITY;
+                    self.paper.hit_var_m2 = f32::INFINITY;
                     self.hits = HitSample::NONE;
                 }
                 Level::Same => {}
             }
         }
-        (self.hit_z_m, self.hit_var_m2) = rule.combine((self.hit_z_m, self.hit_var_m2), z_m, var_m2);
+        let paper = &mut self.paper;
+        (paper.hit_z_m, paper.hit_var_m2) = rule.combine((paper.hit_z_m, paper.hit_var_m2), z_m, var_m2);
         self.hits.add(z_m, var_m2);
-    }
-
-    /// A sample the beam passed through, its highest point in the cell at `beam_top_m`.
-    #[inline(always)]
-    pub(super) fn add_free(&mut self, p: f32, beam_top_m: f32, var_m2: f32) {
-        self.raise_p(p);
-        self.free_z_m = if beam_top_m < self.free_z_m {
-            beam_top_m
-        } else {
-            self.free_z_m
-        };
-        self.free_var_m2 = if var_m2 < self.free_var_m2 {
-            var_m2
-        } else {
-            self.free_var_m2
-        };
     }
 }
 
@@ -216,44 +259,148 @@ impl HitSample {
     }
 }
 
-/// Access to the scratch grid along a walk, re-indexing only when the walk enters another tile.
-pub(super) struct ScratchCursor<'a> {
-    pub(super) grid: &'a mut TileGrid<ScanEvidence>,
-    pub(super) limit_bytes: u64,
-    pub(super) tile: Option<TileIndex>,
-    pub(super) slot: usize,
+/// The evidence a model gathers per cell: the paper's alone ([`PaperEvidence`], 20 bytes a cell) or every
+/// rule's ([`ScanEvidence`], 72 bytes), chosen once per map ([`ScanScratch::for_model`]), so a model pays in
+/// memory and in work only for the rules it uses.
+pub(crate) trait Evidence: Copy + Send + Sync + 'static {
+    const NONE: Self;
+    fn paper(&self) -> &PaperEvidence;
+    /// The scan's hits in the cell as a sample (none for evidence that does not keep them).
+    fn hits(&self) -> HitSample {
+        HitSample::NONE
+    }
+    /// Whether a free sample passed through the cell's surface band.
+    fn band_contradicted(&self) -> bool {
+        false
+    }
+    /// The full evidence, where it is kept (the ceiling layer reads it).
+    fn full(&self) -> Option<&ScanEvidence> {
+        None
+    }
+    /// Whether evidence gathered from separate runs of a scan's rays merges into exactly the evidence of one
+    /// run under `opts` ([`PaperEvidence::merge_later`]), so the rays may be gathered in parallel.
+    fn merges_exactly(_opts: &ModelOptions) -> bool {
+        false
+    }
+    /// [`PaperEvidence::merge_later`], where [`Evidence::merges_exactly`].
+    fn merge_later(&mut self, _later: &Self) {
+        unreachable!("only evidence that merges exactly is gathered in parallel")
+    }
 }
 
-impl<'a> ScratchCursor<'a> {
-    pub(super) fn new(grid: &'a mut TileGrid<ScanEvidence>, limit_bytes: u64) -> Self {
-        Self {
-            grid,
-            limit_bytes,
-            tile: None,
-            slot: 0,
-        }
-    }
+impl Evidence for PaperEvidence {
+    const NONE: Self = Self::NONE;
 
     #[inline(always)]
-    pub(super) fn at(&mut self, cell: CellIndex) -> Result<&mut ScanEvidence> {
-        let tile = TileIndex::of(cell);
-        if self.tile != Some(tile) {
-            self.enter(tile)?;
-        }
-        Ok(self.grid.in_slot_mut(self.slot, offset_in_tile(cell)))
+    fn paper(&self) -> &PaperEvidence {
+        self
     }
 
-    #[cold]
-    #[inline(never)]
-    pub(super) fn enter(&mut self, tile: TileIndex) -> Result<()> {
-        self.slot = self
-            .grid
-            .slot_or_insert(tile, self.limit_bytes)
-            .map_err(|e| Error::MemoryLimit {
-                requested_bytes: e.requested_bytes,
-                limit_bytes: self.limit_bytes,
-            })?;
-        self.tile = Some(tile);
-        Ok(())
+    fn merges_exactly(opts: &ModelOptions) -> bool {
+        opts.scan_hit_elevation == ScanHitElevation::Highest
+    }
+
+    #[inline]
+    fn merge_later(&mut self, later: &Self) {
+        PaperEvidence::merge_later(self, later);
+    }
+}
+
+impl Evidence for ScanEvidence {
+    const NONE: Self = Self::NONE;
+
+    #[inline(always)]
+    fn paper(&self) -> &PaperEvidence {
+        &self.paper
+    }
+
+    fn hits(&self) -> HitSample {
+        self.hits
+    }
+
+    fn band_contradicted(&self) -> bool {
+        self.band_contradicted
+    }
+
+    fn full(&self) -> Option<&ScanEvidence> {
+        Some(self)
+    }
+}
+
+/// The scratch of one evidence kind: the grid the scan's rays are gathered into, and one more per extra thread
+/// when they are gathered in parallel, all kept between scans for reuse.
+#[derive(Debug, Clone)]
+pub(crate) struct Scratch<E: Evidence> {
+    pub(super) main: TileGrid<E>,
+    pub(super) workers: Vec<TileGrid<E>>,
+}
+
+impl<E: Evidence> Scratch<E> {
+    fn recycle(&mut self) {
+        self.main.recycle_marked();
+        self.workers.iter_mut().for_each(TileGrid::recycle_marked);
+    }
+
+    fn new() -> Self {
+        Self {
+            main: TileGrid::new(E::NONE),
+            workers: Vec::new(),
+        }
+    }
+
+    pub(super) fn memory_bytes(&self) -> u64 {
+        self.main.memory_bytes() + self.workers.iter().map(TileGrid::memory_bytes).sum::<u64>()
+    }
+}
+
+/// A map's per-scan scratch, of the evidence kind its model needs.
+#[derive(Debug, Clone)]
+pub(crate) enum ScanScratch {
+    Paper(Scratch<PaperEvidence>),
+    Full(Scratch<ScanEvidence>),
+}
+
+impl ScanScratch {
+    /// An empty scratch for `opts`: the paper's evidence unless a rule needs more. The rules that do judge a
+    /// free sample against the cell's surface or ceiling ([`FreeSpaceOccupancy::SurfaceBand`],
+    /// [`ModelOptions::free_space_max_depth_m`], [`OverheadHits::Ceiling`]) or read the spread of a cell's hits
+    /// ([`ScanHitElevation::MeanWithSpread`], [`ScanHitElevation::HighestLevel`]).
+    pub(crate) fn for_model(opts: &ModelOptions) -> Self {
+        let paper = opts.free_space_occupancy != FreeSpaceOccupancy::SurfaceBand
+            && opts.free_space_max_depth_m.is_none()
+            && opts.overhead_hits != OverheadHits::Ceiling
+            && matches!(
+                opts.scan_hit_elevation,
+                ScanHitElevation::Highest | ScanHitElevation::WeightedMean
+            );
+        if paper {
+            Self::Paper(Scratch::new())
+        } else {
+            Self::Full(Scratch::new())
+        }
+    }
+
+    /// Bytes held, workers' grids included.
+    pub(crate) fn memory_bytes(&self) -> u64 {
+        match self {
+            Self::Paper(s) => s.memory_bytes(),
+            Self::Full(s) => s.memory_bytes(),
+        }
+    }
+
+    /// Clears what the last scan wrote, keeping the memory for the next.
+    pub(crate) fn recycle(&mut self) {
+        match self {
+            Self::Paper(s) => s.recycle(),
+            Self::Full(s) => s.recycle(),
+        }
+    }
+
+    /// Bytes of one cell's evidence.
+    pub(crate) fn cell_bytes(&self) -> usize {
+        match self {
+            Self::Paper(_) => size_of::<PaperEvidence>(),
+            Self::Full(_) => size_of::<ScanEvidence>(),
+        }
     }
 }

@@ -133,7 +133,7 @@ pub struct MapSummary {
     pub num_cells_blocked: u64,
     /// The robot's step limit used for the classes.
     pub max_step_m: f32,
-    /// Bytes the map holds ([`Map::memory_bytes`]).
+    /// Bytes the map holds ([`Map::memory_bytes`]): its cells, without the per-scan scratch (in `timing.json`).
     pub map_bytes: u64,
     /// Bytes of the saved map file.
     pub map_file_bytes: u64,
@@ -158,8 +158,12 @@ pub struct MapTiming {
     pub integrate_rays_per_s: f64,
     /// Cell visits per second of integration.
     pub integrate_cell_visits_per_s: f64,
-    /// Threads used for integration.
+    /// Threads integration may use (`RAYON_NUM_THREADS`, or every core): a long scan's rays are gathered in
+    /// parallel, and the touched tiles updated in parallel. The map is the same on any number.
     pub integrate_threads: u32,
+    /// Bytes of the per-scan scratch the map kept while integrating ([`Map::scratch_bytes`]): with the map's
+    /// own `map_bytes` of `summary.json`, the memory integration took. It grows with the threads.
+    pub scratch_bytes: u64,
 }
 
 /// What a map job produced.
@@ -292,10 +296,10 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     }
     let integrate_wall_time_s = start.elapsed().as_secs_f64();
     progress.finish();
-    // What the map held while integrating (its cells and the per-scan scratch) is the summary's figure; the
-    // scratch and the scans are then given back before the outputs are drawn and written, which need memory of
-    // their own (the map file's bytes, a raster of the observed region).
+    // The per-scan scratch and the scans are given back before the outputs are drawn and written, which need
+    // memory of their own (the map file's bytes, a raster of the observed region).
     let map_bytes = map.memory_bytes();
+    let scratch_bytes = map.scratch_bytes();
     map.release_scratch();
     drop(scans);
 
@@ -317,7 +321,8 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
             integrate_wall_time_s,
             integrate_rays_per_s: per_s(totals.num_rays),
             integrate_cell_visits_per_s: per_s(totals.num_cell_visits),
-            integrate_threads: 1,
+            integrate_threads: u32::try_from(rayon::current_num_threads()).unwrap_or(u32::MAX),
+            scratch_bytes,
         };
         let summary_path = stage.join("summary.json");
         write_json(&summary_path, &summary)?;
@@ -400,8 +405,7 @@ fn write_map_files(job: &MapJob, map: &Map, stage: &Path) -> Result<(Vec<PathBuf
     Ok((files, map_file_bytes))
 }
 
-/// `summary.json`: what the map holds, with the memory it took while integrating (`map_bytes`) and its
-/// file's size.
+/// `summary.json`: what the map holds, with its memory (`map_bytes`) and its file's size.
 fn summarize(job: &MapJob, map: &Map, map_bytes: u64, map_file_bytes: u64) -> MapSummary {
     let totals = map.totals();
     let counts = map.traversability_counts(&job.profile, job.rule);

@@ -1,0 +1,289 @@
+//! What one ray says about each cell it crosses (eq. 10-12): its span, and the samples it adds to the scan's
+//! evidence, the paper's ([`PaperEvidence`]) or every rule's ([`ScanEvidence`]).
+
+use nalgebra::Vector3;
+
+use super::scratch::{Evidence, PaperEvidence, ScanEvidence};
+use crate::cell::{Ceiling, Cell, SeenFrom};
+use crate::geometry::GridGeometry;
+use crate::model::{
+    Elevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits,
+    band_contradicts, ceiling_contradicts, ceiling_passed_under, clamp_probability, elevation_observation,
+    inverse_sensor_model, surface_level, vertical_variance,
+};
+use crate::scan::{Ray, RayKind, Scan};
+use crate::sensor::MIN_RANGE_SIGMA_M;
+use crate::storage::TileGrid;
+use crate::traversal::CellCrossing;
+
+/// What the samples of a scan read: the map as it was before the scan (Algorithm 1), and its settings.
+#[derive(Clone, Copy)]
+pub(super) struct Before<'a> {
+    pub(super) geometry: &'a GridGeometry,
+    pub(super) cells: &'a TileGrid<Cell>,
+    pub(super) ceilings: &'a TileGrid<Ceiling>,
+    pub(super) opts: &'a ModelOptions,
+    pub(super) memory_limit_bytes: u64,
+}
+
+/// How a crossed cell's evidence learns from a ray: a free sample before the hit, or a sample near it.
+pub(super) trait Sampling: Evidence {
+    /// A cell crossed by a ray that returned nothing.
+    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing);
+    /// A cell the beam passes through before its hit.
+    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing);
+    /// A cell within 3 sigma of the hit.
+    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing);
+}
+
+/// The paper's samples: the probability, the beam's height in a cell it passed through on its way to a hit,
+/// and the hits' heights. No look-up of the map and no rule's check: [`free_sample`] and [`hit_sample`] add
+/// the same under the options that choose this evidence.
+impl Sampling for PaperEvidence {
+    #[inline(always)]
+    fn cleared(&mut self, before: &Before, _span: &RaySpan, _crossing: &CellCrossing) {
+        self.raise_p(before.opts.p_min);
+    }
+
+    #[inline(always)]
+    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+        self.add_free(before.opts.p_min, span.top_and_bottom(crossing).0, span.s2);
+    }
+
+    #[inline(always)]
+    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+        match span.hit_probability_and_height(before.opts, crossing) {
+            (p, Some(z)) => self.add_hit(p, z, span.s2, before.opts.scan_hit_elevation),
+            (p, None) => self.raise_p(p),
+        }
+    }
+}
+
+impl Sampling for ScanEvidence {
+    #[inline(always)]
+    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+        free_sample(before, span, crossing, self);
+    }
+
+    #[inline(always)]
+    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+        free_sample(before, span, crossing, self);
+    }
+
+    #[inline(always)]
+    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+        hit_sample(before, span, crossing, self);
+    }
+}
+
+/// The part of one ray the map learns from, in the ray's parameter (metres along it from the sensor).
+pub(super) struct RaySpan {
+    /// The sensor.
+    pub(super) origin: Vector3<f64>,
+    /// The unit direction.
+    pub(super) dir: Vector3<f64>,
+    /// The hit's range and its standard deviation, or `None` for a ray that only clears.
+    pub(super) hit: Option<(f64, f64)>,
+    /// Where the span starts, after height thresholding.
+    pub(super) l_lo: f64,
+    /// Where it ends: 3 sigma past the hit, the clearing range, or the height threshold.
+    pub(super) l_hi: f64,
+    /// The variance a sample's height gets (the range variance, or its vertical projection).
+    pub(super) s2: f32,
+    /// Samples that end before this are plain free samples (`p = p_min`, no exponential); only the few cells
+    /// within 3 sigma of the hit evaluate eq. 10.
+    pub(super) free_until: f64,
+}
+
+impl RaySpan {
+    /// The span of `ray`, or `None` for a ray that teaches nothing (zero length, or wholly above the height
+    /// threshold).
+    pub(super) fn of(scan: &Scan, ray: &Ray, opts: &ModelOptions) -> Option<Self> {
+        let o = scan.origin_in_world.coords;
+        let clear_range_m = f64::from(opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m));
+        let max_range_m = opts.max_range_m.map_or(f64::INFINITY, f64::from);
+        let v: Vector3<f64> = ray.offset_in_world.cast();
+        let length = v.norm();
+        if length == 0.0 {
+            return None;
+        }
+        let dir = v / length;
+        // The hit range, or None for a ray that only clears; and the end of the traversal.
+        let (hit, l_end) = match ray.kind {
+            RayKind::Hit if length <= max_range_m => {
+                let sigma = ray
+                    .range_sigma_m
+                    .unwrap_or_else(|| scan.sensor.sigma_m(length as f32));
+                let sigma = f64::from(sigma.max(MIN_RANGE_SIGMA_M));
+                (
+                    Some((length, sigma)),
+                    length + f64::from(GAUSSIAN_CUTOFF_SIGMAS) * sigma,
+                )
+            }
+            RayKind::Hit => (None, max_range_m),
+            RayKind::NoReturn => (None, clear_range_m.min(max_range_m)),
+        };
+        let sigma_for_free = hit.map_or_else(
+            || {
+                f64::from(
+                    ray.range_sigma_m
+                        .unwrap_or_else(|| scan.sensor.sigma_m(l_end as f32)),
+                )
+            },
+            |(_, s)| s,
+        );
+        // Height thresholding: keep the part of the ray at or below max_height.
+        let (mut l_lo, mut l_hi): (f64, f64) = (0.0, l_end);
+        if let Some(h) = opts.max_height_m {
+            let h = f64::from(h);
+            if dir.z > 0.0 {
+                l_hi = l_hi.min((h - o.z) / dir.z);
+            } else if dir.z < 0.0 {
+                l_lo = l_lo.max((h - o.z) / dir.z);
+            } else if o.z > h {
+                l_hi = -1.0;
+            }
+        }
+        if l_hi < l_lo {
+            return None;
+        }
+        let s2 = if opts.vertical_variance {
+            vertical_variance(sigma_for_free, dir.z, hit.map_or(l_end, |(l, _)| l))
+        } else {
+            (sigma_for_free * sigma_for_free) as f32
+        };
+        let free_until = hit.map_or(f64::INFINITY, |(l_p, s)| {
+            l_p - f64::from(GAUSSIAN_CUTOFF_SIGMAS) * s
+        });
+        Some(Self {
+            origin: o,
+            dir,
+            hit,
+            l_lo,
+            l_hi,
+            s2,
+            free_until,
+        })
+    }
+
+    /// The beam's highest and lowest heights inside a crossed cell.
+    pub(super) fn top_and_bottom(&self, crossing: &CellCrossing) -> (f32, f32) {
+        let (l_top, l_bottom) = if self.dir.z > 0.0 {
+            (crossing.l_exit, crossing.l_enter)
+        } else {
+            (crossing.l_enter, crossing.l_exit)
+        };
+        (
+            (self.origin.z + self.dir.z * l_top) as f32,
+            (self.origin.z + self.dir.z * l_bottom) as f32,
+        )
+    }
+
+    /// A sample within 3 sigma of the hit: eq. 10's probability (clamped), and eq. 12's height where the cell
+    /// measures one (every such cell, or only the end point's under [`HitHeight::Endpoint`]). Within 3 sigma
+    /// of the measured range the surface may lie anywhere: a sample without a height counts for the occupancy,
+    /// but its height bounds nothing (a noisy long reading would otherwise "prove" free space under the
+    /// ground).
+    #[inline(always)]
+    fn hit_probability_and_height(&self, opts: &ModelOptions, crossing: &CellCrossing) -> (f32, Option<f32>) {
+        let Some((l_p, sigma)) = self.hit else {
+            unreachable!("free_until is infinite without a hit")
+        };
+        let l = l_p.clamp(crossing.l_enter, crossing.l_exit);
+        let p = inverse_sensor_model(
+            l as f32,
+            l_p as f32,
+            sigma as f32,
+            opts.significance_k_m,
+            opts.p_min,
+        );
+        let p = clamp_probability(p, opts.p_min, opts.p_max);
+        // Under `HitHeight::Endpoint` only the cell holding the end point (where the clamp leaves `l_p` as it
+        // is) measures a height.
+        let measures_height = opts.hit_height == HitHeight::BeamSample || l == l_p;
+        let z = elevation_observation(p, (self.origin.z + self.dir.z * l) as f32, opts.elevation_threshold)
+            .filter(|_| measures_height);
+        (p, z)
+    }
+}
+
+/// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
+/// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
+fn free_sample(
+    before: &Before,
+    span: &RaySpan,
+    crossing: &CellCrossing,
+    evidence: &mut ScanEvidence,
+) {
+    let (cells, ceilings, opts) = (before.cells, before.ceilings, before.opts);
+    let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
+    let needs_surface = band_rule || opts.free_space_max_depth_m.is_some();
+    // The cell's surface, looked up once for the rules that judge a free sample against it.
+    let surface = if needs_surface {
+        cells.get(crossing.cell).and_then(Cell::elevation)
+    } else {
+        None
+    };
+    let (beam_top, beam_bottom) = span.top_and_bottom(crossing);
+    if span.hit.is_none() {
+        // A ray that returned nothing clears, but bounds no height: it may have left through the ground or
+        // past anything (a dropout), so its heights prove nothing. Under the surface-band rule it therefore
+        // says nothing about a cell with a surface.
+        if !(band_rule && surface.is_some()) {
+            evidence.paper.raise_p(opts.p_min);
+        }
+        return;
+    }
+    if opts.overhead_hits == OverheadHits::Ceiling
+        && let Some(c) = ceilings.get(crossing.cell).filter(|c| c.is_some())
+    {
+        if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas) {
+            evidence.ceiling_contradicted = true;
+        } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas) {
+            evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
+        }
+    }
+    if let (Some(depth), Some(e)) = (opts.free_space_max_depth_m, surface)
+        && e.mean_m - beam_top > depth
+    {
+        // Far below the cell's surface: perhaps under an overhang, so it says nothing.
+        return;
+    }
+    if band_rule && let Some(e) = surface {
+        if !band_contradicts(e, beam_bottom, beam_top, opts.surface_band_sigmas) {
+            // Over or under the surface: it says nothing about it.
+            return;
+        }
+        evidence.band_contradicted = true;
+    }
+    evidence.paper.add_free(opts.p_min, beam_top, span.s2);
+}
+
+/// What a cell within 3 sigma of the hit says: eq. 10's probability, and eq. 12's height where the cell
+/// measures one (every such cell, or only the end point's under [`HitHeight::Endpoint`]), as a hit on the
+/// surface or, above its band under [`OverheadHits::Ceiling`], on a structure over it.
+fn hit_sample(before: &Before, span: &RaySpan, crossing: &CellCrossing, evidence: &mut ScanEvidence) {
+    let (cells, opts) = (before.cells, before.opts);
+    let (p, z) = span.hit_probability_and_height(opts, crossing);
+    let (dir, s2) = (span.dir, span.s2);
+    // How far above the band of the cell's surface the hit lies, in standard deviations: above it, a structure
+    // over the surface (if it stands out of the scan's hits: `ceiling_hit`).
+    let overhead_score = z
+        .filter(|_| opts.overhead_hits == OverheadHits::Ceiling)
+        .and_then(|z| {
+            let e = cells.get(crossing.cell).and_then(Cell::elevation)?;
+            let grown = Elevation {
+                var_m2: e.var_m2 + opts.process_noise_var_m2,
+                ..e
+            };
+            (surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above)
+                .then(|| (z - grown.mean_m) / (grown.var_m2 + s2).sqrt())
+        });
+    match z {
+        Some(z) if let Some(score) = overhead_score => {
+            evidence.add_overhead(p, z, s2, SeenFrom::of_beam(dir.z), score);
+        }
+        Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
+        None => evidence.paper.raise_p(p),
+    }
+}
