@@ -371,6 +371,13 @@ impl<T: Copy> TileGrid<T> {
         })
     }
 
+    /// The tile at `tile`, if allocated.
+    #[inline]
+    pub fn tile(&self, tile: TileIndex) -> Option<&[T; TILE_CELLS]> {
+        let slot = self.slot(tile)?;
+        self.slots[slot].as_deref()
+    }
+
     /// The tile at `tile` with its row marks, if allocated.
     pub fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], u64)> {
         let slot = self.slot(tile)?;

@@ -11,7 +11,7 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::sample::{Before, RaySpan, Sampling};
+use super::sample::{Before, Here, RaySpan, Sampling};
 use super::scratch::{Evidence, ScanScratch, Scratch};
 use super::update::update_cell;
 use super::{IntegrationStats, Map};
@@ -259,17 +259,19 @@ fn sample_walk<E: Sampling, const HIT: bool>(
                 limit_bytes,
             })?;
         let evidence = grid.slot_tile_mut(slot);
+        let mut here = Here::tile::<E>(before, tile);
         let first_row = offset_in_tile(first.cell) >> TILE_SHIFT;
         let mut crossing = first;
         let last_offset = loop {
             let offset = offset_in_tile(crossing.cell);
+            here.offset = offset;
             let ev = &mut evidence[offset & (TILE_CELLS - 1)];
             if !HIT {
-                ev.cleared(before, span, &crossing);
+                ev.cleared(before, span, &crossing, &here);
             } else if crossing.l_exit < span.free_until {
-                ev.free(before, span, &crossing);
+                ev.free(before, span, &crossing, &here);
             } else {
-                ev.near_hit(before, span, &crossing);
+                ev.near_hit(before, span, &crossing, &here);
             }
             next = walk.next();
             match next {

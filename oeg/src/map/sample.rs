@@ -13,7 +13,7 @@ use crate::model::{
 };
 use crate::scan::{Ray, RayKind, Scan};
 use crate::sensor::MIN_RANGE_SIGMA_M;
-use crate::storage::TileGrid;
+use crate::storage::{TILE_CELLS, TileGrid, TileIndex};
 use crate::traversal::CellCrossing;
 
 /// What the samples of a scan read: the map as it was before the scan (Algorithm 1), and its settings.
@@ -26,32 +26,77 @@ pub(super) struct Before<'a> {
     pub(super) memory_limit_bytes: u64,
 }
 
+/// The map's tiles (cells and ceilings) under the tile a walk is in, looked up once per tile for the rules
+/// that read the map ([`Sampling::READS_MAP`]), and a crossed cell's place in them.
+#[derive(Clone, Copy)]
+pub(super) struct Here<'a> {
+    cells: Option<&'a [Cell; TILE_CELLS]>,
+    ceilings: Option<&'a [Ceiling; TILE_CELLS]>,
+    /// The crossed cell's [`crate::storage::offset_in_tile`].
+    pub(super) offset: usize,
+}
+
+impl<'a> Here<'a> {
+    /// The map's tiles at `tile`, where the rules read the map.
+    #[inline]
+    pub(super) fn tile<E: Sampling>(before: &Before<'a>, tile: TileIndex) -> Self {
+        if E::READS_MAP {
+            Self {
+                cells: before.cells.tile(tile),
+                ceilings: before.ceilings.tile(tile),
+                offset: 0,
+            }
+        } else {
+            Self {
+                cells: None,
+                ceilings: None,
+                offset: 0,
+            }
+        }
+    }
+
+    /// The crossed cell's state before the scan (none where its tile was never written).
+    #[inline(always)]
+    fn cell(&self) -> Option<&Cell> {
+        self.cells.map(|t| &t[self.offset & (TILE_CELLS - 1)])
+    }
+
+    #[inline(always)]
+    fn ceiling(&self) -> Option<&Ceiling> {
+        self.ceilings.map(|t| &t[self.offset & (TILE_CELLS - 1)])
+    }
+}
+
 /// How a crossed cell's evidence learns from a ray: a free sample before the hit, or a sample near it.
 pub(super) trait Sampling: Evidence {
+    /// Whether the samples read the map's cells or ceilings ([`Here`]).
+    const READS_MAP: bool;
     /// A cell crossed by a ray that returned nothing.
-    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing);
+    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
     /// A cell the beam passes through before its hit.
-    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing);
+    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
     /// A cell within 3 sigma of the hit.
-    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing);
+    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
 }
 
 /// The paper's samples: the probability, the beam's height in a cell it passed through on its way to a hit,
 /// and the hits' heights. No look-up of the map and no rule's check: [`free_sample`] and [`hit_sample`] add
 /// the same under the options that choose this evidence.
 impl Sampling for PaperEvidence {
+    const READS_MAP: bool = false;
+
     #[inline(always)]
-    fn cleared(&mut self, before: &Before, _span: &RaySpan, _crossing: &CellCrossing) {
+    fn cleared(&mut self, before: &Before, _span: &RaySpan, _crossing: &CellCrossing, _here: &Here) {
         self.raise_p(before.opts.p_min);
     }
 
     #[inline(always)]
-    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, _here: &Here) {
         self.add_free(before.opts.p_min, span.top_and_bottom(crossing).0, span.s2);
     }
 
     #[inline(always)]
-    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
+    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, _here: &Here) {
         match span.hit_probability_and_height(before.opts, crossing) {
             (p, Some(z)) => self.add_hit(p, z, span.s2, before.opts.scan_hit_elevation),
             (p, None) => self.raise_p(p),
@@ -60,19 +105,21 @@ impl Sampling for PaperEvidence {
 }
 
 impl Sampling for ScanEvidence {
+    const READS_MAP: bool = true;
+
     #[inline(always)]
-    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
-        free_sample(before, span, crossing, self);
+    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
+        free_sample(before, span, crossing, here, self);
     }
 
     #[inline(always)]
-    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
-        free_sample(before, span, crossing, self);
+    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
+        free_sample(before, span, crossing, here, self);
     }
 
     #[inline(always)]
-    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing) {
-        hit_sample(before, span, crossing, self);
+    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
+        hit_sample(before, span, crossing, here, self);
     }
 }
 
@@ -213,14 +260,15 @@ fn free_sample(
     before: &Before,
     span: &RaySpan,
     crossing: &CellCrossing,
+    here: &Here,
     evidence: &mut ScanEvidence,
 ) {
-    let (cells, ceilings, opts) = (before.cells, before.ceilings, before.opts);
+    let opts = before.opts;
     let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
     let needs_surface = band_rule || opts.free_space_max_depth_m.is_some();
     // The cell's surface, looked up once for the rules that judge a free sample against it.
     let surface = if needs_surface {
-        cells.get(crossing.cell).and_then(Cell::elevation)
+        here.cell().and_then(Cell::elevation)
     } else {
         None
     };
@@ -235,7 +283,7 @@ fn free_sample(
         return;
     }
     if opts.overhead_hits == OverheadHits::Ceiling
-        && let Some(c) = ceilings.get(crossing.cell).filter(|c| c.is_some())
+        && let Some(c) = here.ceiling().filter(|c| c.is_some())
     {
         if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas) {
             evidence.ceiling_contradicted = true;
@@ -262,8 +310,14 @@ fn free_sample(
 /// What a cell within 3 sigma of the hit says: eq. 10's probability, and eq. 12's height where the cell
 /// measures one (every such cell, or only the end point's under [`HitHeight::Endpoint`]), as a hit on the
 /// surface or, above its band under [`OverheadHits::Ceiling`], on a structure over it.
-fn hit_sample(before: &Before, span: &RaySpan, crossing: &CellCrossing, evidence: &mut ScanEvidence) {
-    let (cells, opts) = (before.cells, before.opts);
+fn hit_sample(
+    before: &Before,
+    span: &RaySpan,
+    crossing: &CellCrossing,
+    here: &Here,
+    evidence: &mut ScanEvidence,
+) {
+    let opts = before.opts;
     let (p, z) = span.hit_probability_and_height(opts, crossing);
     let (dir, s2) = (span.dir, span.s2);
     // How far above the band of the cell's surface the hit lies, in standard deviations: above it, a structure
@@ -271,7 +325,7 @@ fn hit_sample(before: &Before, span: &RaySpan, crossing: &CellCrossing, evidence
     let overhead_score = z
         .filter(|_| opts.overhead_hits == OverheadHits::Ceiling)
         .and_then(|z| {
-            let e = cells.get(crossing.cell).and_then(Cell::elevation)?;
+            let e = here.cell().and_then(Cell::elevation)?;
             let grown = Elevation {
                 var_m2: e.var_m2 + opts.process_noise_var_m2,
                 ..e
