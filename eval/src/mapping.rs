@@ -165,45 +165,53 @@ impl Mapping {
     /// # Errors
     /// A scan a map rejects, or `progress` cancelled.
     pub fn feed_until(&mut self, until_s: f64, progress: &Progress) -> Result<()> {
-        loop {
+        let mut next = self.simulate_next(until_s);
+        while let Some(scan) = next {
             progress.check_cancelled()?;
-            let t0 = Instant::now();
-            let Some(scan) = self.simulation.next_scan_until(until_s) else {
-                break;
-            };
-            self.simulation_s += t0.elapsed().as_secs_f64();
             let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
-            self.observability
-                .observe(&scan, self.max_range_m[scan.sensor_index]);
-            let scan = scan.to_scan(PoseSource::Estimated, self.models[scan.sensor_index]);
-            // The maps are independent: with several, each scan goes into all of them at once (a map's
-            // integration is one thread, so the other cores would idle). The results do not depend on it.
-            let integrate = |(map, seconds): (&mut Map, &mut f64)| {
-                let t1 = Instant::now();
-                let r = map.integrate(&scan).map(|_| ());
-                *seconds += t1.elapsed().as_secs_f64();
-                r
-            };
-            if self.maps.len() > 1 {
-                use rayon::prelude::*;
-                self.maps
-                    .par_iter_mut()
-                    .zip(self.map_s.par_iter_mut())
-                    .map(integrate)
-                    .collect::<std::result::Result<Vec<()>, _>>()?;
-            } else {
-                self.maps
-                    .iter_mut()
-                    .zip(self.map_s.iter_mut())
-                    .try_for_each(integrate)?;
-            }
             if let Some(r) = &mut self.recording {
+                // A recording reads the world as it was at the scan: simulating and mapping take turns.
+                let Self {
+                    observability,
+                    maps,
+                    map_s,
+                    models,
+                    max_range_m,
+                    simulation,
+                    ..
+                } = self;
+                let scan = map_scan(observability, maps, map_s, models, max_range_m, scan)?;
                 let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
                 r.recording
-                    .sensor_scan(self.simulation.world(), name, &scan, self.tick_s)?;
+                    .sensor_scan(simulation.world(), name, &scan, self.tick_s)?;
                 if let Some(map) = self.maps.first() {
                     r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
                 }
+                next = self.simulate_next(until_s);
+            } else {
+                // The next scan is simulated while this one is mapped: within a feed, the maps do not steer
+                // the simulation, and each side keeps its own order, so the results do not depend on it.
+                let Self {
+                    observability,
+                    maps,
+                    map_s,
+                    models,
+                    max_range_m,
+                    simulation,
+                    simulation_s,
+                    ..
+                } = self;
+                let (simulated, mapped) = rayon::join(
+                    || {
+                        let t0 = Instant::now();
+                        let next = simulation.next_scan_until(until_s);
+                        *simulation_s += t0.elapsed().as_secs_f64();
+                        next
+                    },
+                    || map_scan(observability, maps, map_s, models, max_range_m, scan),
+                );
+                mapped?;
+                next = simulated;
             }
             if self.count_simulated_time {
                 progress.set_position(stamp_s.max(0.0) as u64);
@@ -223,6 +231,14 @@ impl Mapping {
             }
         }
         Ok(())
+    }
+
+    /// The simulation's next scan up to `until_s`, timed.
+    fn simulate_next(&mut self, until_s: f64) -> Option<sim::sensors::SensorScan> {
+        let t0 = Instant::now();
+        let scan = self.simulation.next_scan_until(until_s);
+        self.simulation_s += t0.elapsed().as_secs_f64();
+        scan
     }
 
     /// The wall times so far.
@@ -245,4 +261,35 @@ pub fn region_of(s: &scenario::Scenario, geometry: &oeg::GridGeometry) -> Result
         (s.map.min_xy_m[0], s.map.min_xy_m[1]),
         (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
     )?)
+}
+
+/// One simulated scan into the observability and, at the estimated pose, into every map (all at once: the
+/// maps are independent, and a map uses the threads it is given only for long scans), each map's time added to
+/// its `map_s`. Returns the scan as the maps took it.
+fn map_scan(
+    observability: &mut Observability,
+    maps: &mut [Map],
+    map_s: &mut [f64],
+    models: &[oeg::SensorModel],
+    max_range_m: &[f64],
+    scan: sim::sensors::SensorScan,
+) -> Result<oeg::Scan> {
+    observability.observe(&scan, max_range_m[scan.sensor_index]);
+    let scan = scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]);
+    let integrate = |(map, seconds): (&mut Map, &mut f64)| {
+        let t1 = Instant::now();
+        let r = map.integrate(&scan).map(|_| ());
+        *seconds += t1.elapsed().as_secs_f64();
+        r
+    };
+    if maps.len() > 1 {
+        use rayon::prelude::*;
+        maps.par_iter_mut()
+            .zip(map_s.par_iter_mut())
+            .map(integrate)
+            .collect::<std::result::Result<Vec<()>, _>>()?;
+    } else {
+        maps.iter_mut().zip(map_s.iter_mut()).try_for_each(integrate)?;
+    }
+    Ok(scan)
 }

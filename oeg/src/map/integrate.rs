@@ -105,8 +105,11 @@ struct LogOddsLevels {
     free: f32,
 }
 
+/// Rows of a scan's touched tiles (64 cells each) from which they are updated in parallel.
+const MIN_ROWS_IN_PARALLEL: u32 = 256;
+
 /// Rays each thread gathers at least: below this, splitting a scan costs more than it saves.
-const MIN_RAYS_PER_THREAD: usize = 4096;
+const MIN_RAYS_PER_THREAD: usize = 512;
 
 /// Casts every ray of the scan into `scratch.main`: in one run, or, for a long scan whose evidence merges
 /// exactly, in one run per thread merged in order. A parallel gathering that fails (a memory limit, a corrupt
@@ -402,7 +405,9 @@ fn apply<E: Evidence>(
         });
         updated
     };
-    stats.num_cells_updated += if work.len() > 1 && rayon::current_num_threads() > 1 {
+    // Rows of 64 cells to update: below a few hundred, handing tiles to threads costs more than it saves.
+    let rows: u32 = work.iter().map(|(_, _, rows)| rows.count_ones()).sum();
+    stats.num_cells_updated += if rows >= MIN_ROWS_IN_PARALLEL && rayon::current_num_threads() > 1 {
         work.into_par_iter().map(update).sum::<u64>()
     } else {
         work.into_iter().map(update).sum::<u64>()
