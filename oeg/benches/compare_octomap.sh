@@ -29,7 +29,7 @@ for res in 0.05 0.1 0.2; do
   : > "$tmp/oeg"
   for _ in $(seq "$repeats"); do
     graph2tree -i "$input" -res "$res" -o "$tmp/out.bt" 2>&1 | awk '/time to insert scans/ {print $5}' >> "$tmp/octomap"
-    ./target/release/examples/map_graph "$input" "$res" | sed -E 's/.* ([0-9.]+) s, .*/\1/' >> "$tmp/oeg"
+    RAYON_NUM_THREADS=1 ./target/release/examples/map_graph "$input" "$res" | sed -E 's/.* ([0-9.]+) s, .*/\1/' >> "$tmp/oeg"
   done
   o=$(median < "$tmp/octomap")
   m=$(median < "$tmp/oeg")
