@@ -366,7 +366,11 @@ impl<T: Copy> TileGrid<T> {
     /// [`TileGrid::tiles`], with their marks.
     pub fn marked_tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], u64)> + '_ {
         self.tiles().filter_map(move |(tile, t)| {
-            let rows = self.slot(tile).and_then(|s| self.rows.get(s)).copied().unwrap_or(0);
+            let rows = self
+                .slot(tile)
+                .and_then(|s| self.rows.get(s))
+                .copied()
+                .unwrap_or(0);
             (rows != 0).then_some((tile, t, rows))
         })
     }
@@ -508,7 +512,9 @@ mod tests {
         g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(3, 5))] = 1;
         g.mark_rows(slot, 1 << 5);
         // Growing the index far away moves the tile and its marks together.
-        let far = g.slot_or_insert(TileIndex { ti: -40, tj: 30 }, u64::MAX).expect("room");
+        let far = g
+            .slot_or_insert(TileIndex { ti: -40, tj: 30 }, u64::MAX)
+            .expect("room");
         g.slot_tile_mut(far)[0] = 2;
         g.mark_rows(far, 1);
         let marked: Vec<_> = g.marked_tiles().map(|(t, _, rows)| (t, rows)).collect();
@@ -518,7 +524,9 @@ mod tests {
         // The pooled tiles read as new.
         let slot = g.slot_or_insert(tile, u64::MAX).expect("pooled");
         assert_eq!(g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(3, 5))], 0);
-        let other = g.slot_or_insert(TileIndex { ti: 9, tj: 9 }, u64::MAX).expect("pooled");
+        let other = g
+            .slot_or_insert(TileIndex { ti: 9, tj: 9 }, u64::MAX)
+            .expect("pooled");
         assert!(g.slot_tile_mut(other).iter().all(|&v| v == 0));
     }
 

@@ -305,7 +305,7 @@ fn the_per_scan_scratch_is_counted_apart_sized_by_the_rules_and_can_be_given_bac
     map.integrate(&scan_of(Point3::new(0.0, 0.0, 0.3), &[(1.0, 1.0, 0.0)]))
         .expect("integrates again");
 
-    let mut robust = map_with(0.01, oeg::MapPreset::Robust.model(&oeg::RobotProfile::default()));
+    let mut robust = map_with(0.01, oeg::MapPreset::Robust.model(&RobotProfile::default()));
     robust.integrate(&scan).expect("ok");
     assert_eq!(robust.scratch_cell_bytes(), 72);
     assert!(robust.scratch_bytes() > robust.cell_bytes() * 72 / 12);

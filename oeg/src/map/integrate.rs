@@ -38,7 +38,8 @@ impl Map {
     }
 
     /// [`Map::integrate`], asking `stop` every [`RAYS_BETWEEN_STOP_CHECKS`] rays whether to stop: a long scan
-    /// (millions of rays from Python) can be cancelled within a bounded time.
+    /// (millions of rays from Python) can be cancelled within a bounded time. The threads that gather a long
+    /// scan's rays each ask, so `stop` is `Sync` and, once it says stop, should keep saying so.
     ///
     /// # Errors
     /// As [`Map::integrate`], and [`Error::Cancelled`] when `stop` said so (the map is left without this scan's
@@ -145,11 +146,27 @@ fn gather<E: Sampling>(
     let workers_bytes = scratch.memory_bytes() - scratch.main.memory_bytes();
     let mut run_stats = IntegrationStats::default();
     let limit = scratch_limit.saturating_sub(workers_bytes);
-    match gather_rays(before, scan, 0..num_rays, &mut scratch.main, limit, &mut run_stats, stop) {
+    match gather_rays(
+        before,
+        scan,
+        0..num_rays,
+        &mut scratch.main,
+        limit,
+        &mut run_stats,
+        stop,
+    ) {
         Err(Error::MemoryLimit { .. }) if workers_bytes > 0 => {
             scratch.main.recycle_marked();
             scratch.workers.clear();
-            gather_rays(before, scan, 0..num_rays, &mut scratch.main, scratch_limit, stats, stop)
+            gather_rays(
+                before,
+                scan,
+                0..num_rays,
+                &mut scratch.main,
+                scratch_limit,
+                stats,
+                stop,
+            )
         }
         done => {
             *stats += run_stats;
@@ -203,10 +220,12 @@ fn gather_in_parallel<E: Sampling>(
         }
         worker.recycle_marked();
     }
-    Ok(run_stats.into_iter().fold(IntegrationStats::default(), |mut a, s| {
-        a += s;
-        a
-    }))
+    Ok(run_stats
+        .into_iter()
+        .fold(IntegrationStats::default(), |mut a, s| {
+            a += s;
+            a
+        }))
 }
 
 /// Casts the scan's rays `rays` into `grid` (at most `limit_bytes` of it): each ray's span ([`RaySpan::of`]),
@@ -305,8 +324,8 @@ fn walk_of<E: Evidence>(
     let geometry = before.geometry;
     let (o, dir) = (span.origin, span.dir);
     let (start, end) = (o + dir * span.l_lo, o + dir * span.l_hi);
-    let walk = GroundTraversal::new(geometry, (o.x, o.y), (dir.x, dir.y), span.l_lo, span.l_hi)
-        .ok_or_else(|| {
+    let walk = GroundTraversal::new(geometry, (o.x, o.y), (dir.x, dir.y), span.l_lo, span.l_hi).ok_or_else(
+        || {
             Error::InvalidScan(format!(
                 "ray {index} runs from ({:.3}, {:.3}) m to ({:.3}, {:.3}) m, beyond the grid's index \
                  range (2^31 cells of {} m from the origin): is the sensor's pose or this point corrupt?",
@@ -316,7 +335,8 @@ fn walk_of<E: Evidence>(
                 end.y,
                 geometry.resolution_m()
             ))
-        })?;
+        },
+    )?;
     let map_bytes = before.cells.memory_bytes() + before.ceilings.memory_bytes();
     // Fail fast: the walk touches at least one tile per tile edge it spans, so a ray that must exceed the
     // memory limit is refused before a single tile of it is allocated.
@@ -380,7 +400,11 @@ fn apply<E: Evidence>(
             .tile_or_insert(tile, limit.saturating_sub(ceilings.memory_bytes()))
             .map_err(memory_error)?;
         // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
-        if ceiling_rule && evidence.iter().any(|ev| ev.full().is_some_and(|f| f.ceiling_p > 0.0)) {
+        if ceiling_rule
+            && evidence
+                .iter()
+                .any(|ev| ev.full().is_some_and(|f| f.ceiling_p > 0.0))
+        {
             let room = limit.saturating_sub(cells.memory_bytes());
             ceilings.tile_or_insert(tile, room).map_err(memory_error)?;
         }

@@ -248,8 +248,12 @@ impl RaySpan {
         // Under `HitHeight::Endpoint` only the cell holding the end point (where the clamp leaves `l_p` as it
         // is) measures a height.
         let measures_height = opts.hit_height == HitHeight::BeamSample || l == l_p;
-        let z = elevation_observation(p, (self.origin.z + self.dir.z * l) as f32, opts.elevation_threshold)
-            .filter(|_| measures_height);
+        let z = elevation_observation(
+            p,
+            (self.origin.z + self.dir.z * l) as f32,
+            opts.elevation_threshold,
+        )
+        .filter(|_| measures_height);
         (p, z)
     }
 }

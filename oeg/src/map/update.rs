@@ -38,11 +38,11 @@ pub(super) fn update_cell<E: Evidence>(
             ScanHitElevation::MeanWithSpread | ScanHitElevation::HighestLevel => {
                 let hits = evidence.hits();
                 spread_variance(
-                // The hits of one scan share its errors too: their mean is no better than `rho` of one hit.
-                ev.hit_var_m2
-                    .max(opts.measurement_correlation * hits.mean_variance()),
-                hits.sample_variance(),
-                hits.mean_variance(),
+                    // The hits of one scan share its errors too: their mean is no better than `rho` of one hit.
+                    ev.hit_var_m2
+                        .max(opts.measurement_correlation * hits.mean_variance()),
+                    hits.sample_variance(),
+                    hits.mean_variance(),
                 )
             }
             ScanHitElevation::Highest | ScanHitElevation::WeightedMean => ev.hit_var_m2,
