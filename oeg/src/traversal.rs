@@ -44,7 +44,7 @@ impl GroundTraversal {
     /// `origin_xy_m` and `direction_xy` are the ray's x and y components; `l` is in units of the direction's
     /// length (metres for a unit direction). Returns `None` if either end is not finite or lies outside the
     /// `i32` index range, or if `l_end < l_start`.
-    #[inline]
+    #[inline(always)]
     pub fn new(
         geometry: &GridGeometry,
         origin_xy_m: (f64, f64),

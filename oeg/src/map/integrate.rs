@@ -314,6 +314,7 @@ fn rows_between(a: usize, b: usize) -> u64 {
 
 /// The cells under a ray's span, refused when the span leaves the grid's index range or must take `grid` past
 /// `limit_bytes` (checked before a single tile of it is allocated).
+#[inline(always)]
 fn walk_of<E: Evidence>(
     before: &Before,
     grid: &TileGrid<E>,

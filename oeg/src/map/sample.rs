@@ -145,6 +145,7 @@ pub(super) struct RaySpan {
 impl RaySpan {
     /// The span of `ray`, or `None` for a ray that teaches nothing (zero length, or wholly above the height
     /// threshold).
+    #[inline(always)]
     pub(super) fn of(scan: &Scan, ray: &Ray, opts: &ModelOptions) -> Option<Self> {
         let o = scan.origin_in_world.coords;
         let clear_range_m = f64::from(opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m));
@@ -260,6 +261,7 @@ impl RaySpan {
 
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
 /// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
+#[inline(always)]
 fn free_sample(
     before: &Before,
     span: &RaySpan,
@@ -314,6 +316,7 @@ fn free_sample(
 /// What a cell within 3 sigma of the hit says: eq. 10's probability, and eq. 12's height where the cell
 /// measures one (every such cell, or only the end point's under [`HitHeight::Endpoint`]), as a hit on the
 /// surface or, above its band under [`OverheadHits::Ceiling`], on a structure over it.
+#[inline(always)]
 fn hit_sample(
     before: &Before,
     span: &RaySpan,
