@@ -40,6 +40,11 @@ pub fn inspect(path: &Path) -> Result<String> {
     let _ = writeln!(out, "rays integrated:      {}", header.totals.num_rays);
     let _ = writeln!(
         out,
+        "cell visits:          {} ({} cell updates)",
+        header.totals.num_cell_visits, header.totals.num_cells_updated
+    );
+    let _ = writeln!(
+        out,
         "log-odds bounds:      [{}, {}]",
         m.log_odds_min, m.log_odds_max
     );
