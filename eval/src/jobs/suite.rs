@@ -53,6 +53,8 @@ pub struct SuiteRow {
     pub nav_reached: Option<bool>,
     /// A closed-loop run: contacts with truly blocked cells.
     pub nav_contacts: Option<u64>,
+    /// A closed-loop run: of its contacts, those with a cell a ray could have told about before.
+    pub nav_contacts_observable: Option<u64>,
     /// Wall time of the run, seconds.
     pub wall_time_s: f64,
     /// Failed expectations, or the error, `; `-separated.
@@ -77,6 +79,7 @@ impl CsvRow for SuiteRow {
         "blind_cells",
         "nav_reached",
         "nav_contacts",
+        "nav_contacts_observable",
         "wall_time_s",
         "problems",
     ];
@@ -284,9 +287,10 @@ fn suite_page(files: &[PathBuf], rows: &[SuiteRow], stage: &Path) -> String {
         };
         let closed_loop = match (r.nav_reached, r.nav_contacts) {
             (Some(reached), contacts) => format!(
-                "{}, {} contacts",
+                "{}, {} contacts ({} observable)",
                 if reached { "reached" } else { "not reached" },
-                count(contacts)
+                count(contacts),
+                count(r.nav_contacts_observable)
             ),
             (None, _) => "-".into(),
         };
@@ -363,6 +367,7 @@ fn run_one(
             blind_cells: Some(r.metrics.blind_cells),
             nav_reached: r.metrics.nav_reached,
             nav_contacts: r.metrics.nav_contacts,
+            nav_contacts_observable: r.metrics.nav_contacts_observable,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: r
                 .failed
@@ -388,6 +393,7 @@ fn run_one(
             blind_cells: None,
             nav_reached: None,
             nav_contacts: None,
+            nav_contacts_observable: None,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: e.to_string(),
         },

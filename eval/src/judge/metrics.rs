@@ -110,6 +110,11 @@ pub struct Metrics {
     pub nav_planner_failures: Option<u64>,
     /// Times the robot's footprint entered truly blocked cells. The number that must be zero.
     pub nav_contacts: Option<u64>,
+    /// Of `nav_contacts`, those with a cell a ray could have told about before the contact: the map's or the
+    /// navigator's to avoid.
+    pub nav_contacts_observable: Option<u64>,
+    /// Of `nav_contacts`, the blind ones: no ray could have told about any cell the footprint entered.
+    pub nav_contacts_blind: Option<u64>,
     /// The smallest distance from the footprint to a truly blocked cell, metres.
     pub nav_closest_approach_m: Option<f64>,
     /// Whether the robot ended stuck.
@@ -224,6 +229,8 @@ pub fn compute(
         nav_no_path_replans: None,
         nav_planner_failures: None,
         nav_contacts: None,
+        nav_contacts_observable: None,
+        nav_contacts_blind: None,
         nav_closest_approach_m: None,
         nav_stuck: None,
         expectations_passed: true,
@@ -343,6 +350,8 @@ pub(crate) fn test_metrics() -> Metrics {
         nav_reached: None,
         nav_time_s: None,
         nav_contacts: None,
+        nav_contacts_observable: None,
+        nav_contacts_blind: None,
         nav_stuck: None,
         ..compute_empty()
     }
@@ -395,6 +404,8 @@ fn compute_empty() -> Metrics {
         nav_no_path_replans: Some(0),
         nav_planner_failures: Some(0),
         nav_contacts: Some(0),
+        nav_contacts_observable: Some(0),
+        nav_contacts_blind: Some(0),
         nav_closest_approach_m: Some(0.0),
         nav_stuck: Some(false),
         expectations_passed: true,

@@ -135,6 +135,8 @@ pub struct NavigationFigures {
     pub planner_failures: u64,
     /// Contacts with truly blocked cells.
     pub contacts: u64,
+    /// Of them, contacts with a cell a ray could have told about before.
+    pub contacts_observable: u64,
     /// Closest approach to a truly blocked cell, metres.
     pub closest_approach_m: Option<f64>,
     /// Whether the robot ended stuck.
@@ -150,6 +152,8 @@ pub fn record_navigation(metrics: &mut Metrics, n: &NavigationFigures) {
     metrics.nav_no_path_replans = Some(n.no_path_replans);
     metrics.nav_planner_failures = Some(n.planner_failures);
     metrics.nav_contacts = Some(n.contacts);
+    metrics.nav_contacts_observable = Some(n.contacts_observable);
+    metrics.nav_contacts_blind = Some(n.contacts - n.contacts_observable);
     metrics.nav_closest_approach_m = n.closest_approach_m;
     metrics.nav_stuck = Some(n.stuck);
 }

@@ -52,6 +52,17 @@ impl TruthClass {
         matches!(self, Self::Step | Self::TooLow)
     }
 
+    /// Whether a ray could have told about the truth's cell at raster offset `k` of this class, by the run's
+    /// observability truth `o` over the truth's region: a step when a ray ended on it, a structure lower than
+    /// the robot when a ray ended in its band, on the structure. A cell the robot may enter is never blind.
+    pub fn could_be_told(self, o: &sim::observability::Observability, k: usize) -> bool {
+        match self {
+            Self::Step => o.step[k],
+            Self::TooLow => o.band_hit[k],
+            _ => true,
+        }
+    }
+
     /// Whether a structure stands over the cell (passable or not): the clearance decision's cells.
     pub fn is_under_structure(self) -> bool {
         matches!(self, Self::PassableUnder | Self::TooLow)
@@ -234,11 +245,7 @@ impl Verdicts {
             return self;
         };
         for (k, t) in self.truth.iter().enumerate() {
-            self.unobservable[k] = match t {
-                TruthClass::Step => !o.step[k],
-                TruthClass::TooLow => !o.band_hit[k],
-                _ => false,
-            };
+            self.unobservable[k] = !t.could_be_told(o, k);
         }
         self
     }

@@ -31,6 +31,8 @@ pub struct ContactWatch<'a> {
 pub struct NewContact {
     /// The truly blocked cell the footprint entered nearest the robot's centre.
     pub cell: CellIndex,
+    /// Every truly blocked cell under the footprint.
+    pub cells: Vec<CellIndex>,
     /// The obstacle it belongs to (`terrain` for a step of the ground).
     pub obstacle: String,
 }
@@ -71,6 +73,16 @@ impl<'a> ContactWatch<'a> {
             in_contact: false,
             closest: None,
         }
+    }
+
+    /// The truth the watch judges by.
+    pub fn truth(&self) -> &TruthRaster {
+        self.truth
+    }
+
+    /// The truth's region.
+    pub fn region(&self) -> oeg::CellRegion {
+        self.truth.region
     }
 
     /// Checks the robot at its true `pose` at `time_s`: a contact that begins here, if one does, and the
@@ -125,11 +137,15 @@ impl<'a> ContactWatch<'a> {
             return None;
         }
         // The touched cell nearest the robot's centre names the obstacle.
-        let cell = self
+        let cells: Vec<CellIndex> = self
             .footprint
             .cells_under(&self.geometry, &region, pose)
             .into_iter()
             .filter(|c| region.offset(*c).is_some_and(|k| self.blocked[k]))
+            .collect();
+        let cell = cells
+            .iter()
+            .copied()
             .min_by(|a, b| {
                 let d = |c: &CellIndex| {
                     let (x, y) = self.geometry.cell_center(*c);
@@ -140,6 +156,7 @@ impl<'a> ContactWatch<'a> {
             .or(touching.map(|(_, c)| c))?;
         Some(NewContact {
             cell,
+            cells: if cells.is_empty() { vec![cell] } else { cells },
             obstacle: self.obstacle_of(cell),
         })
     }

@@ -14,6 +14,8 @@ pub mod external;
 pub mod record;
 
 use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability, UncertainCells, UnknownCells};
+
+use crate::judge::verdict::TruthClass;
 use sim::scenario::{Navigation, Scenario};
 use sim::truth::TruthRaster;
 
@@ -316,6 +318,7 @@ pub fn navigate(
             yaw_deg: round(pose.yaw_rad.to_degrees()),
             obstacle: watch.obstacle_of(cell),
             distance_m: Some(round(d)),
+            observable: None,
             closed_by: String::new(),
             message: "the closest the footprint came to a truly blocked cell".into(),
         });
@@ -325,11 +328,13 @@ pub fn navigate(
     let driven = end_pose.distance_m - start.distance_m;
     let truth_path = truth_shortest_path(inputs, (start.x_m, start.y_m))?;
     let reached = outcome == Outcome::Reached;
-    let contacts = log
-        .summary_events
-        .iter()
-        .filter(|e| e.kind == EventKind::Contact)
-        .count() as u64;
+    let count_contacts = |observable: Option<bool>| {
+        log.summary_events
+            .iter()
+            .filter(|e| e.kind == EventKind::Contact && observable.is_none_or(|o| e.observable == Some(o)))
+            .count() as u64
+    };
+    let (contacts, contacts_observable) = (count_contacts(None), count_contacts(Some(true)));
     let summary = NavigationSummary {
         scenario: s.name.clone(),
         seed: s.seed,
@@ -352,6 +357,8 @@ pub fn navigate(
         no_path_replans,
         planner_failures: failures,
         contacts,
+        contacts_observable,
+        contacts_blind: contacts - contacts_observable,
         closest_approach_m: watch.closest.map(|c| round(c.0)),
         footprint_m: [
             round(inputs.footprint.min_x_m),
@@ -564,7 +571,25 @@ fn closed_by(
         message: format!("planner: {e}"),
     })?;
     let Some(plan) = plan else {
-        return Ok("blocked".into());
+        // Closed by the map's blocked cells: which of them lie on the truth's own path from here.
+        return Ok(match truth_plan(inputs, (from.x_m, from.y_m))? {
+            None => "blocked; the truth has no path either".into(),
+            Some(truth_path) => {
+                let on_truth_path = truth_path
+                    .cells
+                    .iter()
+                    .filter(|c| {
+                        region
+                            .offset(**c)
+                            .is_some_and(|k| decisions[k] == Traversability::Blocked)
+                    })
+                    .count();
+                format!(
+                    "blocked; the truth has a path, with {on_truth_path} cells the map calls blocked on it \
+                     (the rest closed by the inflation around blocked cells)"
+                )
+            }
+        });
     };
     let reach = (strict.inflation_radius_m / res).ceil() as i32;
     let r2 = (strict.inflation_radius_m / res).powi(2) + 1e-9;
@@ -596,16 +621,29 @@ fn closed_by(
     closing.dedup();
     let count = |class: Traversability| closing.iter().filter(|k| decisions[**k] == class).count();
     let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
+    let truly_blocked = closing
+        .iter()
+        .filter(|k| TruthClass::of(inputs.truth, **k).is_blocked())
+        .count();
+    let truth = format!(
+        "; the truth: {} drivable, {truly_blocked} blocked",
+        closing.len() - truly_blocked
+    );
     Ok(match (uncertain, unknown) {
         (0, 0) => "blocked (the inflation around blocked cells)".into(),
-        (u, 0) => format!("{u} uncertain cells"),
-        (0, n) => format!("{n} never-observed cells"),
-        (u, n) => format!("{u} uncertain and {n} never-observed cells"),
+        (u, 0) => format!("{u} uncertain cells{truth}"),
+        (0, n) => format!("{n} never-observed cells{truth}"),
+        (u, n) => format!("{u} uncertain and {n} never-observed cells{truth}"),
     })
 }
 
 /// The length of the built-in planner's path on the truth from `from` to the goal, metres.
 fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<f64>> {
+    Ok(truth_plan(inputs, from)?.map(|p| p.length_m))
+}
+
+/// The built-in planner's path on the truth from `from` to the goal.
+fn truth_plan(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<Plan>> {
     let truth = inputs.truth;
     let region = truth.region;
     let geometry = oeg::GridGeometry::new(truth.resolution_m)?;
@@ -622,12 +660,10 @@ fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Resul
     )
     .truth_decisions();
     let options = planner_options(inputs);
-    Ok(oeg::plan(&region, truth.resolution_m, &decisions, a, b, &options)
-        .map_err(|e| EvalError::Input {
-            path: inputs.scenario.name.clone().into(),
-            message: format!("planner: {e}"),
-        })?
-        .map(|p| p.length_m))
+    oeg::plan(&region, truth.resolution_m, &decisions, a, b, &options).map_err(|e| EvalError::Input {
+        path: inputs.scenario.name.clone().into(),
+        message: format!("planner: {e}"),
+    })
 }
 
 /// The records as the loop writes them.
@@ -670,6 +706,7 @@ impl Recorder {
             yaw_deg: round(p.yaw_rad.to_degrees()),
             obstacle: String::new(),
             distance_m: None,
+            observable: None,
             closed_by: String::new(),
             message: message.to_string(),
         });
@@ -687,6 +724,15 @@ impl Recorder {
         );
         self.summary_events[e].obstacle = contact.obstacle;
         self.summary_events[e].distance_m = Some(0.0);
+        // Observable: a ray of the scans so far could have told about one of the cells entered.
+        let o = &mapping.observability;
+        let observable = contact.cells.iter().any(|c| {
+            o.region
+                .offset(*c)
+                .filter(|_| o.region == watch.region())
+                .is_some_and(|k| TruthClass::of(watch.truth(), k).could_be_told(o, k))
+        });
+        self.summary_events[e].observable = Some(observable);
         Some(e)
     }
 

@@ -99,6 +99,10 @@ pub struct Event {
     pub obstacle: String,
     /// Distance from the footprint to the nearest truly blocked cell, metres (contacts: 0), empty otherwise.
     pub distance_m: Option<f64>,
+    /// A contact: whether a ray could have told, before it, about a truly blocked cell the footprint entered
+    /// (the observability truth of the scans so far: a step a ray ended on, a structure lower than the robot a
+    /// ray ended in the band of). `false`: blind, no sensor could have warned. Empty for other events.
+    pub observable: Option<bool>,
     /// Cells that closed the way (a `no_path`): blocked, uncertain, never observed.
     pub closed_by: String,
     /// What the event means, in words (a planner failure's message names the file and line).
@@ -114,6 +118,7 @@ impl crate::output::CsvRow for Event {
         "yaw_deg",
         "obstacle",
         "distance_m",
+        "observable",
         "closed_by",
         "message",
     ];
@@ -208,6 +213,10 @@ pub struct NavigationSummary {
     pub planner_failures: u64,
     /// Contacts: times the footprint entered truly blocked cells.
     pub contacts: u64,
+    /// Of the contacts, those with a cell a ray could have told about before it ([`Event::observable`]).
+    pub contacts_observable: u64,
+    /// Of the contacts, the blind ones: no ray could have told about any cell the footprint entered.
+    pub contacts_blind: u64,
     /// The smallest distance from the footprint to a truly blocked cell, metres (null: none within
     /// [`crate::navigation::APPROACH_WINDOW_M`]).
     pub closest_approach_m: Option<f64>,
@@ -234,6 +243,7 @@ impl NavigationSummary {
             no_path_replans: self.no_path_replans,
             planner_failures: self.planner_failures,
             contacts: self.contacts,
+            contacts_observable: self.contacts_observable,
             closest_approach_m: self.closest_approach_m,
             stuck: self.outcome == Outcome::Stuck,
         }

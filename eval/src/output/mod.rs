@@ -194,6 +194,8 @@ mod tests {
             blind_cells: None,
             nav_reached: None,
             nav_contacts: None,
+            nav_contacts_observable: None,
+            nav_contacts_blind: None,
             wall_time_s: 1.0,
             problems: String::new(),
         });
@@ -264,6 +266,7 @@ mod tests {
             yaw_deg: 0.0,
             obstacle: "wall".into(),
             distance_m: Some(0.0),
+            observable: None,
             closed_by: String::new(),
             message: "m".into(),
         });

@@ -45,7 +45,7 @@ pub const METRICS: [(&str, &str, bool); 10] = [
 
 /// The metrics summarized when some run has them: closed-loop runs' (`[navigation]`) and what no ray could tell
 /// (absent from rows of earlier versions).
-pub const OPTIONAL_METRICS: [(&str, &str, bool); 5] = [
+pub const OPTIONAL_METRICS: [(&str, &str, bool); 7] = [
     ("blind_cells", "unsafe cells no ray could tell about", false),
     ("plan_blind_cells", "blind cells on the planned path", false),
     (
@@ -56,6 +56,16 @@ pub const OPTIONAL_METRICS: [(&str, &str, bool); 5] = [
     (
         "nav_contacts",
         "contacts with truly blocked cells per closed-loop run",
+        false,
+    ),
+    (
+        "nav_contacts_observable",
+        "contacts with cells a ray could have told about, per closed-loop run",
+        false,
+    ),
+    (
+        "nav_contacts_blind",
+        "contacts no ray could have warned of, per closed-loop run",
         false,
     ),
     (
