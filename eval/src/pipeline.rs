@@ -409,9 +409,10 @@ fn finish_recording(
                 use crate::navigation::record::EventKind;
                 let level = match e.kind {
                     EventKind::Contact | EventKind::Stuck | EventKind::PlannerFailed => LogLevel::Error,
-                    EventKind::NoPath | EventKind::ClosestApproach | EventKind::TimeLimit => {
-                        LogLevel::Warning
-                    }
+                    EventKind::NoPath
+                    | EventKind::Recovery
+                    | EventKind::ClosestApproach
+                    | EventKind::TimeLimit => LogLevel::Warning,
                     EventKind::Reached => LogLevel::Info,
                 };
                 let place = format!(

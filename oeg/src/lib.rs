@@ -52,8 +52,9 @@ pub use preset::{MapPreset, ROBUST_HEIGHT_MARGIN_M, STATIC_MAX_DEPTH_M};
 // The decision: where the robot can drive, and a planner that uses it.
 pub use footprint::{Footprint, Pose2};
 pub use planner::{
-    DEFAULT_FOOTPRINT_RADIUS_M, DEFAULT_INFLATION_RADIUS_M, NoPath, PLANNER_BYTES_PER_CELL, Plan,
-    PlannerOptions, UncertainCells, UnknownCells, forbidden_mask, plan, plan_or_why,
+    DEFAULT_DOUBT_COST, DEFAULT_FOOTPRINT_RADIUS_M, DEFAULT_INFLATION_RADIUS_M, NoPath,
+    PLANNER_BYTES_PER_CELL, Plan, PlannerOptions, UncertainCells, UnknownCells, forbidden_mask, plan,
+    plan_or_why,
 };
 pub use traversability::{
     DEFAULT_MAX_GRADE, DEFAULT_MAX_STEP_M, DEFAULT_REACH_M, DEFAULT_ROBOT_HEIGHT_M, DEFAULT_UNCERTAIN_KAPPA,

@@ -84,7 +84,22 @@ pub struct PlannerOptions {
     pub unknown: UnknownCells,
     /// Uncertain cells: default [`UncertainCells::Blocked`].
     pub uncertain: UncertainCells,
+    /// Beyond this distance from the start (centre to centre), metres, the cells the map cannot decide
+    /// (uncertain or never observed) are planned through at [`PlannerOptions::doubt_cost`] each, whatever
+    /// `unknown` and `uncertain` say: nav2's `allow_unknown`, for uncertain cells too. A robot that replans
+    /// as it drives then goes closer and looks again; cells nearer than this decide for real. Default `None`:
+    /// never.
+    pub optimistic_beyond_m: Option<f64>,
+    /// The extra cost of entering a cell the map cannot decide beyond [`PlannerOptions::optimistic_beyond_m`],
+    /// in cell lengths: a path crosses `n` such cells only when going round them is more than
+    /// `n * doubt_cost` cells longer. Default [`DEFAULT_DOUBT_COST`].
+    pub doubt_cost: f64,
 }
+
+/// The default [`PlannerOptions::doubt_cost`]: a cell the map cannot decide costs 5 cell lengths to enter, its
+/// own and 4 more, so the planner goes round a few such cells but crosses a band of them rather than make a
+/// long detour.
+pub const DEFAULT_DOUBT_COST: f64 = 4.0;
 
 impl Default for PlannerOptions {
     fn default() -> Self {
@@ -93,6 +108,8 @@ impl Default for PlannerOptions {
             footprint_radius_m: DEFAULT_FOOTPRINT_RADIUS_M,
             unknown: UnknownCells::default(),
             uncertain: UncertainCells::default(),
+            optimistic_beyond_m: None,
+            doubt_cost: DEFAULT_DOUBT_COST,
         }
     }
 }
@@ -102,11 +119,21 @@ impl PlannerOptions {
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] for a negative, non-finite or absurd (over 100 m) inflation or footprint
-    /// radius.
+    /// radius or optimistic distance, or a doubt cost that is not a number from 0 to 1000.
     pub fn validate(&self) -> Result<()> {
+        if !(self.doubt_cost.is_finite() && (0.0..=1000.0).contains(&self.doubt_cost)) {
+            return Err(Error::setting(
+                "doubt_cost",
+                format!(
+                    "must be a number of cell lengths from 0 to 1000, got {}",
+                    self.doubt_cost
+                ),
+            ));
+        }
         for (name, r) in [
             ("inflation_radius_m", self.inflation_radius_m),
             ("footprint_radius_m", self.footprint_radius_m),
+            ("optimistic_beyond_m", self.optimistic_beyond_m.unwrap_or(0.0)),
         ] {
             if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
                 return Err(Error::setting(
@@ -381,6 +408,7 @@ pub fn plan_or_why(
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
+    let extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options);
     let mut forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
     if forbidden[s]
         && let Some(clearance) = start_clearance(region, resolution_m, &decisions, start, options)
@@ -401,7 +429,7 @@ pub fn plan_or_why(
     if forbidden[g] {
         return Ok(Err(NoPath::Goal(original[g])));
     }
-    let found = astar(region, &forbidden, s, g).ok_or(NoPath::NoConnection);
+    let found = astar(region, &forbidden, extra.as_deref(), s, g).ok_or(NoPath::NoConnection);
     Ok(found.map(|offsets| {
         let nx = region.num_x as usize;
         let cells: Vec<CellIndex> = offsets
@@ -416,6 +444,36 @@ pub fn plan_or_why(
         let length_m = (num_side as f64 + num_diagonal as f64 * std::f64::consts::SQRT_2) * resolution_m;
         Plan { cells, length_m }
     }))
+}
+
+/// [`PlannerOptions::optimistic_beyond_m`]: the cells the map cannot decide beyond that distance from `start`
+/// become drivable in `decisions`, and the extra cost of entering each cell (in A*'s units) is returned;
+/// `None` when the option is off.
+fn optimistic_beyond(
+    region: &CellRegion,
+    resolution_m: f64,
+    decisions: &mut [Traversability],
+    start: CellIndex,
+    options: &PlannerOptions,
+) -> Option<Vec<u64>> {
+    let beyond = options.optimistic_beyond_m? / resolution_m;
+    let doubt = (options.doubt_cost * SIDE_COST as f64).round() as u64;
+    let mut extra = vec![0; decisions.len()];
+    for (k, (t, e)) in decisions.iter_mut().zip(&mut extra).enumerate() {
+        if !matches!(t, Traversability::Uncertain | Traversability::Unknown) {
+            continue;
+        }
+        let c = region.cell_at(
+            (k % region.num_x as usize) as u32,
+            (k / region.num_x as usize) as u32,
+        );
+        let (di, dj) = (f64::from(c.i - start.i), f64::from(c.j - start.j));
+        if di * di + dj * dj > beyond * beyond {
+            *t = Traversability::Free;
+            *e = doubt;
+        }
+    }
+    Some(extra)
 }
 
 /// The clearance a robot standing inside the inflation at `start` may keep: the distance from the start
@@ -465,7 +523,14 @@ fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
 }
 
 /// A* over the offsets of a `region`-shaped mask; the path's offsets, start first.
-fn astar(region: &CellRegion, forbidden: &[bool], start: usize, goal: usize) -> Option<Vec<usize>> {
+/// `extra`: a cost added for entering each cell (none: every cell costs its move alone).
+fn astar(
+    region: &CellRegion,
+    forbidden: &[bool],
+    extra: Option<&[u64]>,
+    start: usize,
+    goal: usize,
+) -> Option<Vec<usize>> {
     const UNSEEN: u64 = u64::MAX;
     const NO_PARENT: u32 = u32::MAX;
     let (nx, ny) = (region.num_x as usize, region.num_y as usize);
@@ -515,7 +580,7 @@ fn astar(region: &CellRegion, forbidden: &[bool], start: usize, goal: usize) -> 
                 continue; // no corner cutting
             }
             let step = if diagonal { DIAGONAL_COST } else { SIDE_COST };
-            let g_n = g + step;
+            let g_n = g + step + extra.map_or(0, |e| e[n]);
             if g_n < cost[n] {
                 cost[n] = g_n;
                 parent[n] = k as u32;
@@ -552,6 +617,91 @@ mod tests {
             footprint_radius_m: 0.0,
             unknown,
             uncertain: UncertainCells::Blocked,
+            ..PlannerOptions::default()
+        }
+    }
+
+    #[test]
+    fn beyond_the_optimistic_distance_undecided_cells_are_crossed_at_a_cost_and_near_ones_decide() {
+        // A 20 x 9 room at 0.1 m, start at the left, goal at the right, and a wall of uncertain cells across
+        // it at column `wall`: the planner without optimism finds no path; with it, it crosses the wall when
+        // the wall lies beyond the distance, and not when it lies within it.
+        let r = region(20, 9);
+        let (start, goal) = (CellIndex::new(0, 4), CellIndex::new(19, 4));
+        let wall_at = |column: i32, class: Traversability| marked(&r, class, |c| c.i == column);
+        let strict = no_inflation(UnknownCells::Avoid);
+        let optimistic = PlannerOptions {
+            optimistic_beyond_m: Some(0.5),
+            ..strict
+        };
+        for class in [Traversability::Uncertain, Traversability::Unknown] {
+            let far = wall_at(10, class);
+            assert!(
+                plan(&r, 0.1, &far, start, goal, &strict)
+                    .expect("valid")
+                    .is_none()
+            );
+            let crossed = plan(&r, 0.1, &far, start, goal, &optimistic)
+                .expect("valid")
+                .expect("crossed beyond 0.5 m");
+            assert!(crossed.cells.iter().any(|c| c.i == 10));
+            // 0.3 m from the start: within the distance, the wall decides for real.
+            let near = wall_at(3, class);
+            assert!(
+                plan(&r, 0.1, &near, start, goal, &optimistic)
+                    .expect("valid")
+                    .is_none()
+            );
+        }
+    }
+
+    #[test]
+    fn undecided_cells_cost_more_than_sure_ones() {
+        // A block of uncertain cells on the straight line with a free way round it: the path goes round while
+        // the detour costs less than the block's doubt, and through it when crossing is the cheaper.
+        let r = region(30, 11);
+        let (start, goal) = (CellIndex::new(0, 5), CellIndex::new(29, 5));
+        let block = marked(&r, Traversability::Uncertain, |c| {
+            (14..=16).contains(&c.i) && (3..=7).contains(&c.j)
+        });
+        let options = |doubt_cost| PlannerOptions {
+            optimistic_beyond_m: Some(0.5),
+            doubt_cost,
+            ..no_inflation(UnknownCells::Avoid)
+        };
+        let crosses = |p: &Plan| {
+            p.cells
+                .iter()
+                .any(|c| block[r.offset(*c).expect("inside")] != Traversability::Free)
+        };
+        let round = plan(&r, 0.1, &block, start, goal, &options(DEFAULT_DOUBT_COST))
+            .expect("valid")
+            .expect("a path");
+        assert!(!crosses(&round), "went through the block at the default cost");
+        let through = plan(&r, 0.1, &block, start, goal, &options(0.0))
+            .expect("valid")
+            .expect("a path");
+        assert!(crosses(&through), "a free doubt should take the straight line");
+        assert!(through.length_m < round.length_m);
+    }
+
+    #[test]
+    fn a_doubt_cost_or_an_optimistic_distance_out_of_range_is_refused() {
+        for bad in [
+            PlannerOptions {
+                doubt_cost: -1.0,
+                ..PlannerOptions::default()
+            },
+            PlannerOptions {
+                doubt_cost: f64::NAN,
+                ..PlannerOptions::default()
+            },
+            PlannerOptions {
+                optimistic_beyond_m: Some(f64::INFINITY),
+                ..PlannerOptions::default()
+            },
+        ] {
+            assert!(bad.validate().is_err(), "{bad:?}");
         }
     }
 
@@ -631,6 +781,7 @@ mod tests {
             footprint_radius_m: 0.1,
             unknown: UnknownCells::Avoid,
             uncertain: UncertainCells::Blocked,
+            ..PlannerOptions::default()
         };
         assert_eq!(
             plan(&r, 0.1, &d, s, g, &wide).expect("valid"),
@@ -693,6 +844,7 @@ mod tests {
             footprint_radius_m: 2.0,
             unknown,
             uncertain: UncertainCells::Blocked,
+            ..PlannerOptions::default()
         };
         let corridor = marked(&r, Traversability::Unknown, |c| c.j == 2);
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
@@ -718,6 +870,7 @@ mod tests {
             footprint_radius_m: 0.1,
             unknown: UnknownCells::Drivable,
             uncertain: UncertainCells::Blocked,
+            ..PlannerOptions::default()
         };
         let (s, g) = (CellIndex::new(2, 2), CellIndex::new(10, 2));
         let p = plan(&r, 0.1, &d, s, g, &options)
@@ -749,6 +902,7 @@ mod tests {
             footprint_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
             uncertain: UncertainCells::Blocked,
+            ..PlannerOptions::default()
         };
         assert!(plan(&r, 0.1, &d, s, g, &footprint).expect("valid").is_some());
         let point = no_inflation(UnknownCells::Avoid);
@@ -769,6 +923,7 @@ mod tests {
             footprint_radius_m: 0.2,
             unknown: UnknownCells::Avoid,
             uncertain: UncertainCells::Blocked,
+            ..PlannerOptions::default()
         };
         let with_hit_at =
             |hit: CellIndex| -> Vec<Traversability> { marked(&r, Traversability::Blocked, |c| c == hit) };

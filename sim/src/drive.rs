@@ -104,7 +104,7 @@ pub struct VelocityCommand {
     pub since_s: f64,
     /// The pose then.
     pub from: PlanarPose,
-    /// Forward speed, m/s (not negative: the robot does not reverse).
+    /// Forward speed, m/s; negative: the robot backs up.
     pub speed_m_s: f64,
     /// Turn rate, radians per second, counter-clockwise.
     pub turn_rate_rad_s: f64,
@@ -114,7 +114,7 @@ impl VelocityCommand {
     /// The pose at `t_s` (not before the command): the exact arc of a unicycle.
     pub fn pose_at(&self, t_s: f64) -> PlanarPose {
         let dt = (t_s - self.since_s).max(0.0);
-        let (v, w, p) = (self.speed_m_s.max(0.0), self.turn_rate_rad_s, self.from);
+        let (v, w, p) = (self.speed_m_s, self.turn_rate_rad_s, self.from);
         let yaw = p.yaw_rad + w * dt;
         let (dx, dy) = if (w * dt).abs() < 1e-9 {
             let mid = p.yaw_rad + w * dt / 2.0;
@@ -130,7 +130,7 @@ impl VelocityCommand {
             x_m: p.x_m + dx,
             y_m: p.y_m + dy,
             yaw_rad: wrap_angle(yaw),
-            distance_m: p.distance_m + v * dt,
+            distance_m: p.distance_m + v.abs() * dt,
         }
     }
 }

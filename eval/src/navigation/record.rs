@@ -59,7 +59,10 @@ pub enum EventKind {
     NoPath,
     /// The external planner failed: it could not start, exited non-zero, timed out or wrote a bad path.
     PlannerFailed,
-    /// The robot did not move `stuck_radius_m` in `stuck_time_s`.
+    /// The robot did not move `stuck_radius_m` in `stuck_time_s`, and began the next behaviour of the
+    /// recovery sequence (the message says which).
+    Recovery,
+    /// The robot did not move `stuck_radius_m` in `stuck_time_s` after the whole recovery sequence.
     Stuck,
     /// The estimated position came within the goal tolerance.
     Reached,
@@ -75,6 +78,7 @@ impl EventKind {
             Self::ClosestApproach => "closest_approach",
             Self::NoPath => "no_path",
             Self::PlannerFailed => "planner_failed",
+            Self::Recovery => "recovery",
             Self::Stuck => "stuck",
             Self::Reached => "reached",
             Self::TimeLimit => "time_limit",

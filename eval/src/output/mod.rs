@@ -195,7 +195,6 @@ mod tests {
             nav_reached: None,
             nav_contacts: None,
             nav_contacts_observable: None,
-            nav_contacts_blind: None,
             wall_time_s: 1.0,
             problems: String::new(),
         });

@@ -228,6 +228,44 @@ impl Checker<'_> {
         })?;
         self.positive(n.stuck_time_s, &at("stuck_time_s"), "time in seconds")?;
         self.length(n.stuck_radius_m, &at("stuck_radius_m"), "radius in metres")?;
+        if let Some(d) = n.decide_within_m {
+            self.non_negative(d, &at("decide_within_m"), "distance in metres")?;
+            self.check(d <= MAX_LENGTH_M, &at("decide_within_m"), || {
+                format!("expected a distance in metres of at most {MAX_LENGTH_M}, got {d}")
+            })?;
+        }
+        self.check(
+            n.recovery_wait_s.is_finite() && (0.0..=MAX_DURATION_S).contains(&n.recovery_wait_s),
+            &at("recovery_wait_s"),
+            || {
+                format!(
+                    "expected a wait in [0, {MAX_DURATION_S}] s, got {}",
+                    n.recovery_wait_s
+                )
+            },
+        )?;
+        self.non_negative(
+            n.backup_distance_m,
+            &at("backup_distance_m"),
+            "distance in metres",
+        )?;
+        self.check(n.backup_distance_m <= 10.0, &at("backup_distance_m"), || {
+            format!(
+                "expected a back-up of at most 10 m, got {} m",
+                n.backup_distance_m
+            )
+        })?;
+        self.positive(n.backup_speed_m_s, &at("backup_speed_m_s"), "speed in m/s")?;
+        self.check(
+            n.backup_speed_m_s <= s.robot.max_speed_m_s,
+            &at("backup_speed_m_s"),
+            || {
+                format!(
+                    "expected at most the robot's max_speed_m_s ({} m/s), got {} m/s",
+                    s.robot.max_speed_m_s, n.backup_speed_m_s
+                )
+            },
+        )?;
         self.check(
             n.planner_timeout_s.is_finite() && n.planner_timeout_s > 0.0 && n.planner_timeout_s <= 3600.0,
             &at("planner_timeout_s"),

@@ -17,6 +17,13 @@ pub const DEFAULT_NAVIGATION_SPEED_M_S: f64 = 0.4;
 pub const DEFAULT_STUCK_TIME_S: f64 = 10.0;
 /// Default stuck radius, metres: nav2's `SimpleProgressChecker.required_movement_radius`.
 pub const DEFAULT_STUCK_RADIUS_M: f64 = 0.5;
+/// Default wait of the recovery sequence, seconds: nav2's `Wait` behaviour in its default behaviour tree.
+pub const DEFAULT_RECOVERY_WAIT_S: f64 = 5.0;
+/// Default back-up distance of the recovery sequence, metres: nav2's `BackUp` in its default behaviour tree.
+pub const DEFAULT_BACKUP_DISTANCE_M: f64 = 0.3;
+/// Default back-up speed of the recovery sequence, m/s (nav2's default tree backs up at 0.05 m/s; a tenth of
+/// the robot's cruise speed).
+pub const DEFAULT_BACKUP_SPEED_M_S: f64 = 0.05;
 /// Default wall-time limit of one call of an external planner, seconds.
 pub const DEFAULT_PLANNER_TIMEOUT_S: f64 = 10.0;
 
@@ -66,6 +73,23 @@ pub struct Navigation {
     /// circumscribed radius.
     #[serde(default = "default_unknown")]
     pub unknown: oeg::UnknownCells,
+    /// Cells the map cannot decide (uncertain, or never observed) farther than this from the robot, metres,
+    /// are planned through at `[planner] doubt_cost` each (nav2's `allow_unknown`, for uncertain cells too):
+    /// the robot drives closer and looks again. Nearer ones decide as `[planner] uncertain` and `unknown` say.
+    /// Default ([`Navigation::decide_within`]): what the robot may cover before its next plan takes effect, one
+    /// replanning period at cruise speed plus the controller's lookahead (1.0 m with the defaults).
+    #[serde(default)]
+    pub decide_within_m: Option<f64>,
+    /// Seconds the recovery sequence waits (see [`Navigation`]'s recovery), default
+    /// [`DEFAULT_RECOVERY_WAIT_S`].
+    #[serde(default = "default_recovery_wait")]
+    pub recovery_wait_s: f64,
+    /// Metres the recovery sequence backs up, default [`DEFAULT_BACKUP_DISTANCE_M`]; 0: it does not.
+    #[serde(default = "default_backup_distance")]
+    pub backup_distance_m: f64,
+    /// Speed of the back-up, m/s, default [`DEFAULT_BACKUP_SPEED_M_S`].
+    #[serde(default = "default_backup_speed")]
+    pub backup_speed_m_s: f64,
     /// `astar` (default) or `external`.
     #[serde(default)]
     pub planner: PlannerKind,
@@ -78,6 +102,23 @@ pub struct Navigation {
     pub planner_timeout_s: f64,
 }
 
+impl Navigation {
+    /// [`Navigation::decide_within_m`], or its default: `lookahead_m + speed_m_s * replan_period_s`.
+    pub fn decide_within(&self) -> f64 {
+        self.decide_within_m
+            .unwrap_or(self.lookahead_m + self.speed_m_s * self.replan_period_s)
+    }
+}
+
+fn default_recovery_wait() -> f64 {
+    DEFAULT_RECOVERY_WAIT_S
+}
+fn default_backup_distance() -> f64 {
+    DEFAULT_BACKUP_DISTANCE_M
+}
+fn default_backup_speed() -> f64 {
+    DEFAULT_BACKUP_SPEED_M_S
+}
 fn default_unknown() -> oeg::UnknownCells {
     oeg::UnknownCells::Drivable
 }
@@ -101,4 +142,21 @@ fn default_stuck_radius() -> f64 {
 }
 fn default_planner_timeout() -> f64 {
     DEFAULT_PLANNER_TIMEOUT_S
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Navigation;
+
+    fn navigation(extra: &str) -> Navigation {
+        toml::from_str(&format!("goal_xy_m = [5.0, 0.0]\n{extra}")).expect("valid")
+    }
+
+    #[test]
+    fn cells_decide_within_one_replanning_period_at_cruise_speed_plus_the_lookahead() {
+        // The defaults: 0.6 m of lookahead and 1 s at 0.4 m/s.
+        assert!((navigation("").decide_within() - 1.0).abs() < 1e-12);
+        assert!((navigation("speed_m_s = 0.8\nreplan_period_s = 2.0").decide_within() - 2.2).abs() < 1e-12);
+        assert_eq!(navigation("decide_within_m = 3.5").decide_within(), 3.5);
+    }
 }

@@ -107,6 +107,9 @@ pub struct PlannerSettings {
     pub unknown: oeg::UnknownCells,
     /// Cells the map cannot judge (`uncertain`); default `blocked`.
     pub uncertain: oeg::UncertainCells,
+    /// The extra cost, in cell lengths, of crossing a cell the map cannot decide where a closed loop plans
+    /// optimistically (beyond `[navigation] decide_within_m`); default `oeg::DEFAULT_DOUBT_COST` (4).
+    pub doubt_cost: Option<f64>,
 }
 
 impl PlannerSettings {
@@ -117,6 +120,8 @@ impl PlannerSettings {
             footprint_radius_m: self.footprint_radius_m.unwrap_or(oeg::DEFAULT_FOOTPRINT_RADIUS_M),
             unknown: self.unknown,
             uncertain: self.uncertain,
+            optimistic_beyond_m: None,
+            doubt_cost: self.doubt_cost.unwrap_or(oeg::DEFAULT_DOUBT_COST),
         }
     }
 

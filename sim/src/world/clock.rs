@@ -99,7 +99,7 @@ impl World {
         )
     }
 
-    /// From now on, the robot drives at `speed_m_s` (clamped to be at least 0) turning at `turn_rate_rad_s`
+    /// From now on, the robot drives at `speed_m_s` (negative: backwards) turning at `turn_rate_rad_s`
     /// from where it is, instead of along its scripted path, until the next command: the simulator's side of
     /// a `cmd_vel`. The robot is kinematic: it goes where it is sent, through obstacles too (contacts are
     /// the judge's to find).
@@ -107,7 +107,7 @@ impl World {
         self.command = Some(VelocityCommand {
             since_s: self.time_s,
             from: self.planar,
-            speed_m_s: speed_m_s.max(0.0),
+            speed_m_s,
             turn_rate_rad_s,
         });
     }
