@@ -169,23 +169,16 @@ impl Mapping {
         while let Some(scan) = next {
             progress.check_cancelled()?;
             let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
-            if let Some(r) = &mut self.recording {
+            if self.recording.is_some() {
                 // A recording reads the world as it was at the scan: simulating and mapping take turns.
-                let Self {
-                    observability,
-                    maps,
-                    map_s,
-                    models,
-                    max_range_m,
-                    simulation,
-                    ..
-                } = self;
-                let scan = map_scan(observability, maps, map_s, models, max_range_m, scan)?;
-                let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
-                r.recording
-                    .sensor_scan(simulation.world(), name, &scan, self.tick_s)?;
-                if let Some(map) = self.maps.first() {
-                    r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
+                let scan = self.map_scan(scan)?;
+                if let Some(r) = &mut self.recording {
+                    let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
+                    r.recording
+                        .sensor_scan(self.simulation.world(), name, &scan, self.tick_s)?;
+                    if let Some(map) = self.maps.first() {
+                        r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
+                    }
                 }
                 next = self.simulate_next(until_s);
             } else {
@@ -231,6 +224,18 @@ impl Mapping {
             }
         }
         Ok(())
+    }
+
+    /// [`map_scan`] of this mapping's maps and observability.
+    fn map_scan(&mut self, scan: sim::sensors::SensorScan) -> Result<oeg::Scan> {
+        map_scan(
+            &mut self.observability,
+            &mut self.maps,
+            &mut self.map_s,
+            &self.models,
+            &self.max_range_m,
+            scan,
+        )
     }
 
     /// The simulation's next scan up to `until_s`, timed.

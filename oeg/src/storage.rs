@@ -313,16 +313,35 @@ impl<T: Copy> TileGrid<T> {
         })
     }
 
-    /// Allocated tiles, mutable, in the order of [`TileGrid::tiles`].
-    pub fn tiles_mut(&mut self) -> impl Iterator<Item = (TileIndex, &mut [T; TILE_CELLS])> + '_ {
-        let (min, tiles_x) = (self.tile_min, self.tiles_x.max(1));
-        self.slots.iter_mut().enumerate().filter_map(move |(slot, t)| {
-            let tile = TileIndex {
-                ti: min.ti + (slot % tiles_x) as i32,
-                tj: min.tj + (slot / tiles_x) as i32,
+    /// The allocated tiles among `tiles`, mutable, for tiles given in the order of [`TileGrid::tiles`] (row by
+    /// row over the tile index, as another grid's [`TileGrid::marked_tiles`] yields them): the cost is that of
+    /// the tiles asked for, not of the grid. A tile out of that order, or not allocated, is left out.
+    pub fn tiles_mut_in_order(
+        &mut self,
+        tiles: impl IntoIterator<Item = TileIndex>,
+    ) -> Vec<(TileIndex, &mut [T; TILE_CELLS])> {
+        let (min, tiles_x, tiles_y) = (self.tile_min, self.tiles_x, self.tiles_y);
+        let slot_of = |tile: TileIndex| {
+            let u = tile.ti.wrapping_sub(min.ti) as u32 as usize;
+            let v = tile.tj.wrapping_sub(min.tj) as u32 as usize;
+            (u < tiles_x && v < tiles_y).then(|| v * tiles_x + u)
+        };
+        let mut found = Vec::new();
+        let (mut rest, mut base): (&mut [Option<Tile<T>>], usize) = (&mut self.slots, 0);
+        for tile in tiles {
+            let Some(slot) = slot_of(tile).filter(|s| *s >= base) else {
+                continue;
             };
-            t.as_deref_mut().map(|t| (tile, t))
-        })
+            let (_, from) = std::mem::take(&mut rest).split_at_mut(slot - base);
+            let Some((at, after)) = from.split_first_mut() else {
+                break;
+            };
+            if let Some(t) = at.as_deref_mut() {
+                found.push((tile, t));
+            }
+            (rest, base) = (after, slot + 1);
+        }
+        found
     }
 
     /// The tile at `tile`, if allocated.
@@ -528,6 +547,25 @@ mod tests {
             .slot_or_insert(TileIndex { ti: 9, tj: 9 }, u64::MAX)
             .expect("pooled");
         assert!(g.slot_tile_mut(other).iter().all(|&v| v == 0));
+    }
+
+    #[test]
+    fn tiles_asked_for_in_order_are_lent_together_and_others_left_out() {
+        let mut g = TileGrid::new(0u8);
+        let at = |ti, tj| TileIndex { ti, tj };
+        for t in [at(0, 0), at(3, 0), at(1, 2), at(-2, 5)] {
+            g.tile_or_insert(t, u64::MAX).expect("room")[0] = 1;
+        }
+        let asked = [at(3, 0), at(2, 1), at(1, 2), at(0, 0), at(-2, 5), at(99, 99)];
+        // (0, 0) comes after (1, 2) in the grid's order: out of order, so left out, as are the unallocated.
+        let lent = g.tiles_mut_in_order(asked);
+        let got: Vec<TileIndex> = lent.iter().map(|(t, _)| *t).collect();
+        assert_eq!(got, vec![at(3, 0), at(1, 2), at(-2, 5)]);
+        for (_, t) in lent {
+            t[1] = 7;
+        }
+        assert_eq!(g.get(CellIndex::new(3 * 64 + 1, 0)), Some(&7));
+        assert_eq!(g.get(CellIndex::new(1, 0)), Some(&0));
     }
 
     #[test]

@@ -130,8 +130,7 @@ fn gather<E: Sampling>(
     if runs > 1 && E::merges_exactly(before.opts) {
         match gather_in_parallel(before, scan, scratch, runs, scratch_limit, stop) {
             Ok(run_stats) => {
-                stats.num_rays_skipped += run_stats.num_rays_skipped;
-                stats.num_cell_visits += run_stats.num_cell_visits;
+                *stats += run_stats;
                 return Ok(());
             }
             Err(Error::Cancelled) => return Err(Error::Cancelled),
@@ -410,11 +409,13 @@ fn apply<E: Evidence>(
             ceilings.tile_or_insert(tile, room).map_err(memory_error)?;
         }
     }
+    // The marked tiles come row by row over the tile index, the order the cells' grid lends them in.
     let work: Vec<_> = cells
-        .tiles_mut()
+        .tiles_mut_in_order(scratch.marked_tiles().map(|(tile, _, _)| tile))
+        .into_iter()
         .filter_map(|(tile, cells)| {
             let (evidence, rows) = scratch.marked_tile(tile)?;
-            (rows != 0).then_some((cells, evidence, rows))
+            Some((cells, evidence, rows))
         })
         .collect();
     let update = |(cells, evidence, rows): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], u64)| {
