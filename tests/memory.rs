@@ -89,10 +89,11 @@ fn the_default_memory_bound_holds_under_ulimit_and_the_program_never_aborts() {
     );
     assert!(!out.exists());
 
-    // One corrupt far point: refused before anything is allocated, in well under a second of work.
+    // One corrupt far point: refused before anything is allocated, in well under a second of work. 400 km at
+    // 0.05 m crosses 125,000 tiles: 10 GB of scratch at 20 bytes a cell, over the 4 GiB bound.
     let far = dir.join("far.graph");
     let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::laser());
-    scan.push_hit(Point3::new(100_000.0, 0.0, 0.0));
+    scan.push_hit(Point3::new(400_000.0, 0.0, 0.0));
     oeg::write_graph(&far, &[scan]).expect("graph");
     let started = std::time::Instant::now();
     let o = map_under_ulimit(limit_kib, &far, &out);

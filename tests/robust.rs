@@ -136,8 +136,11 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
 /// (`oeg suite scenarios --set map.preset=robust`), with a margin. They pin what the preset does today, not what
 /// it should do: the scenarios' own `[expectations]` (set for their own settings) fail under it, and the planner
 /// finds no path in 5 of the 15 scenes because of uncertain cells (the closing note of issue 12). The closed-loop
-/// scenes (`nav_*`, measured 2026-12-03) do not start under it: uncertain cells around the robot close every
-/// way at the first plan, and it ends stuck where it stood.
+/// scenes (`nav_*`) were measured again on 2026-12-05, once the navigator planned through undecided cells beyond
+/// its decision distance and recovered before giving up: the robot now drives under `robust` (before, uncertain
+/// cells around it closed every way at the first plan and it ended stuck where it stood), so it maps, and is
+/// scored on, more of each scene. `nav_curbs` is the finding of issue 40: the 3 cm curb across the way is
+/// uncertain, the robot turns back and forth before it, and 105 step cells it saw are unsafe.
 const ROBUST_BOUNDS: [(&str, u64, u64, f64); 20] = [
     // (scenario, unsafe step cells, unsafe clearance cells: measured + about 10 % + 2; elevation within 2 sigma:
     // measured - 0.02).
@@ -150,9 +153,9 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 20] = [
     ("long_range_stereo", 4, 2, 0.87),
     ("nav_around_wall", 3, 2, 0.93),
     ("nav_blind_spot", 2, 543, 0.92),
-    ("nav_board_and_branch", 2, 7, 0.97),
-    ("nav_curbs", 2, 2, 0.95),
-    ("nav_person_crossing", 2, 2, 0.95),
+    ("nav_board_and_branch", 2, 54, 0.96),
+    ("nav_curbs", 118, 2, 0.97),
+    ("nav_person_crossing", 5, 2, 0.97),
     ("outdoor_stereo", 2, 3, 0.89),
     ("people_walking", 2, 2, 0.94),
     ("pose_drift", 21, 2, 0.96),
