@@ -2,8 +2,9 @@
 //! the touched tiles updated in parallel (`Map::integrate`), under every preset, on synthetic scans long enough
 //! to be split and on the shared real scans when present.
 
-use std::path::PathBuf;
+mod common;
 
+use common::shared_file;
 use nalgebra::{Point3, Vector3};
 use oeg::{Map, MapConfig, MapPreset, Ray, RobotProfile, Scan, SensorModel, map_to_bytes};
 
@@ -83,17 +84,9 @@ fn a_synthetic_map_is_the_same_on_one_two_three_and_five_threads() {
 
 #[test]
 fn the_shared_real_scans_map_the_same_on_any_thread_count() {
-    let dir = std::env::var_os("OEG_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-    let path = dir.join("3dtk_frames.graph");
-    if !path.is_file() {
-        println!(
-            "skipped: {} is absent (the shared data set lives beside the project, not in it)",
-            path.display()
-        );
+    let Some(path) = shared_file("3dtk_frames.graph") else {
         return;
-    }
+    };
     let scans = oeg::read_graph_scans(&path, SensorModel::laser()).expect("readable");
     assert_same_on_any_thread_count(0.05, &scans);
 }

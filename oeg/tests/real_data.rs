@@ -1,25 +1,10 @@
 //! The shared real files (`../shared/data` beside the project, or `$OEG_SHARED_DATA`), read when present.
 //! A user's clone does not have them: each test then prints why it skipped and passes.
 
-use std::path::PathBuf;
+mod common;
 
+use common::shared_file;
 use oeg::{Map, MapConfig, SensorModel};
-
-fn shared_file(name: &str) -> Option<PathBuf> {
-    let dir = std::env::var_os("OEG_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-    let path = dir.join(name);
-    if path.is_file() {
-        Some(path)
-    } else {
-        println!(
-            "skipped: {} is absent (the shared data set lives beside the project, not in it)",
-            path.display()
-        );
-        None
-    }
-}
 
 #[test]
 fn the_3dtk_scan_graph_reads_and_maps() {
