@@ -4,7 +4,7 @@
 //!
 //! Both steps use the threads rayon gives them ([`rayon::current_num_threads`]), and the map is the same, bit
 //! for bit, on any number: a long scan's rays are gathered in runs, one per thread, into separate scratch
-//! grids merged in the runs' order (where the evidence merges exactly: [`Evidence::merges_exactly`]), and the
+//! grids merged in the runs' order (where the evidence merges exactly: [`Evidence::exact_merge`]), and the
 //! touched tiles are updated in parallel, each cell from its own evidence alone.
 
 use std::ops::Range;
@@ -127,8 +127,10 @@ fn gather<E: Sampling>(
     let scratch_limit = before
         .memory_limit_bytes
         .saturating_sub(before.cells.memory_bytes());
-    if runs > 1 && E::merges_exactly(before.opts) {
-        match gather_in_parallel(before, scan, scratch, runs, scratch_limit, stop) {
+    if runs > 1
+        && let Some(merge) = E::exact_merge(before.opts)
+    {
+        match gather_in_parallel(before, scan, scratch, runs, scratch_limit, merge, stop) {
             Ok(run_stats) => {
                 *stats += run_stats;
                 return Ok(());
@@ -183,6 +185,7 @@ fn gather_in_parallel<E: Sampling>(
     scratch: &mut Scratch<E>,
     runs: usize,
     scratch_limit: u64,
+    merge: fn(&mut E, &E),
     stop: &(impl Fn() -> bool + Sync),
 ) -> Result<IntegrationStats> {
     scratch.workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
@@ -212,7 +215,7 @@ fn gather_in_parallel<E: Sampling>(
             let merged = main.slot_tile_mut(slot);
             for_each_row(rows, |r| {
                 for k in r * TILE_SIZE..(r + 1) * TILE_SIZE {
-                    merged[k].merge_later(&later[k]);
+                    merge(&mut merged[k], &later[k]);
                 }
             });
             main.mark_rows(slot, rows);

@@ -277,14 +277,11 @@ pub(crate) trait Evidence: Copy + Send + Sync + 'static {
     fn full(&self) -> Option<&ScanEvidence> {
         None
     }
-    /// Whether evidence gathered from separate runs of a scan's rays merges into exactly the evidence of one
-    /// run under `opts` ([`PaperEvidence::merge_later`]), so the rays may be gathered in parallel.
-    fn merges_exactly(_opts: &ModelOptions) -> bool {
-        false
-    }
-    /// [`PaperEvidence::merge_later`], where [`Evidence::merges_exactly`].
-    fn merge_later(&mut self, _later: &Self) {
-        unreachable!("only evidence that merges exactly is gathered in parallel")
+    /// How evidence gathered from a later run of a scan's rays merges into an earlier run's to give exactly
+    /// the evidence of one run under `opts` ([`PaperEvidence::merge_later`]), if it can: then the rays may be
+    /// gathered in parallel.
+    fn exact_merge(_opts: &ModelOptions) -> Option<fn(&mut Self, &Self)> {
+        None
     }
 }
 
@@ -296,13 +293,8 @@ impl Evidence for PaperEvidence {
         self
     }
 
-    fn merges_exactly(opts: &ModelOptions) -> bool {
-        opts.scan_hit_elevation == ScanHitElevation::Highest
-    }
-
-    #[inline]
-    fn merge_later(&mut self, later: &Self) {
-        PaperEvidence::merge_later(self, later);
+    fn exact_merge(opts: &ModelOptions) -> Option<fn(&mut Self, &Self)> {
+        (opts.scan_hit_elevation == ScanHitElevation::Highest).then_some(PaperEvidence::merge_later)
     }
 }
 
