@@ -58,7 +58,7 @@ pub use planner::{
 };
 pub use traversability::{
     DEFAULT_MAX_GRADE, DEFAULT_MAX_STEP_M, DEFAULT_REACH_M, DEFAULT_ROBOT_HEIGHT_M, DEFAULT_UNCERTAIN_KAPPA,
-    RobotProfile, Traversability, TraversabilityCounts, TraversabilityRule, ceiling_decision,
+    Doubt, RobotProfile, Traversability, TraversabilityCounts, TraversabilityRule, ceiling_decision,
     contact_decision, footprint_decision, more_restrictive, step_decision,
 };
 

@@ -618,10 +618,11 @@ fn the_contact_rule_measures_a_step_from_the_lowest_level_not_the_lowest_cell() 
     let mut map = map_with(0.05, ModelOptions::default());
     let profile = RobotProfile::default();
     let noise = [0.0, 0.01, -0.01, 0.005, -0.005, 0.012, -0.012, 0.0];
-    for j in 0..12 {
-        for i in 0..24 {
+    // Three cells of margin all round, so that the cells looked at have their contact windows observed.
+    for j in -3..15 {
+        for i in -3..27 {
             let (x, y) = (0.025 + 0.05 * f64::from(i), 0.025 + 0.05 * f64::from(j));
-            let z = noise[((i * 7 + j * 3) % 8) as usize] + if i >= 12 { 0.05 } else { 0.0 };
+            let z = noise[(i * 7 + j * 3_i32).rem_euclid(8) as usize] + if i >= 12 { 0.05 } else { 0.0 };
             hit_from_above(&mut map, x, y, z);
         }
     }
@@ -705,7 +706,8 @@ fn board_seen_now_and_then(overhead_hits: oeg::OverheadHits) -> Map {
 fn a_board_hit_now_and_then_over_ground_hit_every_scan_is_kept_as_a_ceiling() {
     let p = RobotProfile::default();
     let rule = oeg::MapPreset::Robust.traversability();
-    let kept = board_seen_now_and_then(oeg::OverheadHits::Ceiling);
+    let mut kept = board_seen_now_and_then(oeg::OverheadHits::Ceiling);
+    ground_around(&mut kept, 2.025, 0.025);
     let c = cell(&kept, 2.025, 0.025);
     let ceiling = kept.ceiling(c).expect("a ceiling over the ground");
     assert!((ceiling.z_m - 0.34).abs() < 0.01, "{ceiling:?}");
@@ -718,7 +720,8 @@ fn a_board_hit_now_and_then_over_ground_hit_every_scan_is_kept_as_a_ceiling() {
     // Beams under the board never pass through its band, so they leave it alone.
     assert_eq!(kept.num_ceilings(), 1);
     // One height per cell: the ground under it outvotes the board's rare hits.
-    let lost = board_seen_now_and_then(oeg::OverheadHits::Surface);
+    let mut lost = board_seen_now_and_then(oeg::OverheadHits::Surface);
+    ground_around(&mut lost, 2.025, 0.025);
     assert!(lost.ceiling(c).is_none());
     assert_eq!(lost.traversability(c, &p, rule), Traversability::Traversable);
 }
@@ -774,6 +777,7 @@ fn a_structure_hit_over_the_robot_is_passed_under_only_where_a_beam_passed_under
     let rule = oeg::MapPreset::Robust.traversability();
     let lidar = Point3::new(0.025, 0.025, 0.45);
     let ground = |map: &mut Map| {
+        ground_around(map, 2.025, 0.025);
         for _ in 0..3 {
             beams(map, lidar, &[(2.025, 0.025, 0.0), (2.125, 0.025, 0.0)]);
         }
@@ -822,6 +826,7 @@ fn a_hit_in_the_tail_of_many_raises_no_ceiling_but_a_structure_among_many_does()
     let rule = oeg::MapPreset::Robust.traversability();
     let ground = || {
         let mut map = map_with(0.05, oeg::MapPreset::Robust.model(&profile));
+        ground_around(&mut map, 0.025, 0.025);
         for _ in 0..10 {
             frame_from_above(&mut map, 0.025, 0.025, &[0.0; 200]);
         }
@@ -853,6 +858,18 @@ fn a_hit_in_the_tail_of_many_raises_no_ceiling_but_a_structure_among_many_does()
 }
 
 /// A straight-down ray onto `(x, y, z)`, its range (and so its height) known to 5 mm.
+/// Level ground at z = 0 hit from above in every cell within 3 cells of `(x, y)` but its own: the cell's
+/// contact window is observed, so the frontier ([`oeg::Doubt::Frontier`]) leaves its decision alone.
+fn ground_around(map: &mut Map, x: f64, y: f64) {
+    for dj in -3..=3 {
+        for di in -3..=3 {
+            if (di, dj) != (0, 0) {
+                hit_from_above(map, x + 0.05 * f64::from(di), y + 0.05 * f64::from(dj), 0.0);
+            }
+        }
+    }
+}
+
 fn hit_from_above(map: &mut Map, x: f64, y: f64, z: f64) {
     let mut scan = Scan::new(Point3::new(x, y, z + 1.0), SensorModel::laser());
     scan.rays

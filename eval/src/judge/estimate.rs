@@ -14,7 +14,7 @@
 //! When the user's grid is the truth's (same resolution, origin on a cell corner), every truth cell has
 //! exactly one source, and the arrays are taken as they are.
 
-use oeg::{CellRegion, GridGeometry, LayerKind, Map, Traversability, TraversabilityRule};
+use oeg::{CellRegion, Doubt, GridGeometry, LayerKind, Map, Traversability, TraversabilityRule};
 use sim::truth::TruthRaster;
 
 use crate::error::{EvalError, Result};
@@ -36,6 +36,9 @@ pub struct Estimate {
     pub geometry: GridGeometry,
     /// The map's decision on every cell; [`Traversability::Unknown`] where the map cannot decide.
     pub decisions: Vec<Traversability>,
+    /// Why the map could not decide each uncertain cell, or each observed cell it left unknown ([`Map::doubt`]),
+    /// `None` on the others; empty when the map does not say (another mapper's arrays).
+    pub doubts: Vec<Option<Doubt>>,
     /// Whether the map observed the cell: for the testbed's map, a ray reached it; for another mapper's
     /// arrays, the cell has a decision, an elevation or an occupancy probability.
     pub observed: Vec<bool>,
@@ -213,10 +216,21 @@ impl Estimate {
         };
         // The occupancy is NaN exactly where no ray reached the cell.
         let occupancy = layer(LayerKind::OccupancyProbability)?;
+        let decisions = map.traversability_layer(region, &truth.profile, rule)?.values;
+        let doubts = region
+            .cells()
+            .zip(&decisions)
+            .map(|(cell, d)| {
+                matches!(d, Traversability::Uncertain | Traversability::Unknown)
+                    .then(|| map.doubt(cell, &truth.profile, rule))
+                    .flatten()
+            })
+            .collect();
         Ok(Self {
             region,
             geometry: *map.geometry(),
-            decisions: map.traversability_layer(region, &truth.profile, rule)?.values,
+            decisions,
+            doubts,
             observed: occupancy.iter().map(|o| !o.is_nan()).collect(),
             elevation_m: layer(LayerKind::ElevationM)?,
             variance_m2: layer(LayerKind::VarianceM2)?,
@@ -269,6 +283,7 @@ impl Estimate {
             region,
             geometry,
             decisions: Vec::with_capacity(n),
+            doubts: Vec::new(),
             observed: Vec::with_capacity(n),
             elevation_m: Vec::with_capacity(n),
             variance_m2: Vec::with_capacity(n),

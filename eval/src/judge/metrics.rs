@@ -7,7 +7,7 @@ use serde::Serialize;
 use sim::truth::TruthRaster;
 
 use crate::judge::estimate::Estimate;
-use crate::judge::verdict::Verdicts;
+use crate::judge::verdict::{TruthClass, Verdict, Verdicts};
 
 /// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
 /// scenario and seed.
@@ -71,8 +71,23 @@ pub struct Metrics {
     pub unsafe_observable_cells: u64,
     /// Of the uncertain cells, those truly blocked.
     pub uncertain_truly_blocked_cells: u64,
+    /// The cells the map could not decide by what it could not tell ([`oeg::Doubt`]), `doubt_<doubt>_cells`,
+    /// one key per doubt: the scored uncertain cells, and the observed cells on the terrain it left unknown
+    /// (`frontier`, `no_height`; not scored). Null when the map does not say why (another mapper's arrays).
+    #[serde(flatten)]
+    pub doubts: BTreeMap<String, Option<u64>>,
     /// Scored cells under a structure (a gap higher than a step within 3 m above the ground).
     pub num_clearance_cells: u64,
+    /// DynamicMap's SA adapted to cells ([`crate::judge::ghosts`]): of the truly blocked cells a ray could have
+    /// told about and no actor passed through, the fraction mapped blocked or uncertain (null: none).
+    pub static_accuracy: f64,
+    /// DynamicMap's DA: of the cells an actor covered and left (truly drivable, scored), the fraction mapped
+    /// drivable at the end (null: no such cell).
+    pub dynamic_accuracy: f64,
+    /// DynamicMap's AA, `sqrt(static_accuracy * dynamic_accuracy)` (null when either is).
+    pub associated_accuracy: f64,
+    /// The cells behind `dynamic_accuracy`.
+    pub num_dynamic_cells: u64,
     /// Bytes the map holds.
     pub map_bytes: u64,
     /// Scans integrated.
@@ -125,6 +140,30 @@ pub struct Metrics {
     pub num_expectations_failed: u64,
 }
 
+/// The cells the map could not decide by doubt, keyed `doubt_<doubt>_cells`: the scored uncertain cells, and
+/// the observed cells on the terrain left unknown. Counts when the estimate says why, nulls when it does not.
+fn doubt_counts(estimate: &Estimate, verdicts: &Verdicts) -> BTreeMap<String, Option<u64>> {
+    let known = !estimate.doubts.is_empty();
+    let mut counts: BTreeMap<oeg::Doubt, u64> = oeg::Doubt::ALL.iter().map(|d| (*d, 0)).collect();
+    let cells = estimate
+        .doubts
+        .iter()
+        .zip(&verdicts.verdict)
+        .zip(&verdicts.truth)
+        .zip(&verdicts.mapped);
+    for (((doubt, verdict), truth), mapped) in cells {
+        let counted = *verdict == Verdict::Uncertain
+            || (*mapped == oeg::Traversability::Unknown && *truth != TruthClass::OffTerrain);
+        if let (Some(d), true) = (doubt, counted) {
+            *counts.entry(*d).or_default() += 1;
+        }
+    }
+    counts
+        .into_iter()
+        .map(|(d, n)| (format!("doubt_{}_cells", d.name()), known.then_some(n)))
+        .collect()
+}
+
 /// Computes every metric except the expectation and plan fields: the elevation against the truth, and the
 /// decisions from the verdict raster.
 pub fn compute(
@@ -160,6 +199,7 @@ pub fn compute(
         }
     }
     let counts = verdicts.counts();
+    let doubts = doubt_counts(estimate, verdicts);
     let n = errors.len() as f64;
     let (rmse, mae, bias, p95, within_2sigma) = if errors.is_empty() {
         (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
@@ -211,7 +251,12 @@ pub fn compute(
         blind_cells: counts.blind_cells(),
         unsafe_observable_cells: counts.unsafe_cells() - counts.blind_cells(),
         uncertain_truly_blocked_cells: counts.uncertain_truly_blocked_cells,
+        doubts,
         num_clearance_cells: counts.num_clearance_cells,
+        static_accuracy: f64::NAN,
+        dynamic_accuracy: f64::NAN,
+        associated_accuracy: f64::NAN,
+        num_dynamic_cells: 0,
         map_bytes: estimate.totals.map_bytes,
         num_scans: estimate.totals.num_scans,
         num_rays: estimate.totals.num_rays,
@@ -386,7 +431,12 @@ fn compute_empty() -> Metrics {
         blind_cells: 0,
         unsafe_observable_cells: 0,
         uncertain_truly_blocked_cells: 0,
+        doubts: BTreeMap::new(),
         num_clearance_cells: 0,
+        static_accuracy: f64::NAN,
+        dynamic_accuracy: f64::NAN,
+        associated_accuracy: f64::NAN,
+        num_dynamic_cells: 0,
         map_bytes: 0,
         num_scans: 0,
         num_rays: 0,

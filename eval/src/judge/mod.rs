@@ -5,10 +5,11 @@
 //! truth's region: the testbed's own map and another mapper's arrays are judged by the same code
 //! ([`evaluate`], [`score`]).
 //!
-//! The modules depend one way: [`estimate`], [`verdict`] <- [`metrics`], [`plan_check`], [`obstacles`],
-//! [`wrong_cells`] <- [`Evaluation`] <- the figures and the report.
+//! The modules depend one way: [`estimate`], [`verdict`] <- [`metrics`], [`ghosts`], [`plan_check`],
+//! [`obstacles`], [`wrong_cells`] <- [`Evaluation`] <- the figures and the report.
 
 pub mod estimate;
+pub mod ghosts;
 pub mod metrics;
 pub mod obstacles;
 pub mod outcome;
@@ -85,6 +86,7 @@ pub fn score(
     let mut metrics = metrics::compute(&s.name, s.seed, &estimate, truth, &verdicts);
     let plan = plan_check::check(s, &estimate.geometry, &verdicts)?;
     record_plan(&mut metrics, &plan);
+    record_ghosts(&mut metrics, &ghosts::count(s, &verdicts, &estimate.geometry));
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }
@@ -156,6 +158,14 @@ pub fn record_navigation(metrics: &mut Metrics, n: &NavigationFigures) {
     metrics.nav_contacts_blind = Some(n.contacts - n.contacts_observable);
     metrics.nav_closest_approach_m = n.closest_approach_m;
     metrics.nav_stuck = Some(n.stuck);
+}
+
+/// Fills SA, DA and AA from their counts (NaN, written as null, where undefined).
+pub fn record_ghosts(metrics: &mut Metrics, ghosts: &ghosts::GhostCounts) {
+    metrics.static_accuracy = ghosts.static_accuracy().unwrap_or(f64::NAN);
+    metrics.dynamic_accuracy = ghosts.dynamic_accuracy().unwrap_or(f64::NAN);
+    metrics.associated_accuracy = ghosts.associated_accuracy().unwrap_or(f64::NAN);
+    metrics.num_dynamic_cells = ghosts.num_dynamic_cells;
 }
 
 /// Records the planner check in the metrics (the `plan_*` keys).

@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::rules::{
-    RobotProfile, Traversability, TraversabilityRule, ceiling_decision, contact_decision, footprint_decision,
-    more_restrictive, step_decision,
+    Doubt, RobotProfile, Traversability, TraversabilityRule, ceiling_decision, contact_decision,
+    footprint_decision, more_restrictive, step_decision,
 };
 use crate::error::Result;
 use crate::geometry::{CellIndex, CellRegion};
@@ -26,6 +26,45 @@ impl Map {
         profile: &RobotProfile,
         rule: TraversabilityRule,
     ) -> Traversability {
+        self.decision(cell, profile, rule).class
+    }
+
+    /// Why [`Map::traversability`] cannot decide `cell`: the rule that could not tell for an uncertain cell, or
+    /// why an observed cell is left unknown ([`Doubt::Frontier`], [`Doubt::NoHeight`]); `None` for a decided or
+    /// a never observed cell.
+    pub fn doubt(&self, cell: CellIndex, profile: &RobotProfile, rule: TraversabilityRule) -> Option<Doubt> {
+        self.decision(cell, profile, rule).doubt
+    }
+
+    /// [`Map::traversability`] with the reason for an uncertain class.
+    fn decision(&self, cell: CellIndex, profile: &RobotProfile, rule: TraversabilityRule) -> Decision {
+        let d = self.cell_decision(cell, profile, rule);
+        // The frontier: a wheel on a drivable cell may come from any cell within the contact distance, and one
+        // the map never observed may hold a step. The cell is not known to be drivable until its whole contact
+        // window is observed: it is unknown, as the cells it borders (the planner neither enters nor inflates
+        // them, and plans through them optimistically beyond its stopping distance), not an obstacle.
+        if matches!(rule, TraversabilityRule::Contact { .. })
+            && d.class.is_drivable()
+            && self
+                .cells_within(cell, profile.contact_distance_m())
+                .any(|(_, c)| !self.cell(c).is_observed())
+        {
+            return Decision {
+                class: Traversability::Unknown,
+                doubt: Some(Doubt::Frontier),
+            };
+        }
+        d
+    }
+
+    /// Whether a cell within `distance_m` of a point of `cell` (itself included) holds a height estimate.
+    fn has_estimate_within(&self, cell: CellIndex, distance_m: f32) -> bool {
+        self.cells_within(cell, distance_m)
+            .any(|(_, c)| self.cell(c).elevation().is_some())
+    }
+
+    /// [`Map::decision`] before the frontier test: the surface's decision or the structure's.
+    fn cell_decision(&self, cell: CellIndex, profile: &RobotProfile, rule: TraversabilityRule) -> Decision {
         let surface = self.surface_traversability(cell, profile, rule);
         let Some(ceiling) = self.ceiling(cell) else {
             return surface;
@@ -48,18 +87,19 @@ impl Map {
         let over_ceiling = match ground {
             Some(g) => {
                 let (clearance, sigma) = rise_over(structure, g);
-                ceiling_decision(
-                    clearance,
-                    ceiling.clear_m - g.mean_m,
-                    sigma,
-                    kappa,
-                    profile,
-                    confirmed,
-                )
+                let passed_under_m = ceiling.clear_m - g.mean_m;
+                ceiling_decision(clearance, passed_under_m, sigma, kappa, profile, confirmed).map(|class| {
+                    let doubt = (class == Traversability::Uncertain)
+                        .then(|| ceiling_doubt(clearance, sigma * kappa, profile, confirmed));
+                    Decision { class, doubt }
+                })
             }
-            None => Some(Traversability::Uncertain),
+            None => Some(Decision::uncertain(Doubt::StructureNoGround)),
         };
-        more_restrictive(surface, over_ceiling)
+        match over_ceiling {
+            Some(c) if more_restrictive(surface.class, Some(c.class)) != surface.class => c,
+            _ => surface,
+        }
     }
 
     /// The traversability of one cell's surface for `profile` under `rule`.
@@ -68,10 +108,10 @@ impl Map {
         cell: CellIndex,
         profile: &RobotProfile,
         rule: TraversabilityRule,
-    ) -> Traversability {
+    ) -> Decision {
         let c = self.cell(cell);
         if !c.is_observed() {
-            return Traversability::Unknown;
+            return Traversability::Unknown.into();
         }
         if c.log_odds <= self.occupied_log_odds() {
             // Beams passed through the cell and none ended in it: no height was measured, and the beams bound it
@@ -79,16 +119,33 @@ impl Map {
             // rule judges it by the estimates around it.
             return match (rule, c.elevation()) {
                 (TraversabilityRule::Contact { kappa, reach_m }, None) => {
-                    self.unmeasured_decision(cell, profile, kappa, reach_m)
+                    self.unmeasured(cell, profile, kappa, reach_m, Doubt::BesideStep)
                 }
-                _ => Traversability::Free,
+                _ => Traversability::Free.into(),
             };
         }
         let Some(e) = c.elevation() else {
-            // Occupied, height unknown: the rules without an uncertain answer assume the worst.
+            // Occupied, height unknown: the rules without an uncertain answer assume the worst. Under the contact
+            // rule the cell lies within a beam's range noise of its end point, which alone measures a height
+            // ([`crate::HitHeight::Endpoint`]): the surface it belongs to was measured around it, and it is
+            // judged by the estimates within the contact distance as a free cell is. With none there, its
+            // height is unknown, as a clearance never observed is: neither drivable nor an obstacle.
             return match rule {
-                TraversabilityRule::Contact { .. } => Traversability::Uncertain,
-                _ => Traversability::Blocked,
+                TraversabilityRule::Contact { kappa, reach_m } => {
+                    if self.has_estimate_within(cell, profile.contact_distance_m()) {
+                        let d = self.unmeasured(cell, profile, kappa, reach_m, Doubt::BesideStep);
+                        match d.class {
+                            Traversability::Free => Traversability::Traversable.into(),
+                            _ => d,
+                        }
+                    } else {
+                        Decision {
+                            class: Traversability::Unknown,
+                            doubt: Some(Doubt::NoHeight),
+                        }
+                    }
+                }
+                _ => Traversability::Blocked.into(),
             };
         };
         let (step_m, var_m2) = match rule {
@@ -110,8 +167,17 @@ impl Map {
                     .grounds_within(cell, [reach_m, profile.contact_distance_m()], kappa)
                     .map(|g| g.unwrap_or(e));
                 let (wide_rise, wide_sigma) = rise_over(e, wide);
+                // A cell measured too coarsely to tell level ground from a step is imprecise, whichever band
+                // its estimate falls in.
+                let band_doubt = |doubt| {
+                    if imprecise(e, kappa, profile) {
+                        Doubt::Imprecise
+                    } else {
+                        doubt
+                    }
+                };
                 if let Some(t) = footprint_decision(wide_rise, wide_sigma, reach_m, kappa, profile) {
-                    return t;
+                    return Decision::or_doubt(t, band_doubt(Doubt::FootprintBand));
                 }
                 let (step, sigma) = rise_over(e, ground);
                 let decision = contact_decision(step, sigma, kappa, profile);
@@ -121,14 +187,16 @@ impl Map {
                 return if decision == Traversability::Traversable
                     && self.step_may_hide_within(cell, (e, wide), profile, kappa, reach_m)
                 {
-                    Traversability::Uncertain
+                    Decision::uncertain(Doubt::HiddenStep)
+                } else if (step - profile.height_m).abs() <= kappa * sigma {
+                    Decision::or_doubt(decision, Doubt::HeightBand)
                 } else {
-                    decision
+                    Decision::or_doubt(decision, band_doubt(Doubt::StepBand))
                 };
             }
             TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => (e.mean_m, e.var_m2),
         };
-        step_decision(step_m, var_m2.sqrt(), rule, profile)
+        step_decision(step_m, var_m2.sqrt(), rule, profile).into()
     }
 
     /// [`TraversabilityRule::Contact`]'s decision for a free cell, which holds no height: `Free` where the
@@ -145,6 +213,20 @@ impl Map {
         kappa: f32,
         reach_m: f32,
     ) -> Traversability {
+        self.unmeasured(cell, profile, kappa, reach_m, Doubt::BesideStep)
+            .class
+    }
+
+    /// [`Map::unmeasured_decision`], with `doubt` as the reason for an uncertain cell, or
+    /// [`Doubt::Imprecise`] when the higher estimate it is judged by is too coarse to tell a step.
+    fn unmeasured(
+        &self,
+        cell: CellIndex,
+        profile: &RobotProfile,
+        kappa: f32,
+        reach_m: f32,
+        doubt: Doubt,
+    ) -> Decision {
         // Level ground, the common case, in one pass: where no estimate within reach rises a step over another,
         // the cell is ground. The tests below would say so too: the rises they take are at most `hi - lo`, and
         // their standard deviations at most `sqrt(2 var_max)`.
@@ -162,20 +244,24 @@ impl Map {
             }
         }
         if lo > hi || hi - lo + kappa * (2.0 * var_max).sqrt() < profile.max_step_m {
-            return Traversability::Free;
+            return Traversability::Free.into();
         }
         let [wide, ground] = self.grounds_within(cell, [reach_m, profile.contact_distance_m()], kappa);
-        let (Some(top), Some(wide), Some(ground)) = (highest, wide, ground) else {
-            return Traversability::Free;
+        let (Some(highest), Some(wide), Some(ground)) = (highest, wide, ground) else {
+            return Traversability::Free.into();
         };
+        let top = self.top_level(cell, highest, profile.contact_distance_m(), kappa);
         let (wide_rise, wide_sigma) = rise_over(top, wide);
         let (step, sigma) = rise_over(top, ground);
         let level = footprint_decision(wide_rise, wide_sigma, reach_m, kappa, profile).is_none()
             && contact_decision(step, sigma, kappa, profile) == Traversability::Traversable;
         if level {
-            Traversability::Free
+            Traversability::Free.into()
+        } else if imprecise(highest, kappa, profile) {
+            // The level's variance is that of a mean; each estimate in it is as coarse as the highest.
+            Decision::uncertain(Doubt::Imprecise)
         } else {
-            Traversability::Uncertain
+            Decision::uncertain(doubt)
         }
     }
 
@@ -240,6 +326,30 @@ impl Map {
                     && n.elevation().is_none()
                     && self.unmeasured_decision(c, profile, kappa, reach_m) == Traversability::Uncertain
             })
+    }
+
+    /// The top level within `distance_m` of `cell`, whose highest estimate is `highest`: every estimate there
+    /// within `kappa` standard deviations (of the difference) of it, their inverse-variance weighted mean. The
+    /// mirror of the ground level ([`Map::ground_within`]), for the same reason: the highest of many noisy
+    /// estimates of level ground lies about two standard deviations above it, and would make level ground
+    /// beside a cell with no height look like a step. A real step's top is a level of its own, and stays.
+    fn top_level(&self, cell: CellIndex, highest: Elevation, distance_m: f32, kappa: f32) -> Elevation {
+        let (mut sum_w, mut sum_wz) = (0.0_f64, 0.0_f64);
+        for (_, c) in self.cells_within(cell, distance_m) {
+            let Some(e) = self.cell(c).elevation() else {
+                continue;
+            };
+            if surface_level(highest, e.mean_m, e.var_m2, kappa) == Level::Below {
+                continue;
+            }
+            let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
+            sum_w += w;
+            sum_wz += w * f64::from(e.mean_m);
+        }
+        Elevation {
+            mean_m: (sum_wz / sum_w) as f32,
+            var_m2: (1.0 / sum_w) as f32,
+        }
     }
 
     /// [`Map::ground_within`] for several distances at once, in one walk over the widest window: each
@@ -326,6 +436,59 @@ impl Map {
             }
         }
         counts
+    }
+}
+
+/// A cell's class and, for an uncertain one, why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Decision {
+    class: Traversability,
+    doubt: Option<Doubt>,
+}
+
+impl Decision {
+    fn uncertain(doubt: Doubt) -> Self {
+        Self {
+            class: Traversability::Uncertain,
+            doubt: Some(doubt),
+        }
+    }
+
+    /// `class`, with `doubt` as the reason if it is uncertain.
+    fn or_doubt(class: Traversability, doubt: Doubt) -> Self {
+        Self {
+            class,
+            doubt: (class == Traversability::Uncertain).then_some(doubt),
+        }
+    }
+}
+
+impl From<Traversability> for Decision {
+    fn from(class: Traversability) -> Self {
+        Self { class, doubt: None }
+    }
+}
+
+/// Whether an estimate is too coarse to tell level ground from a step: beside a neighbour measured as well, the
+/// difference of two level cells (standard deviation `sqrt(2) sigma`) would reach a step within `kappa` standard
+/// deviations, so the uncertain band holds level ground itself. The sensors' resolution at that range, not a
+/// surface near a threshold.
+fn imprecise(e: Elevation, kappa: f32, profile: &RobotProfile) -> bool {
+    kappa * (2.0 * e.var_m2).sqrt() >= profile.max_step_m
+}
+
+/// Which of [`ceiling_decision`]'s tests left a structure uncertain, for a `clearance_m` with an uncertain band
+/// of `band_m` on either side.
+fn ceiling_doubt(clearance_m: f32, band_m: f32, profile: &RobotProfile, confirmed: bool) -> Doubt {
+    if clearance_m > profile.height_m + band_m {
+        Doubt::UndersideUnseen
+    } else if !confirmed
+        && clearance_m > profile.max_step_m + band_m
+        && clearance_m < profile.height_m - band_m
+    {
+        Doubt::StructureUnconfirmed
+    } else {
+        Doubt::StructureBand
     }
 }
 

@@ -77,7 +77,9 @@ impl RobotProfile {
 #[serde(rename_all = "snake_case")]
 #[repr(u8)]
 pub enum Traversability {
-    /// Never observed.
+    /// Never observed; under [`TraversabilityRule::Contact`], also an observed cell whose height nothing
+    /// around it measured ([`Doubt::NoHeight`]), and one that would be drivable beside a cell never observed
+    /// ([`Doubt::Frontier`]).
     Unknown = 0,
     /// Observed and not occupied.
     Free = 1,
@@ -105,6 +107,89 @@ impl Traversability {
             Self::Traversable => "traversable",
             Self::Blocked => "blocked",
             Self::Uncertain => "uncertain",
+        }
+    }
+}
+
+/// Why [`TraversabilityRule::Contact`] cannot decide an observed cell ([`crate::Map::doubt`]): the test that
+/// could not tell for a [`Traversability::Uncertain`] cell, or the frontier for one left
+/// [`Traversability::Unknown`]. Each names what the map would have to measure better to decide.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Doubt {
+    /// The cell's step over the ground within the contact distance lies within `kappa` standard deviations of
+    /// `max_step_m` ([`contact_decision`]).
+    StepBand,
+    /// The cell's height over that ground lies within `kappa` standard deviations of the robot's height: an
+    /// overhang it might just pass under ([`contact_decision`]).
+    HeightBand,
+    /// The cell's rise over the robot's half width lies within `kappa` standard deviations of what it climbs
+    /// ([`footprint_decision`]).
+    FootprintBand,
+    /// The cell's estimate is too coarse to tell level ground from a step: `kappa * sqrt(2) * sigma >=
+    /// max_step_m`, so two level cells measured so would differ by a step within the band. The sensors'
+    /// resolution at that range (a stereo camera's depth error grows with the square of the range): driving
+    /// closer and looking again decides it.
+    Imprecise,
+    /// Occupied with no height estimate (it lies within a beam's range noise of its end point, which alone
+    /// measures a height), and no estimate within the contact distance to judge it by. The cell is
+    /// [`Traversability::Unknown`], as a clearance never observed is: neither drivable nor an obstacle.
+    NoHeight,
+    /// A cell with no height (free: beams passed over it; or occupied within a beam's range noise of its end
+    /// point) beside an estimate a step higher: it may be part of the step (the top of a low wall the lidar
+    /// grazes, the shadow behind a curb).
+    BesideStep,
+    /// A cell that would be traversable, with such a free cell within the contact distance and ground a step
+    /// below it: a curb's far edge may drop into its own shadow.
+    HiddenStep,
+    /// The frontier: the cell would be drivable, but a cell within the robot's contact distance was never
+    /// observed, and a wheel may come from it. The cell is [`Traversability::Unknown`], not uncertain: it is
+    /// not known to be drivable, and it is no obstacle either. Observing the rest of the window decides it.
+    Frontier,
+    /// A structure's clearance lies within `kappa` standard deviations of a step or of the robot's height
+    /// ([`ceiling_decision`]).
+    StructureBand,
+    /// A structure lower than the robot, seen less surely than one sure hit: it may not be there.
+    StructureUnconfirmed,
+    /// A structure measured higher than the robot, under which no beam passed higher than the robot: its
+    /// underside may hang lower than its hits.
+    UndersideUnseen,
+    /// A structure over a cell with no ground within the contact distance to measure its clearance from.
+    StructureNoGround,
+}
+
+impl Doubt {
+    /// Every doubt, in file order.
+    pub const ALL: [Self; 12] = [
+        Self::StepBand,
+        Self::HeightBand,
+        Self::FootprintBand,
+        Self::Imprecise,
+        Self::NoHeight,
+        Self::BesideStep,
+        Self::HiddenStep,
+        Self::Frontier,
+        Self::StructureBand,
+        Self::StructureUnconfirmed,
+        Self::UndersideUnseen,
+        Self::StructureNoGround,
+    ];
+
+    /// The snake_case name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::StepBand => "step_band",
+            Self::HeightBand => "height_band",
+            Self::FootprintBand => "footprint_band",
+            Self::Imprecise => "imprecise",
+            Self::NoHeight => "no_height",
+            Self::BesideStep => "beside_step",
+            Self::HiddenStep => "hidden_step",
+            Self::Frontier => "frontier",
+            Self::StructureBand => "structure_band",
+            Self::StructureUnconfirmed => "structure_unconfirmed",
+            Self::UndersideUnseen => "underside_unseen",
+            Self::StructureNoGround => "structure_no_ground",
         }
     }
 }

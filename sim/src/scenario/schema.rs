@@ -455,6 +455,49 @@ pub enum Actor {
     },
 }
 
+impl Actor {
+    /// Where the actor stands at `t_s`, or `None` when it is not in the scene.
+    pub fn position_at(&self, t_s: f64) -> Option<(f64, f64)> {
+        match self {
+            Self::Person { waypoints, .. } => position_on(waypoints, t_s),
+        }
+    }
+
+    /// The radius of the actor's footprint, metres.
+    pub fn radius_m(&self) -> f64 {
+        match self {
+            Self::Person { radius_m, .. } => *radius_m,
+        }
+    }
+
+    /// The times `[first, last]` between which the actor is in the scene, seconds.
+    pub fn time_span_s(&self) -> Option<[f64; 2]> {
+        match self {
+            Self::Person { waypoints, .. } => Some([waypoints.first()?[0], waypoints.last()?[0]]),
+        }
+    }
+}
+
+/// The position at `t_s` along timed waypoints `[t_s, x_m, y_m]` (times increasing), linear between them;
+/// `None` before the first or after the last.
+pub fn position_on(waypoints: &[[f64; 3]], t_s: f64) -> Option<(f64, f64)> {
+    let first = waypoints.first()?;
+    let last = waypoints.last()?;
+    if t_s < first[0] || t_s > last[0] {
+        return None;
+    }
+    for w in waypoints.windows(2) {
+        if t_s <= w[1][0] {
+            let f = (t_s - w[0][0]) / (w[1][0] - w[0][0]);
+            return Some((
+                w[0][1] + f * (w[1][1] - w[0][1]),
+                w[0][2] + f * (w[1][2] - w[0][2]),
+            ));
+        }
+    }
+    Some((last[1], last[2]))
+}
+
 fn default_person_radius() -> f64 {
     0.25
 }

@@ -10,21 +10,7 @@ use crate::drive::{PlanarPose, VelocityCommand};
 impl ActorTrack {
     /// Position at `t_s`, or `None` when the actor is not in the scene.
     pub(super) fn position_at(&self, t_s: f64) -> Option<(f64, f64)> {
-        let first = self.waypoints.first()?;
-        let last = self.waypoints.last()?;
-        if t_s < first[0] || t_s > last[0] {
-            return None;
-        }
-        for w in self.waypoints.windows(2) {
-            if t_s <= w[1][0] {
-                let f = (t_s - w[0][0]) / (w[1][0] - w[0][0]);
-                return Some((
-                    w[0][1] + f * (w[1][1] - w[0][1]),
-                    w[0][2] + f * (w[1][2] - w[0][2]),
-                ));
-            }
-        }
-        Some((last[1], last[2]))
+        crate::scenario::position_on(&self.waypoints, t_s)
     }
 }
 

@@ -45,7 +45,7 @@ pub const METRICS: [(&str, &str, bool); 10] = [
 
 /// The metrics summarized when some run has them: closed-loop runs' (`[navigation]`) and what no ray could tell
 /// (absent from rows of earlier versions).
-pub const OPTIONAL_METRICS: [(&str, &str, bool); 7] = [
+pub const OPTIONAL_METRICS: [(&str, &str, bool); 12] = [
     ("blind_cells", "unsafe cells no ray could tell about", false),
     ("plan_blind_cells", "blind cells on the planned path", false),
     (
@@ -66,6 +66,23 @@ pub const OPTIONAL_METRICS: [(&str, &str, bool); 7] = [
     (
         "nav_contacts_blind",
         "contacts no ray could have warned of, per closed-loop run",
+        false,
+    ),
+    ("nav_stuck", "rate of closed-loop runs that ended stuck", true),
+    ("uncertain_cells", "uncertain cells", false),
+    (
+        "doubt_imprecise_cells",
+        "uncertain cells the sensors measured too coarsely to tell a step",
+        false,
+    ),
+    (
+        "dynamic_accuracy",
+        "DA: cells people left, mapped drivable (fraction)",
+        false,
+    ),
+    (
+        "associated_accuracy",
+        "AA: sqrt(SA x DA), ghosts cleared and obstacles kept (fraction)",
         false,
     ),
     (
