@@ -4,26 +4,31 @@
 # own target folder): one compact table per build in docs/results/safe_and_live.md, stamped with the command and
 # the commits. About 40 minutes a build on a 2-core machine.
 #
-#   bash scripts/safe-and-live.sh            # HEAD only
-#   bash scripts/safe-and-live.sh 77163bb    # and the build before, for "before and after"
+#   bash scripts/safe-and-live.sh                      # HEAD only
+#   bash scripts/safe-and-live.sh 77163bb              # and the build before, for "before and after"
+#   bash scripts/safe-and-live.sh 77163bb /work/study  # in a folder kept between calls: a sweep that was
+#                                                      # stopped resumes, a built baseline is reused
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 baseline=${1:-}
 commit=$(git rev-parse --short HEAD)
 [ -n "$(git status --porcelain)" ] && commit="$commit with uncommitted changes"
-work=$(mktemp -d)
-cleanup() {
-    [ -n "$baseline" ] && git -C "$root" worktree remove --force "$work/baseline" 2>/dev/null || true
-    rm -rf "$work"
-}
-trap cleanup EXIT
+if [ -n "${2:-}" ]; then
+    work=$2
+    mkdir -p "$work"
+else
+    work=$(mktemp -d)
+    trap 'git -C "$root" worktree remove --force "$work/baseline" 2>/dev/null || true; rm -rf "$work"' EXIT
+fi
 
 cargo build --quiet --release -p oeg-testbed
 builds=("$commit:$root/target/release/oeg")
 if [ -n "$baseline" ]; then
-    git -C "$root" worktree add --quiet --detach "$work/baseline" "$baseline"
-    (cd "$work/baseline" && CARGO_TARGET_DIR="$work/target" cargo build --quiet --release -p oeg-testbed)
+    if [ ! -x "$work/target/release/oeg" ]; then
+        git -C "$root" worktree add --quiet --detach "$work/baseline" "$baseline"
+        (cd "$work/baseline" && CARGO_TARGET_DIR="$work/target" cargo build --quiet --release -p oeg-testbed)
+    fi
     builds=("$(git rev-parse --short "$baseline"):$work/target/release/oeg" "${builds[@]}")
 fi
 
