@@ -6,14 +6,16 @@
 //!   remover must not remove.
 //! - **DA** (dynamic accuracy): of the cells an actor's footprint covered at some time of the run, that are
 //!   truly drivable and that no actor covers at its end, the fraction the map calls drivable at the end: the
-//!   ghosts removed.
+//!   ghosts removed. A cell the map leaves uncertain only because the sensors measured it too coarsely to tell
+//!   a step ([`oeg::Doubt::Imprecise`]: a stereo camera's ground a few metres away) says nothing about a
+//!   ghost, and is left out.
 //! - **AA** (associated accuracy): `sqrt(SA x DA)`.
 //!
 //! Both are over the scored cells (observed, on the terrain, not left unknown): a cell the map never observed
 //! is neither kept nor removed. DynamicMap reports them in percent; on KITTI sequence 00 it gives OctoMap an AA
 //! of 82.37 and DUFOMap 98.56.
 
-use oeg::{CellIndex, CellRegion, GridGeometry, Traversability};
+use oeg::{CellIndex, CellRegion, Doubt, GridGeometry, Traversability};
 use sim::scenario::{Actor, Scenario};
 
 use crate::judge::verdict::{Verdict, Verdicts};
@@ -136,14 +138,20 @@ fn mark_disk(
 }
 
 /// SA and DA's counts for the map judged in `verdicts` (with its observability marks), the actors of `s`
-/// over its whole duration.
-pub fn count(s: &Scenario, verdicts: &Verdicts, geometry: &GridGeometry) -> GhostCounts {
+/// over its whole duration; `doubts` says why the map left each cell undecided (empty: it does not say).
+pub fn count(
+    s: &Scenario,
+    verdicts: &Verdicts,
+    geometry: &GridGeometry,
+    doubts: &[Option<Doubt>],
+) -> GhostCounts {
     let (swept, at_end) = actor_cells(&s.actors, s.duration_s, verdicts.region, geometry);
     let mut c = GhostCounts::default();
     for k in 0..verdicts.verdict.len() {
         if verdicts.verdict[k] == Verdict::NotScored {
             continue;
         }
+        let imprecise = doubts.get(k).copied().flatten() == Some(Doubt::Imprecise);
         let truth = verdicts.truth[k];
         let mapped = verdicts.mapped[k];
         if truth.is_blocked() && !swept[k] && !verdicts.unobservable[k] {
@@ -152,7 +160,7 @@ pub fn count(s: &Scenario, verdicts: &Verdicts, geometry: &GridGeometry) -> Ghos
                 mapped,
                 Traversability::Blocked | Traversability::Uncertain
             ));
-        } else if !truth.is_blocked() && swept[k] && !at_end[k] {
+        } else if !truth.is_blocked() && swept[k] && !at_end[k] && !imprecise {
             c.num_dynamic_cells += 1;
             c.dynamic_cleared_cells += u64::from(mapped.is_drivable());
         }

@@ -81,8 +81,8 @@ pub struct Metrics {
     /// DynamicMap's SA adapted to cells ([`crate::judge::ghosts`]): of the truly blocked cells a ray could have
     /// told about and no actor passed through, the fraction mapped blocked or uncertain (null: none).
     pub static_accuracy: f64,
-    /// DynamicMap's DA: of the cells an actor covered and left (truly drivable, scored), the fraction mapped
-    /// drivable at the end (null: no such cell).
+    /// DynamicMap's DA: of the cells an actor covered and left (truly drivable, scored, not uncertain only for
+    /// the sensors' resolution), the fraction mapped drivable at the end (null: no such cell).
     pub dynamic_accuracy: f64,
     /// DynamicMap's AA, `sqrt(static_accuracy * dynamic_accuracy)` (null when either is).
     pub associated_accuracy: f64,

@@ -86,7 +86,10 @@ pub fn score(
     let mut metrics = metrics::compute(&s.name, s.seed, &estimate, truth, &verdicts);
     let plan = plan_check::check(s, &estimate.geometry, &verdicts)?;
     record_plan(&mut metrics, &plan);
-    record_ghosts(&mut metrics, &ghosts::count(s, &verdicts, &estimate.geometry));
+    record_ghosts(
+        &mut metrics,
+        &ghosts::count(s, &verdicts, &estimate.geometry, &estimate.doubts),
+    );
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }
