@@ -140,7 +140,10 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
 /// its decision distance and recovered before giving up: the robot now drives under `robust` (before, uncertain
 /// cells around it closed every way at the first plan and it ended stuck where it stood), so it maps, and is
 /// scored on, more of each scene. `nav_curbs` is the finding of issue 40: the 3 cm curb across the way is
-/// uncertain, the robot turns back and forth before it, and 105 step cells it saw are unsafe.
+/// uncertain, the robot turns back and forth before it, and 105 step cells it saw are unsafe. Every bound was
+/// measured again on 2026-12-05 (the same command) once the frontier and the cells with no height became unknown
+/// rather than drivable or uncertain, and kept where it was tighter: the planner still finds no path in 7 of the
+/// 20 scenes, whose truth has one (docs/metrics.md, "Why a cell is not decided", names the doubts).
 const ROBUST_BOUNDS: [(&str, u64, u64, f64); 20] = [
     // (scenario, unsafe step cells, unsafe clearance cells: measured + about 10 % + 2; elevation within 2 sigma:
     // measured - 0.02).
@@ -148,22 +151,22 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 20] = [
     ("corridor_lasers", 2, 2, 0.96),
     ("curb_staircase", 12, 2, 0.96),
     ("curbs_and_boards", 2, 40, 0.95),
-    ("default", 31, 244, 0.93),
-    ("large_outdoor", 2, 399, 0.97),
+    ("default", 31, 173, 0.93),
+    ("large_outdoor", 2, 376, 0.97),
     ("long_range_stereo", 4, 2, 0.87),
-    ("nav_around_wall", 3, 2, 0.93),
-    ("nav_blind_spot", 2, 543, 0.92),
-    ("nav_board_and_branch", 2, 54, 0.96),
+    ("nav_around_wall", 3, 2, 0.96),
+    ("nav_blind_spot", 2, 214, 0.95),
+    ("nav_board_and_branch", 2, 46, 0.96),
     ("nav_curbs", 118, 2, 0.97),
-    ("nav_person_crossing", 5, 2, 0.97),
+    ("nav_person_crossing", 2, 2, 0.97),
     ("outdoor_stereo", 2, 3, 0.89),
     ("people_walking", 2, 2, 0.94),
-    ("pose_drift", 21, 2, 0.96),
-    ("ramp_and_slope", 34, 2, 0.97),
-    ("spurious_returns", 13, 2, 0.96),
+    ("pose_drift", 7, 2, 0.96),
+    ("ramp_and_slope", 33, 2, 0.97),
+    ("spurious_returns", 2, 2, 0.96),
     ("thin_pole", 3, 2, 0.97),
-    ("trees_no_threshold", 11, 2, 0.97),
-    ("trees_threshold", 11, 2, 0.97),
+    ("trees_no_threshold", 8, 2, 0.97),
+    ("trees_threshold", 8, 2, 0.97),
 ];
 
 #[test]
