@@ -36,7 +36,7 @@ impl Map {
         self.decision(cell, profile, rule).doubt
     }
 
-    /// [`Map::traversability`] with the reason for an uncertain class.
+    /// [`Map::traversability`] with the reason when the class leaves the cell undecided ([`Map::doubt`]).
     fn decision(&self, cell: CellIndex, profile: &RobotProfile, rule: TraversabilityRule) -> Decision {
         let d = self.cell_decision(cell, profile, rule);
         // The frontier: a wheel on a drivable cell may come from any cell within the contact distance, and one
