@@ -11,6 +11,7 @@ use crate::error::Result;
 use crate::geometry::{CellIndex, CellRegion};
 use crate::map::{Map, Raster};
 use crate::model::{Elevation, Level, ceiling_confirmed, surface_level};
+use crate::storage::{TileIndex, offset_in_tile};
 
 /// How far `top` lies above `ground`, metres, with the standard deviation of the difference.
 fn rise_over(top: Elevation, ground: Elevation) -> (f32, f32) {
@@ -45,9 +46,7 @@ impl Map {
         // them, and plans through them optimistically beyond its stopping distance), not an obstacle.
         if matches!(rule, TraversabilityRule::Contact { .. })
             && d.class.is_drivable()
-            && self
-                .cells_within(cell, profile.contact_distance_m())
-                .any(|(_, c)| !self.cell(c).is_observed())
+            && self.unobserved_within(cell, profile.contact_distance_m())
         {
             return Decision {
                 class: Traversability::Unknown,
@@ -55,6 +54,24 @@ impl Map {
             };
         }
         d
+    }
+
+    /// Whether a cell within `distance_m` of a point of `cell` was never observed. The window mostly lies in
+    /// one tile, which is then looked up once rather than once a cell.
+    fn unobserved_within(&self, cell: CellIndex, distance_m: f32) -> bool {
+        let r = self.reach_cells(distance_m).floor() as i32 + 1;
+        let corner = |d: i32| CellIndex::new(cell.i.saturating_add(d), cell.j.saturating_add(d));
+        let tile = TileIndex::of(corner(-r));
+        if TileIndex::of(corner(r)) != tile {
+            return self
+                .cells_within(cell, distance_m)
+                .any(|(_, c)| !self.cell(c).is_observed());
+        }
+        let Some(cells) = self.cells.tile(tile) else {
+            return true;
+        };
+        self.cells_within(cell, distance_m)
+            .any(|(_, c)| !cells[offset_in_tile(c)].is_observed())
     }
 
     /// Whether a cell within `distance_m` of a point of `cell` (itself included) holds a height estimate.
