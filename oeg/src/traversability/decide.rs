@@ -351,22 +351,16 @@ impl Map {
     /// estimates of level ground lies about two standard deviations above it, and would make level ground
     /// beside a cell with no height look like a step. A real step's top is a level of its own, and stays.
     fn top_level(&self, cell: CellIndex, highest: Elevation, distance_m: f32, kappa: f32) -> Elevation {
-        let (mut sum_w, mut sum_wz) = (0.0_f64, 0.0_f64);
+        let mut level = WeightedMean::default();
         for (_, c) in self.cells_within(cell, distance_m) {
             let Some(e) = self.cell(c).elevation() else {
                 continue;
             };
-            if surface_level(highest, e.mean_m, e.var_m2, kappa) == Level::Below {
-                continue;
+            if surface_level(highest, e.mean_m, e.var_m2, kappa) != Level::Below {
+                level.add(e);
             }
-            let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
-            sum_w += w;
-            sum_wz += w * f64::from(e.mean_m);
         }
-        Elevation {
-            mean_m: (sum_wz / sum_w) as f32,
-            var_m2: (1.0 / sum_w) as f32,
-        }
+        level.elevation()
     }
 
     /// [`Map::ground_within`] for several distances at once, in one walk over the widest window: each
@@ -392,25 +386,20 @@ impl Map {
                 }
             }
         }
-        let mut sums = [(0.0_f64, 0.0_f64); N];
+        let mut sums = [WeightedMean::default(); N];
         for (gap2, e) in window() {
             for ((sum, reach), l) in sums.iter_mut().zip(&reach).zip(&lowest) {
                 let Some(l) = *l else { continue };
                 if gap2 > reach * reach || surface_level(l, e.mean_m, e.var_m2, kappa) == Level::Above {
                     continue;
                 }
-                let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
-                sum.0 += w;
-                sum.1 += w * f64::from(e.mean_m);
+                sum.add(e);
             }
         }
         let mut out = [None; N];
-        for ((o, l), (sum_w, sum_wz)) in out.iter_mut().zip(&lowest).zip(sums) {
+        for ((o, l), sum) in out.iter_mut().zip(&lowest).zip(sums) {
             if l.is_some() {
-                *o = Some(Elevation {
-                    mean_m: (sum_wz / sum_w) as f32,
-                    var_m2: (1.0 / sum_w) as f32,
-                });
+                *o = Some(sum.elevation());
             }
         }
         out
@@ -456,7 +445,30 @@ impl Map {
     }
 }
 
-/// A cell's class and, for an uncertain one, why.
+/// The inverse-variance weighted mean of elevation estimates: a level (the ground's, the top's) and its variance.
+#[derive(Debug, Clone, Copy, Default)]
+struct WeightedMean {
+    sum_w: f64,
+    sum_wz: f64,
+}
+
+impl WeightedMean {
+    fn add(&mut self, e: Elevation) {
+        let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
+        self.sum_w += w;
+        self.sum_wz += w * f64::from(e.mean_m);
+    }
+
+    /// The mean and its variance, `1 / sum(1 / var)`.
+    fn elevation(self) -> Elevation {
+        Elevation {
+            mean_m: (self.sum_wz / self.sum_w) as f32,
+            var_m2: (1.0 / self.sum_w) as f32,
+        }
+    }
+}
+
+/// A cell's class and, when it is left undecided, why.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Decision {
     class: Traversability,
