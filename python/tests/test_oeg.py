@@ -162,6 +162,10 @@ def test_scoring_the_testbeds_own_map_gives_the_counts_of_oeg_run(tmp_path: Path
         occupancy=layer["occupancy_probability"],
     )
     for key, value in run.metrics.items():
+        if key.startswith("doubt_"):
+            # Arrays say what the map decided, not why.
+            assert s.metrics[key] is None, key
+            continue
         expected = 0 if key in ("map_bytes", "num_scans", "num_rays") else value
         assert s.metrics[key] == expected, key
     assert s.metrics["num_scored_cells"] > 1000
