@@ -217,11 +217,13 @@ impl Estimate {
         // The occupancy is NaN exactly where no ray reached the cell.
         let occupancy = layer(LayerKind::OccupancyProbability)?;
         let decisions = map.traversability_layer(region, &truth.profile, rule)?.values;
+        // Only the contact rule leaves cells undecided for a reason; the others' doubts are all `None`.
+        let says_why = matches!(rule, TraversabilityRule::Contact { .. });
         let doubts = region
             .cells()
             .zip(&decisions)
             .map(|(cell, d)| {
-                matches!(d, Traversability::Uncertain | Traversability::Unknown)
+                (says_why && matches!(d, Traversability::Uncertain | Traversability::Unknown))
                     .then(|| map.doubt(cell, &truth.profile, rule))
                     .flatten()
             })
