@@ -112,8 +112,9 @@ impl Traversability {
 }
 
 /// Why [`TraversabilityRule::Contact`] cannot decide an observed cell ([`crate::Map::doubt`]): the test that
-/// could not tell for a [`Traversability::Uncertain`] cell, or the frontier for one left
-/// [`Traversability::Unknown`]. Each names what the map would have to measure better to decide.
+/// could not tell for a [`Traversability::Uncertain`] cell, or why an observed cell is left
+/// [`Traversability::Unknown`] (no height, the frontier). Each names what the map would have to measure better
+/// to decide.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Doubt {
