@@ -165,65 +165,81 @@ impl Mapping {
     /// # Errors
     /// A scan a map rejects, or `progress` cancelled.
     pub fn feed_until(&mut self, until_s: f64, progress: &Progress) -> Result<()> {
-        let mut next = self.simulate_next(until_s);
-        while let Some(scan) = next {
+        if self.recording.is_some() {
+            return self.feed_recording_until(until_s, progress);
+        }
+        // The next batch of scans is simulated while the last is mapped: within a feed, the maps do not steer
+        // the simulation, and each side keeps its own order, so the results do not depend on it. Batches let
+        // the maps gather short scans side by side (`Map::integrate_batch`) and the threads meet seldom.
+        let mut batch = self.simulate_batch(until_s);
+        while !batch.is_empty() {
             progress.check_cancelled()?;
-            let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
-            if self.recording.is_some() {
-                // A recording reads the world as it was at the scan: simulating and mapping take turns.
-                let scan = self.map_scan(scan)?;
-                if let Some(r) = &mut self.recording {
-                    let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
-                    r.recording
-                        .sensor_scan(self.simulation.world(), name, &scan, self.tick_s)?;
-                    if let Some(map) = self.maps.first() {
-                        r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
-                    }
-                }
-                next = self.simulate_next(until_s);
-            } else {
-                // The next scan is simulated while this one is mapped: within a feed, the maps do not steer
-                // the simulation, and each side keeps its own order, so the results do not depend on it.
-                let Self {
-                    observability,
-                    maps,
-                    map_s,
-                    models,
-                    max_range_m,
-                    simulation,
-                    simulation_s,
-                    ..
-                } = self;
-                let (simulated, mapped) = rayon::join(
-                    || {
-                        let t0 = Instant::now();
-                        let next = simulation.next_scan_until(until_s);
-                        *simulation_s += t0.elapsed().as_secs_f64();
-                        next
-                    },
-                    || map_scan(observability, maps, map_s, models, max_range_m, scan),
-                );
-                mapped?;
-                next = simulated;
-            }
-            if self.count_simulated_time {
-                progress.set_position(stamp_s.max(0.0) as u64);
-            } else {
-                progress.inc(1);
-            }
-            // The progress line is refreshed once per simulation tick (`tick_s`).
-            let tick = (stamp_s / self.tick_s).floor() as i64;
-            if tick != self.last_tick {
-                self.last_tick = tick;
-                progress.message(format!(
-                    "t = {:.1} / {:.0} s, {:.2} M rays/s",
-                    stamp_s,
-                    self.duration_s,
-                    self.simulation.num_rays() as f64 / self.simulation_s.max(1e-9) / 1e6
-                ));
-            }
+            let last_stamp_s = batch.last().map_or(0.0, |scan| scan.stamp_s);
+            let num_scans = batch.len() as u64;
+            let Self {
+                observability,
+                maps,
+                map_s,
+                models,
+                max_range_m,
+                simulation,
+                simulation_s,
+                ..
+            } = self;
+            let (simulated, mapped) = rayon::join(
+                || simulate_batch(simulation, simulation_s, until_s),
+                || map_batch(observability, maps, map_s, models, max_range_m, batch),
+            );
+            mapped?;
+            batch = simulated;
+            self.report_progress(last_stamp_s, num_scans, progress);
         }
         Ok(())
+    }
+
+    /// [`Mapping::feed_until`] while recording: simulating and mapping take turns, scan by scan, since a
+    /// recording reads the world as it was at the scan.
+    fn feed_recording_until(&mut self, until_s: f64, progress: &Progress) -> Result<()> {
+        while let Some(scan) = self.simulate_next(until_s) {
+            progress.check_cancelled()?;
+            let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
+            let scan = self.map_scan(scan)?;
+            if let Some(r) = &mut self.recording {
+                let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
+                r.recording
+                    .sensor_scan(self.simulation.world(), name, &scan, self.tick_s)?;
+                if let Some(map) = self.maps.first() {
+                    r.recording.map_layers(stamp_s, map, &r.profile, r.rule, false)?;
+                }
+            }
+            self.report_progress(stamp_s, 1, progress);
+        }
+        Ok(())
+    }
+
+    /// Moves the progress bar past `num_scans` scans, the last at `stamp_s`: its line is refreshed once per
+    /// simulation tick (`tick_s`).
+    fn report_progress(&mut self, stamp_s: f64, num_scans: u64, progress: &Progress) {
+        if self.count_simulated_time {
+            progress.set_position(stamp_s.max(0.0) as u64);
+        } else {
+            progress.inc(num_scans);
+        }
+        let tick = (stamp_s / self.tick_s).floor() as i64;
+        if tick != self.last_tick {
+            self.last_tick = tick;
+            progress.message(format!(
+                "t = {:.1} / {:.0} s, {:.2} M rays/s",
+                stamp_s,
+                self.duration_s,
+                self.simulation.num_rays() as f64 / self.simulation_s.max(1e-9) / 1e6
+            ));
+        }
+    }
+
+    /// The simulation's next batch of scans up to `until_s`, timed.
+    fn simulate_batch(&mut self, until_s: f64) -> Vec<sim::sensors::SensorScan> {
+        simulate_batch(&mut self.simulation, &mut self.simulation_s, until_s)
     }
 
     /// [`map_scan`] of this mapping's maps and observability.
@@ -256,34 +272,44 @@ impl Mapping {
     }
 }
 
-/// The scenario's map region as cells.
-///
-/// # Errors
-/// A region that does not fit the grid.
-pub fn region_of(s: &scenario::Scenario, geometry: &oeg::GridGeometry) -> Result<oeg::CellRegion> {
-    let eps = s.map.resolution_m * 1e-6;
-    Ok(geometry.region_covering(
-        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
-        (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
-    )?)
+/// Scans simulated, then mapped, together ([`Mapping::feed_until`]): a fraction of a second of the drive.
+const SCANS_PER_BATCH: usize = 32;
+
+/// The simulation's next scans up to `until_s`, at most [`SCANS_PER_BATCH`], the time added to `simulation_s`.
+fn simulate_batch(
+    simulation: &mut Simulation,
+    simulation_s: &mut f64,
+    until_s: f64,
+) -> Vec<sim::sensors::SensorScan> {
+    let t0 = Instant::now();
+    let batch = std::iter::from_fn(|| simulation.next_scan_until(until_s))
+        .take(SCANS_PER_BATCH)
+        .collect();
+    *simulation_s += t0.elapsed().as_secs_f64();
+    batch
 }
 
-/// One simulated scan into the observability and, at the estimated pose, into every map (all at once: the
-/// maps are independent, and a map uses the threads it is given only for long scans), each map's time added to
-/// its `map_s`. Returns the scan as the maps took it.
-fn map_scan(
+/// Simulated scans into the observability and, at the estimated pose, into every map: each map takes the batch
+/// at once (`Map::integrate_batch`), the maps at the same time (they are independent), each map's time added
+/// to its `map_s`. Returns the scans as the maps took them.
+fn map_batch(
     observability: &mut Observability,
     maps: &mut [Map],
     map_s: &mut [f64],
     models: &[oeg::SensorModel],
     max_range_m: &[f64],
-    scan: sim::sensors::SensorScan,
-) -> Result<oeg::Scan> {
-    observability.observe(&scan, max_range_m[scan.sensor_index]);
-    let scan = scan.to_scan(PoseSource::Estimated, models[scan.sensor_index]);
+    batch: Vec<sim::sensors::SensorScan>,
+) -> Result<Vec<oeg::Scan>> {
+    let scans: Vec<oeg::Scan> = batch
+        .into_iter()
+        .map(|scan| {
+            observability.observe(&scan, max_range_m[scan.sensor_index]);
+            scan.to_scan(PoseSource::Estimated, models[scan.sensor_index])
+        })
+        .collect();
     let integrate = |(map, seconds): (&mut Map, &mut f64)| {
         let t1 = Instant::now();
-        let r = map.integrate(&scan).map(|_| ());
+        let r = map.integrate_batch(&scans).map(|_| ()).map_err(|e| e.error);
         *seconds += t1.elapsed().as_secs_f64();
         r
     };
@@ -296,5 +322,31 @@ fn map_scan(
     } else {
         maps.iter_mut().zip(map_s.iter_mut()).try_for_each(integrate)?;
     }
-    Ok(scan)
+    Ok(scans)
+}
+
+/// The scenario's map region as cells.
+///
+/// # Errors
+/// A region that does not fit the grid.
+pub fn region_of(s: &scenario::Scenario, geometry: &oeg::GridGeometry) -> Result<oeg::CellRegion> {
+    let eps = s.map.resolution_m * 1e-6;
+    Ok(geometry.region_covering(
+        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
+        (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
+    )?)
+}
+
+/// One simulated scan into the observability and, at the estimated pose, into every map ([`map_batch`] of
+/// one scan). Returns the scan as the maps took it.
+fn map_scan(
+    observability: &mut Observability,
+    maps: &mut [Map],
+    map_s: &mut [f64],
+    models: &[oeg::SensorModel],
+    max_range_m: &[f64],
+    scan: sim::sensors::SensorScan,
+) -> Result<oeg::Scan> {
+    let mut taken = map_batch(observability, maps, map_s, models, max_range_m, vec![scan])?;
+    Ok(taken.remove(0))
 }

@@ -3,13 +3,16 @@
 //!
 //! * `integrate` (`map/integrate.rs`): [`Map::integrate`], the paper's Algorithm 1, in parallel where threads
 //!   are given: each ray's samples (`map/sample.rs`) gathered into the scan scratch (`map/scratch.rs`), then
-//!   each touched cell updated once (`map/update.rs`);
+//!   each touched cell updated once (`map/update.rs`); [`Map::integrate_batch`] (`map/batch.rs`): many short
+//!   scans side by side, one per thread;
 //! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);
 //! * the decisions ([`Map::traversability`], [`Map::traversability_layer`], [`Map::traversability_counts`]):
 //!   `traversability/decide.rs`, beside the pure rules they apply;
 //! * saving and loading: [`crate::save_map`], [`crate::load_map`] (`io/mapfile.rs`).
 
+mod batch;
 mod integrate;
+pub use batch::BatchError;
 pub use integrate::RAYS_BETWEEN_STOP_CHECKS;
 mod layers;
 mod sample;

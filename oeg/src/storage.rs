@@ -67,6 +67,95 @@ pub fn for_each_row(mut rows: u64, mut f: impl FnMut(usize)) {
 /// One tile's cells.
 pub type Tile<T> = Box<[T; TILE_CELLS]>;
 
+/// The cells of a tile written since it was placed, as offsets ([`offset_in_tile`]) in the order they were first
+/// written: what a grid written a few cells at a time (the scan scratch) visits and clears. Marking is
+/// branch-free, for the hottest loop: every call writes, and only a first write counts.
+#[derive(Debug, Clone)]
+pub struct CellMarks {
+    len: usize,
+    /// One more than a tile's cells: the slot past the last mark takes the writes that do not count.
+    offsets: [u16; TILE_CELLS + 1],
+}
+
+/// What was marked written in a tile: rows ([`TileGrid::mark_rows`]) and cells
+/// ([`TileGrid::slot_tile_and_marks_mut`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Marked<'a> {
+    rows: u64,
+    cells: &'a [u16],
+}
+
+impl Marked<'_> {
+    /// Whether nothing was marked.
+    pub fn is_empty(self) -> bool {
+        self.rows == 0 && self.cells.is_empty()
+    }
+
+    /// The cells to visit: every cell of a marked row, and each marked cell outside them.
+    pub fn num_cells(self) -> usize {
+        self.rows.count_ones() as usize * TILE_SIZE + self.cells.len()
+    }
+
+    /// Calls `f` with the offset of every cell that may have been written, once each: every cell of the marked
+    /// rows, then the marked cells outside them. Cells of a marked row may be unwritten (still `fill`).
+    #[inline]
+    pub fn for_each(self, mut f: impl FnMut(usize)) {
+        for_each_row(self.rows, |r| {
+            (r * TILE_SIZE..(r + 1) * TILE_SIZE).for_each(&mut f)
+        });
+        for &offset in self.cells {
+            let k = usize::from(offset) & (TILE_CELLS - 1);
+            if self.rows & (1 << (k >> TILE_SHIFT)) == 0 {
+                f(k);
+            }
+        }
+    }
+}
+
+impl CellMarks {
+    const EMPTY: Self = Self {
+        len: 0,
+        offsets: [0; TILE_CELLS + 1],
+    };
+
+    /// Marks the cell at `offset` if `first` (its first write since the tile was placed).
+    #[inline(always)]
+    pub fn mark_if(&mut self, offset: usize, first: bool) {
+        self.len = self.mark_after(self.len, offset, first);
+    }
+
+    /// [`CellMarks::mark_if`] for a caller that keeps the count itself, in a register across a loop: marks
+    /// the cell at `offset` after the first `len` marks if `first`, and returns the new count, to be stored
+    /// with [`CellMarks::set_len`] when the loop ends.
+    #[inline(always)]
+    pub fn mark_after(&mut self, len: usize, offset: usize, first: bool) -> usize {
+        let n = len.min(TILE_CELLS);
+        self.offsets[n] = offset as u16;
+        n + usize::from(first)
+    }
+
+    /// The number of marks.
+    #[inline(always)]
+    pub fn count(&self) -> usize {
+        self.len
+    }
+
+    /// Stores the count of a caller of [`CellMarks::mark_after`].
+    #[inline(always)]
+    pub fn set_len(&mut self, len: usize) {
+        self.len = len.min(TILE_CELLS);
+    }
+
+    /// The marked cells' offsets.
+    pub fn as_slice(&self) -> &[u16] {
+        &self.offsets[..self.len.min(TILE_CELLS)]
+    }
+
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+}
+
 /// A sparse grid of `T`, allocated tile by tile. Cells never written read as the `fill` value.
 #[derive(Debug, Clone)]
 pub struct TileGrid<T> {
@@ -76,10 +165,13 @@ pub struct TileGrid<T> {
     tiles_x: usize,
     tiles_y: usize,
     slots: Vec<Option<Tile<T>>>,
-    /// The rows written in each slot's tile since it was placed ([`TileGrid::mark_rows`]), bit `r` for row `r`;
-    /// empty for a grid that never marks (the map's layers), as long as `slots` for one that does (the scan
-    /// scratch).
+    /// What was written in each slot's tile since it was placed, marked by rows ([`TileGrid::mark_rows`], bit
+    /// `r` for row `r`) or by cells ([`TileGrid::slot_tile_and_marks_mut`]); each empty for a grid that never
+    /// marks that way (the map's layers never do), as long as `slots` for one that does (the scan scratch).
     rows: Vec<u64>,
+    marks: Vec<Option<Box<CellMarks>>>,
+    /// Lists in `marks` (each has room for a whole tile, for good: marking never reallocates).
+    num_mark_lists: usize,
     num_tiles: usize,
     /// Tiles released by [`TileGrid::recycle_marked`], reset to `fill`, reused before allocating.
     pool: Vec<Tile<T>>,
@@ -103,6 +195,8 @@ impl<T: Copy> TileGrid<T> {
             tiles_y: 0,
             slots: Vec::new(),
             rows: Vec::new(),
+            marks: Vec::new(),
+            num_mark_lists: 0,
             num_tiles: 0,
             pool: Vec::new(),
         }
@@ -128,11 +222,13 @@ impl<T: Copy> TileGrid<T> {
         self.slot(tile).is_some_and(|slot| self.slots[slot].is_some())
     }
 
-    /// Bytes allocated: tiles (in use and pooled), the tile index, and the grid itself.
+    /// Bytes allocated: tiles (in use and pooled), the tile index, the marks, and the grid itself.
     pub fn memory_bytes(&self) -> u64 {
         ((self.num_tiles + self.pool.len()) * Self::tile_bytes()
             + self.slots.capacity() * size_of::<Option<Tile<T>>>()
             + self.rows.capacity() * size_of::<u64>()
+            + self.marks.capacity() * size_of::<Option<Box<CellMarks>>>()
+            + self.num_mark_lists * size_of::<CellMarks>()
             + size_of::<Self>()) as u64
     }
 
@@ -213,7 +309,12 @@ impl<T: Copy> TileGrid<T> {
             self.grow_to_cover(tile, limit_bytes)?;
         }
         let recycled = recycled.or_else(|| self.pool.pop());
-        let requested_bytes = self.memory_bytes() + Self::tile_bytes() as u64;
+        // A grid that marks cells gives the slot its list on its first mark: counted here, before.
+        let marks_bytes = match self.marks.get(self.slot(tile).unwrap_or(usize::MAX)) {
+            Some(None) => size_of::<CellMarks>(),
+            _ => 0,
+        };
+        let requested_bytes = self.memory_bytes() + (Self::tile_bytes() + marks_bytes) as u64;
         if recycled.is_none() && requested_bytes > limit_bytes {
             return Err(CapacityExceeded { requested_bytes });
         }
@@ -276,26 +377,33 @@ impl<T: Copy> TileGrid<T> {
         let (new_x, new_y) = (new_x as usize, new_y as usize);
         let mut slots: Vec<Option<Tile<T>>> = Vec::new();
         slots.resize_with(new_x * new_y, || None);
-        let marks = !self.rows.is_empty();
-        let mut rows = vec![0u64; if marks { new_x * new_y } else { 0 }];
+        let (by_rows, by_cells) = (!self.rows.is_empty(), !self.marks.is_empty());
+        let mut rows = vec![0u64; if by_rows { new_x * new_y } else { 0 }];
+        let mut marks: Vec<Option<Box<CellMarks>>> = Vec::new();
+        marks.resize_with(if by_cells { new_x * new_y } else { 0 }, || None);
         let new_min = TileIndex {
             ti: lo_i as i32,
             tj: lo_j as i32,
         };
         for v in 0..self.tiles_y {
             for u in 0..self.tiles_x {
-                if let Some(t) = self.slots[v * self.tiles_x + u].take() {
-                    let nu = (i64::from(self.tile_min.ti) + u as i64 - lo_i) as usize;
-                    let nv = (i64::from(self.tile_min.tj) + v as i64 - lo_j) as usize;
-                    slots[nv * new_x + nu] = Some(t);
-                    if marks {
-                        rows[nv * new_x + nu] = self.rows[v * self.tiles_x + u];
-                    }
+                let (nu, nv) = (
+                    (i64::from(self.tile_min.ti) + u as i64 - lo_i) as usize,
+                    (i64::from(self.tile_min.tj) + v as i64 - lo_j) as usize,
+                );
+                let (from, to) = (v * self.tiles_x + u, nv * new_x + nu);
+                slots[to] = self.slots[from].take();
+                if by_rows {
+                    rows[to] = self.rows[from];
+                }
+                if by_cells {
+                    marks[to] = self.marks[from].take();
                 }
             }
         }
         self.slots = slots;
         self.rows = rows;
+        self.marks = marks;
         self.tile_min = new_min;
         self.tiles_x = new_x;
         self.tiles_y = new_y;
@@ -370,9 +478,28 @@ impl<T: Copy> TileGrid<T> {
         self.allocate(tile, limit_bytes, Some(cells)).map(|_| ())
     }
 
+    /// The tile in `slot` (from [`TileGrid::slot_or_insert`], with no allocation or re-indexing in between)
+    /// and the list of its cells written since it was placed, to which the caller adds the offset
+    /// ([`offset_in_tile`]) of each cell it writes for the first time: [`TileGrid::marked_tiles`] and
+    /// [`TileGrid::recycle_marked`] then visit those cells alone. The list has room for the whole tile.
+    #[inline]
+    pub fn slot_tile_and_marks_mut(&mut self, slot: usize) -> (&mut [T; TILE_CELLS], &mut CellMarks) {
+        if self.marks.len() != self.slots.len() {
+            self.marks.resize_with(self.slots.len(), || None);
+        }
+        let marks = self.marks[slot].get_or_insert_with(|| {
+            self.num_mark_lists += 1;
+            Box::new(CellMarks::EMPTY)
+        });
+        match self.slots[slot].as_deref_mut() {
+            Some(t) => (t, marks),
+            None => unreachable!("slots come from slot_or_insert"),
+        }
+    }
+
     /// Records that rows `rows` (bit `r` for row `r`, [`offset_in_tile`] `>> TILE_SHIFT`) of the tile in `slot`
-    /// were written, for [`TileGrid::marked_tiles`] and [`TileGrid::recycle_marked`]: a grid written a few
-    /// cells at a time (the scan scratch) then visits and clears those rows only.
+    /// were written, for [`TileGrid::marked_tiles`] and [`TileGrid::recycle_marked`]: a walk marks the rows
+    /// it crossed once per tile, at no cost per cell, where its cells are many.
     #[inline]
     pub fn mark_rows(&mut self, slot: usize, rows: u64) {
         if self.rows.len() != self.slots.len() {
@@ -381,16 +508,24 @@ impl<T: Copy> TileGrid<T> {
         self.rows[slot] |= rows;
     }
 
-    /// Allocated tiles with rows marked written ([`TileGrid::mark_rows`]), in the order of
-    /// [`TileGrid::tiles`], with their marks.
-    pub fn marked_tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], u64)> + '_ {
+    /// What was marked written in the tile in `slot`.
+    fn marked_in(&self, slot: usize) -> Marked<'_> {
+        Marked {
+            rows: self.rows.get(slot).copied().unwrap_or(0),
+            cells: self
+                .marks
+                .get(slot)
+                .and_then(Option::as_deref)
+                .map_or(&[][..], CellMarks::as_slice),
+        }
+    }
+
+    /// Allocated tiles with something marked written ([`TileGrid::mark_rows`],
+    /// [`TileGrid::slot_tile_and_marks_mut`]), in the order of [`TileGrid::tiles`], with what was marked.
+    pub fn marked_tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], Marked<'_>)> + '_ {
         self.tiles().filter_map(move |(tile, t)| {
-            let rows = self
-                .slot(tile)
-                .and_then(|s| self.rows.get(s))
-                .copied()
-                .unwrap_or(0);
-            (rows != 0).then_some((tile, t, rows))
+            let marked = self.slot(tile).map(|s| self.marked_in(s))?;
+            (!marked.is_empty()).then_some((tile, t, marked))
         })
     }
 
@@ -401,25 +536,34 @@ impl<T: Copy> TileGrid<T> {
         self.slots[slot].as_deref()
     }
 
-    /// The tile at `tile` with its row marks, if allocated.
-    pub fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], u64)> {
+    /// The tile at `tile` with what was marked written in it, if allocated.
+    pub fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], Marked<'_>)> {
         let slot = self.slot(tile)?;
         let t = self.slots[slot].as_deref()?;
-        Some((t, self.rows.get(slot).copied().unwrap_or(0)))
+        Some((t, self.marked_in(slot)))
     }
 
-    /// Releases every tile into the grid's pool, its marked rows reset to `fill`: the grid reads as empty again
-    /// but keeps its memory for the next use (the per-scan scratch of [`crate::Map::integrate`]). For a grid
-    /// written only through marked rows ([`TileGrid::mark_rows`]), so the cost is that of what was written,
-    /// not of the tiles' size.
+    /// Releases every tile into the grid's pool, its marked rows and cells reset to `fill`: the grid reads as
+    /// empty again but keeps its memory for the next use (the per-scan scratch of [`crate::Map::integrate`]).
+    /// For a grid written only where it marked ([`TileGrid::mark_rows`], [`TileGrid::slot_tile_and_marks_mut`]),
+    /// so the cost is that of what was written, not of the tiles' size.
     pub fn recycle_marked(&mut self) {
         let fill = self.fill;
-        for (slot, rows) in self.slots.iter_mut().zip(self.rows.iter_mut()) {
-            if let Some(mut t) = slot.take() {
+        for (slot, t) in self.slots.iter_mut().enumerate() {
+            let Some(mut t) = t.take() else {
+                continue;
+            };
+            if let Some(rows) = self.rows.get_mut(slot) {
                 for_each_row(*rows, |r| t[r * TILE_SIZE..(r + 1) * TILE_SIZE].fill(fill));
                 *rows = 0;
-                self.pool.push(t);
             }
+            if let Some(Some(marks)) = self.marks.get_mut(slot) {
+                for &offset in marks.as_slice() {
+                    t[usize::from(offset) & (TILE_CELLS - 1)] = fill;
+                }
+                marks.clear();
+            }
+            self.pool.push(t);
         }
         self.num_tiles = 0;
     }
@@ -512,8 +656,9 @@ mod tests {
         let slot = g
             .slot_or_insert(TileIndex::of(CellIndex::new(1, 1)), u64::MAX)
             .expect("room");
-        g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(1, 1))] = 5;
-        g.mark_rows(slot, 1 << 1);
+        let (t, marks) = g.slot_tile_and_marks_mut(slot);
+        t[offset_in_tile(CellIndex::new(1, 1))] = 5;
+        marks.mark_if(offset_in_tile(CellIndex::new(1, 1)), true);
         let bytes = g.memory_bytes();
         g.recycle_marked();
         assert_eq!(g.num_tiles(), 0);
@@ -524,20 +669,33 @@ mod tests {
     }
 
     #[test]
-    fn marked_rows_are_the_rows_recycled_and_survive_growth() {
+    fn marked_cells_are_the_cells_recycled_and_survive_growth() {
         let mut g = TileGrid::new(0u8);
         let tile = TileIndex::of(CellIndex::new(3, 5));
+        let at = offset_in_tile(CellIndex::new(3, 5));
         let slot = g.slot_or_insert(tile, u64::MAX).expect("room");
-        g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(3, 5))] = 1;
-        g.mark_rows(slot, 1 << 5);
+        let (t, marks) = g.slot_tile_and_marks_mut(slot);
+        t[at] = 1;
+        marks.mark_if(at, true);
+        // A write that is not the cell's first is not marked again.
+        marks.mark_if(at, false);
+        let room = g.memory_bytes();
         // Growing the index far away moves the tile and its marks together.
         let far = g
             .slot_or_insert(TileIndex { ti: -40, tj: 30 }, u64::MAX)
             .expect("room");
-        g.slot_tile_mut(far)[0] = 2;
-        g.mark_rows(far, 1);
-        let marked: Vec<_> = g.marked_tiles().map(|(t, _, rows)| (t, rows)).collect();
-        assert_eq!(marked, vec![(tile, 1 << 5), (TileIndex { ti: -40, tj: 30 }, 1)]);
+        let (t, marks) = g.slot_tile_and_marks_mut(far);
+        t[0] = 2;
+        marks.mark_if(0, true);
+        assert!(
+            g.memory_bytes() >= room + (TILE_CELLS * size_of::<u16>()) as u64,
+            "marks are counted"
+        );
+        let marked: Vec<_> = g.marked_tiles().map(|(t, _, m)| (t, visited(m))).collect();
+        assert_eq!(
+            marked,
+            vec![(tile, vec![at]), (TileIndex { ti: -40, tj: 30 }, vec![0])]
+        );
         g.recycle_marked();
         assert_eq!(g.marked_tiles().count(), 0);
         // The pooled tiles read as new.
@@ -547,6 +705,45 @@ mod tests {
             .slot_or_insert(TileIndex { ti: 9, tj: 9 }, u64::MAX)
             .expect("pooled");
         assert!(g.slot_tile_mut(other).iter().all(|&v| v == 0));
+    }
+
+    fn visited(marked: Marked<'_>) -> Vec<usize> {
+        let mut cells = Vec::new();
+        marked.for_each(|k| cells.push(k));
+        cells
+    }
+
+    #[test]
+    fn marked_rows_and_cells_are_visited_once_and_recycled() {
+        let mut g = TileGrid::new(0u8);
+        let tile = TileIndex { ti: 0, tj: 0 };
+        let slot = g.slot_or_insert(tile, u64::MAX).expect("room");
+        let (t, marks) = g.slot_tile_and_marks_mut(slot);
+        // A cell in row 1 (also marked as a row below) and one in row 3.
+        for k in [TILE_SIZE + 5, 3 * TILE_SIZE + 2] {
+            t[k] = 1;
+            marks.mark_if(k, true);
+        }
+        g.slot_tile_mut(slot)[TILE_SIZE + 9] = 2;
+        g.mark_rows(slot, 1 << 1);
+        let (_, _, marked) = g.marked_tiles().next().expect("marked");
+        assert_eq!(marked.num_cells(), TILE_SIZE + 2);
+        let cells = visited(marked);
+        let expected: Vec<usize> = (TILE_SIZE..2 * TILE_SIZE).chain([3 * TILE_SIZE + 2]).collect();
+        assert_eq!(
+            cells, expected,
+            "the row's cells, then the marked cell outside it"
+        );
+        g.recycle_marked();
+        let slot = g.slot_or_insert(tile, u64::MAX).expect("pooled");
+        assert!(g.slot_tile_mut(slot).iter().all(|&v| v == 0));
+    }
+
+    #[test]
+    fn rows_are_listed_in_order() {
+        let mut seen = Vec::new();
+        for_each_row((1 << 63) | (1 << 7) | 1, |r| seen.push(r));
+        assert_eq!(seen, vec![0, 7, 63]);
     }
 
     #[test]
@@ -566,13 +763,6 @@ mod tests {
         }
         assert_eq!(g.get(CellIndex::new(3 * 64 + 1, 0)), Some(&7));
         assert_eq!(g.get(CellIndex::new(1, 0)), Some(&0));
-    }
-
-    #[test]
-    fn rows_are_listed_in_order() {
-        let mut seen = Vec::new();
-        for_each_row((1 << 63) | (1 << 7) | 1, |r| seen.push(r));
-        assert_eq!(seen, vec![0, 7, 63]);
     }
 
     #[test]

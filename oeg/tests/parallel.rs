@@ -1,6 +1,7 @@
 //! The map is the same, bit for bit, on any number of threads: a long scan's rays are gathered in parallel and
-//! the touched tiles updated in parallel (`Map::integrate`), under every preset, on synthetic scans long enough
-//! to be split and on the shared real scans when present.
+//! the touched tiles updated in parallel (`Map::integrate`), and short scans are gathered side by side
+//! (`Map::integrate_batch`), under every preset, on synthetic scans long enough to be split, on the same rays
+//! cut into short scans, and on the shared real scans when present.
 
 mod common;
 
@@ -8,35 +9,80 @@ use common::shared_file;
 use nalgebra::{Point3, Vector3};
 use oeg::{Map, MapConfig, MapPreset, Ray, RobotProfile, Scan, SensorModel, map_to_bytes};
 
+/// How the scans are given to the map.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Feed {
+    /// `Map::integrate`, scan by scan.
+    OneByOne,
+    /// `Map::integrate_batch`, all at once.
+    Batch,
+}
+
+fn map_of(preset: MapPreset, resolution_m: f64) -> Map {
+    let mut config = MapConfig::new(resolution_m);
+    config.model = preset.model(&RobotProfile::default());
+    Map::new(config).expect("valid")
+}
+
 /// Integrates `scans` into a fresh map of `preset` at `resolution_m` on a pool of `threads` threads and
 /// returns the saved map's bytes.
-fn map_bytes_on(threads: usize, preset: MapPreset, resolution_m: f64, scans: &[Scan]) -> Vec<u8> {
+fn map_bytes_on(threads: usize, feed: Feed, preset: MapPreset, resolution_m: f64, scans: &[Scan]) -> Vec<u8> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .expect("a thread pool");
     pool.install(|| {
-        let mut config = MapConfig::new(resolution_m);
-        config.model = preset.model(&RobotProfile::default());
-        let mut map = Map::new(config).expect("valid");
-        for scan in scans {
-            map.integrate(scan).expect("integrated");
+        let mut map = map_of(preset, resolution_m);
+        match feed {
+            Feed::OneByOne => {
+                for scan in scans {
+                    map.integrate(scan).expect("integrated");
+                }
+            }
+            Feed::Batch => {
+                map.integrate_batch(scans).expect("integrated");
+            }
         }
         assert!(map.num_observed_cells() > 100);
+        assert_eq!(map.num_scans(), scans.len() as u64);
         map_to_bytes(&map)
     })
 }
 
+/// The map of `scans` one by one on one thread, against the map on 2, 3 and 5 threads, one by one and in a
+/// batch (and in a batch on one thread).
 fn assert_same_on_any_thread_count(resolution_m: f64, scans: &[Scan]) {
     for preset in MapPreset::ALL {
-        let one = map_bytes_on(1, preset, resolution_m, scans);
-        for threads in [2, 3, 5] {
+        let one = map_bytes_on(1, Feed::OneByOne, preset, resolution_m, scans);
+        for (threads, feed) in [
+            (1, Feed::Batch),
+            (2, Feed::OneByOne),
+            (2, Feed::Batch),
+            (3, Feed::Batch),
+            (5, Feed::OneByOne),
+            (5, Feed::Batch),
+        ] {
             assert!(
-                map_bytes_on(threads, preset, resolution_m, scans) == one,
-                "{preset:?} at {resolution_m} m: the map on {threads} threads differs from the map on one"
+                map_bytes_on(threads, feed, preset, resolution_m, scans) == one,
+                "{preset:?} at {resolution_m} m: the map on {threads} threads ({feed:?}) differs from the \
+                 map on one"
             );
         }
     }
+}
+
+/// `scans` cut into scans of `rays` rays each, from the same sensor pose: a robot's log of short scans.
+fn cut(scans: &[Scan], rays: usize) -> Vec<Scan> {
+    scans
+        .iter()
+        .flat_map(|scan| {
+            scan.rays.chunks(rays).map(|chunk| {
+                let mut short = scan.clone();
+                short.rays = chunk.to_vec();
+                short
+            })
+        })
+        .collect()
 }
 
 /// A sensor 0.4 m over a floor with a box and a step, sweeping 24,000 rays (long enough to be split among 5
@@ -83,10 +129,61 @@ fn a_synthetic_map_is_the_same_on_one_two_three_and_five_threads() {
 }
 
 #[test]
+fn short_scans_and_long_ones_between_them_map_the_same_on_any_thread_count() {
+    let long = synthetic_scans();
+    // 700-ray scans, with a long scan after every 25 of them (a stereo frame between laser lines).
+    let mut scans = Vec::new();
+    for (k, short) in cut(&long, 700).into_iter().enumerate() {
+        if k % 25 == 24 {
+            scans.push(long[k / 25 % long.len()].clone());
+        }
+        scans.push(short);
+    }
+    assert!(scans.len() > 100);
+    assert_same_on_any_thread_count(0.05, &scans);
+}
+
+#[test]
+fn a_batch_stops_at_the_scan_the_map_refuses_with_the_scans_before_it_in_the_map() {
+    let scans = cut(&synthetic_scans(), 600);
+    let mut bad = scans[..12].to_vec();
+    bad[9].rays[3] = Ray::hit(Vector3::new(f32::NAN, 0.0, 0.0));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| {
+            let mut map = map_of(MapPreset::Paper, 0.05);
+            let err = map.integrate_batch(&bad).expect_err("scan 9 holds a NaN");
+            assert_eq!(err.index, 9, "{err}");
+            assert!(err.to_string().contains("scan 9"), "{err}");
+            let mut before = map_of(MapPreset::Paper, 0.05);
+            for scan in &scans[..9] {
+                before.integrate(scan).expect("valid");
+            }
+            assert!(
+                map_to_bytes(&map) == map_to_bytes(&before),
+                "on {threads} threads"
+            );
+        });
+    }
+}
+
+#[test]
 fn the_shared_real_scans_map_the_same_on_any_thread_count() {
     let Some(path) = shared_file("3dtk_frames.graph") else {
         return;
     };
     let scans = oeg::read_graph_scans(&path, SensorModel::laser()).expect("readable");
     assert_same_on_any_thread_count(0.05, &scans);
+}
+
+#[test]
+fn the_shared_real_scans_cut_into_short_scans_map_the_same_on_any_thread_count() {
+    let Some(path) = shared_file("3dtk_frames.graph") else {
+        return;
+    };
+    let scans = oeg::read_graph_scans(&path, SensorModel::laser()).expect("readable");
+    assert_same_on_any_thread_count(0.1, &cut(&scans, 900));
 }

@@ -19,7 +19,7 @@ use crate::cell::{Ceiling, Cell};
 use crate::error::{Error, Result};
 use crate::model::{OverheadHits, update_ceiling};
 use crate::scan::Scan;
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex, for_each_row, offset_in_tile};
+use crate::storage::{Marked, TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex, offset_in_tile};
 use crate::traversal::GroundTraversal;
 
 /// Rays between two questions of [`Map::integrate_unless`]'s `stop`: a few milliseconds of work.
@@ -99,15 +99,22 @@ impl Map {
 
 /// The log-odds levels a cell update compares with.
 #[derive(Clone, Copy)]
-struct LogOddsLevels {
+pub(super) struct LogOddsLevels {
     /// `L` above which a cell is occupied.
-    occupied: f32,
+    pub(super) occupied: f32,
     /// The log-odds of a plain free sample.
-    free: f32,
+    pub(super) free: f32,
 }
 
-/// Rows of a scan's touched tiles (64 cells each) from which they are updated in parallel.
-const MIN_ROWS_IN_PARALLEL: u32 = 256;
+/// Cells a scan touched from which its tiles are updated in parallel.
+const MIN_CELLS_IN_PARALLEL: usize = 4096;
+
+/// Rays of a short scan, at most: a few milliseconds of work. Its walks mark each cell they cross first
+/// ([`TileGrid::slot_tile_and_marks_mut`]), so its update and clearing visit those cells alone rather than the
+/// rows they crossed ([`TileGrid::mark_rows`], free in the walk): a short scan touches a few cells of many
+/// rows, where a long scan's many rays cross each cell many times. A batch gathers short scans side by side
+/// ([`Map::integrate_batch`]); a long scan is split between the threads on its own.
+pub(super) const SHORT_SCAN_RAYS: usize = 8 * 1024;
 
 /// Rays each thread gathers at least: below this, splitting a scan costs more than it saves.
 const MIN_RAYS_PER_THREAD: usize = 512;
@@ -188,37 +195,43 @@ fn gather_in_parallel<E: Sampling>(
     merge: fn(&mut E, &E),
     stop: &(impl Fn() -> bool + Sync),
 ) -> Result<IntegrationStats> {
-    scratch.workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
-    let num_rays = scan.rays.len();
+    // Workers' grids are kept, with their pooled tiles, for the next scan that needs them (here or in
+    // `Map::integrate_batch`).
+    if scratch.workers.len() < runs - 1 {
+        scratch.workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
+    }
+    let bounds = balanced_runs(scan, runs, before.geometry.resolution_m());
     let share = scratch_limit / runs as u64;
     let grids: Vec<&mut TileGrid<E>> = std::iter::once(&mut scratch.main)
         .chain(scratch.workers.iter_mut())
+        .take(runs)
         .collect();
     let run_stats = grids
         .into_par_iter()
         .enumerate()
         .map(|(k, grid)| {
-            let rays = num_rays * k / runs..num_rays * (k + 1) / runs;
+            let rays = bounds[k]..bounds[k + 1];
             let mut stats = IntegrationStats::default();
             gather_rays(before, scan, rays, grid, share, &mut stats, stop).map(|()| stats)
         })
         .collect::<Result<Vec<_>>>()?;
     let Scratch { main, workers } = scratch;
-    for worker in workers.iter_mut() {
-        for (tile, later, rows) in worker.marked_tiles() {
+    for worker in workers.iter_mut().take(runs - 1) {
+        for (tile, later, later_marks) in worker.marked_tiles() {
             let slot = main
                 .slot_or_insert(tile, scratch_limit)
                 .map_err(|e| Error::MemoryLimit {
                     requested_bytes: e.requested_bytes,
                     limit_bytes: before.memory_limit_bytes,
                 })?;
-            let merged = main.slot_tile_mut(slot);
-            for_each_row(rows, |r| {
-                for k in r * TILE_SIZE..(r + 1) * TILE_SIZE {
+            // Only the paper's evidence merges exactly, and an untouched cell's evidence merges as nothing.
+            let (merged, marks) = main.slot_tile_and_marks_mut(slot);
+            later_marks.for_each(|k| {
+                if !later[k].paper().is_untouched() {
+                    marks.mark_if(k, merged[k].first_visit());
                     merge(&mut merged[k], &later[k]);
                 }
             });
-            main.mark_rows(slot, rows);
         }
         worker.recycle_marked();
     }
@@ -230,10 +243,33 @@ fn gather_in_parallel<E: Sampling>(
         }))
 }
 
+/// The bounds of `runs` runs of consecutive rays of `scan` with about equal work: a ray's walk crosses about
+/// one cell per cell size of its length over the ground, so a camera's frame, whose upper rows reach far and
+/// lower rows near, is not cut at its middle ray. Any cut gives the same map (the runs merge exactly); this
+/// one keeps the threads equally busy.
+fn balanced_runs(scan: &Scan, runs: usize, resolution_m: f64) -> Vec<usize> {
+    let work: Vec<f64> = scan
+        .rays
+        .iter()
+        .scan(0.0, |total, ray| {
+            let v = ray.offset_in_world;
+            *total += f64::from(v.x.hypot(v.y)) / resolution_m + 1.0;
+            Some(*total)
+        })
+        .collect();
+    let total = work.last().copied().unwrap_or(0.0);
+    let mut bounds: Vec<usize> = (0..runs)
+        .map(|k| work.partition_point(|&w| w < total * k as f64 / runs as f64))
+        .collect();
+    bounds[0] = 0;
+    bounds.push(scan.rays.len());
+    bounds
+}
+
 /// Casts the scan's rays `rays` into `grid` (at most `limit_bytes` of it): each ray's span ([`RaySpan::of`]),
 /// checked against the grid and the limit ([`walk_of`]), then what each crossed cell learns from it
 /// ([`Sampling`]).
-fn gather_rays<E: Sampling>(
+pub(super) fn gather_rays<E: Sampling>(
     before: &Before,
     scan: &Scan,
     rays: Range<usize>,
@@ -242,6 +278,7 @@ fn gather_rays<E: Sampling>(
     stats: &mut IntegrationStats,
     stop: &impl Fn() -> bool,
 ) -> Result<()> {
+    let by_cell = scan.rays.len() < SHORT_SCAN_RAYS;
     for index in rays {
         if index % RAYS_BETWEEN_STOP_CHECKS == RAYS_BETWEEN_STOP_CHECKS - 1 && stop() {
             return Err(Error::Cancelled);
@@ -252,21 +289,23 @@ fn gather_rays<E: Sampling>(
         };
         let walk = walk_of(before, grid, index, &span, limit_bytes)?;
         stats.num_cell_visits += walk.len() as u64;
-        if span.hit.is_some() {
-            sample_walk::<E, true>(before, &span, walk, grid, limit_bytes)?;
-        } else {
-            sample_walk::<E, false>(before, &span, walk, grid, limit_bytes)?;
+        match (span.hit.is_some(), by_cell) {
+            (true, true) => sample_walk::<E, true, true>(before, &span, walk, grid, limit_bytes)?,
+            (true, false) => sample_walk::<E, true, false>(before, &span, walk, grid, limit_bytes)?,
+            (false, true) => sample_walk::<E, false, true>(before, &span, walk, grid, limit_bytes)?,
+            (false, false) => sample_walk::<E, false, false>(before, &span, walk, grid, limit_bytes)?,
         }
     }
     Ok(())
 }
 
 /// What one ray's walk says about each cell it crosses ([`Sampling`]), added to `grid`'s evidence tile by tile:
-/// a straight walk crosses a tile once, in a run of consecutive rows, so each tile is looked up once and its
-/// rows are marked once ([`TileGrid::mark_rows`]). `HIT`: whether the ray hit something (else every cell it
-/// crosses is cleared: [`Sampling::cleared`]).
+/// a straight walk crosses a tile once, in a run of consecutive rows, so each tile is looked up once, and the
+/// rows are marked once ([`TileGrid::mark_rows`]) or, `BY_CELL`, each cell the scan crosses for the first time
+/// ([`TileGrid::slot_tile_and_marks_mut`], [`SHORT_SCAN_RAYS`]). `HIT`: whether the ray hit something
+/// (else every cell it crosses is cleared: [`Sampling::cleared`]).
 #[inline(always)]
-fn sample_walk<E: Sampling, const HIT: bool>(
+fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
     before: &Before,
     span: &RaySpan,
     mut walk: GroundTraversal,
@@ -282,14 +321,23 @@ fn sample_walk<E: Sampling, const HIT: bool>(
                 requested_bytes: e.requested_bytes,
                 limit_bytes,
             })?;
-        let evidence = grid.slot_tile_mut(slot);
+        let (evidence, mut marks) = if BY_CELL {
+            let (evidence, marks) = grid.slot_tile_and_marks_mut(slot);
+            (evidence, Some(marks))
+        } else {
+            (grid.slot_tile_mut(slot), None)
+        };
         let mut here = Here::tile::<E>(before, tile);
         let first_row = offset_in_tile(first.cell) >> TILE_SHIFT;
         let mut crossing = first;
+        let mut marked = marks.as_ref().map_or(0, |m| m.count());
         let last_offset = loop {
             let offset = offset_in_tile(crossing.cell);
             here.offset = offset;
             let ev = &mut evidence[offset & (TILE_CELLS - 1)];
+            if let Some(marks) = marks.as_deref_mut() {
+                marked = marks.mark_after(marked, offset, ev.first_visit());
+            }
             if !HIT {
                 ev.cleared(before, span, &crossing, &here);
             } else if crossing.l_exit < span.free_until {
@@ -303,7 +351,11 @@ fn sample_walk<E: Sampling, const HIT: bool>(
                 _ => break offset,
             }
         };
-        grid.mark_rows(slot, rows_between(first_row, last_offset >> TILE_SHIFT));
+        if let Some(marks) = marks {
+            marks.set_len(marked);
+        } else {
+            grid.mark_rows(slot, rows_between(first_row, last_offset >> TILE_SHIFT));
+        }
     }
     Ok(())
 }
@@ -398,16 +450,16 @@ fn apply<E: Evidence>(
         requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
         limit_bytes: config.memory_limit_bytes,
     };
-    for (tile, evidence, _) in scratch.marked_tiles() {
+    for (tile, evidence, marks) in scratch.marked_tiles() {
         cells
             .tile_or_insert(tile, limit.saturating_sub(ceilings.memory_bytes()))
             .map_err(memory_error)?;
         // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
-        if ceiling_rule
-            && evidence
-                .iter()
-                .any(|ev| ev.full().is_some_and(|f| f.ceiling_p > 0.0))
-        {
+        if ceiling_rule && {
+            let mut hit = false;
+            marks.for_each(|k| hit |= evidence[k].full().is_some_and(|f| f.ceiling_p > 0.0));
+            hit
+        } {
             let room = limit.saturating_sub(cells.memory_bytes());
             ceilings.tile_or_insert(tile, room).map_err(memory_error)?;
         }
@@ -417,26 +469,16 @@ fn apply<E: Evidence>(
         .tiles_mut_in_order(scratch.marked_tiles().map(|(tile, _, _)| tile))
         .into_iter()
         .filter_map(|(tile, cells)| {
-            let (evidence, rows) = scratch.marked_tile(tile)?;
-            Some((cells, evidence, rows))
+            let (evidence, marks) = scratch.marked_tile(tile)?;
+            Some((cells, evidence, marks))
         })
         .collect();
-    let update = |(cells, evidence, rows): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], u64)| {
-        let mut updated = 0u64;
-        for_each_row(rows, |r| {
-            for k in r * TILE_SIZE..(r + 1) * TILE_SIZE {
-                let ev = &evidence[k];
-                if !ev.paper().is_untouched() {
-                    updated += 1;
-                    update_cell(&mut cells[k], ev, opts, levels.occupied, levels.free);
-                }
-            }
-        });
-        updated
+    let update = |(cells, evidence, marks): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], Marked<'_>)| {
+        update_marked(cells, evidence, marks, opts, levels)
     };
-    // Rows of 64 cells to update: below a few hundred, handing tiles to threads costs more than it saves.
-    let rows: u32 = work.iter().map(|(_, _, rows)| rows.count_ones()).sum();
-    stats.num_cells_updated += if rows >= MIN_ROWS_IN_PARALLEL && rayon::current_num_threads() > 1 {
+    // Cells to update: below a few thousand, handing tiles to threads costs more than it saves.
+    let touched: usize = work.iter().map(|(_, _, marks)| marks.num_cells()).sum();
+    stats.num_cells_updated += if touched >= MIN_CELLS_IN_PARALLEL && rayon::current_num_threads() > 1 {
         work.into_par_iter().map(update).sum::<u64>()
     } else {
         work.into_iter().map(update).sum::<u64>()
@@ -454,14 +496,15 @@ fn update_ceilings<E: Evidence>(
     opts: &crate::model::ModelOptions,
     levels: LogOddsLevels,
 ) {
-    for (tile, evidence, _) in scratch.marked_tiles() {
+    for (tile, evidence, marks) in scratch.marked_tiles() {
         let Some(ceilings) = ceilings.tile_mut(tile) else {
             continue;
         };
-        for (ceiling, ev) in ceilings.iter_mut().zip(evidence.iter()) {
-            let Some(ev) = ev.full().filter(|f| f.touches_ceiling()) else {
-                continue;
+        marks.for_each(|k| {
+            let Some(ev) = evidence[k].full().filter(|f| f.touches_ceiling()) else {
+                return;
             };
+            let ceiling = &mut ceilings[k];
             *ceiling = update_ceiling(
                 *ceiling,
                 ev.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas),
@@ -470,8 +513,28 @@ fn update_ceilings<E: Evidence>(
                 opts,
                 levels.occupied,
             );
-        }
+        });
     }
+}
+
+/// Updates a tile's cells that a scan touched, from their evidence (each once, in any order: every cell's update
+/// reads its own evidence alone). Returns the cells updated.
+pub(super) fn update_marked<E: Evidence>(
+    cells: &mut [Cell; TILE_CELLS],
+    evidence: &[E; TILE_CELLS],
+    marks: Marked<'_>,
+    opts: &crate::model::ModelOptions,
+    levels: LogOddsLevels,
+) -> u64 {
+    let mut updated = 0u64;
+    marks.for_each(|k| {
+        let ev = &evidence[k];
+        if !ev.paper().is_untouched() {
+            updated += 1;
+            update_cell(&mut cells[k], ev, opts, levels.occupied, levels.free);
+        }
+    });
+    updated
 }
 
 #[cfg(test)]

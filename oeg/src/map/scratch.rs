@@ -120,6 +120,9 @@ pub(crate) struct ScanEvidence {
     pub(super) overhead_score: f32,
     /// The number of the scan's samples in the cell that measured a height, overhead hits included.
     pub(super) num_heights: f32,
+    /// Whether a ray of the scan crossed the cell ([`Evidence::first_visit`]): a sample may leave every other
+    /// field as it was (a beam over a surface says nothing about it).
+    visited: bool,
 }
 
 const _: () = assert!(size_of::<ScanEvidence>() == 72);
@@ -136,6 +139,7 @@ impl ScanEvidence {
         ceiling_p: 0.0,
         overhead_score: 0.0,
         num_heights: 0.0,
+        visited: false,
     };
 
     /// Whether the scan said something about the cell's ceiling.
@@ -265,6 +269,9 @@ impl HitSample {
 pub(crate) trait Evidence: Copy + Send + Sync + 'static {
     const NONE: Self;
     fn paper(&self) -> &PaperEvidence;
+    /// Called as a ray's sample is about to be added: whether the scan's rays had not crossed the cell yet
+    /// (the cell's offset is then marked, so that the update and the clearing visit the cells crossed alone).
+    fn first_visit(&mut self) -> bool;
     /// The scan's hits in the cell as a sample (none for evidence that does not keep them).
     fn hits(&self) -> HitSample {
         HitSample::NONE
@@ -293,6 +300,12 @@ impl Evidence for PaperEvidence {
         self
     }
 
+    /// Every sample of the paper's rules raises the probability to at least `p_min > 0`.
+    #[inline(always)]
+    fn first_visit(&mut self) -> bool {
+        self.is_untouched()
+    }
+
     fn exact_merge(opts: &ModelOptions) -> Option<fn(&mut Self, &Self)> {
         (opts.scan_hit_elevation == ScanHitElevation::Highest).then_some(PaperEvidence::merge_later)
     }
@@ -304,6 +317,11 @@ impl Evidence for ScanEvidence {
     #[inline(always)]
     fn paper(&self) -> &PaperEvidence {
         &self.paper
+    }
+
+    #[inline(always)]
+    fn first_visit(&mut self) -> bool {
+        !std::mem::replace(&mut self.visited, true)
     }
 
     fn hits(&self) -> HitSample {
@@ -328,7 +346,7 @@ pub(crate) struct Scratch<E: Evidence> {
 }
 
 impl<E: Evidence> Scratch<E> {
-    fn recycle(&mut self) {
+    pub(super) fn recycle(&mut self) {
         self.main.recycle_marked();
         self.workers.iter_mut().for_each(TileGrid::recycle_marked);
     }

@@ -1,0 +1,233 @@
+//! Many scans at once: [`Map::integrate_batch`]. A scan of a few hundred rays is too short to split between
+//! threads, but consecutive short scans can be gathered side by side, one per thread, when a model's samples do
+//! not read the map (the paper's rules: [`Sampling::READS_MAP`]), so that what scan `k + 1` says does not
+//! depend on scan `k`'s update. The cells are then updated tile by tile in parallel, each cell from the scans'
+//! evidence in their order: the same map, bit for bit, as [`Map::integrate`] on each scan in turn.
+
+use std::borrow::Borrow;
+
+use rayon::prelude::*;
+
+use super::integrate::{LogOddsLevels, SHORT_SCAN_RAYS, gather_rays, update_marked};
+use super::sample::{Before, Sampling};
+use super::scratch::{ScanScratch, Scratch};
+use super::{IntegrationStats, Map};
+use crate::error::Error;
+use crate::scan::Scan;
+use crate::storage::{TileGrid, TileIndex};
+
+/// Scans of a window per thread: enough work between two meetings of the threads that their waking costs
+/// little, and scans of different lengths even out.
+const SCANS_PER_THREAD: usize = 8;
+
+/// Why [`Map::integrate_batch`] stopped: the scan that failed and its error. The scans before it are in the
+/// map; it and those after it are not.
+#[derive(Debug, thiserror::Error)]
+#[error("scan {index} of the batch: {error}")]
+pub struct BatchError {
+    /// The failed scan's place in the batch, from 0.
+    pub index: usize,
+    /// What [`Map::integrate`] said of it.
+    pub error: Error,
+}
+
+impl Map {
+    /// Integrates `scans` in order: the same map, bit for bit, as [`Map::integrate`] on each in turn, and the sum
+    /// of their statistics.
+    ///
+    /// Under a model whose samples do not read the map (one whose scratch is the paper's evidence), runs of
+    /// consecutive short scans (fewer than 8,192 rays) go in windows of 8 scans a thread: a window's scans are
+    /// gathered side by side, one per thread, then its cells are updated tile by tile in parallel. This is what
+    /// makes a robot's log, thousands of scans of a few hundred rays each, use every core; a long scan is split
+    /// between the threads on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold
+    /// less than half the memory limit: near it, scans go one at a time, so that a limit stops the same scan at
+    /// the same place.
+    ///
+    /// # Errors
+    /// The first scan [`Map::integrate`] refuses, with its place in `scans`.
+    pub fn integrate_batch<S: Borrow<Scan> + Sync>(
+        &mut self,
+        scans: &[S],
+    ) -> Result<IntegrationStats, BatchError> {
+        // On a worker thread, so that the threads meet without a hand-over from outside the pool.
+        rayon::scope(|_| self.integrate_in_windows(scans))
+    }
+
+    /// [`Map::integrate_batch`] on a thread of the pool.
+    fn integrate_in_windows<S: Borrow<Scan> + Sync>(
+        &mut self,
+        scans: &[S],
+    ) -> Result<IntegrationStats, BatchError> {
+        let threads = rayon::current_num_threads();
+        let mut total = IntegrationStats::default();
+        let mut next = 0;
+        while next < scans.len() {
+            let window = if threads > 1 {
+                scans[next..]
+                    .iter()
+                    .take(threads * SCANS_PER_THREAD)
+                    .take_while(|s| Borrow::<Scan>::borrow(*s).rays.len() < SHORT_SCAN_RAYS)
+                    .count()
+            } else {
+                0
+            };
+            if window > 1
+                && let Some(stats) = self.integrate_side_by_side(&scans[next..next + window])
+            {
+                total += stats;
+                next += window;
+                continue;
+            }
+            let stats = self
+                .integrate(scans[next].borrow())
+                .map_err(|error| BatchError { index: next, error })?;
+            total += stats;
+            next += 1;
+        }
+        Ok(total)
+    }
+
+    /// `scans` gathered side by side and applied in order; `None`, with the map and scratch as they were, when
+    /// they cannot be (a model whose samples read the map, an invalid scan, memory near the limit): the caller
+    /// then integrates them one by one, which reports any error as it always does.
+    fn integrate_side_by_side<S: Borrow<Scan> + Sync>(&mut self, scans: &[S]) -> Option<IntegrationStats> {
+        if scans
+            .iter()
+            .any(|s| Borrow::<Scan>::borrow(s).validate().is_err())
+        {
+            return None;
+        }
+        let Self {
+            config,
+            geometry,
+            cells,
+            ceilings,
+            scratch,
+            occupied_log_odds,
+            free_log_odds,
+            ..
+        } = self;
+        let ScanScratch::Paper(scratch) = scratch else {
+            return None;
+        };
+        let before = Before {
+            geometry,
+            cells,
+            ceilings,
+            opts: &config.model,
+            memory_limit_bytes: config.memory_limit_bytes,
+        };
+        let budget = config.memory_limit_bytes / 2;
+        let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
+        let levels = LogOddsLevels {
+            occupied: *occupied_log_odds,
+            free: *free_log_odds,
+        };
+        stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, levels);
+        scratch.recycle();
+        self.num_scans += scans.len() as u64;
+        self.totals += stats;
+        Some(stats)
+    }
+}
+
+/// Gathers scan `k` into the scratch's grid `k` (the main grid, then the workers'), all in parallel, under
+/// `budget` bytes for the map and every grid together (each grid under an equal share); `None`, the scratch
+/// recycled, if a ray fails or the budget is exceeded.
+fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
+    before: &Before,
+    scans: &[S],
+    scratch: &mut Scratch<E>,
+    budget: u64,
+) -> Option<IntegrationStats> {
+    if E::READS_MAP {
+        return None;
+    }
+    let map_bytes = before.cells.memory_bytes() + before.ceilings.memory_bytes();
+    // Each grid under an equal share of what the budget leaves.
+    let share = budget.checked_sub(map_bytes)? / scans.len() as u64;
+    if scratch.workers.len() < scans.len() - 1 {
+        scratch
+            .workers
+            .resize_with(scans.len() - 1, || TileGrid::new(E::NONE));
+    }
+    let grids: Vec<&mut TileGrid<E>> = std::iter::once(&mut scratch.main)
+        .chain(scratch.workers.iter_mut())
+        .take(scans.len())
+        .collect();
+    let gathered = grids
+        .into_par_iter()
+        .zip(scans.par_iter())
+        .map(|(grid, scan)| {
+            let scan: &Scan = scan.borrow();
+            let mut stats = IntegrationStats {
+                num_rays: scan.rays.len() as u64,
+                ..IntegrationStats::default()
+            };
+            gather_rays(before, scan, 0..scan.rays.len(), grid, share, &mut stats, &|| {
+                false
+            })
+            .map(|()| stats)
+        })
+        .collect::<crate::error::Result<Vec<_>>>();
+    // The tiles the cells' grid will place, at most one per marked tile of each scan.
+    let new_tiles: usize = std::iter::once(&scratch.main)
+        .chain(scratch.workers.iter())
+        .map(|g| {
+            g.marked_tiles()
+                .filter(|(t, _, _)| !before.cells.has_tile(*t))
+                .count()
+        })
+        .sum();
+    let needed = map_bytes
+        .saturating_add(scratch.memory_bytes())
+        .saturating_add((new_tiles * TileGrid::<crate::cell::Cell>::tile_bytes()) as u64);
+    match gathered {
+        Ok(all) if needed <= budget => Some(all.into_iter().fold(IntegrationStats::default(), |mut a, s| {
+            a += s;
+            a
+        })),
+        _ => {
+            scratch.recycle();
+            None
+        }
+    }
+}
+
+/// Updates every cell the first `num_scans` grids of the scratch touched, from each grid's evidence in their
+/// order, tile by tile in parallel; the tiles are placed first, scan by scan, in the order [`Map::integrate`]
+/// places them. Returns the cell updates.
+fn apply_in_order<E: Sampling>(
+    cells: &mut TileGrid<crate::cell::Cell>,
+    scratch: &Scratch<E>,
+    num_scans: usize,
+    opts: &crate::model::ModelOptions,
+    levels: LogOddsLevels,
+) -> u64 {
+    let grids: Vec<&TileGrid<E>> = std::iter::once(&scratch.main)
+        .chain(scratch.workers.iter())
+        .take(num_scans)
+        .collect();
+    let mut touched: Vec<TileIndex> = Vec::new();
+    for grid in &grids {
+        for (tile, _, _) in grid.marked_tiles() {
+            // The budget checked before leaves room for every tile: placing one cannot fail.
+            if cells.tile_or_insert(tile, u64::MAX).is_ok() {
+                touched.push(tile);
+            }
+        }
+    }
+    // Row by row over the tile index, the order the cells' grid lends its tiles in.
+    touched.sort_unstable_by_key(|t| (t.tj, t.ti));
+    touched.dedup();
+    let work: Vec<_> = cells.tiles_mut_in_order(touched).into_iter().collect();
+    work.into_par_iter()
+        .map(|(tile, cells)| {
+            grids
+                .iter()
+                .filter_map(|grid| grid.marked_tile(tile))
+                .map(|(evidence, marks)| update_marked(cells, evidence, marks, opts, levels))
+                .sum::<u64>()
+        })
+        .sum()
+}
