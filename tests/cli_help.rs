@@ -1,5 +1,6 @@
 //! Every `--help` tells the truth about the documentation: each page it names exists, each `#section` it
 //! names is a heading of that page, and the top-level help says what `oeg` with no command does.
+#![allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 
 mod common;
 

@@ -1,5 +1,6 @@
 //! `oeg run` end to end through the built binary, on the hand-built scenes of `tests/scenes/`: the static
 //! decision scene (curbs, a board, a branch) and the person who crosses and leaves.
+#![allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 
 mod common;
 

@@ -1,6 +1,7 @@
 //! `oeg run --mcap`: the recording reads back with the `mcap` crate, every message validates against the
 //! JSON schema stored with its channel, the topics and frames are the documented ones (`docs/mcap.md`), and
 //! the file is the same bytes on one and two threads.
+#![allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 
 mod common;
 

@@ -2,6 +2,7 @@
 //! says pass or fail with the measured and required values, every figure's SVG (`--svg`) is well-formed with
 //! its PNG's size, and the figures, SVGs and pages are the same bytes on any thread count. (The suite's page is checked by `tests/suite.rs`, the sweep's by `tests/cli_sweep.rs`,
 //! a closed loop's by `tests/navigation.rs`, on the runs they already make.)
+#![allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 
 mod common;
 

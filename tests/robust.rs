@@ -3,6 +3,7 @@
 //! a wall, so that beams cross where the person's top was once they have left), curbs
 //! at 15, 30 and 45 degrees to the grid either side of the 3.5 cm threshold, and a table 2 cm lower than the
 //! robot.
+#![allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 
 mod common;
 

@@ -1,6 +1,10 @@
 //! The committed fuzz corpus, replayed: every input of every target (the seeds, and every input that once
 //! crashed, hung or over-allocated, under `corpus/<target>/`) goes through its reader, which must return. A
 //! panic fails the test and names the file.
+#![allow(
+    clippy::disallowed_methods,
+    reason = "the corpus is read whole, as the fuzzer hands an input to a target"
+)]
 
 use oeg_fuzz::{TARGETS, corpus_dir, run};
 

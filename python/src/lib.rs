@@ -686,7 +686,7 @@ fn run_scenario(
         oeg_eval::pipeline::run_scenario(&options, progress)
     })?;
     let metrics = serde_json::to_string(&report.metrics).map_err(oeg_error)?;
-    let obstacles = std::fs::read_to_string(report.out_dir.join("obstacles.csv")).map_err(oeg_error)?;
+    let obstacles = oeg::read_text(&report.out_dir.join("obstacles.csv")).map_err(oeg_error)?;
     let failed = report.failed.iter().map(ToString::to_string).collect();
     Ok((metrics, obstacles, failed, report.out_dir.display().to_string()))
 }

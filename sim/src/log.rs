@@ -153,16 +153,26 @@ fn serde_json_bytes(header: &LogHeader) -> Vec<u8> {
     serde_json::to_vec(header).unwrap_or_default()
 }
 
+/// The largest log read (it is read whole): 64 GiB, hours of a 3D lidar. A larger file, or a device or a pipe
+/// that runs past it, is refused rather than read until memory runs out.
+pub const MAX_LOG_BYTES: u64 = 64 << 30;
+
 /// Reads a log.
 ///
 /// # Errors
-/// [`SimError::Io`] if it cannot be read; [`SimError::Log`] (naming the file and byte) for a wrong magic
+/// [`SimError::Io`] if it cannot be read or is larger than [`MAX_LOG_BYTES`]; [`SimError::Log`] (naming the file and byte) for a wrong magic
 /// number or version, a malformed header, a truncated record, a bad ray kind, a non-finite number, a scan
 /// count that disagrees with the records, or a checksum mismatch.
 pub fn read_log(path: &Path) -> Result<SensorLog> {
-    let data = std::fs::read(path).map_err(|source| SimError::Io {
-        path: path.to_path_buf(),
-        source,
+    let data = oeg::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
+        oeg::Error::Io { source, .. } => SimError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        other => SimError::Log {
+            path: path.to_path_buf(),
+            message: other.to_string(),
+        },
     })?;
     parse_log(path, &data)
 }

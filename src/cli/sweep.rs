@@ -140,7 +140,9 @@ pub fn run(command: SweepCommand) -> anyhow::Result<()> {
             }
             Ok(())
         }
-        SweepCommand::Report { dir, partial, svg } => write_report(&dir, partial, svg),
+        SweepCommand::Report { dir, partial, svg } => {
+            write_report(&dir, partial, oeg_eval::figures::ImageFormats { svg })
+        }
     }
 }
 
@@ -196,8 +198,8 @@ fn run_plan(plan: &SweepPlan, options: &ExecuteOptions) -> anyhow::Result<()> {
 }
 
 /// `oeg sweep report`: the summary and plots, and how much of the plan they cover.
-fn write_report(dir: &Path, partial: bool, svg: bool) -> anyhow::Result<()> {
-    let report = report::report(dir, partial, oeg_eval::figures::ImageFormats { svg })?;
+fn write_report(dir: &Path, partial: bool, formats: oeg_eval::figures::ImageFormats) -> anyhow::Result<()> {
+    let report = report::report(dir, partial, formats)?;
     say!(
         "{}: {} of the plan's {} runs{}",
         dir.display(),

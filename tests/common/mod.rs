@@ -1,5 +1,5 @@
 //! Helpers shared by the tests that drive the built `oeg` binary.
-
+#![allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};

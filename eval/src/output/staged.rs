@@ -442,6 +442,7 @@ fn check_replaceable(target: &Path) -> Result<()> {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 mod tests {
     use super::*;
 

@@ -218,6 +218,7 @@ fn put_vector3(out: &mut Vec<u8>, v: &Vector3<f64>) {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 mod tests {
     use super::*;
 

@@ -25,14 +25,18 @@ fn error(path: &Path, message: String) -> HeightmapError {
 /// # Errors
 /// As [`decode_greyscale_png`], and a file that cannot be read.
 pub fn read_greyscale_png(path: &Path) -> Result<(usize, usize, Vec<f64>), HeightmapError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| error(path, format!("cannot open the terrain image: {e}")))?;
+    let bytes = oeg::read_bounded(path, MAX_TERRAIN_FILE_BYTES)
+        .map_err(|e| error(path, format!("cannot open the terrain image: {e}")))?;
     decode_greyscale_png(path, &bytes)
 }
 
 /// The most pixels a terrain image may hold: the scenario's cell limit
 /// ([`super::MAX_MAP_CELLS`]), checked from the PNG header before any pixel is decoded.
 pub const MAX_TERRAIN_PIXELS: u64 = super::MAX_MAP_CELLS;
+
+/// The largest terrain image file read: [`MAX_TERRAIN_PIXELS`] of 16 bits, uncompressed, and a mebibyte of
+/// headers (a PNG that deflates nothing is a little larger than its pixels).
+pub const MAX_TERRAIN_FILE_BYTES: u64 = 2 * MAX_TERRAIN_PIXELS + (1 << 20);
 
 /// Decodes the bytes of an 8- or 16-bit greyscale PNG (`path` names it in messages) as values in [0, 1].
 ///

@@ -350,6 +350,7 @@ fn check_owned(dir: &Path, empty_ok: bool) -> Result<()> {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 mod tests {
     use super::*;
 

@@ -774,6 +774,7 @@ fn set(doc: &mut Table, path: &[&str], value: Value) {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods, reason = "tests read back the files they wrote")]
 mod tests {
     use std::path::{Path, PathBuf};
 
