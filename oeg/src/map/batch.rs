@@ -49,11 +49,20 @@ impl Map {
         &mut self,
         scans: &[S],
     ) -> Result<IntegrationStats, BatchError> {
+        if rayon::current_num_threads() < 2 || !matches!(self.scratch, ScanScratch::Paper(_)) {
+            let mut total = IntegrationStats::default();
+            for (index, scan) in scans.iter().enumerate() {
+                total += self
+                    .integrate(scan.borrow())
+                    .map_err(|error| BatchError { index, error })?;
+            }
+            return Ok(total);
+        }
         // On a worker thread, so that the threads meet without a hand-over from outside the pool.
         rayon::scope(|_| self.integrate_in_windows(scans))
     }
 
-    /// [`Map::integrate_batch`] on a thread of the pool.
+    /// [`Map::integrate_batch`] on a thread of the pool, for a model whose scratch is the paper's evidence.
     fn integrate_in_windows<S: Borrow<Scan> + Sync>(
         &mut self,
         scans: &[S],
@@ -62,15 +71,11 @@ impl Map {
         let mut total = IntegrationStats::default();
         let mut next = 0;
         while next < scans.len() {
-            let window = if threads > 1 {
-                scans[next..]
-                    .iter()
-                    .take(threads * SCANS_PER_THREAD)
-                    .take_while(|s| Borrow::<Scan>::borrow(*s).rays.len() < SHORT_SCAN_RAYS)
-                    .count()
-            } else {
-                0
-            };
+            let window = scans[next..]
+                .iter()
+                .take(threads * SCANS_PER_THREAD)
+                .take_while(|s| Borrow::<Scan>::borrow(*s).rays.len() < SHORT_SCAN_RAYS)
+                .count();
             if window > 1
                 && let Some(stats) = self.integrate_side_by_side(&scans[next..next + window])
             {
@@ -92,7 +97,7 @@ impl Map {
     /// then integrates them one by one, which reports any error as it always does.
     fn integrate_side_by_side<S: Borrow<Scan> + Sync>(&mut self, scans: &[S]) -> Option<IntegrationStats> {
         if scans
-            .iter()
+            .par_iter()
             .any(|s| Borrow::<Scan>::borrow(s).validate().is_err())
         {
             return None;
