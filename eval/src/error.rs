@@ -17,7 +17,7 @@ pub enum EvalError {
     Setting(#[from] crate::settings::SettingError),
     /// The MCAP recording could not be written.
     #[error(transparent)]
-    Recording(#[from] crate::recording::RecordingError),
+    Recording(#[from] RecordingError),
     /// Arguments on the command line that the job cannot use (no input files, an impossible `--jobs`).
     #[error("the command line: {message}")]
     CommandLine {
@@ -64,3 +64,15 @@ pub enum EvalError {
 
 /// Short for `Result<T, EvalError>`.
 pub type Result<T, E = EvalError> = std::result::Result<T, E>;
+
+/// What went wrong writing the MCAP recording (`crate::recording`). Defined here, with the crate's other
+/// errors, so that the error module depends on no module that reports through it.
+#[derive(Debug, thiserror::Error)]
+#[error("writing the MCAP recording: {0}")]
+pub struct RecordingError(pub(crate) String);
+
+impl From<mcap::McapError> for RecordingError {
+    fn from(e: mcap::McapError) -> Self {
+        Self(e.to_string())
+    }
+}

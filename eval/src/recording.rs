@@ -20,16 +20,7 @@ pub const ESTIMATED_BASE_FRAME: &str = "base_link_estimated";
 /// The map's layers are recorded once per this many seconds of simulated time, and at the end.
 pub const DEFAULT_GRID_PERIOD_S: f64 = 1.0;
 
-/// What went wrong writing the recording.
-#[derive(Debug, thiserror::Error)]
-#[error("writing the MCAP recording: {0}")]
-pub struct RecordingError(String);
-
-impl From<mcap::McapError> for RecordingError {
-    fn from(e: mcap::McapError) -> Self {
-        Self(e.to_string())
-    }
-}
+pub use crate::error::RecordingError;
 
 /// The Foxglove schemas used, as JSON schemas (the fields this recording writes, with their types), by name.
 pub fn schemas() -> BTreeMap<&'static str, Value> {

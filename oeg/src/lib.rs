@@ -20,7 +20,7 @@ mod traversability;
 mod traversal;
 
 // The map: its grid, cells and layers.
-pub use cell::{Ceiling, Cell, SeenFrom};
+pub use cell::Cell;
 pub use error::{Error, Result};
 pub use geometry::{CellIndex, CellRegion, GridGeometry, MAX_RESOLUTION_M, MIN_RESOLUTION_M};
 pub use map::{
@@ -37,10 +37,10 @@ pub use sensor::{
 
 // The model: the paper's equations, the rules beyond it, the options that choose them, and the named presets.
 pub use model::{
-    BEAM_SIGMA_RAD, CeilingHit, DEFAULT_ELEVATION_THRESHOLD, DEFAULT_LOG_ODDS_MAX, DEFAULT_LOG_ODDS_MIN,
-    DEFAULT_OCCUPIED_THRESHOLD, DEFAULT_P_MAX, DEFAULT_P_MIN, DEFAULT_SIGNIFICANCE_K_M,
+    BEAM_SIGMA_RAD, Ceiling, CeilingHit, DEFAULT_ELEVATION_THRESHOLD, DEFAULT_LOG_ODDS_MAX,
+    DEFAULT_LOG_ODDS_MIN, DEFAULT_OCCUPIED_THRESHOLD, DEFAULT_P_MAX, DEFAULT_P_MIN, DEFAULT_SIGNIFICANCE_K_M,
     DEFAULT_SURFACE_BAND_SIGMAS, Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy,
-    GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits, ScanHitElevation,
+    GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits, ScanHitElevation, SeenFrom,
     VERTICAL_SIGMA_FLOOR_M, band_contradicts, ceiling_confirmed, ceiling_contradicts, ceiling_passed_under,
     clamp_probability, correlated_variance, elevation_observation, free_sample_informs, fuse_elevation,
     fuse_top_surface, fuse_with_disagreement, inverse_sensor_model, kalman_fuse, log_odds, normal_tail,

@@ -3,13 +3,14 @@
 //!
 //! * `integrate` (`map/integrate.rs`): [`Map::integrate`], the paper's Algorithm 1, in parallel where threads
 //!   are given: each ray's samples (`map/sample.rs`) gathered into the scan scratch (`map/scratch.rs`), then
-//!   each touched cell updated once (`map/update.rs`); [`Map::integrate_batch`] (`map/batch.rs`): many short
+//!   each touched cell updated once (`map/apply.rs`, one cell's update in `map/update.rs`); [`Map::integrate_batch`] (`map/batch.rs`): many short
 //!   scans side by side, one per thread;
 //! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);
 //! * the decisions ([`Map::traversability`], [`Map::traversability_layer`], [`Map::traversability_counts`]):
 //!   `traversability/decide.rs`, beside the pure rules they apply;
 //! * saving and loading: [`crate::save_map`], [`crate::load_map`] (`io/mapfile.rs`).
 
+mod apply;
 mod batch;
 mod integrate;
 pub use batch::BatchError;
@@ -24,9 +25,10 @@ pub use layers::{Layer, LayerKind, Raster};
 use serde::{Deserialize, Serialize};
 
 use self::scratch::ScanScratch;
-use crate::cell::{Ceiling, Cell};
+use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
+use crate::model::Ceiling;
 use crate::model::{ModelOptions, log_odds};
 use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
 

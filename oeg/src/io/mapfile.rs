@@ -29,10 +29,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::{ByteReader, container, read_file, write_atomically};
-use crate::cell::{Ceiling, Cell, SeenFrom};
 use crate::error::{Error, Result};
 use crate::map::{IntegrationStats, Map, MapConfig};
 use crate::storage::{TILE_CELLS, TILE_SIZE, TileIndex};
+use crate::{Ceiling, Cell, SeenFrom};
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"OEGMAP\r\n";

@@ -8,7 +8,8 @@ use std::borrow::Borrow;
 
 use rayon::prelude::*;
 
-use super::integrate::{LogOddsLevels, SHORT_SCAN_RAYS, gather_rays, update_marked};
+use super::apply::{LogOddsLevels, update_marked};
+use super::integrate::{SHORT_SCAN_RAYS, gather_rays};
 use super::sample::{Before, Sampling};
 use super::scratch::{ScanScratch, Scratch};
 use super::{IntegrationStats, Map};

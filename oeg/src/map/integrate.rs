@@ -1,6 +1,5 @@
 //! Scan integration: the paper's Algorithm 1. Every ray of a scan is cast through the grid and what it says
-//! about each cell is gathered (eq. 10-12, `sample.rs`); then each touched cell is updated once (eq. 5-9, or
-//! the rule the options choose: `update.rs`).
+//! about each cell is gathered (eq. 10-12, `sample.rs`); then each touched cell is updated once (`apply.rs`).
 //!
 //! Both steps use the threads rayon gives them ([`rayon::current_num_threads`]), and the map is the same, bit
 //! for bit, on any number: a long scan's rays are gathered in runs, one per thread, into separate scratch
@@ -11,15 +10,13 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
+use super::apply::{LogOddsLevels, apply};
 use super::sample::{Before, Here, RaySpan, Sampling};
 use super::scratch::{Evidence, ScanScratch, Scratch};
-use super::update::update_cell;
 use super::{IntegrationStats, Map};
-use crate::cell::{Ceiling, Cell};
 use crate::error::{Error, Result};
-use crate::model::{OverheadHits, update_ceiling};
 use crate::scan::Scan;
-use crate::storage::{Marked, TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex, offset_in_tile};
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex, offset_in_tile};
 use crate::traversal::GroundTraversal;
 
 /// Rays between two questions of [`Map::integrate_unless`]'s `stop`: a few milliseconds of work.
@@ -96,18 +93,6 @@ impl Map {
         Ok(stats)
     }
 }
-
-/// The log-odds levels a cell update compares with.
-#[derive(Clone, Copy)]
-pub(super) struct LogOddsLevels {
-    /// `L` above which a cell is occupied.
-    pub(super) occupied: f32,
-    /// The log-odds of a plain free sample.
-    pub(super) free: f32,
-}
-
-/// Cells a scan touched from which its tiles are updated in parallel.
-const MIN_CELLS_IN_PARALLEL: usize = 4096;
 
 /// Rays of a short scan, at most: a few milliseconds of work. Its walks mark each cell they cross first
 /// ([`TileGrid::slot_tile_and_marks_mut`]), so its update and clearing visit those cells alone rather than the
@@ -429,112 +414,6 @@ fn walk_of<E: Evidence>(
         }
     }
     Ok(walk)
-}
-
-/// Updates every cell the scan touched, once: first the tiles the update needs are placed, in a fixed order
-/// (so a memory limit leaves the map without any of this scan's updates), then the cells are updated, tile by
-/// tile in parallel, then the ceiling layer.
-fn apply<E: Evidence>(
-    cells: &mut TileGrid<Cell>,
-    ceilings: &mut TileGrid<Ceiling>,
-    scratch: &TileGrid<E>,
-    config: &super::MapConfig,
-    levels: LogOddsLevels,
-    stats: &mut IntegrationStats,
-) -> Result<()> {
-    let opts = &config.model;
-    let ceiling_rule = opts.overhead_hits == OverheadHits::Ceiling;
-    let scratch_bytes = scratch.memory_bytes();
-    let limit = config.memory_limit_bytes.saturating_sub(scratch_bytes);
-    let memory_error = |e: crate::storage::CapacityExceeded| Error::MemoryLimit {
-        requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
-        limit_bytes: config.memory_limit_bytes,
-    };
-    for (tile, evidence, marks) in scratch.marked_tiles() {
-        cells
-            .tile_or_insert(tile, limit.saturating_sub(ceilings.memory_bytes()))
-            .map_err(memory_error)?;
-        // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
-        if ceiling_rule && {
-            let mut hit = false;
-            marks.for_each(|k| hit |= evidence[k].full().is_some_and(|f| f.ceiling_p > 0.0));
-            hit
-        } {
-            let room = limit.saturating_sub(cells.memory_bytes());
-            ceilings.tile_or_insert(tile, room).map_err(memory_error)?;
-        }
-    }
-    // The marked tiles come row by row over the tile index, the order the cells' grid lends them in.
-    let work: Vec<_> = cells
-        .tiles_mut_in_order(scratch.marked_tiles().map(|(tile, _, _)| tile))
-        .into_iter()
-        .filter_map(|(tile, cells)| {
-            let (evidence, marks) = scratch.marked_tile(tile)?;
-            Some((cells, evidence, marks))
-        })
-        .collect();
-    let update = |(cells, evidence, marks): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], Marked<'_>)| {
-        update_marked(cells, evidence, marks, opts, levels)
-    };
-    // Cells to update: below a few thousand, handing tiles to threads costs more than it saves.
-    let touched: usize = work.iter().map(|(_, _, marks)| marks.num_cells()).sum();
-    stats.num_cells_updated += if touched >= MIN_CELLS_IN_PARALLEL && rayon::current_num_threads() > 1 {
-        work.into_par_iter().map(update).sum::<u64>()
-    } else {
-        work.into_iter().map(update).sum::<u64>()
-    };
-    if ceiling_rule {
-        update_ceilings(ceilings, scratch, opts, levels);
-    }
-    Ok(())
-}
-
-/// The ceiling layer's update ([`OverheadHits::Ceiling`]), where the scan said something about a ceiling.
-fn update_ceilings<E: Evidence>(
-    ceilings: &mut TileGrid<Ceiling>,
-    scratch: &TileGrid<E>,
-    opts: &crate::model::ModelOptions,
-    levels: LogOddsLevels,
-) {
-    for (tile, evidence, marks) in scratch.marked_tiles() {
-        let Some(ceilings) = ceilings.tile_mut(tile) else {
-            continue;
-        };
-        marks.for_each(|k| {
-            let Some(ev) = evidence[k].full().filter(|f| f.touches_ceiling()) else {
-                return;
-            };
-            let ceiling = &mut ceilings[k];
-            *ceiling = update_ceiling(
-                *ceiling,
-                ev.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas),
-                ev.ceiling_contradicted,
-                ev.ceiling_clear_m,
-                opts,
-                levels.occupied,
-            );
-        });
-    }
-}
-
-/// Updates a tile's cells that a scan touched, from their evidence (each once, in any order: every cell's update
-/// reads its own evidence alone). Returns the cells updated.
-pub(super) fn update_marked<E: Evidence>(
-    cells: &mut [Cell; TILE_CELLS],
-    evidence: &[E; TILE_CELLS],
-    marks: Marked<'_>,
-    opts: &crate::model::ModelOptions,
-    levels: LogOddsLevels,
-) -> u64 {
-    let mut updated = 0u64;
-    marks.for_each(|k| {
-        let ev = &evidence[k];
-        if !ev.paper().is_untouched() {
-            updated += 1;
-            update_cell(&mut cells[k], ev, opts, levels.occupied, levels.free);
-        }
-    });
-    updated
 }
 
 #[cfg(test)]

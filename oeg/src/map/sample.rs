@@ -4,8 +4,9 @@
 use nalgebra::Vector3;
 
 use super::scratch::{Evidence, PaperEvidence, ScanEvidence};
-use crate::cell::{Ceiling, Cell, SeenFrom};
+use crate::cell::Cell;
 use crate::geometry::GridGeometry;
+use crate::model::{Ceiling, SeenFrom};
 use crate::model::{
     Elevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits,
     band_contradicts, ceiling_contradicts, ceiling_passed_under, clamp_probability, elevation_observation,

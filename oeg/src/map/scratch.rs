@@ -2,7 +2,7 @@
 //! (Algorithm 1 reads the map as it was before the scan), kept in tiles beside the map and reused scan after
 //! scan.
 
-use crate::cell::SeenFrom;
+use crate::model::SeenFrom;
 use crate::model::{
     CeilingHit, Elevation, FreeSpaceOccupancy, Level, ModelOptions, OverheadHits, ScanHitElevation,
     overhead_significant, spread_variance, surface_level,

@@ -154,7 +154,7 @@ pub enum OverheadHits {
     #[default]
     Surface,
     /// A structure over the surface (a board or a table top over the ground, a person who stepped onto it):
-    /// the hit goes to the cell's ceiling ([`crate::cell::Ceiling`], [`crate::model::update_ceiling`]), the
+    /// the hit goes to the cell's ceiling ([`crate::Ceiling`], [`crate::model::update_ceiling`]), the
     /// lowest structure seen over the surface, and leaves the surface alone. One height per cell cannot hold a
     /// board seen now and then over ground seen all the time: fused into the surface, the board's rare top hits
     /// are outvoted by the ground under it. A ceiling is cleared by beams through its band, as a surface is;

@@ -4,7 +4,7 @@
 
 use super::equations::{Elevation, kalman_fuse, log_odds, update_log_odds};
 use super::options::{ElevationFusion, FreeSpaceOccupancy, ModelOptions, ScanHitElevation};
-use crate::cell::{Ceiling, SeenFrom};
+use super::{Ceiling, SeenFrom};
 
 /// Fuses the elevation measurement `h` (variance `s2`) into `prior` under `rule` (see [`ElevationFusion`]);
 /// `band_sigmas` is the surface band's half width for [`ElevationFusion::TopSurface`].
