@@ -24,6 +24,7 @@ pub use layers::{Layer, LayerKind, Raster};
 
 use serde::{Deserialize, Serialize};
 
+use self::apply::LogOddsLevels;
 use self::scratch::ScanScratch;
 use crate::cell::Cell;
 use crate::error::{Error, Result};
@@ -108,10 +109,8 @@ pub struct Map {
     /// The ceiling layer ([`crate::OverheadHits::Ceiling`]): tiles only where a ceiling was seen.
     pub(crate) ceilings: TileGrid<Ceiling>,
     pub(crate) scratch: ScanScratch,
-    /// `L` above which a cell is occupied (the occupancy threshold in log-odds).
-    pub(crate) occupied_log_odds: f32,
-    /// Eq. 6 of `p_min`, the log-odds of a plain free sample.
-    pub(crate) free_log_odds: f32,
+    /// The occupancy threshold and a plain free sample in log-odds, resolved once from the model.
+    pub(crate) levels: LogOddsLevels,
     pub(crate) totals: IntegrationStats,
     pub(crate) num_scans: u64,
 }
@@ -129,8 +128,10 @@ impl Map {
             cells: TileGrid::new(Cell::UNOBSERVED),
             ceilings: TileGrid::new(Ceiling::NONE),
             scratch: ScanScratch::for_model(&config.model),
-            occupied_log_odds: log_odds(config.model.occupied_threshold),
-            free_log_odds: log_odds(config.model.p_min),
+            levels: LogOddsLevels {
+                occupied: log_odds(config.model.occupied_threshold),
+                free: log_odds(config.model.p_min),
+            },
             totals: IntegrationStats::default(),
             num_scans: 0,
             config,
@@ -175,12 +176,12 @@ impl Map {
     /// Whether the cell is occupied (`P > occupied_threshold`); `None` if never observed.
     pub fn is_occupied(&self, cell: CellIndex) -> Option<bool> {
         let c = self.cell(cell);
-        c.is_observed().then_some(c.log_odds > self.occupied_log_odds)
+        c.is_observed().then_some(c.log_odds > self.levels.occupied)
     }
 
     /// The occupancy threshold as log-odds: a cell is occupied when its `L` is above it.
     pub fn occupied_log_odds(&self) -> f32 {
-        self.occupied_log_odds
+        self.levels.occupied
     }
 
     /// Bytes the map holds: the cells' tiles, the ceiling layer's, their indices and the map itself. The

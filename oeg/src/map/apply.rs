@@ -12,12 +12,12 @@ use crate::model::{Ceiling, OverheadHits, update_ceiling};
 use crate::storage::{Marked, TILE_CELLS, TileGrid};
 
 /// The log-odds levels a cell update compares with.
-#[derive(Clone, Copy)]
-pub(super) struct LogOddsLevels {
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LogOddsLevels {
     /// `L` above which a cell is occupied.
-    pub(super) occupied: f32,
+    pub(crate) occupied: f32,
     /// The log-odds of a plain free sample.
-    pub(super) free: f32,
+    pub(crate) free: f32,
 }
 
 /// Cells a scan touched from which its tiles are updated in parallel.

@@ -109,8 +109,7 @@ impl Map {
             cells,
             ceilings,
             scratch,
-            occupied_log_odds,
-            free_log_odds,
+            levels,
             ..
         } = self;
         let ScanScratch::Paper(scratch) = scratch else {
@@ -125,11 +124,7 @@ impl Map {
         };
         let budget = config.memory_limit_bytes / 2;
         let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
-        let levels = LogOddsLevels {
-            occupied: *occupied_log_odds,
-            free: *free_log_odds,
-        };
-        stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, levels);
+        stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, *levels);
         scratch.recycle();
         self.num_scans += scans.len() as u64;
         self.totals += stats;

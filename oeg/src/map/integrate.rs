@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::apply::{LogOddsLevels, apply};
+use super::apply::apply;
 use super::sample::{Before, Here, RaySpan, Sampling};
 use super::scratch::{Evidence, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
@@ -65,14 +65,10 @@ impl Map {
             cells,
             ceilings,
             scratch,
-            occupied_log_odds,
-            free_log_odds,
+            levels,
             ..
         } = self;
-        let levels = LogOddsLevels {
-            occupied: *occupied_log_odds,
-            free: *free_log_odds,
-        };
+        let levels = *levels;
         let before = Before {
             geometry,
             cells,
