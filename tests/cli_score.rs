@@ -57,7 +57,7 @@ fn run_and_export(dir: &Path) -> (PathBuf, PathBuf) {
     .expect("scenario");
     let sc = &loaded.scenario;
     let map = oeg::load_map(&run.join("map.oeg")).expect("map");
-    let region = oeg_eval::pipeline::region_of(sc, map.geometry()).expect("region");
+    let region = *loaded.window.region();
     let files = oeg::planner_files(
         &map,
         region,

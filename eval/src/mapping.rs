@@ -83,16 +83,9 @@ impl Mapping {
             .collect::<std::result::Result<Vec<_>, _>>()?;
         let models = simulation.sensors().iter().map(|x| x.map_model()).collect();
         let s = &loaded.scenario;
-        let first_geometry = match maps.first() {
-            Some(m) => *m.geometry(),
-            None => oeg::GridGeometry::new(s.map.resolution_m)?,
-        };
-        let observability = Observability::new(
-            simulation.world(),
-            &first_geometry,
-            region_of(s, &first_geometry)?,
-            s.robot.profile(),
-        );
+        // What the sensors could see, on the scenario's own window (the first map's: the others share the
+        // simulation and differ in their model, or in a sweep's resolution, where the judge leaves it out).
+        let observability = Observability::new(simulation.world(), &loaded.window, s.robot.profile());
         let max_range_m: Vec<f64> = simulation.sensors().iter().map(|x| x.spec.max_range_m).collect();
         let blind_band = blind_band(
             simulation.sensors(),
@@ -323,18 +316,6 @@ fn map_batch(
         maps.iter_mut().zip(map_s.iter_mut()).try_for_each(integrate)?;
     }
     Ok(scans)
-}
-
-/// The scenario's map region as cells.
-///
-/// # Errors
-/// A region that does not fit the grid.
-pub fn region_of(s: &scenario::Scenario, geometry: &oeg::GridGeometry) -> Result<oeg::CellRegion> {
-    let eps = s.map.resolution_m * 1e-6;
-    Ok(geometry.region_covering(
-        (s.map.min_xy_m[0], s.map.min_xy_m[1]),
-        (s.map.max_xy_m[0] - eps, s.map.max_xy_m[1] - eps),
-    )?)
 }
 
 /// One simulated scan into the observability and, at the estimated pose, into every map ([`map_batch`] of

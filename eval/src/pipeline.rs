@@ -15,7 +15,6 @@ use sim::{Simulation, scenario};
 use crate::error::{EvalError, Result};
 use crate::judge::metrics::{self, FailedExpectation, Metrics};
 use crate::judge::{Evaluation, Sensed, evaluate};
-pub use crate::mapping::region_of;
 use crate::mapping::{Mapping, SimulatedTiming};
 use crate::navigation::external::ExternalPlanner;
 use crate::navigation::{NavigationInputs, NavigationLog, PlannerSource, navigate};
@@ -258,12 +257,7 @@ pub fn simulate(
     let truth_start = Instant::now();
     // The static world's truth (people and the robot left out) is the same at any time: it is taken before
     // the loop, so the judge can watch the robot's footprint against it at every step.
-    let truth = truth_of(
-        s,
-        mapping.simulation.world(),
-        mapping.maps[0].geometry(),
-        progress,
-    )?;
+    let truth = truth_of(loaded, mapping.simulation.world(), progress)?;
     let truth_s = truth_start.elapsed().as_secs_f64();
     let inputs = NavigationInputs {
         scenario: s,
@@ -340,38 +334,34 @@ pub fn planner_source(
     }
 }
 
-/// The truth over the scenario's map region on `geometry`'s cells, people left out, from the world at the end
-/// of the run, with [`DEFAULT_SAMPLES_PER_SIDE`] samples per cell side.
+/// The truth over the scenario's map window ([`scenario::LoadedScenario::window`]), people left out, from the
+/// world at the end of the run, with [`DEFAULT_SAMPLES_PER_SIDE`] samples per cell side.
 ///
 /// # Errors
-/// A region that does not fit the grid, `progress` cancelled.
+/// `progress` cancelled.
 pub fn truth_of(
-    s: &scenario::Scenario,
+    loaded: &scenario::LoadedScenario,
     world: &sim::World,
-    geometry: &GridGeometry,
     progress: &Progress,
 ) -> Result<TruthRaster> {
-    truth_sampled(s, world, geometry, DEFAULT_SAMPLES_PER_SIDE, progress)
+    truth_sampled(loaded, world, DEFAULT_SAMPLES_PER_SIDE, progress)
 }
 
 /// [`truth_of`] with `samples_per_side` samples per cell side; `progress`'s cancellation is checked at every
 /// band of the computation.
 ///
 /// # Errors
-/// A region that does not fit the grid, `progress` cancelled.
+/// `progress` cancelled.
 pub fn truth_sampled(
-    s: &scenario::Scenario,
+    loaded: &scenario::LoadedScenario,
     world: &sim::World,
-    geometry: &GridGeometry,
     samples_per_side: u32,
     progress: &Progress,
 ) -> Result<TruthRaster> {
-    let region = region_of(s, geometry)?;
     TruthRaster::compute(
         world,
-        geometry,
-        region,
-        profile_of(s)?,
+        &loaded.window,
+        profile_of(&loaded.scenario)?,
         Actors::Excluded,
         samples_per_side,
         &|| progress.check_cancelled().is_ok(),
@@ -477,12 +467,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
             create_dir(&planner_dir)?;
         }
         let recording = if options.mcap {
-            let geometry = GridGeometry::new(s.map.resolution_m)?;
-            Some(Recording::new(
-                region_of(s, &geometry)?,
-                s.map.resolution_m,
-                DEFAULT_GRID_PERIOD_S,
-            )?)
+            Some(Recording::new(loaded.window, DEFAULT_GRID_PERIOD_S)?)
         } else {
             None
         };
@@ -506,7 +491,7 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
             Some(t) => t,
             None => {
                 let truth_start = Instant::now();
-                let truth = truth_of(s, simulation.world(), &geometry, progress)?;
+                let truth = truth_of(&loaded, simulation.world(), progress)?;
                 (truth, truth_start.elapsed().as_secs_f64())
             }
         };

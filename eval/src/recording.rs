@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::io::Cursor;
 
 use nalgebra::Isometry3;
-use oeg::{CellRegion, LayerKind, Map, RobotProfile, TraversabilityRule};
+use oeg::{GridWindow, LayerKind, Map, RobotProfile, TraversabilityRule};
 use serde_json::{Value, json};
 
 /// The frame every message is placed in: the scenario's world, metres, z up.
@@ -115,8 +115,7 @@ pub struct Recording {
     writer: mcap::Writer<Cursor<Vec<u8>>>,
     schemas: BTreeMap<&'static str, u16>,
     channels: BTreeMap<String, (u16, u32)>,
-    region: CellRegion,
-    resolution_m: f64,
+    window: GridWindow,
     grid_period_s: f64,
     next_grid_s: f64,
     last_pose_s: f64,
@@ -131,12 +130,11 @@ impl std::fmt::Debug for Recording {
 }
 
 impl Recording {
-    /// A recording of the map over `region` (cells of `resolution_m`), its layers every `grid_period_s` of
-    /// simulated time.
+    /// A recording of the map over `window`, its layers every `grid_period_s` of simulated time.
     ///
     /// # Errors
     /// The writer's header cannot be written.
-    pub fn new(region: CellRegion, resolution_m: f64, grid_period_s: f64) -> Result<Self, RecordingError> {
+    pub fn new(window: GridWindow, grid_period_s: f64) -> Result<Self, RecordingError> {
         let writer = mcap::WriteOptions::new()
             .compression(None)
             .profile("")
@@ -146,8 +144,7 @@ impl Recording {
             writer,
             schemas: BTreeMap::new(),
             channels: BTreeMap::new(),
-            region,
-            resolution_m,
+            window,
             grid_period_s,
             next_grid_s: 0.0,
             last_pose_s: f64::NEG_INFINITY,
@@ -267,9 +264,9 @@ impl Recording {
         self.write(&format!("/scans/{sensor}"), "foxglove.PointCloud", t_s, &message)
     }
 
-    /// A grid over the recording's region on `topic`, one field `name` of 4-byte floats or bytes per cell.
+    /// A grid over the recording's window on `topic`, one field `name` of 4-byte floats or bytes per cell.
     fn grid(&mut self, topic: &str, t_s: f64, name: &str, cells: GridCells) -> Result<(), RecordingError> {
-        let r = self.region;
+        let (r, resolution_m) = (*self.window.region(), self.window.resolution_m());
         let (cell_stride, numeric_type, data) = match cells {
             GridCells::F32(values) => (
                 4,
@@ -278,11 +275,10 @@ impl Recording {
             ),
             GridCells::U8(values) => (1, 1, values),
         };
-        let origin_x = f64::from(r.min.i) * self.resolution_m;
-        let origin_y = f64::from(r.min.j) * self.resolution_m;
+        let (origin_x, origin_y) = self.window.min_corner_m();
         let message = json!({"timestamp": stamp(t_s), "frame_id": WORLD_FRAME,
             "pose": planar_pose_json(origin_x, origin_y, 0.0), "column_count": r.num_x,
-            "cell_size": {"x": self.resolution_m, "y": self.resolution_m},
+            "cell_size": {"x": resolution_m, "y": resolution_m},
             "row_stride": cell_stride * r.num_x, "cell_stride": cell_stride,
             "fields": [{"name": name, "offset": 0, "type": numeric_type}],
             "data": crate::output::base64(&data)});
@@ -316,12 +312,12 @@ impl Recording {
             ("/map/variance", LayerKind::VarianceM2, "variance_m2"),
         ] {
             let layer = map
-                .layer(kind, self.region)
+                .layer(kind, *self.window.region())
                 .map_err(|e| RecordingError(e.to_string()))?;
             self.grid(topic, t_s, name, GridCells::F32(layer.values))?;
         }
         let decisions = map
-            .traversability_layer(self.region, profile, rule)
+            .traversability_layer(*self.window.region(), profile, rule)
             .map_err(|e| RecordingError(e.to_string()))?;
         let codes = decisions.values.iter().map(|t| *t as u8).collect();
         self.grid("/map/decisions", t_s, "decision", GridCells::U8(codes))

@@ -2,7 +2,6 @@
 //! could see ([`ScoringTruth`]), and another mapper's arrays resampled onto the truth's grid and judged by the
 //! same code as `oeg run` (`oeg score`, the Python package's `oeg.score`; `docs/scoring.md`).
 
-use oeg::GridGeometry;
 use sim::observability::Observability;
 use sim::scenario::{LoadedScenario, Scenario};
 use sim::sensors::ObstacleReturns;
@@ -38,7 +37,6 @@ impl ScoringTruth {
     /// A world that cannot be built, a region that does not fit the grid, `progress` cancelled.
     pub fn of(loaded: &LoadedScenario, with_sensors: bool, progress: &Progress) -> Result<Self> {
         let s = &loaded.scenario;
-        let geometry = GridGeometry::new(s.map.resolution_m)?;
         if with_sensors && s.navigation.is_none() {
             let mut mapping = Mapping::new(loaded, &[])?;
             progress.set_length(mapping.simulation.num_scans_total());
@@ -47,7 +45,7 @@ impl ScoringTruth {
             mapping.simulation.world_mut().advance_to(s.duration_s);
             return Ok(Self {
                 scenario: s.clone(),
-                raster: truth_of(s, mapping.simulation.world(), &geometry, progress)?,
+                raster: truth_of(loaded, mapping.simulation.world(), progress)?,
                 returns: Some(mapping.simulation.obstacle_returns().clone()),
                 observability: Some(mapping.observability),
             });
@@ -56,7 +54,7 @@ impl ScoringTruth {
         let world = sim::World::new(loaded)?;
         Ok(Self {
             scenario: s.clone(),
-            raster: truth_of(s, &world, &geometry, progress)?,
+            raster: truth_of(loaded, &world, progress)?,
             observability: None,
             returns: None,
         })

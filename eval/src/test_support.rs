@@ -20,8 +20,7 @@ pub(crate) fn truth_cell(elevation_m: f32, step_blocked: bool, structure_gap_m: 
 /// A truth raster of 1 m cells over `region` for the paper's Pioneer 3-AT, people left out.
 pub(crate) fn truth_raster(region: CellRegion, cells: Vec<CellTruth>) -> TruthRaster {
     TruthRaster {
-        region,
-        resolution_m: 1.0,
+        window: oeg::GridWindow::new(oeg::GridGeometry::new(1.0).expect("resolution"), region),
         profile: RobotProfile::default(),
         time_s: 0.0,
         actors: Actors::Excluded,

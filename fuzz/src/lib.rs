@@ -188,16 +188,11 @@ fn truth_of_text(text: &str) -> bool {
         return false;
     };
     let s = &loaded.scenario;
-    let Ok(geometry) = oeg::GridGeometry::new(s.map.resolution_m) else {
-        return true;
-    };
-    let Ok(region) = oeg_eval::pipeline::region_of(s, &geometry) else {
-        return true;
-    };
+    let region = *loaded.window.region();
     let cost = sim::truth::TruthCost::estimate(
         u64::from(region.num_x),
         u64::from(region.num_y),
-        s.map.resolution_m,
+        loaded.window.resolution_m(),
         sim::truth::DEFAULT_SAMPLES_PER_SIDE,
         f64::from(s.robot.profile().contact_distance_m()),
     );
@@ -208,7 +203,7 @@ fn truth_of_text(text: &str) -> bool {
         return true;
     };
     let progress = oeg_eval::progress::Progress::hidden();
-    let truth = oeg_eval::pipeline::truth_of(s, &world, &geometry, &progress).expect("never cancelled");
+    let truth = oeg_eval::pipeline::truth_of(&loaded, &world, &progress).expect("never cancelled");
     assert_eq!(
         truth.cells.len() as u64,
         region.num_cells(),
@@ -220,7 +215,6 @@ fn truth_of_text(text: &str) -> bool {
 /// The scene, its truth and robot the check-path target checks paths against, built once.
 struct CheckPathScene {
     loaded: sim::scenario::LoadedScenario,
-    geometry: oeg::GridGeometry,
     truth: sim::truth::TruthRaster,
 }
 
@@ -229,19 +223,13 @@ fn check_path(path: &Path, data: &[u8]) -> bool {
     let scene = SCENE.get_or_init(|| {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/scenes/nav_wall.toml");
         let loaded = sim::scenario::load(&file).expect("the shipped scene");
-        let geometry = oeg::GridGeometry::new(loaded.scenario.map.resolution_m).expect("its grid");
         let world = sim::World::new(&loaded).expect("its world");
         let progress = oeg_eval::progress::Progress::hidden();
-        let truth =
-            oeg_eval::pipeline::truth_of(&loaded.scenario, &world, &geometry, &progress).expect("its truth");
-        CheckPathScene {
-            loaded,
-            geometry,
-            truth,
-        }
+        let truth = oeg_eval::pipeline::truth_of(&loaded, &world, &progress).expect("its truth");
+        CheckPathScene { loaded, truth }
     });
-    let res = scene.geometry.resolution_m();
-    let extent = oeg_eval::navigation::external::extent_of(&scene.truth.region, res);
+    let res = scene.truth.window.resolution_m();
+    let extent = oeg_eval::navigation::external::extent_of(&scene.truth.window);
     let Ok(points) = oeg_eval::navigation::external::parse_path(path, data, extent) else {
         return false;
     };
@@ -251,7 +239,6 @@ fn check_path(path: &Path, data: &[u8]) -> bool {
     let judge = oeg_eval::jobs::check_path::PathJudge {
         scenario: &scene.loaded.scenario,
         truth: &scene.truth,
-        geometry: scene.geometry,
         footprint: scene.loaded.robot.footprint(),
     };
     let check = judge.check(path, &points, None).expect("within the pose bound");

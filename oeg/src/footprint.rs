@@ -2,7 +2,7 @@
 //! polygon `footprint`, here a rectangle). Turned with the robot's heading, it says which cells the robot
 //! covers and how close it comes to a cell: the checks of a driven or planned path use it, never a disc.
 
-use crate::geometry::{CellIndex, CellRegion, GridGeometry};
+use crate::geometry::{CellIndex, GridGeometry, GridWindow};
 
 /// A rectangle in the robot's base frame (x forward, y left), metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,9 +61,10 @@ impl Footprint {
         .map(|(x, y)| (pose.x_m + c * x - s * y, pose.y_m + s * x + c * y))
     }
 
-    /// The cells of `region` whose square overlaps the footprint at `pose` (touching edges do not count),
+    /// The cells of `window` whose square overlaps the footprint at `pose` (touching edges do not count),
     /// in row-major order.
-    pub fn cells_under(&self, geometry: &GridGeometry, region: &CellRegion, pose: Pose2) -> Vec<CellIndex> {
+    pub fn cells_under(&self, window: &GridWindow, pose: Pose2) -> Vec<CellIndex> {
+        let (geometry, region) = (window.geometry(), window.region());
         let corners = self.corners(pose);
         let (lo_x, hi_x) = span(corners.iter().map(|p| p.0));
         let (lo_y, hi_y) = span(corners.iter().map(|p| p.1));
@@ -144,6 +145,7 @@ fn point_segment_distance(p: Point, a: Point, b: Point) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::CellRegion;
 
     fn pioneer_like() -> Footprint {
         Footprint {
@@ -167,8 +169,7 @@ mod tests {
         };
         // Heading +x at a cell corner: 4 x 1 cells on each side of the x axis.
         let along_x = f.cells_under(
-            &g,
-            &region,
+            &GridWindow::new(g, region),
             Pose2 {
                 x_m: 0.0,
                 y_m: 0.0,
@@ -183,8 +184,7 @@ mod tests {
         );
         // Turned a quarter: the same cells transposed.
         let along_y = f.cells_under(
-            &g,
-            &region,
+            &GridWindow::new(g, region),
             Pose2 {
                 x_m: 0.0,
                 y_m: 0.0,
@@ -199,8 +199,7 @@ mod tests {
         );
         // Turned 45 degrees: a diagonal band, and never the far corners of its bounding box.
         let diagonal = f.cells_under(
-            &g,
-            &region,
+            &GridWindow::new(g, region),
             Pose2 {
                 x_m: 0.0,
                 y_m: 0.0,

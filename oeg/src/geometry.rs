@@ -202,6 +202,96 @@ impl CellRegion {
     }
 }
 
+/// A window onto the grid: its geometry and a rectangle of its cells, the one value every dense raster over a
+/// part of the map (a layer, the truth, a figure, a planner's files) is laid out by. grid_map's
+/// `SubmapGeometry` is the model: the map's geometry is set once, and a window onto it is one value, not a
+/// resolution and a region carried side by side.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GridWindow {
+    geometry: GridGeometry,
+    region: CellRegion,
+}
+
+impl GridWindow {
+    /// The window onto `geometry`'s grid over `region`.
+    pub const fn new(geometry: GridGeometry, region: CellRegion) -> Self {
+        Self { geometry, region }
+    }
+
+    /// The window over the world rectangle from `min_xy_m` (included) to `max_xy_m` (excluded): the cells
+    /// whose min-x, min-y corner lies in it, and the cell holding `min_xy_m`. A region given in metres, such
+    /// as a scenario's `[map]` region, is read by this one rule, so a rectangle whose sides are whole cells
+    /// covers exactly those cells and no row beyond them.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] if a corner is not finite, lies beyond the grid's index range, or
+    /// `max_xy_m` is not above `min_xy_m` on both axes.
+    pub fn covering(geometry: GridGeometry, min_xy_m: (f64, f64), max_xy_m: (f64, f64)) -> Result<Self> {
+        if !(max_xy_m.0 > min_xy_m.0 && max_xy_m.1 > min_xy_m.1) {
+            return Err(Error::setting(
+                "region",
+                format!(
+                    "the rectangle from {min_xy_m:?} to {max_xy_m:?} m is empty; expected its max corner above                      its min corner on both axes"
+                ),
+            ));
+        }
+        // The max corner is excluded: a point a millionth of a cell inside it picks the last cell covered.
+        let eps = geometry.resolution_m() * 1e-6;
+        let region = geometry.region_covering(min_xy_m, (max_xy_m.0 - eps, max_xy_m.1 - eps))?;
+        Ok(Self { geometry, region })
+    }
+
+    /// The grid's geometry.
+    pub const fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// The cells of the window.
+    pub const fn region(&self) -> &CellRegion {
+        &self.region
+    }
+
+    /// The cell size, metres.
+    pub fn resolution_m(&self) -> f64 {
+        self.geometry.resolution_m()
+    }
+
+    /// The number of cells in the window.
+    pub fn num_cells(&self) -> u64 {
+        self.region.num_cells()
+    }
+
+    /// The world coordinates of the window's min-x, min-y corner, metres.
+    pub fn min_corner_m(&self) -> (f64, f64) {
+        self.geometry.cell_min_corner(self.region.min)
+    }
+
+    /// The window's width and height, metres.
+    pub fn size_m(&self) -> (f64, f64) {
+        let r = self.resolution_m();
+        (f64::from(self.region.num_x) * r, f64::from(self.region.num_y) * r)
+    }
+
+    /// The row-major offset of the cell holding the world point `(x, y)`, or `None` outside the window.
+    pub fn offset_of(&self, x_m: f64, y_m: f64) -> Option<usize> {
+        self.region.offset(self.geometry.cell_of(x_m, y_m)?)
+    }
+
+    /// The world coordinates of the centre of the cell at row-major `offset`.
+    pub fn center_of_offset(&self, offset: usize) -> (f64, f64) {
+        let num_x = self.region.num_x as usize;
+        self.geometry.cell_center(
+            self.region
+                .cell_at((offset % num_x) as u32, (offset / num_x) as u32),
+        )
+    }
+
+    /// A window onto the same grid over other cells.
+    pub fn with_region(&self, region: CellRegion) -> Self {
+        Self::new(self.geometry, region)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,5 +344,38 @@ mod tests {
         let r = g.region_covering((-1.0, 0.0), (1.0, 0.49)).expect("valid");
         assert_eq!(r.min, CellIndex::new(-2, 0));
         assert_eq!((r.num_x, r.num_y), (5, 1));
+    }
+
+    #[test]
+    fn a_window_covers_whole_cells_of_its_rectangle_and_no_row_beyond() {
+        let g = GridGeometry::new(0.05).expect("valid");
+        // Sides of whole cells: 20 x 10 cells, the max corner excluded.
+        let w = GridWindow::covering(g, (0.0, -0.25), (1.0, 0.25)).expect("valid");
+        assert_eq!(
+            (w.region().min, w.region().num_x, w.region().num_y),
+            (CellIndex::new(0, -5), 20, 10)
+        );
+        assert_eq!(w.size_m(), (1.0, 0.5));
+        assert_eq!(w.offset_of(0.999, 0.249), Some(w.num_cells() as usize - 1));
+        assert_eq!(w.offset_of(1.0, 0.0), None);
+        // A corner inside a cell takes that cell whole.
+        let w = GridWindow::covering(g, (0.03, 0.0), (0.08, 0.05)).expect("valid");
+        assert_eq!((w.region().num_x, w.region().num_y), (2, 1));
+        let (x, y) = w.center_of_offset(1);
+        assert!((x - 0.075).abs() < 1e-12 && (y - 0.025).abs() < 1e-12);
+        assert_eq!(w.min_corner_m(), (0.0, 0.0));
+    }
+
+    #[test]
+    fn an_empty_or_non_finite_rectangle_has_no_window() {
+        let g = GridGeometry::new(0.1).expect("valid");
+        for (lo, hi) in [
+            ((0.0, 0.0), (0.0, 1.0)),
+            ((1.0, 0.0), (0.0, 1.0)),
+            ((0.0, 0.0), (f64::NAN, 1.0)),
+        ] {
+            let err = GridWindow::covering(g, lo, hi).expect_err("must be refused");
+            assert!(err.to_string().contains("region"), "{err}");
+        }
     }
 }

@@ -22,7 +22,7 @@ mod traversal;
 // The map: its grid, cells and layers.
 pub use cell::Cell;
 pub use error::{Error, Result};
-pub use geometry::{CellIndex, CellRegion, GridGeometry, MAX_RESOLUTION_M, MIN_RESOLUTION_M};
+pub use geometry::{CellIndex, CellRegion, GridGeometry, GridWindow, MAX_RESOLUTION_M, MIN_RESOLUTION_M};
 pub use map::{
     BatchError, DEFAULT_MEMORY_LIMIT_BYTES, IntegrationStats, Layer, LayerKind, Map, MapConfig,
     RAYS_BETWEEN_STOP_CHECKS, Raster,

@@ -1,6 +1,6 @@
 //! A path planner on the map's decisions: the check a navigation stack makes with a 2.5D map.
 //!
-//! 8-connected A* over a [`CellRegion`] from a start cell to a goal cell. The robot's centre may enter a cell
+//! 8-connected A* over a [`GridWindow`] from a start cell to a goal cell. The robot's centre may enter a cell
 //! when the cell is drivable and no blocked cell lies within [`PlannerOptions::inflation_radius_m`] of it (ROS
 //! costmap_2d's lethal inscribed radius); unknown cells follow [`UnknownCells`]. Diagonal moves may not cut a
 //! corner (both cells beside the diagonal must be enterable). Costs are integers (1000 a side, 1414 a diagonal)
@@ -8,16 +8,17 @@
 //!
 //! ```
 //! use oeg::{PlannerOptions, plan};
-//! use oeg::{CellIndex, CellRegion, Traversability};
+//! use oeg::{CellIndex, CellRegion, GridGeometry, GridWindow, Traversability};
 //!
-//! // A 10 x 5 region of 0.1 m cells with a wall across x = 0.5 m except at its top row.
+//! // A 10 x 5 window of 0.1 m cells with a wall across x = 0.5 m except at its top row.
 //! let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(9, 4)).expect("region");
+//! let window = GridWindow::new(GridGeometry::new(0.1)?, region);
 //! let decisions: Vec<Traversability> = region
 //!     .cells()
 //!     .map(|c| if c.i == 5 && c.j < 4 { Traversability::Blocked } else { Traversability::Free })
 //!     .collect();
 //! let options = PlannerOptions { inflation_radius_m: 0.0, ..PlannerOptions::default() };
-//! let path = plan(&region, 0.1, &decisions, CellIndex::new(0, 0), CellIndex::new(9, 0), &options)?
+//! let path = plan(&window, &decisions, CellIndex::new(0, 0), CellIndex::new(9, 0), &options)?
 //!     .expect("through the gap");
 //! assert!(path.cells.contains(&CellIndex::new(5, 4)));
 //! # Ok::<(), oeg::Error>(())
@@ -29,7 +30,7 @@ use std::collections::BinaryHeap;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::geometry::{CellIndex, CellRegion};
+use crate::geometry::{CellIndex, CellRegion, GridWindow};
 use crate::traversability::Traversability;
 
 /// Default inflation radius, metres: half the Pioneer 3-AT's 0.50 m width (its inscribed radius).
@@ -155,19 +156,19 @@ pub struct Plan {
     pub length_m: f64,
 }
 
-/// Where the robot's centre may not be, row-major over `region`: blocked cells inflated by the radius, and
+/// Where the robot's centre may not be, row-major over `window`: blocked cells inflated by the radius, and
 /// unknown cells as `options.unknown` says. Start and goal exemptions are [`plan`]'s, not this mask's.
 ///
 /// # Errors
-/// [`Error::InvalidSetting`] for bad options or a resolution that is not a positive number; a `decisions`
-/// slice whose length is not the region's cell count.
+/// [`Error::InvalidSetting`] for bad options, or a `decisions` slice whose length is not the window's cell
+/// count.
 pub fn forbidden_mask(
-    region: &CellRegion,
-    resolution_m: f64,
+    window: &GridWindow,
     decisions: &[Traversability],
     options: &PlannerOptions,
 ) -> Result<Vec<bool>> {
-    validate_inputs(region, resolution_m, decisions, options)?;
+    let (region, resolution_m) = (window.region(), window.resolution_m());
+    validate_inputs(region, decisions, options)?;
     let is_obstacle = |t: Traversability| match t {
         Traversability::Blocked => true,
         Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
@@ -193,20 +194,14 @@ pub fn forbidden_mask(
     Ok(forbidden)
 }
 
-/// The checks every entry point makes: sane options, a positive resolution, one decision per region cell.
+/// The checks every entry point makes: sane options and one decision per cell (the window's resolution was
+/// checked when its geometry was made).
 fn validate_inputs(
     region: &CellRegion,
-    resolution_m: f64,
     decisions: &[Traversability],
     options: &PlannerOptions,
 ) -> Result<()> {
     options.validate()?;
-    if !(resolution_m.is_finite() && resolution_m > 0.0) {
-        return Err(Error::setting(
-            "resolution_m",
-            format!("must be a positive number of metres, got {resolution_m}"),
-        ));
-    }
     if decisions.len() as u64 != region.num_cells() {
         return Err(Error::setting(
             "decisions",
@@ -314,7 +309,7 @@ fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
     }
 }
 
-/// The shortest path from `start` to `goal` through `region` on `decisions` (one per region cell, row-major),
+/// The shortest path from `start` to `goal` through `window` on `decisions` (one per cell, row-major),
 /// or `None` if there is none.
 ///
 /// The robot stands at the start, so every cell under it counts as drivable, blocked or unknown (costmap_2d's
@@ -330,16 +325,15 @@ fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 /// cross on its way out of it).
 ///
 /// # Errors
-/// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the region.
+/// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the window.
 pub fn plan(
-    region: &CellRegion,
-    resolution_m: f64,
+    window: &GridWindow,
     decisions: &[Traversability],
     start: CellIndex,
     goal: CellIndex,
     options: &PlannerOptions,
 ) -> Result<Option<Plan>> {
-    Ok(plan_or_why(region, resolution_m, decisions, start, goal, options)?.ok())
+    Ok(plan_or_why(window, decisions, start, goal, options)?.ok())
 }
 
 /// Why [`plan`] found no path.
@@ -386,13 +380,13 @@ impl NoPath {
 /// # Errors
 /// As [`plan`].
 pub fn plan_or_why(
-    region: &CellRegion,
-    resolution_m: f64,
+    window: &GridWindow,
     decisions: &[Traversability],
     start: CellIndex,
     goal: CellIndex,
     options: &PlannerOptions,
 ) -> Result<std::result::Result<Plan, NoPath>> {
+    let (region, resolution_m) = (window.region(), window.resolution_m());
     let offset_of = |name: &'static str, c: CellIndex| {
         region.offset(c).ok_or_else(|| {
             Error::setting(
@@ -402,20 +396,19 @@ pub fn plan_or_why(
         })
     };
     let (s, g) = (offset_of("start", start)?, offset_of("goal", goal)?);
-    validate_inputs(region, resolution_m, decisions, options)?;
+    validate_inputs(region, decisions, options)?;
     let original = decisions;
     let mut decisions = decisions.to_vec();
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
     let extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options);
-    let mut forbidden = forbidden_mask(region, resolution_m, &decisions, options)?;
+    let mut forbidden = forbidden_mask(window, &decisions, options)?;
     if forbidden[s]
         && let Some(clearance) = start_clearance(region, resolution_m, &decisions, start, options)
     {
         forbidden = forbidden_mask(
-            region,
-            resolution_m,
+            window,
             &decisions,
             &PlannerOptions {
                 inflation_radius_m: clearance,
@@ -596,6 +589,11 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// `r` as a window onto a grid of `resolution_m`.
+    fn on(r: &CellRegion, resolution_m: f64) -> GridWindow {
+        GridWindow::new(crate::GridGeometry::new(resolution_m).expect("resolution"), *r)
+    }
+
     fn region(nx: i32, ny: i32) -> CellRegion {
         CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(nx - 1, ny - 1)).expect("region")
     }
@@ -637,18 +635,18 @@ mod tests {
         for class in [Traversability::Uncertain, Traversability::Unknown] {
             let far = wall_at(10, class);
             assert!(
-                plan(&r, 0.1, &far, start, goal, &strict)
+                plan(&on(&r, 0.1), &far, start, goal, &strict)
                     .expect("valid")
                     .is_none()
             );
-            let crossed = plan(&r, 0.1, &far, start, goal, &optimistic)
+            let crossed = plan(&on(&r, 0.1), &far, start, goal, &optimistic)
                 .expect("valid")
                 .expect("crossed beyond 0.5 m");
             assert!(crossed.cells.iter().any(|c| c.i == 10));
             // 0.3 m from the start: within the distance, the wall decides for real.
             let near = wall_at(3, class);
             assert!(
-                plan(&r, 0.1, &near, start, goal, &optimistic)
+                plan(&on(&r, 0.1), &near, start, goal, &optimistic)
                     .expect("valid")
                     .is_none()
             );
@@ -674,11 +672,11 @@ mod tests {
                 .iter()
                 .any(|c| block[r.offset(*c).expect("inside")] != Traversability::Free)
         };
-        let round = plan(&r, 0.1, &block, start, goal, &options(DEFAULT_DOUBT_COST))
+        let round = plan(&on(&r, 0.1), &block, start, goal, &options(DEFAULT_DOUBT_COST))
             .expect("valid")
             .expect("a path");
         assert!(!crosses(&round), "went through the block at the default cost");
-        let through = plan(&r, 0.1, &block, start, goal, &options(0.0))
+        let through = plan(&on(&r, 0.1), &block, start, goal, &options(0.0))
             .expect("valid")
             .expect("a path");
         assert!(crosses(&through), "a free doubt should take the straight line");
@@ -709,7 +707,7 @@ mod tests {
     fn no_path_says_which_end_is_forbidden_or_that_nothing_joins_them() {
         let r = region(10, 3);
         let why = |d: &[Traversability], goal: CellIndex, options: &PlannerOptions| {
-            plan_or_why(&r, 0.1, d, CellIndex::new(0, 1), goal, options)
+            plan_or_why(&on(&r, 0.1), d, CellIndex::new(0, 1), goal, options)
                 .expect("valid")
                 .expect_err("no path")
         };
@@ -746,8 +744,7 @@ mod tests {
         let r = region(10, 6);
         let d = vec![Traversability::Free; 60];
         let p = plan(
-            &r,
-            0.1,
+            &on(&r, 0.1),
             &d,
             CellIndex::new(0, 0),
             CellIndex::new(9, 3),
@@ -774,7 +771,7 @@ mod tests {
         // A wall at i = 5 with a one-cell gap at j = 5.
         let d = marked(&r, Traversability::Blocked, |c| c.i == 5 && c.j != 5);
         let (s, g) = (CellIndex::new(0, 5), CellIndex::new(10, 5));
-        let open = plan(&r, 0.1, &d, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid");
+        let open = plan(&on(&r, 0.1), &d, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid");
         assert!(open.is_some(), "the gap lets a point robot through");
         let wide = PlannerOptions {
             inflation_radius_m: 0.1,
@@ -784,13 +781,13 @@ mod tests {
             ..PlannerOptions::default()
         };
         assert_eq!(
-            plan(&r, 0.1, &d, s, g, &wide).expect("valid"),
+            plan(&on(&r, 0.1), &d, s, g, &wide).expect("valid"),
             None,
             "a 0.1 m robot does not fit"
         );
         let closed = marked(&r, Traversability::Blocked, |c| c.i == 5);
         assert_eq!(
-            plan(&r, 0.1, &closed, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid"),
+            plan(&on(&r, 0.1), &closed, s, g, &no_inflation(UnknownCells::Avoid)).expect("valid"),
             None
         );
     }
@@ -806,8 +803,7 @@ mod tests {
             Traversability::Free,
         ];
         let p = plan(
-            &r,
-            1.0,
+            &on(&r, 1.0),
             &d,
             CellIndex::new(0, 0),
             CellIndex::new(1, 1),
@@ -824,7 +820,7 @@ mod tests {
             c.i == 3 || c == CellIndex::new(0, 1)
         });
         let (s, g) = (CellIndex::new(0, 1), CellIndex::new(6, 1));
-        let go = |unknown| plan(&r, 1.0, &d, s, g, &no_inflation(unknown)).expect("valid");
+        let go = |unknown| plan(&on(&r, 1.0), &d, s, g, &no_inflation(unknown)).expect("valid");
         assert_eq!(go(UnknownCells::Avoid), None, "the unknown column is not entered");
         assert!(go(UnknownCells::Drivable).is_some());
         assert_eq!(go(UnknownCells::Inflate), None);
@@ -834,7 +830,7 @@ mod tests {
             known[r.offset(c).expect("inside")] = Traversability::Traversable;
         }
         assert!(
-            plan(&r, 1.0, &known, s, g, &no_inflation(UnknownCells::Avoid))
+            plan(&on(&r, 1.0), &known, s, g, &no_inflation(UnknownCells::Avoid))
                 .expect("valid")
                 .is_some()
         );
@@ -849,12 +845,12 @@ mod tests {
         let corridor = marked(&r, Traversability::Unknown, |c| c.j == 2);
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
         assert!(
-            plan(&r, 1.0, &corridor, s, g, &opts(UnknownCells::Avoid))
+            plan(&on(&r, 1.0), &corridor, s, g, &opts(UnknownCells::Avoid))
                 .expect("valid")
                 .is_some()
         );
         assert_eq!(
-            plan(&r, 1.0, &corridor, s, g, &opts(UnknownCells::Inflate)).expect("valid"),
+            plan(&on(&r, 1.0), &corridor, s, g, &opts(UnknownCells::Inflate)).expect("valid"),
             None
         );
     }
@@ -873,7 +869,7 @@ mod tests {
             ..PlannerOptions::default()
         };
         let (s, g) = (CellIndex::new(2, 2), CellIndex::new(10, 2));
-        let p = plan(&r, 0.1, &d, s, g, &options)
+        let p = plan(&on(&r, 0.1), &d, s, g, &options)
             .expect("valid")
             .expect("a way out and round");
         // Every cell of the path keeps at least the start's clearance less half a cell (0.25 m) from the wall.
@@ -884,7 +880,7 @@ mod tests {
             }
         }
         // Without the clearance rule the start would be pinned: every cell round it lies in the inflation.
-        let forbidden = forbidden_mask(&r, 0.1, &d, &options).expect("valid");
+        let forbidden = forbidden_mask(&on(&r, 0.1), &d, &options).expect("valid");
         assert!(forbidden[r.offset(s).expect("inside")]);
     }
 
@@ -904,10 +900,10 @@ mod tests {
             uncertain: UncertainCells::Blocked,
             ..PlannerOptions::default()
         };
-        assert!(plan(&r, 0.1, &d, s, g, &footprint).expect("valid").is_some());
+        assert!(plan(&on(&r, 0.1), &d, s, g, &footprint).expect("valid").is_some());
         let point = no_inflation(UnknownCells::Avoid);
         assert_eq!(
-            plan(&r, 0.1, &d, s, g, &point).expect("valid"),
+            plan(&on(&r, 0.1), &d, s, g, &point).expect("valid"),
             None,
             "only the start cell is exempt"
         );
@@ -929,12 +925,15 @@ mod tests {
             |hit: CellIndex| -> Vec<Traversability> { marked(&r, Traversability::Blocked, |c| c == hit) };
         let near_start = with_hit_at(CellIndex::new(3, 2));
         assert!(
-            plan(&r, 0.1, &near_start, s, g, &options)
+            plan(&on(&r, 0.1), &near_start, s, g, &options)
                 .expect("valid")
                 .is_some()
         );
         let near_goal = with_hit_at(CellIndex::new(10, 2));
-        assert_eq!(plan(&r, 0.1, &near_goal, s, g, &options).expect("valid"), None);
+        assert_eq!(
+            plan(&on(&r, 0.1), &near_goal, s, g, &options).expect("valid"),
+            None
+        );
     }
 
     #[test]
@@ -949,10 +948,14 @@ mod tests {
             inflation_radius_m: 5.0,
             ..PlannerOptions::default()
         };
-        assert_eq!(plan(&r, 0.1, &wall, s, g, &options).expect("valid"), None);
+        assert_eq!(plan(&on(&r, 0.1), &wall, s, g, &options).expect("valid"), None);
         // Without the wall the margin is free to be as wide as it likes around the start.
         let open = marked(&r, Traversability::Blocked, |_| false);
-        assert!(plan(&r, 0.1, &open, s, g, &options).expect("valid").is_some());
+        assert!(
+            plan(&on(&r, 0.1), &open, s, g, &options)
+                .expect("valid")
+                .is_some()
+        );
     }
 
     #[test]
@@ -960,16 +963,24 @@ mod tests {
         let r = region(3, 3);
         let d = vec![Traversability::Free; 9];
         let o = PlannerOptions::default();
-        assert!(plan(&r, 0.1, &d[..8], CellIndex::new(0, 0), CellIndex::new(2, 2), &o).is_err());
-        assert!(plan(&r, 0.1, &d, CellIndex::new(0, 0), CellIndex::new(3, 2), &o).is_err());
-        assert!(plan(&r, 0.0, &d, CellIndex::new(0, 0), CellIndex::new(2, 2), &o).is_err());
+        assert!(
+            plan(
+                &on(&r, 0.1),
+                &d[..8],
+                CellIndex::new(0, 0),
+                CellIndex::new(2, 2),
+                &o
+            )
+            .is_err()
+        );
+        assert!(plan(&on(&r, 0.1), &d, CellIndex::new(0, 0), CellIndex::new(3, 2), &o).is_err());
         let bad = PlannerOptions {
             inflation_radius_m: f64::NAN,
             footprint_radius_m: f64::NAN,
             ..o
         };
         let err =
-            plan(&r, 0.1, &d, CellIndex::new(0, 0), CellIndex::new(2, 2), &bad).expect_err("NaN radius");
+            plan(&on(&r, 0.1), &d, CellIndex::new(0, 0), CellIndex::new(2, 2), &bad).expect_err("NaN radius");
         assert!(err.to_string().contains("inflation_radius_m"), "{err}");
     }
 
@@ -998,7 +1009,7 @@ mod tests {
                 .map(|v| if *v == 0 { Traversability::Blocked } else { Traversability::Free })
                 .collect();
             let options = PlannerOptions { inflation_radius_m: radius_cells * 0.1, unknown: UnknownCells::Avoid, ..PlannerOptions::default() };
-            let mask = forbidden_mask(&r, 0.1, &d, &options).expect("valid");
+            let mask = forbidden_mask(&on(&r, 0.1), &d, &options).expect("valid");
             prop_assert_eq!(mask, brute_mask(&r, &d, radius_cells));
         }
 
@@ -1014,7 +1025,7 @@ mod tests {
             d[0] = Traversability::Free;
             d[99] = Traversability::Free;
             let o = no_inflation(UnknownCells::Avoid);
-            if let Some(p) = plan(&r, 1.0, &d, CellIndex::new(0, 0), CellIndex::new(9, 9), &o).expect("valid") {
+            if let Some(p) = plan(&on(&r, 1.0), &d, CellIndex::new(0, 0), CellIndex::new(9, 9), &o).expect("valid") {
                 prop_assert!(p.length_m >= 9.0 * std::f64::consts::SQRT_2 - 1e-9);
                 for c in &p.cells {
                     prop_assert!(d[r.offset(*c).expect("inside")] != Traversability::Blocked);

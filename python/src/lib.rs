@@ -195,15 +195,9 @@ fn xyz(name: &str, value: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
 }
 
 /// `(x_min, x_max, y_min, y_max)` of a region, metres: `matplotlib.pyplot.imshow(extent=...)`.
-fn extent(region: &oeg::CellRegion, geometry: &oeg::GridGeometry) -> Extent {
-    let (x0, y0) = geometry.cell_min_corner(region.min);
-    let res = geometry.resolution_m();
-    (
-        x0,
-        x0 + f64::from(region.num_x) * res,
-        y0,
-        y0 + f64::from(region.num_y) * res,
-    )
+fn extent(window: &oeg::GridWindow) -> Extent {
+    let [x0, x1, y0, y1] = oeg_eval::navigation::external::extent_of(window);
+    (x0, x1, y0, y1)
 }
 
 /// `(x_min, x_max, y_min, y_max)` in metres.
@@ -367,7 +361,7 @@ impl PyMap {
         let layer = self.map.layer(kind, region).map_err(oeg_error)?;
         Ok((
             grid(py, &region, layer.values)?,
-            extent(&region, self.map.geometry()),
+            extent(&oeg::GridWindow::new(*self.map.geometry(), region)),
         ))
     }
 
@@ -389,7 +383,10 @@ impl PyMap {
             .traversability_layer(region, &s.robot, rule)
             .map_err(oeg_error)?;
         let codes = classes.values.iter().map(|t| *t as u8).collect();
-        Ok((grid(py, &region, codes)?, extent(&region, self.map.geometry())))
+        Ok((
+            grid(py, &region, codes)?,
+            extent(&oeg::GridWindow::new(*self.map.geometry(), region)),
+        ))
     }
 
     fn memory_bytes(&self) -> u64 {
@@ -403,7 +400,7 @@ impl PyMap {
     fn observed_extent(&self) -> Option<Extent> {
         self.map
             .observed_region()
-            .map(|r| extent(&r, self.map.geometry()))
+            .map(|r| extent(&oeg::GridWindow::new(*self.map.geometry(), r)))
     }
 
     fn save(&self, path: PathBuf) -> PyResult<()> {
@@ -708,14 +705,13 @@ impl PyTruth {
     /// Cell size, metres.
     #[getter]
     fn resolution_m(&self) -> f64 {
-        self.inner.raster.resolution_m
+        self.inner.raster.window.resolution_m()
     }
 
     /// `(x_min, x_max, y_min, y_max)` of the region, metres.
     #[getter]
-    fn extent(&self) -> PyResult<Extent> {
-        let geometry = oeg::GridGeometry::new(self.inner.raster.resolution_m).map_err(oeg_error)?;
-        Ok(extent(&self.inner.raster.region, &geometry))
+    fn extent(&self) -> Extent {
+        extent(&self.inner.raster.window)
     }
 
     /// Whether the observability layers exist.
@@ -734,7 +730,7 @@ impl PyTruth {
     fn layers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         use oeg_eval::judge::verdict::TruthClass;
         let t = &self.inner.raster;
-        let region = &t.region;
+        let region = t.window.region();
         let out = PyDict::new(py);
         let cells = &t.cells;
         let layers: [(&str, Vec<f32>); 4] = [
@@ -854,7 +850,7 @@ fn score(
         .check(Path::new("the arrays"), [None; 3])
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let evaluation = py.detach(|| truth.inner.score(&foreign)).map_err(oeg_error)?;
-    let geometry = evaluation.estimate.geometry;
+    let geometry = *evaluation.estimate.window.geometry();
     let plan = oeg_eval::judge::plan_check::rows(&evaluation.plan, &geometry);
     Ok((
         serde_json::to_string(&evaluation.metrics).map_err(oeg_error)?,

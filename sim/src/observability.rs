@@ -17,7 +17,7 @@
 //! the gap at a range can hide in it.
 
 use nalgebra::{Point3, Vector3};
-use oeg::{CellIndex, CellRegion, GridGeometry, RobotProfile};
+use oeg::{CellIndex, GridWindow, RobotProfile};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -27,10 +27,8 @@ use crate::world::World;
 /// The observability of every cell of a region.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Observability {
-    /// The cells.
-    pub region: CellRegion,
-    /// Cell size, metres.
-    pub resolution_m: f64,
+    /// The cells, on the map's grid.
+    pub window: GridWindow,
     /// Per cell: a ray truly ended on it.
     pub step: Vec<bool>,
     /// Per cell: a ray crossed or ended inside its band between a step and the robot's height.
@@ -39,7 +37,6 @@ pub struct Observability {
     pub band_hit: Vec<bool>,
     /// Rays that told something (cast, and not a hole or a dropout).
     pub num_rays: u64,
-    geometry: GridGeometry,
     profile: RobotProfile,
     /// Ground height at each cell's centre, metres (NaN off the terrain).
     ground_m: Vec<f64>,
@@ -48,9 +45,10 @@ pub struct Observability {
 }
 
 impl Observability {
-    /// Nothing observed yet over `region`; the ground is read from `world` under every cell's centre.
-    pub fn new(world: &World, geometry: &GridGeometry, region: CellRegion, profile: RobotProfile) -> Self {
-        let cells: Vec<CellIndex> = region.cells().collect();
+    /// Nothing observed yet over `window`; the ground is read from `world` under every cell's centre.
+    pub fn new(world: &World, window: &GridWindow, profile: RobotProfile) -> Self {
+        let geometry = window.geometry();
+        let cells: Vec<CellIndex> = window.region().cells().collect();
         let ground_m: Vec<f64> = cells
             .par_iter()
             .map(|c| {
@@ -63,13 +61,11 @@ impl Observability {
             (lo.min(g), hi.max(g))
         });
         Self {
-            region,
-            resolution_m: geometry.resolution_m(),
+            window: *window,
             step: vec![false; cells.len()],
             clearance: vec![false; cells.len()],
             band_hit: vec![false; cells.len()],
             num_rays: 0,
-            geometry: *geometry,
             profile,
             ground_m,
             ground_lo_m,
@@ -130,7 +126,7 @@ impl Observability {
     }
 
     fn offset_at(&self, p: &Point3<f64>) -> Option<usize> {
-        self.region.offset(self.geometry.cell_of(p.x, p.y)?)
+        self.window.offset_of(p.x, p.y)
     }
 
     /// The cells whose band the ray from `origin` along the unit `dir` crosses within `length`.
@@ -145,13 +141,8 @@ impl Observability {
             return;
         };
         // ... and within the region.
-        let res = self.resolution_m;
-        let lo = self.region.min;
-        let (x0, y0) = (f64::from(lo.i) * res, f64::from(lo.j) * res);
-        let (x1, y1) = (
-            x0 + f64::from(self.region.num_x) * res,
-            y0 + f64::from(self.region.num_y) * res,
-        );
+        let ((x0, y0), (w, h)) = (self.window.min_corner_m(), self.window.size_m());
+        let (x1, y1) = (x0 + w, y0 + h);
         for (o, d, a, b) in [(origin.x, dir.x, x0, x1), (origin.y, dir.y, y0, y1)] {
             match slab(o, d, a, b, length) {
                 Some((s0, s1)) => (t0, t1) = (t0.max(s0), t1.min(s1)),
@@ -161,10 +152,11 @@ impl Observability {
         if t0 >= t1 {
             return;
         }
+        let res = self.window.resolution_m();
         // Amanatides and Woo's traversal of the cells the segment's x-y shadow crosses.
         let at = |t: f64| (origin.x + dir.x * t, origin.y + dir.y * t);
         let (sx, sy) = at(t0);
-        let Some(mut cell) = self.geometry.cell_of(sx, sy) else {
+        let Some(mut cell) = self.window.geometry().cell_of(sx, sy) else {
             return;
         };
         let axis = |d: f64, p: f64, index: i32| -> (i32, f64, f64) {
@@ -185,10 +177,10 @@ impl Observability {
         let (step_i, mut next_x, dx) = axis(dir.x, sx, cell.i);
         let (step_j, mut next_y, dy) = axis(dir.y, sy, cell.j);
         let mut enter = t0;
-        let max_cells = self.region.num_x as usize + self.region.num_y as usize + 2;
+        let max_cells = self.window.region().num_x as usize + self.window.region().num_y as usize + 2;
         for _ in 0..max_cells {
             let leave = next_x.min(next_y).min(t1);
-            if let Some(k) = self.region.offset(cell) {
+            if let Some(k) = self.window.region().offset(cell) {
                 let g = self.ground_m[k];
                 let (za, zb) = (origin.z + dir.z * enter, origin.z + dir.z * leave);
                 if g.is_finite() && za.max(zb) >= g + step && za.min(zb) <= g + height {

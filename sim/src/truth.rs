@@ -27,7 +27,7 @@
 //! [`STRUCTURE_SEARCH_M`] (passable when the smallest gap is at least the robot's height).
 
 use nalgebra::{Point3, Vector3};
-use oeg::{CellIndex, CellRegion, GridGeometry, RobotProfile};
+use oeg::{CellIndex, CellRegion, GridGeometry, GridWindow, RobotProfile};
 use rayon::prelude::*;
 
 use crate::world::{Actors, RayStart, World};
@@ -62,10 +62,8 @@ impl CellTruth {
 /// The truth over a region of the map's grid, row-major from its min-x, min-y cell (as `oeg` rasters).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TruthRaster {
-    /// The cells.
-    pub region: CellRegion,
-    /// Cell size, metres.
-    pub resolution_m: f64,
+    /// The cells, on the map's grid.
+    pub window: GridWindow,
     /// The robot used for the decisions.
     pub profile: RobotProfile,
     /// Simulated time of the truth.
@@ -77,7 +75,7 @@ pub struct TruthRaster {
 }
 
 impl TruthRaster {
-    /// Computes the truth over `region` at the world's current time.
+    /// Computes the truth over `window` at the world's current time.
     ///
     /// The work goes in bands of cell rows, so memory stays within [`TruthCost::peak_bytes`] whatever the
     /// region; `keep_going` is asked before every band and the computation stops with [`TruthCancelled`] when it
@@ -87,13 +85,13 @@ impl TruthRaster {
     /// [`TruthCancelled`] when `keep_going` said stop.
     pub fn compute(
         world: &World,
-        geometry: &GridGeometry,
-        region: CellRegion,
+        window: &GridWindow,
         profile: RobotProfile,
         actors: Actors,
         samples_per_side: u32,
         keep_going: &dyn Fn() -> bool,
     ) -> Result<Self, TruthCancelled> {
+        let (geometry, region) = (window.geometry(), *window.region());
         let n = samples_per_side.max(1) as usize;
         let lattice = SampleLattice::new(geometry, region, n, f64::from(profile.contact_distance_m()));
         let mut cells = Vec::with_capacity(region.num_cells() as usize);
@@ -119,8 +117,7 @@ impl TruthRaster {
             first_row = end_row;
         }
         Ok(Self {
-            region,
-            resolution_m: geometry.resolution_m(),
+            window: *window,
             profile,
             time_s: world.time_s(),
             actors,
@@ -138,7 +135,7 @@ impl TruthRaster {
 
     /// The truth of `cell`, if inside the region.
     pub fn get(&self, cell: CellIndex) -> Option<&CellTruth> {
-        self.region.offset(cell).map(|k| &self.cells[k])
+        self.window.region().offset(cell).map(|k| &self.cells[k])
     }
 }
 

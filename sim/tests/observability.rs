@@ -72,7 +72,8 @@ fn board_band_hits(x: f64) -> (usize, usize) {
     let region = geometry
         .region_covering((x - 0.1, -0.5), (x + 0.1, 0.5))
         .expect("region");
-    let mut o = Observability::new(sim.world(), &geometry, region, RobotProfile::default());
+    let window = oeg::GridWindow::new(geometry, region);
+    let mut o = Observability::new(sim.world(), &window, RobotProfile::default());
     while let Some(scan) = sim.next_scan() {
         if scan.stamp_s > 1.0 {
             break;

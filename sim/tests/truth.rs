@@ -7,7 +7,7 @@
 
 mod common;
 
-use oeg::{CellRegion, GridGeometry, RobotProfile};
+use oeg::{CellRegion, GridGeometry, GridWindow, RobotProfile};
 use sim::truth::TruthRaster;
 use sim::world::{Actors, World};
 
@@ -29,8 +29,15 @@ fn truth_over(
     let geometry = GridGeometry::new(0.05).expect("resolution");
     let region: CellRegion = geometry.region_covering(min, max).expect("region");
     (
-        TruthRaster::compute(&world, &geometry, region, PROFILE, Actors::Excluded, 4, &|| true)
-            .expect("never cancelled"),
+        TruthRaster::compute(
+            &world,
+            &GridWindow::new(geometry, region),
+            PROFILE,
+            Actors::Excluded,
+            4,
+            &|| true,
+        )
+        .expect("never cancelled"),
         geometry,
         world,
     )
@@ -81,7 +88,8 @@ fn a_board_at_0_35_m_blocks_and_one_at_0_60_m_lets_the_robot_pass() {
     assert!(
         truth.truly_blocked(
             truth
-                .region
+                .window
+                .region()
                 .offset(g.cell_of(3.02, -1.02).expect("cell"))
                 .expect("inside")
         )
@@ -199,10 +207,24 @@ fn people_are_in_the_truth_only_when_asked() {
     let world = World::new(&loaded).expect("world");
     let g = GridGeometry::new(0.05).expect("resolution");
     let region = g.region_covering((2.9, -0.1), (3.1, 0.1)).expect("region");
-    let with = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Included, 2, &|| true)
-        .expect("never cancelled");
-    let without = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 2, &|| true)
-        .expect("never cancelled");
+    let with = TruthRaster::compute(
+        &world,
+        &GridWindow::new(g, region),
+        PROFILE,
+        Actors::Included,
+        2,
+        &|| true,
+    )
+    .expect("never cancelled");
+    let without = TruthRaster::compute(
+        &world,
+        &GridWindow::new(g, region),
+        PROFILE,
+        Actors::Excluded,
+        2,
+        &|| true,
+    )
+    .expect("never cancelled");
     assert!(with.cells.iter().any(|c| c.step_blocked));
     assert!(without.cells.iter().all(|c| !c.step_blocked));
 }
@@ -220,7 +242,7 @@ fn the_truth_is_reproducible() {
             .map(|c| [c.elevation_m, c.ground_m, c.step_m, c.structure_gap_m].map(f32::to_bits))
             .collect()
     };
-    assert_eq!(a.region, b.region);
+    assert_eq!(a.window, b.window);
     assert!(bits(&a) == bits(&b), "the same seed gave a different truth");
     assert!(a.cells.iter().any(|c| c.step_blocked), "the bush blocks");
 }
@@ -235,13 +257,20 @@ fn a_cell_s_truth_does_not_depend_on_how_the_region_is_cut_into_bands() {
     let g = GridGeometry::new(0.01).expect("resolution");
     let compute = |min, max| {
         let region = g.region_covering(min, max).expect("region");
-        TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 4, &|| true)
-            .expect("never cancelled")
+        TruthRaster::compute(
+            &world,
+            &GridWindow::new(g, region),
+            PROFILE,
+            Actors::Excluded,
+            4,
+            &|| true,
+        )
+        .expect("never cancelled")
     };
     let narrow = compute((2.5, -1.2), (3.5, -0.8));
     let wide = compute((-10.0, -1.2), (20.0, -0.8));
     let mut blocked = 0;
-    for cell in narrow.region.cells() {
+    for cell in narrow.window.region().cells() {
         let (a, b) = (narrow.get(cell).expect("inside"), wide.get(cell).expect("inside"));
         assert_eq!(format!("{a:?}"), format!("{b:?}"), "cell {cell:?}");
         blocked += usize::from(a.step_blocked);
@@ -258,7 +287,14 @@ fn the_truth_stops_when_asked() {
         asked.set(asked.get() + 1);
         false
     };
-    let result = TruthRaster::compute(&world, &g, region, PROFILE, Actors::Excluded, 4, &keep_going);
+    let result = TruthRaster::compute(
+        &world,
+        &GridWindow::new(g, region),
+        PROFILE,
+        Actors::Excluded,
+        4,
+        &keep_going,
+    );
     assert_eq!(result, Err(sim::truth::TruthCancelled));
     assert_eq!(asked.get(), 1, "asked before the first band");
 }

@@ -79,8 +79,7 @@ pub fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
         label: "elevation [m]".into(),
     };
     Figure::new(
-        truth.region,
-        truth.resolution_m,
+        &truth.window,
         title,
         |c| match truth.get(c) {
             Some(t) if t.elevation_m.is_finite() => Colormap::Viridis.color((t.elevation_m - lo) / (hi - lo)),
@@ -141,8 +140,6 @@ pub fn write(
     formats: ImageFormats,
 ) -> Result<Vec<PathBuf>> {
     let metrics = &evaluation.metrics;
-    let region = truth.region;
-    let res = truth.resolution_m;
     let drive = drive_polyline(s);
     let with_drive = |mut fig: Figure| {
         fig.polyline(&drive, DRIVE);
@@ -174,8 +171,7 @@ pub fn write(
         label: "map - truth [m]".into(),
     };
     let fig = Figure::new(
-        region,
-        res,
+        &truth.window,
         &format!(
             "{}: elevation error (RMSE {:.3} m)",
             s.name, metrics.elevation_rmse_m
@@ -223,8 +219,7 @@ pub fn decisions_figure(
     }
     let legend = Legend::Classes(classes);
     let fig = Figure::new(
-        verdicts.region,
-        verdicts.resolution_m,
+        &verdicts.window,
         &format!(
             "{title}: {} unsafe, {} over-cautious, {} uncertain cells",
             metrics.unsafe_cells, metrics.overcautious_cells, metrics.uncertain_cells
@@ -277,8 +272,7 @@ pub fn event_figure(
     classes.push(("driven so far".into(), DRIVEN.into()));
     classes.push(("obstacle footprint".into(), OUTLINE.into()));
     let mut fig = Figure::new(
-        verdicts.region,
-        verdicts.resolution_m,
+        &verdicts.window,
         title,
         |c| {
             verdicts
@@ -324,14 +318,13 @@ pub fn observability_figure(
     ];
     let o = observability;
     let mut fig = Figure::new(
-        o.region,
-        o.resolution_m,
+        &o.window,
         &format!("{}: what the sensors could see ({} rays)", s.name, o.num_rays),
         |c| {
-            let Some(k) = o.region.offset(c) else {
+            let Some(k) = o.window.region().offset(c) else {
                 return NO_DATA;
             };
-            if verdicts.region == o.region && verdicts.unobservable[k] {
+            if verdicts.window == o.window && verdicts.unobservable[k] {
                 return BLIND;
             }
             match (o.step[k], o.clearance[k]) {

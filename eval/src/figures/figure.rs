@@ -1,6 +1,6 @@
 //! Map figures: a raster drawn north-up with axes in metres, a title, and a colour bar or a legend.
 
-use oeg::{CellIndex, CellRegion};
+use oeg::{CellIndex, GridWindow};
 
 use super::canvas::{BLACK, Canvas, Rgb, WHITE};
 use super::colormap::Colormap;
@@ -117,23 +117,22 @@ impl Legend {
 #[derive(Debug, Clone)]
 pub struct Figure {
     canvas: Canvas,
-    region: CellRegion,
-    resolution_m: f64,
+    window: GridWindow,
     px_per_cell: f64,
     plot_w: usize,
     plot_h: usize,
 }
 
 impl Figure {
-    /// Draws the raster over `region` (each cell filled by `cell_fill`: a colour, or a [`Fill`] with a
+    /// Draws the raster over `window` (each cell filled by `cell_fill`: a colour, or a [`Fill`] with a
     /// texture), its axes, title and legend.
     pub fn new<F: Into<Fill>>(
-        region: CellRegion,
-        resolution_m: f64,
+        window: &GridWindow,
         title: &str,
         cell_fill: impl Fn(CellIndex) -> F,
         legend: &Legend,
     ) -> Self {
+        let region = *window.region();
         let longest = f64::from(region.num_x.max(region.num_y));
         let px_per_cell = (TARGET_PLOT_PX / longest).min(MAX_PX_PER_CELL);
         let plot_w = ((f64::from(region.num_x) * px_per_cell).round() as usize).max(1);
@@ -142,8 +141,7 @@ impl Figure {
         let height = TOP + plot_h.max(200) + BOTTOM;
         let mut fig = Self {
             canvas: Canvas::new(width, height, WHITE),
-            region,
-            resolution_m,
+            window: *window,
             px_per_cell,
             plot_w,
             plot_h,
@@ -197,12 +195,7 @@ impl Figure {
         let (x0, y0) = (LEFT as i64, TOP as i64);
         let (w, h) = (self.plot_w as i64, self.plot_h as i64);
         self.canvas.stroke_rect(x0 - 1, y0 - 1, w + 2, h + 2, BLACK);
-        let (min_x, min_y) = (
-            f64::from(self.region.min.i) * self.resolution_m,
-            f64::from(self.region.min.j) * self.resolution_m,
-        );
-        let span_x = f64::from(self.region.num_x) * self.resolution_m;
-        let span_y = f64::from(self.region.num_y) * self.resolution_m;
+        let ((min_x, min_y), (span_x, span_y)) = (self.window.min_corner_m(), self.window.size_m());
         for (value, label) in ticks(min_x, min_x + span_x) {
             let px = x0 + ((value - min_x) / span_x * w as f64).round() as i64;
             self.canvas.line(px, y0 + h, px, y0 + h + 4, BLACK);
@@ -277,8 +270,9 @@ impl Figure {
 
     /// The pixel of the world point `(x, y)`.
     pub fn world_to_px(&self, x_m: f64, y_m: f64) -> (i64, i64) {
-        let u = (x_m / self.resolution_m - f64::from(self.region.min.i)) * self.px_per_cell;
-        let v = (y_m / self.resolution_m - f64::from(self.region.min.j)) * self.px_per_cell;
+        let (res, min) = (self.window.resolution_m(), self.window.region().min);
+        let u = (x_m / res - f64::from(min.i)) * self.px_per_cell;
+        let v = (y_m / res - f64::from(min.j)) * self.px_per_cell;
         (
             LEFT as i64 + u.round() as i64,
             TOP as i64 + self.plot_h as i64 - v.round() as i64,
@@ -386,6 +380,7 @@ pub fn finite_range(values: &[f32]) -> Option<(f32, f32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use oeg::CellRegion;
 
     #[test]
     fn ticks_are_nice_and_inside() {
@@ -433,12 +428,16 @@ mod tests {
         assert_eq!(finite_range(&[f32::NAN]), None);
     }
 
+    fn window(region: CellRegion, resolution_m: f64) -> GridWindow {
+        GridWindow::new(oeg::GridGeometry::new(resolution_m).expect("resolution"), region)
+    }
+
     #[test]
     fn the_figure_widens_to_fit_long_legend_labels() {
         let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(9, 9)).expect("valid");
         let name = "over-cautious (mapped blocked, truly drivable), a long label";
         let legend = Legend::Classes(vec![(name.to_string(), BLACK.into())]);
-        let fig = Figure::new(region, 0.1, "t", |_| WHITE, &legend);
+        let fig = Figure::new(&window(region, 0.1), "t", |_| WHITE, &legend);
         let text_end = LEFT + fig.plot_w + LEGEND_GAP + 20 + Canvas::text_width(name, 1);
         assert!(
             fig.canvas().width() > text_end,
@@ -459,8 +458,7 @@ mod tests {
         let top_right = region.max();
         let legend = Legend::Classes(vec![]);
         let fig = Figure::new(
-            region,
-            1.0,
+            &window(region, 1.0),
             "t",
             |c| if c == top_right { BLACK } else { WHITE },
             &legend,

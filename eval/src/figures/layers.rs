@@ -3,7 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use oeg::{
-    CellIndex, CellRegion, Layer, LayerKind, Map, Raster, RobotProfile, Traversability, TraversabilityRule,
+    CellIndex, CellRegion, GridWindow, Layer, LayerKind, Map, Raster, RobotProfile, Traversability,
+    TraversabilityRule,
 };
 
 use super::colormap::Colormap;
@@ -22,22 +23,15 @@ pub fn scalar_figure(
     range: Option<(f32, f32)>,
 ) -> Figure {
     let range = range.or_else(|| finite_range(&layer.values));
-    scalar_figure_of(
-        layer.region,
-        layer.resolution_m,
-        title,
-        label,
-        colormap,
-        range,
-        |c| layer.get(c).unwrap_or(f32::NAN),
-    )
+    scalar_figure_of(&layer.window, title, label, colormap, range, |c| {
+        layer.get(c).unwrap_or(f32::NAN)
+    })
 }
 
-/// A continuous quantity over `region`, read cell by cell (only the cells the figure shows are read):
+/// A continuous quantity over `window`, read cell by cell (only the cells the figure shows are read):
 /// non-finite values in [`NO_DATA`] grey, the rest coloured over `range` (default: 0 to 1).
 pub fn scalar_figure_of(
-    region: CellRegion,
-    resolution_m: f64,
+    window: &GridWindow,
     title: &str,
     label: &str,
     colormap: Colormap,
@@ -52,8 +46,7 @@ pub fn scalar_figure_of(
         label: label.to_string(),
     };
     Figure::new(
-        region,
-        resolution_m,
+        window,
         title,
         |c| match value(c) {
             v if v.is_finite() => colormap.color((v - min) / (max - min)),
@@ -87,16 +80,15 @@ pub const TRAVERSABILITY_CLASSES: [(Traversability, &str); 5] = [
 
 /// The traversability layer with a class legend.
 pub fn traversability_figure(layer: &Raster<Traversability>, title: &str) -> Figure {
-    traversability_figure_of(layer.region, layer.resolution_m, title, |c| {
+    traversability_figure_of(&layer.window, title, |c| {
         layer.get(c).unwrap_or(Traversability::Unknown)
     })
 }
 
-/// The decisions over `region`, read cell by cell (only the cells the figure shows are read), with a class
+/// The decisions over `window`, read cell by cell (only the cells the figure shows are read), with a class
 /// legend.
 pub fn traversability_figure_of(
-    region: CellRegion,
-    resolution_m: f64,
+    window: &GridWindow,
     title: &str,
     class: impl Fn(CellIndex) -> Traversability,
 ) -> Figure {
@@ -106,13 +98,7 @@ pub fn traversability_figure_of(
             .map(|(t, name)| (name.to_string(), traversability_fill(*t)))
             .collect(),
     );
-    Figure::new(
-        region,
-        resolution_m,
-        title,
-        |c| traversability_fill(class(c)),
-        &legend,
-    )
+    Figure::new(window, title, |c| traversability_fill(class(c)), &legend)
 }
 
 /// The finite range of one layer over the observed cells in `region`: the cost follows what the map holds,
@@ -148,7 +134,8 @@ pub fn write_layer_images(
     let Some(region) = region.or_else(|| map.observed_region()) else {
         return Ok(Vec::new());
     };
-    let res = map.geometry().resolution_m();
+    let window = GridWindow::new(*map.geometry(), region);
+    let res = window.resolution_m();
     let mut files = Vec::new();
     let same: fn(f32) -> f32 = |v| v;
     // The variance spans orders of magnitude (a laser's millimetres beside far stereo's metres): on a linear
@@ -186,13 +173,13 @@ pub fn write_layer_images(
     for (name, kind, title, label, colormap, range, scale) in layers {
         let range = range.or_else(|| observed_range(map, kind, region, scale));
         let title = format!("{title} ({res} m cells)");
-        let figure = scalar_figure_of(region, res, &title, label, colormap, range, |c| {
+        let figure = scalar_figure_of(&window, &title, label, colormap, range, |c| {
             scale(kind.value(&map.cell(c)))
         });
         files.extend(save(&out_dir.join(name), figure.canvas(), formats)?);
     }
     let title = format!("Traversability (max step {} m)", profile.max_step_m);
-    let figure = traversability_figure_of(region, res, &title, |c| map.traversability(c, profile, rule));
+    let figure = traversability_figure_of(&window, &title, |c| map.traversability(c, profile, rule));
     files.extend(save(
         &out_dir.join("traversability.png"),
         figure.canvas(),

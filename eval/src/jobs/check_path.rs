@@ -89,12 +89,9 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     inputs.extend(job.map.clone());
     let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     let staged = Staged::begin(&job.out_dir, &inputs)?;
-    let geometry = oeg::GridGeometry::new(s.map.resolution_m)?;
     let world = sim::World::new(&loaded)?;
-    let truth = crate::pipeline::truth_of(s, &world, &geometry, &crate::progress::Progress::hidden())?;
-    let region = truth.region;
-    let res = geometry.resolution_m();
-    let extent = crate::navigation::external::extent_of(&region, res);
+    let truth = crate::pipeline::truth_of(&loaded, &world, &crate::progress::Progress::hidden())?;
+    let extent = crate::navigation::external::extent_of(&truth.window);
     // Every message of `read_path` names the file and the line.
     let points = crate::navigation::external::read_path(&job.path, extent)
         .map_err(|f| EvalError::Placed { message: f.message })?;
@@ -108,7 +105,6 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let judge = PathJudge {
         scenario: s,
         truth: &truth,
-        geometry,
         footprint: loaded.robot.footprint(),
     };
     let check = judge.check(&job.path, &points, verdicts.as_ref())?;
@@ -119,15 +115,13 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     Ok((check, files))
 }
 
-/// What a path is checked against: the scenario, its truth on `geometry`'s cells and the robot's footprint.
+/// What a path is checked against: the scenario, its truth and the robot's footprint.
 #[derive(Debug, Clone, Copy)]
 pub struct PathJudge<'a> {
     /// The scenario (its obstacles name the contacts).
     pub scenario: &'a sim::scenario::Scenario,
-    /// Its truth.
+    /// Its truth, on the map's window.
     pub truth: &'a TruthRaster,
-    /// The truth's grid.
-    pub geometry: oeg::GridGeometry,
     /// The robot's footprint, base frame.
     pub footprint: oeg::Footprint,
 }
@@ -145,9 +139,9 @@ impl PathJudge<'_> {
         points: &[(f64, f64)],
         verdicts: Option<&Verdicts>,
     ) -> Result<PathCheck> {
-        let (s, truth, geometry, footprint) = (self.scenario, self.truth, self.geometry, self.footprint);
-        let region = truth.region;
-        let res = geometry.resolution_m();
+        let (s, truth, footprint) = (self.scenario, self.truth, self.footprint);
+        let region = *truth.window.region();
+        let res = truth.window.resolution_m();
         // Each pose looks at the blocked cells within a few metres: the number of poses is bounded before the work.
         let planned_poses = count_poses(points, res / 2.0);
         if planned_poses > MAX_CHECKED_POSES {
@@ -160,14 +154,14 @@ impl PathJudge<'_> {
                 ),
             });
         }
-        let mut watch = ContactWatch::new(s, truth, geometry, footprint);
+        let mut watch = ContactWatch::new(s, truth, footprint);
         let (mut first_contact, mut contact_poses) = (None, 0u64);
         // The cells the footprint crossed, one flag a cell of the region (not a list of every pose's cells).
         let mut crossed = vec![false; truth.cells.len()];
         let num_poses = for_each_pose(points, res / 2.0, |along, pose| {
             let began = watch.check(along, pose);
             let mut touching = false;
-            for c in footprint.cells_under(&geometry, &region, pose) {
+            for c in footprint.cells_under(&truth.window, pose) {
                 if let Some(k) = region.offset(c) {
                     touching |= truth.truly_blocked(k);
                     crossed[k] = true;

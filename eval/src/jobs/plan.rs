@@ -97,7 +97,9 @@ pub fn plan_on_map(
         CellIndex::new(start.i.max(goal.i), start.j.max(goal.j)),
     )
     .ok_or_else(|| point_error("start", from))?;
-    let region = map.observed_region().map_or(ends, |r| r.union(&ends));
+    let window = oeg::GridWindow::new(geometry, map.observed_region().map_or(ends, |r| r.union(&ends)));
+    let region = *window.region();
+    let (width_m, height_m) = window.size_m();
     // The search's arrays, beside the decisions' raster (which the map counts itself), within the map's limit.
     let needed = region
         .num_cells()
@@ -115,23 +117,17 @@ pub fn plan_on_map(
                 to.0,
                 to.1,
                 region.num_cells(),
-                f64::from(region.num_x) * geometry.resolution_m(),
-                f64::from(region.num_y) * geometry.resolution_m(),
+                width_m,
+                height_m,
             ),
         });
     }
     let classes = map.traversability_layer(region, profile, rule)?;
-    let plan = oeg::plan_or_why(
-        &region,
-        geometry.resolution_m(),
-        &classes.values,
-        start,
-        goal,
-        options,
-    )
-    .map_err(|e| EvalError::Input {
-        path: name.to_path_buf(),
-        message: format!("planner: {e}"),
+    let plan = oeg::plan_or_why(&classes.window, &classes.values, start, goal, options).map_err(|e| {
+        EvalError::Input {
+            path: name.to_path_buf(),
+            message: format!("planner: {e}"),
+        }
     })?;
     Ok(MapPlan { classes, plan })
 }

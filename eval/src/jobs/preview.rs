@@ -2,7 +2,6 @@
 
 use std::path::{Path, PathBuf};
 
-use oeg::GridGeometry;
 use sim::scenario::{self, LoadedScenario};
 use sim::world::World;
 
@@ -73,11 +72,9 @@ pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let staged = Staged::begin(out_dir, &inputs)?;
     let world = World::new(&loaded)?;
-    let geometry = GridGeometry::new(s.map.resolution_m)?;
     let truth = crate::pipeline::truth_sampled(
-        s,
+        &loaded,
         &world,
-        &geometry,
         PREVIEW_SAMPLES_PER_SIDE,
         &crate::progress::Progress::hidden(),
     )?;
@@ -116,11 +113,10 @@ pub fn preview(path: &Path, out_dir: &Path, formats: ImageFormats) -> Result<Vec
             s.name, truth.profile.max_step_m, truth.profile.height_m
         );
         let mut fig = Figure::new(
-            truth.region,
-            geometry.resolution_m(),
+            &truth.window,
             &title,
             |c| {
-                let Some(k) = truth.region.offset(c) else {
+                let Some(k) = truth.window.region().offset(c) else {
                     return NO_DATA;
                 };
                 let class = TruthClass::of(&truth, k);

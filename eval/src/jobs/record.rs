@@ -71,9 +71,7 @@ fn record_mcap(
     progress: &Progress,
 ) -> Result<u64> {
     let s = &loaded.scenario;
-    let geometry = oeg::GridGeometry::new(s.map.resolution_m)?;
-    let region = crate::mapping::region_of(s, &geometry)?;
-    let mut recording = Recording::new(region, s.map.resolution_m, DEFAULT_GRID_PERIOD_S)?;
+    let mut recording = Recording::new(loaded.window, DEFAULT_GRID_PERIOD_S)?;
     let mut num_scans = 0;
     while let Some(scan) = sim.next_scan() {
         let sensor = &header.sensors[scan.sensor_index];
@@ -83,7 +81,7 @@ fn record_mcap(
         progress.inc(1);
     }
     // The static world's truth, people left out, as a run's recording has it.
-    recording.truth(&crate::pipeline::truth_of(s, sim.world(), &geometry, progress)?)?;
+    recording.truth(&crate::pipeline::truth_of(loaded, sim.world(), progress)?)?;
     oeg::write_atomically(out, &recording.finish()?)?;
     Ok(num_scans)
 }

@@ -14,7 +14,7 @@
 //! When the user's grid is the truth's (same resolution, origin on a cell corner), every truth cell has
 //! exactly one source, and the arrays are taken as they are.
 
-use oeg::{CellRegion, Doubt, GridGeometry, LayerKind, Map, Traversability, TraversabilityRule};
+use oeg::{Doubt, GridWindow, LayerKind, Map, Traversability, TraversabilityRule};
 use sim::truth::TruthRaster;
 
 use crate::error::{EvalError, Result};
@@ -30,10 +30,8 @@ pub const MAX_ABS_ELEVATION_M: f64 = 1e6;
 /// What a map says about each cell of a region: row-major over the truth's region, as the truth raster.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Estimate {
-    /// The truth's cells.
-    pub region: CellRegion,
-    /// The truth's grid.
-    pub geometry: GridGeometry,
+    /// The truth's cells, on the truth's grid.
+    pub window: GridWindow,
     /// The map's decision on every cell; [`Traversability::Unknown`] where the map cannot decide.
     pub decisions: Vec<Traversability>,
     /// Why the map could not decide each uncertain cell, or each observed cell it left unknown ([`Map::doubt`]),
@@ -205,7 +203,7 @@ impl Estimate {
     /// # Errors
     /// Rasters too large for the map's memory limit.
     pub fn of_map(map: &Map, truth: &TruthRaster, rule: TraversabilityRule) -> Result<Self> {
-        let region = truth.region;
+        let region = *truth.window.region();
         let layer = |kind: LayerKind| -> Result<Vec<f64>> {
             Ok(map
                 .layer(kind, region)?
@@ -229,8 +227,7 @@ impl Estimate {
             })
             .collect();
         Ok(Self {
-            region,
-            geometry: *map.geometry(),
+            window: truth.window,
             decisions,
             doubts,
             observed: occupancy.iter().map(|o| !o.is_nan()).collect(),
@@ -250,8 +247,7 @@ impl Estimate {
     /// # Errors
     /// A truth whose resolution is not a valid cell size.
     pub fn resample(foreign: &ForeignMap, truth: &TruthRaster) -> Result<Self> {
-        let geometry = GridGeometry::new(truth.resolution_m)?;
-        let region = truth.region;
+        let (geometry, region) = (truth.window.geometry(), *truth.window.region());
         let n = truth.cells.len();
         let mut acc = vec![Sources::default(); n];
         let (ox, oy, res) = (
@@ -282,8 +278,7 @@ impl Estimate {
             }
         }
         let mut e = Self {
-            region,
-            geometry,
+            window: truth.window,
             decisions: Vec::with_capacity(n),
             doubts: Vec::new(),
             observed: Vec::with_capacity(n),
@@ -375,13 +370,13 @@ fn mean(sum: f64, n: u32) -> f64 {
 mod tests {
     use super::*;
     use crate::test_support::{truth_cell, truth_raster};
-    use oeg::CellIndex;
+    use oeg::{CellIndex, CellRegion, GridGeometry};
 
     /// A truth of 2 x 2 cells of 0.5 m from (0, 0).
     fn truth() -> TruthRaster {
         let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(1, 1)).expect("region");
         let mut t = truth_raster(region, vec![truth_cell(0.0, false, f32::NAN); 4]);
-        t.resolution_m = 0.5;
+        t.window = GridWindow::new(GridGeometry::new(0.5).expect("resolution"), region);
         t
     }
 

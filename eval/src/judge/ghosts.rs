@@ -15,7 +15,7 @@
 //! is neither kept nor removed. DynamicMap reports them in percent; on KITTI sequence 00 it gives OctoMap an AA
 //! of 82.37 and DUFOMap 98.56.
 
-use oeg::{CellIndex, CellRegion, Doubt, GridGeometry, Traversability};
+use oeg::{CellIndex, Doubt, GridWindow, Traversability};
 use sim::scenario::{Actor, Scenario};
 
 use crate::judge::verdict::{Verdict, Verdicts};
@@ -54,17 +54,12 @@ fn fraction(part: u64, whole: u64) -> Option<f64> {
     (whole > 0).then(|| part as f64 / whole as f64)
 }
 
-/// Per cell of `region`: whether an actor's footprint covered its centre at some time of `[0, end_s]`, and
+/// Per cell of `window`: whether an actor's footprint covered its centre at some time of `[0, end_s]`, and
 /// whether one covers it at `end_s`. Each actor's path is followed in steps of at most half a cell.
-pub fn actor_cells(
-    actors: &[Actor],
-    end_s: f64,
-    region: CellRegion,
-    geometry: &GridGeometry,
-) -> (Vec<bool>, Vec<bool>) {
-    let n = region.num_cells() as usize;
+pub fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> (Vec<bool>, Vec<bool>) {
+    let n = window.num_cells() as usize;
     let (mut swept, mut at_end) = (vec![false; n], vec![false; n]);
-    let res = geometry.resolution_m();
+    let res = window.resolution_m();
     for actor in actors {
         let Some([t0, t1]) = actor.time_span_s() else {
             continue;
@@ -79,7 +74,7 @@ pub fn actor_cells(
         let step_s = max_speed_step(actor, res / 2.0);
         loop {
             if let Some((x, y)) = actor.position_at(t) {
-                mark_disk(&mut swept, region, geometry, (x, y), radius);
+                mark_disk(&mut swept, window, (x, y), radius);
             }
             if t >= t1 {
                 break;
@@ -87,7 +82,7 @@ pub fn actor_cells(
             t = (t + step_s).min(t1);
         }
         if let Some((x, y)) = actor.position_at(end_s) {
-            mark_disk(&mut at_end, region, geometry, (x, y), radius);
+            mark_disk(&mut at_end, window, (x, y), radius);
         }
     }
     (swept, at_end)
@@ -110,14 +105,9 @@ fn max_speed_step(actor: &Actor, step_m: f64) -> f64 {
     step.max(1e-3)
 }
 
-/// Marks the cells of `region` whose centre lies within `radius_m` of `(x, y)`.
-fn mark_disk(
-    cells: &mut [bool],
-    region: CellRegion,
-    geometry: &GridGeometry,
-    (x, y): (f64, f64),
-    radius_m: f64,
-) {
+/// Marks the cells of `window` whose centre lies within `radius_m` of `(x, y)`.
+fn mark_disk(cells: &mut [bool], window: &GridWindow, (x, y): (f64, f64), radius_m: f64) {
+    let (geometry, region) = (window.geometry(), window.region());
     let (Some(lo), Some(hi)) = (
         geometry.cell_of(x - radius_m, y - radius_m),
         geometry.cell_of(x + radius_m, y + radius_m),
@@ -139,13 +129,8 @@ fn mark_disk(
 
 /// SA and DA's counts for the map judged in `verdicts` (with its observability marks), the actors of `s`
 /// over its whole duration; `doubts` says why the map left each cell undecided (empty: it does not say).
-pub fn count(
-    s: &Scenario,
-    verdicts: &Verdicts,
-    geometry: &GridGeometry,
-    doubts: &[Option<Doubt>],
-) -> GhostCounts {
-    let (swept, at_end) = actor_cells(&s.actors, s.duration_s, verdicts.region, geometry);
+pub fn count(s: &Scenario, verdicts: &Verdicts, doubts: &[Option<Doubt>]) -> GhostCounts {
+    let (swept, at_end) = actor_cells(&s.actors, s.duration_s, &verdicts.window);
     let mut c = GhostCounts::default();
     for k in 0..verdicts.verdict.len() {
         if verdicts.verdict[k] == Verdict::NotScored {
@@ -171,6 +156,7 @@ pub fn count(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use oeg::{CellRegion, GridGeometry};
 
     fn person(waypoints: Vec<[f64; 3]>) -> Actor {
         Actor::Person {
@@ -188,7 +174,7 @@ mod tests {
             CellRegion::from_corners(CellIndex::new(0, -20), CellIndex::new(99, 19)).expect("region");
         // Walks 4 m along y = 0 in 2 s (2 m/s), then leaves the scene.
         let walker = person(vec![[0.0, 0.5, 0.0], [2.0, 4.5, 0.0]]);
-        let (swept, at_end) = actor_cells(&[walker], 10.0, region, &g);
+        let (swept, at_end) = actor_cells(&[walker], 10.0, &GridWindow::new(g, region));
         assert!(at_end.iter().all(|c| !c));
         let at = |x: f64, y: f64| swept[region.offset(g.cell_of(x, y).expect("cell")).expect("inside")];
         // Every cell along the way, no gap between the steps; the band is 0.5 m wide.
@@ -203,7 +189,7 @@ mod tests {
         assert!(!at(4.9, 0.0));
         // One who stands still to the end covers their cells at the end.
         let stander = person(vec![[0.0, 2.0, 0.0], [20.0, 2.0, 0.0]]);
-        let (_, at_end) = actor_cells(&[stander], 10.0, region, &g);
+        let (_, at_end) = actor_cells(&[stander], 10.0, &GridWindow::new(g, region));
         assert_eq!(at_end.iter().filter(|c| **c).count(), swept_disk_cells(&g));
     }
 

@@ -214,7 +214,7 @@ pub fn compute(
             within as f64 / n,
         )
     };
-    let num_cells = truth.region.num_cells();
+    let num_cells = truth.window.num_cells();
     Metrics {
         scenario: scenario.to_string(),
         seed,

@@ -84,12 +84,9 @@ pub fn score(
     let verdicts =
         Verdicts::from_classes(truth, estimate.decisions.clone()).with_observability(sensed.observability);
     let mut metrics = metrics::compute(&s.name, s.seed, &estimate, truth, &verdicts);
-    let plan = plan_check::check(s, &estimate.geometry, &verdicts)?;
+    let plan = plan_check::check(s, &verdicts)?;
     record_plan(&mut metrics, &plan);
-    record_ghosts(
-        &mut metrics,
-        &ghosts::count(s, &verdicts, &estimate.geometry, &estimate.doubts),
-    );
+    record_ghosts(&mut metrics, &ghosts::count(s, &verdicts, &estimate.doubts));
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }

@@ -215,7 +215,7 @@ fn tally_footprint(
     verdicts: &Verdicts,
     row: &mut ObstacleDecision,
 ) -> Tally {
-    let geometry = estimate.geometry;
+    let geometry = *estimate.window.geometry();
     let [cx, cy] = o.center_xy_m();
     let center_cell = geometry.cell_of(cx, cy);
     let mut t = Tally {
@@ -225,7 +225,7 @@ fn tally_footprint(
         over_blocked: [0; 3],
         over_all: [0; 3],
     };
-    for (k, cell) in truth.region.cells().enumerate() {
+    for (k, cell) in truth.window.region().cells().enumerate() {
         let (x, y) = geometry.cell_center(cell);
         if !footprint_contains(o, Point2::new(x, y)) && center_cell != Some(cell) {
             continue;

@@ -5,7 +5,7 @@
 
 use oeg::{Plan, PlannerOptions, UnknownCells};
 
-use oeg::{CellIndex, CellRegion, Traversability};
+use oeg::{CellIndex, GridWindow, Traversability};
 use serde::Serialize;
 use sim::scenario::Scenario;
 
@@ -32,9 +32,9 @@ pub struct PlanCheck {
 /// # Errors
 /// A planner input the scenario's validation should have caught (a waypoint outside the region, bad
 /// options), reported against the scenario.
-pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) -> Result<PlanCheck> {
-    let region = verdicts.region;
-    let res = geometry.resolution_m();
+pub fn check(s: &Scenario, verdicts: &Verdicts) -> Result<PlanCheck> {
+    let window = &verdicts.window;
+    let (geometry, region) = (window.geometry(), *window.region());
     let missing = || EvalError::Input {
         path: s.name.clone().into(),
         message: "the planner needs a start and a goal inside the map region (the drive's first and last \
@@ -62,11 +62,11 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
         message: format!("planner: {e}"),
     };
     let options = s.planner.options();
-    let map_plan = oeg::plan(&region, res, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
+    let map_plan = oeg::plan(window, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
     let truly = verdicts.truth_decisions();
-    let truth_plan = oeg::plan(&region, res, &truly, start, goal, &options).map_err(planner_error)?;
+    let truth_plan = oeg::plan(window, &truly, start, goal, &options).map_err(planner_error)?;
     let unsafe_cells = match &map_plan {
-        Some(p) => unsafe_path_cells(p, &region, res, &truly, &options).map_err(planner_error)?,
+        Some(p) => unsafe_path_cells(p, window, &truly, &options).map_err(planner_error)?,
         None => Vec::new(),
     };
     let blind_cells = blind_path_cells(&unsafe_cells, verdicts, options.inflation_radius_m);
@@ -80,8 +80,9 @@ pub fn check(s: &Scenario, geometry: &oeg::GridGeometry, verdicts: &Verdicts) ->
 
 /// The unsafe path cells all of whose truly blocked cells within `radius_m` are unobservable.
 fn blind_path_cells(unsafe_cells: &[CellIndex], verdicts: &Verdicts, radius_m: f64) -> Vec<CellIndex> {
-    let reach = (radius_m / verdicts.resolution_m).ceil() as i32;
-    let r2 = (radius_m / verdicts.resolution_m).powi(2) + 1e-9;
+    let res = verdicts.window.resolution_m();
+    let reach = (radius_m / res).ceil() as i32;
+    let r2 = (radius_m / res).powi(2) + 1e-9;
     unsafe_cells
         .iter()
         .filter(|c| {
@@ -99,20 +100,19 @@ fn blind_path_cells(unsafe_cells: &[CellIndex], verdicts: &Verdicts, radius_m: f
 }
 
 /// The cells of `plan` whose centre lies within the inflation radius of a blocked cell of the truth's
-/// decisions `truly` (row-major over `region`): where the robot following the path would touch an obstacle.
+/// decisions `truly` (row-major over `window`): where the robot following the path would touch an obstacle.
 ///
 /// # Errors
 /// As [`oeg::forbidden_mask`].
 pub fn unsafe_path_cells(
     plan: &Plan,
-    region: &CellRegion,
-    resolution_m: f64,
+    window: &GridWindow,
     truly: &[Traversability],
     options: &PlannerOptions,
 ) -> oeg::Result<Vec<CellIndex>> {
+    let region = window.region();
     let forbidden = oeg::forbidden_mask(
-        region,
-        resolution_m,
+        window,
         truly,
         &PlannerOptions {
             unknown: UnknownCells::Drivable,
@@ -184,12 +184,13 @@ pub fn polyline(plan: &Plan, geometry: &oeg::GridGeometry) -> Vec<(f64, f64)> {
 mod tests {
     use super::*;
     use crate::test_support::{truth_cell, truth_raster};
-    use oeg::{Map, MapConfig, RobotProfile, TraversabilityRule};
+    use oeg::{CellRegion, Map, MapConfig, RobotProfile, TraversabilityRule};
 
     #[test]
     fn a_path_through_a_wall_the_map_missed_is_unsafe_and_the_truth_goes_around() {
         // 1 m cells, 7 x 5; the truth has a wall at x = 3 m from y = 0 to 3 m, the map (all free) misses it.
         let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(6, 4)).expect("region");
+        let window = GridWindow::new(oeg::GridGeometry::new(1.0).expect("resolution"), region);
         let truth = truth_raster(
             region,
             region
@@ -208,7 +209,7 @@ mod tests {
             ..PlannerOptions::default()
         };
         let (s, g) = (CellIndex::new(0, 0), CellIndex::new(6, 0));
-        let truth_plan = oeg::plan(&region, 1.0, &truly, s, g, &options)
+        let truth_plan = oeg::plan(&window, &truly, s, g, &options)
             .expect("valid")
             .expect("around the wall");
         assert!(
@@ -222,14 +223,14 @@ mod tests {
             .expect("raster")
             .values;
         assert!(mapped.iter().all(|t| *t == Traversability::Unknown));
-        let straight = oeg::plan(&region, 1.0, &mapped, s, g, &options)
+        let straight = oeg::plan(&window, &mapped, s, g, &options)
             .expect("valid")
             .expect("straight");
         assert!((straight.length_m - 6.0).abs() < 1e-9);
-        let unsafe_cells = unsafe_path_cells(&straight, &region, 1.0, &truly, &options).expect("valid");
+        let unsafe_cells = unsafe_path_cells(&straight, &window, &truly, &options).expect("valid");
         assert_eq!(unsafe_cells, [CellIndex::new(3, 0)]);
         assert_eq!(
-            unsafe_path_cells(&truth_plan, &region, 1.0, &truly, &options).expect("valid"),
+            unsafe_path_cells(&truth_plan, &window, &truly, &options).expect("valid"),
             [],
             "the truth's own path is safe"
         );

@@ -2,7 +2,7 @@
 //! what the map says (its [`Traversability`]) and the verdict on the map. Every metric, CSV file, image and the
 //! planner check read this raster; "truly blocked" is defined once, by [`TruthRaster::truly_blocked`].
 
-use oeg::{CellIndex, CellRegion, Map, Traversability, TraversabilityRule};
+use oeg::{CellIndex, GridWindow, Map, Traversability, TraversabilityRule};
 use serde::Serialize;
 use sim::truth::TruthRaster;
 
@@ -144,10 +144,8 @@ impl Verdict {
 /// The verdict raster of one map against one truth: row-major over the truth's region.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Verdicts {
-    /// The cells.
-    pub region: CellRegion,
-    /// Cell size, metres.
-    pub resolution_m: f64,
+    /// The cells: the truth's window.
+    pub window: GridWindow,
     /// The truth's class of every cell.
     pub truth: Vec<TruthClass>,
     /// The map's class of every cell.
@@ -213,7 +211,7 @@ impl Verdicts {
     /// A raster too large for the map's memory limit.
     pub fn new(map: &Map, truth: &TruthRaster, rule: TraversabilityRule) -> Result<Self> {
         let mapped = map
-            .traversability_layer(truth.region, &truth.profile, rule)?
+            .traversability_layer(*truth.window.region(), &truth.profile, rule)?
             .values;
         Ok(Self::from_classes(truth, mapped))
     }
@@ -228,8 +226,7 @@ impl Verdicts {
             .map(|(t, m)| Verdict::of(*t, *m))
             .collect();
         Self {
-            region: truth.region,
-            resolution_m: truth.resolution_m,
+            window: truth.window,
             unobservable: vec![false; truth_classes.len()],
             truth: truth_classes,
             mapped,
@@ -241,7 +238,7 @@ impl Verdicts {
     /// the same region (a step: no ray ended on the cell; a structure lower than the robot: no ray ended in
     /// its band, on the structure). Without one (`None`, or another region) nothing is marked.
     pub fn with_observability(mut self, observability: Option<&sim::observability::Observability>) -> Self {
-        let Some(o) = observability.filter(|o| o.region == self.region) else {
+        let Some(o) = observability.filter(|o| o.window == self.window) else {
             return self;
         };
         for (k, t) in self.truth.iter().enumerate() {
@@ -252,7 +249,7 @@ impl Verdicts {
 
     /// The raster offset of `cell`, if inside the region.
     pub fn offset(&self, cell: CellIndex) -> Option<usize> {
-        self.region.offset(cell)
+        self.window.region().offset(cell)
     }
 
     /// The counts of every verdict.
@@ -306,6 +303,7 @@ impl Verdicts {
 mod tests {
     use super::*;
     use crate::test_support::{truth_cell, truth_raster};
+    use oeg::CellRegion;
     use proptest::prelude::*;
 
     const MAPPED: [Traversability; 5] = [

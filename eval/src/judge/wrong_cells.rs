@@ -43,9 +43,9 @@ pub struct WrongCell {
 /// that the map could not judge (`uncertain`), row-major from the region's min corner, read from the run's
 /// verdict raster.
 pub fn wrong_cells(estimate: &Estimate, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
-    let geometry = estimate.geometry;
+    let geometry = *estimate.window.geometry();
     let mut rows = Vec::new();
-    for (k, cell) in truth.region.cells().enumerate() {
+    for (k, cell) in truth.window.region().cells().enumerate() {
         let error = match verdicts.verdict[k] {
             Verdict::Unsafe => "unsafe",
             Verdict::OverCautious => "over_cautious",

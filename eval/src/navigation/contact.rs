@@ -1,7 +1,7 @@
 //! The judge's watch over a closed-loop run: the robot's real footprint, turned with its true heading,
 //! against the truly blocked cells of the truth raster. Nothing here reads the map.
 
-use oeg::{CellIndex, Footprint, GridGeometry, Pose2};
+use oeg::{CellIndex, Footprint, GridWindow, Pose2};
 use sim::scenario::Scenario;
 use sim::truth::TruthRaster;
 
@@ -13,7 +13,6 @@ pub const APPROACH_WINDOW_M: f64 = 2.0;
 pub struct ContactWatch<'a> {
     scenario: &'a Scenario,
     truth: &'a TruthRaster,
-    geometry: GridGeometry,
     footprint: Footprint,
     blocked: Vec<bool>,
     /// The columns (`i`) of the truly blocked cells of each row of the region, ascending: a pose looks only at
@@ -38,15 +37,10 @@ pub struct NewContact {
 }
 
 impl<'a> ContactWatch<'a> {
-    /// A watch with no contact yet.
-    pub fn new(
-        scenario: &'a Scenario,
-        truth: &'a TruthRaster,
-        geometry: GridGeometry,
-        footprint: Footprint,
-    ) -> Self {
+    /// A watch with no contact yet, on the truth's cells.
+    pub fn new(scenario: &'a Scenario, truth: &'a TruthRaster, footprint: Footprint) -> Self {
         let blocked: Vec<bool> = (0..truth.cells.len()).map(|k| truth.truly_blocked(k)).collect();
-        let region = truth.region;
+        let region = *truth.window.region();
         let blocked_columns = (0..region.num_y)
             .map(|v| {
                 (0..region.num_x)
@@ -58,7 +52,6 @@ impl<'a> ContactWatch<'a> {
         Self {
             scenario,
             truth,
-            geometry,
             footprint,
             blocked,
             blocked_columns,
@@ -80,17 +73,18 @@ impl<'a> ContactWatch<'a> {
         self.truth
     }
 
-    /// The truth's region.
-    pub fn region(&self) -> oeg::CellRegion {
-        self.truth.region
+    /// The truth's window.
+    pub fn window(&self) -> &GridWindow {
+        &self.truth.window
     }
 
     /// Checks the robot at its true `pose` at `time_s`: a contact that begins here, if one does, and the
     /// closest approach updated.
     pub fn check(&mut self, time_s: f64, pose: Pose2) -> Option<NewContact> {
-        let region = self.truth.region;
+        let truth = self.truth;
+        let (geometry, region) = (truth.window.geometry(), *truth.window.region());
         let reach = self.footprint.length_m().hypot(self.footprint.width_m()) + APPROACH_WINDOW_M;
-        let window = self.geometry.region_covering(
+        let window = geometry.region_covering(
             (pose.x_m - reach, pose.y_m - reach),
             (pose.x_m + reach, pose.y_m + reach),
         );
@@ -103,13 +97,13 @@ impl<'a> ContactWatch<'a> {
             // is a lower bound of the footprint's: a cell whose bound exceeds the nearest so far is skipped
             // without the exact distance (the result is the same).
             let radius = self.radius_m;
-            let half = self.geometry.resolution_m() / 2.0;
+            let half = geometry.resolution_m() / 2.0;
             for j in lo.j..=hi.j {
                 let row = &self.blocked_columns[(j - rlo.j) as usize];
                 let first = row.partition_point(|&i| i < lo.i);
                 for &i in row[first..].iter().take_while(|&&i| i <= hi.i) {
                     let cell = CellIndex::new(i, j);
-                    let (cx, cy) = self.geometry.cell_center(cell);
+                    let (cx, cy) = geometry.cell_center(cell);
                     let (dx, dy) = (
                         ((cx - pose.x_m).abs() - half).max(0.0),
                         ((cy - pose.y_m).abs() - half).max(0.0),
@@ -118,7 +112,7 @@ impl<'a> ContactWatch<'a> {
                     if (dx * dx + dy * dy).sqrt() - radius > bound + 1e-9 {
                         continue;
                     }
-                    let d = self.footprint.distance_to_cell(&self.geometry, cell, pose);
+                    let d = self.footprint.distance_to_cell(geometry, cell, pose);
                     if d <= APPROACH_WINDOW_M && nearest.is_none_or(|(best, _)| d < best) {
                         nearest = Some((d, cell));
                     }
@@ -139,7 +133,7 @@ impl<'a> ContactWatch<'a> {
         // The touched cell nearest the robot's centre names the obstacle.
         let cells: Vec<CellIndex> = self
             .footprint
-            .cells_under(&self.geometry, &region, pose)
+            .cells_under(&truth.window, pose)
             .into_iter()
             .filter(|c| region.offset(*c).is_some_and(|k| self.blocked[k]))
             .collect();
@@ -148,7 +142,7 @@ impl<'a> ContactWatch<'a> {
             .copied()
             .min_by(|a, b| {
                 let d = |c: &CellIndex| {
-                    let (x, y) = self.geometry.cell_center(*c);
+                    let (x, y) = self.truth.window.geometry().cell_center(*c);
                     (x - pose.x_m).hypot(y - pose.y_m)
                 };
                 d(a).total_cmp(&d(b))
@@ -164,8 +158,8 @@ impl<'a> ContactWatch<'a> {
     /// The obstacle a blocked cell belongs to: the one whose footprint holds the cell's centre, else the one
     /// holding a corner of the cell, else `terrain`.
     pub fn obstacle_of(&self, cell: CellIndex) -> String {
-        let (x, y) = self.geometry.cell_center(cell);
-        let h = self.geometry.resolution_m() / 2.0;
+        let (x, y) = self.truth.window.geometry().cell_center(cell);
+        let h = self.truth.window.resolution_m() / 2.0;
         let points = [
             (x, y),
             (x - h, y - h),

@@ -45,18 +45,10 @@ pub struct PlannerFailure {
 /// The region's extent a path must stay in: min x, max x, min y, max y, metres.
 pub type Extent = [f64; 4];
 
-/// The extent of `region`'s cells of `resolution_m`.
-pub fn extent_of(region: &oeg::CellRegion, resolution_m: f64) -> Extent {
-    let (x0, y0) = (
-        f64::from(region.min.i) * resolution_m,
-        f64::from(region.min.j) * resolution_m,
-    );
-    [
-        x0,
-        x0 + f64::from(region.num_x) * resolution_m,
-        y0,
-        y0 + f64::from(region.num_y) * resolution_m,
-    ]
+/// The extent of `window`'s cells.
+pub fn extent_of(window: &oeg::GridWindow) -> Extent {
+    let ((x0, y0), (w, h)) = (window.min_corner_m(), window.size_m());
+    [x0, x0 + w, y0, y0 + h]
 }
 
 impl ExternalPlanner {

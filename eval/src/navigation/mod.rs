@@ -181,8 +181,7 @@ pub fn navigate(
 ) -> Result<NavigationLog> {
     let s = inputs.scenario;
     let n = inputs.settings;
-    let geometry = *mapping.maps[0].geometry();
-    let mut watch = ContactWatch::new(s, inputs.truth, geometry, inputs.footprint);
+    let mut watch = ContactWatch::new(s, inputs.truth, inputs.footprint);
     let mut log = Recorder::default();
     let dt = s.tick_s;
 
@@ -447,14 +446,10 @@ fn round(v: f64) -> f64 {
     crate::output::round_m(v)
 }
 
-/// The cell of a point, clamped into the region (a point on its max edge lies in the cell beyond).
-fn clamped_cell(
-    geometry: &oeg::GridGeometry,
-    region: &oeg::CellRegion,
-    (x, y): (f64, f64),
-) -> Option<CellIndex> {
-    let (lo, hi) = (region.min, region.max());
-    let c = geometry.cell_of(x, y)?;
+/// The cell of a point, clamped into the window (a point on its max edge lies in the cell beyond).
+fn clamped_cell(window: &oeg::GridWindow, (x, y): (f64, f64)) -> Option<CellIndex> {
+    let (lo, hi) = (window.region().min, window.region().max());
+    let c = window.geometry().cell_of(x, y)?;
     let inside = c.i >= lo.i - 1 && c.i <= hi.i + 1 && c.j >= lo.j - 1 && c.j <= hi.j + 1;
     inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
 }
@@ -463,8 +458,9 @@ fn clamped_cell(
 fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
     let s = inputs.scenario;
     let map = &mapping.maps[0];
-    let geometry = *map.geometry();
-    let region = inputs.truth.region;
+    // The map's cells over the scenario's window (the truth's, which the robot never reads).
+    let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
+    let (geometry, region) = (*window.geometry(), *window.region());
     let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
     let options = planner_options(inputs);
     let decisions = map
@@ -473,8 +469,8 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
     let result = match inputs.planner {
         PlannerSource::Builtin => {
             let (Some(a), Some(b)) = (
-                clamped_cell(&geometry, &region, (from.x_m, from.y_m)),
-                clamped_cell(&geometry, &region, goal),
+                clamped_cell(&window, (from.x_m, from.y_m)),
+                clamped_cell(&window, goal),
             ) else {
                 return Ok(Replan::Failed {
                     message: format!(
@@ -484,7 +480,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
                     timed_out: false,
                 });
             };
-            oeg::plan(&region, geometry.resolution_m(), &decisions, a, b, &options)
+            oeg::plan(&window, &decisions, a, b, &options)
                 .map_err(|e| EvalError::Input {
                     path: s.name.clone().into(),
                     message: format!("planner: {e}"),
@@ -501,7 +497,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
             )?;
             // The map itself too, for planners that read this project's format (`oeg plan`).
             files.push(("map.oeg".into(), oeg::map_to_bytes(map)));
-            let extent = external::extent_of(&region, geometry.resolution_m());
+            let extent = external::extent_of(&window);
             match planner.call(&files, (from.x_m, from.y_m), goal, extent)? {
                 Ok(points) => Some(points),
                 Err(f)
@@ -519,7 +515,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
             }
         }
         PlannerSource::Callback(planner) => {
-            let extent = external::extent_of(&region, geometry.resolution_m());
+            let extent = external::extent_of(&window);
             let request = PlanRequest {
                 map,
                 region,
@@ -551,7 +547,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
     Ok(match result {
         Some(points) => Replan::Path(points),
         None => Replan::NoPath {
-            closed_by: closed_by(&decisions, inputs, &geometry, from, goal)?,
+            closed_by: closed_by(&decisions, inputs, &window, from, goal)?,
         },
     })
 }
@@ -672,14 +668,13 @@ fn path_points(plan: &Plan, geometry: &oeg::GridGeometry, goal: (f64, f64)) -> V
 fn closed_by(
     decisions: &[Traversability],
     inputs: &NavigationInputs<'_>,
-    geometry: &oeg::GridGeometry,
+    window: &oeg::GridWindow,
     from: Pose2,
     goal: (f64, f64),
 ) -> Result<String> {
-    let region = inputs.truth.region;
     let (Some(a), Some(b)) = (
-        clamped_cell(geometry, &region, (from.x_m, from.y_m)),
-        clamped_cell(geometry, &region, goal),
+        clamped_cell(window, (from.x_m, from.y_m)),
+        clamped_cell(window, goal),
     ) else {
         return Ok("outside the map region".into());
     };
@@ -689,8 +684,8 @@ fn closed_by(
         uncertain: UncertainCells::Drivable,
         ..strict
     };
-    let res = geometry.resolution_m();
-    let plan = oeg::plan(&region, res, decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
+    let (region, res) = (*window.region(), window.resolution_m());
+    let plan = oeg::plan(window, decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
         path: inputs.scenario.name.clone().into(),
         message: format!("planner: {e}"),
     })?;
@@ -769,12 +764,10 @@ fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Resul
 /// The built-in planner's path on the truth from `from` to the goal.
 fn truth_plan(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<Plan>> {
     let truth = inputs.truth;
-    let region = truth.region;
-    let geometry = oeg::GridGeometry::new(truth.resolution_m)?;
     let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
     let (Some(a), Some(b)) = (
-        clamped_cell(&geometry, &region, from),
-        clamped_cell(&geometry, &region, goal),
+        clamped_cell(&truth.window, from),
+        clamped_cell(&truth.window, goal),
     ) else {
         return Ok(None);
     };
@@ -784,7 +777,7 @@ fn truth_plan(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<
     )
     .truth_decisions();
     let options = planner_options(inputs);
-    oeg::plan(&region, truth.resolution_m, &decisions, a, b, &options).map_err(|e| EvalError::Input {
+    oeg::plan(&truth.window, &decisions, a, b, &options).map_err(|e| EvalError::Input {
         path: inputs.scenario.name.clone().into(),
         message: format!("planner: {e}"),
     })
@@ -851,9 +844,10 @@ impl Recorder {
         // Observable: a ray of the scans so far could have told about one of the cells entered.
         let o = &mapping.observability;
         let observable = contact.cells.iter().any(|c| {
-            o.region
+            o.window
+                .region()
                 .offset(*c)
-                .filter(|_| o.region == watch.region())
+                .filter(|_| o.window == *watch.window())
                 .is_some_and(|k| TruthClass::of(watch.truth(), k).could_be_told(o, k))
         });
         self.summary_events[e].observable = Some(observable);
@@ -867,7 +861,7 @@ impl Recorder {
         }
         let decisions = mapping.maps[0]
             .traversability_layer(
-                inputs.truth.region,
+                *inputs.truth.window.region(),
                 &inputs.truth.profile,
                 inputs.scenario.map.traversability,
             )?

@@ -43,7 +43,7 @@ pub fn write_report(
         out_dir,
         &profile,
         s.map.traversability,
-        Some(truth.region),
+        Some(*truth.window.region()),
         formats,
     )?);
     files.extend(comparison::write(
@@ -62,7 +62,7 @@ pub fn write_report(
 /// # Errors
 /// A failed write.
 pub fn write_tables(out_dir: &Path, truth: &TruthRaster, evaluation: &Evaluation) -> Result<Vec<PathBuf>> {
-    let geometry = evaluation.estimate.geometry;
+    let geometry = *evaluation.estimate.window.geometry();
     let plan = out_dir.join("plan.csv");
     write_table(
         &plan,

@@ -44,9 +44,13 @@ pub fn nav2_map(
     uncertain: UncertainCells,
     image_name: &str,
 ) -> (Vec<u8>, String) {
-    let region = decisions.region;
+    let region = *decisions.region();
     let (w, h) = (region.num_x as usize, region.num_y as usize);
-    let mut pgm = format!("P5\n# CREATOR: oeg {}\n{w} {h}\n255\n", decisions.resolution_m).into_bytes();
+    let mut pgm = format!(
+        "P5\n# CREATOR: oeg {}\n{w} {h}\n255\n",
+        decisions.window.resolution_m()
+    )
+    .into_bytes();
     pgm.reserve(w * h);
     for v in (0..h).rev() {
         pgm.extend(
@@ -55,7 +59,7 @@ pub fn nav2_map(
                 .map(|t| nav2_grey(*t, uncertain)),
         );
     }
-    let res = decisions.resolution_m;
+    let res = decisions.window.resolution_m();
     let (x0, y0) = (f64::from(region.min.i) * res, f64::from(region.min.j) * res);
     let yaml = format!(
         "image: {image_name}\nmode: trinary\nresolution: {res}\norigin: [{x0}, {y0}, 0.0]\nnegate: 0\n\
@@ -428,8 +432,10 @@ mod tests {
     fn decisions() -> Raster<Traversability> {
         use Traversability::*;
         Raster {
-            region: CellRegion::from_corners(CellIndex::new(-2, 4), CellIndex::new(0, 5)).expect("region"),
-            resolution_m: 0.5,
+            window: crate::GridWindow::new(
+                crate::GridGeometry::new(0.5).expect("resolution"),
+                CellRegion::from_corners(CellIndex::new(-2, 4), CellIndex::new(0, 5)).expect("region"),
+            ),
             values: vec![Free, Blocked, Unknown, Traversable, Uncertain, Free],
         }
     }

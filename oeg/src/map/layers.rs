@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::Map;
 use crate::cell::Cell;
 use crate::error::{Error, Result};
-use crate::geometry::{CellIndex, CellRegion};
+use crate::geometry::{CellIndex, CellRegion, GridWindow};
 use crate::model::probability_from_log_odds;
 
 /// A per-cell quantity of the map.
@@ -64,21 +64,24 @@ impl LayerKind {
     }
 }
 
-/// A dense raster over a region.
+/// A dense raster over a window onto the grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Raster<T> {
-    /// The cells covered.
-    pub region: CellRegion,
-    /// Cell size, metres.
-    pub resolution_m: f64,
-    /// One value per cell, row-major from the region's min corner.
+    /// The cells covered, on the map's grid.
+    pub window: GridWindow,
+    /// One value per cell, row-major from the window's min corner.
     pub values: Vec<T>,
 }
 
 impl<T: Copy> Raster<T> {
-    /// The value at `cell`, or `None` outside the region.
+    /// The value at `cell`, or `None` outside the window.
     pub fn get(&self, cell: CellIndex) -> Option<T> {
-        self.region.offset(cell).map(|k| self.values[k])
+        self.window.region().offset(cell).map(|k| self.values[k])
+    }
+
+    /// The cells covered.
+    pub fn region(&self) -> &CellRegion {
+        self.window.region()
     }
 }
 
@@ -112,8 +115,7 @@ impl Map {
         let mut values = Vec::with_capacity(n);
         values.extend(region.cells().map(|c| kind.value(&self.cell(c))));
         Ok(Raster {
-            region,
-            resolution_m: self.geometry().resolution_m(),
+            window: GridWindow::new(*self.geometry(), region),
             values,
         })
     }

@@ -419,8 +419,7 @@ impl Map {
         let mut values = Vec::with_capacity(n);
         values.extend(region.cells().map(|c| self.traversability(c, profile, rule)));
         Ok(Raster {
-            region,
-            resolution_m: self.geometry().resolution_m(),
+            window: crate::GridWindow::new(*self.geometry(), region),
             values,
         })
     }

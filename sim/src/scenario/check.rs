@@ -79,15 +79,17 @@ impl Checker<'_> {
 
     /// Checks every value of the scenario for sense, section by section; the first bad one is an error at its
     /// place in the file.
-    pub(super) fn validate(&self, s: &Scenario) -> Result<()> {
+    /// Returns the map's window onto the grid, built from `[map]` once it is known to make sense.
+    pub(super) fn validate(&self, s: &Scenario) -> Result<oeg::GridWindow> {
         self.validate_run(s)?;
-        self.validate_map(s)?;
-        self.validate_robot(s)?;
+        let window = self.validate_map(s)?;
+        self.validate_robot(s, &window)?;
         self.validate_navigation(s)?;
         self.validate_terrain(s)?;
         self.validate_objects(s)?;
         self.validate_sensors(s)?;
-        self.validate_expectations(s)
+        self.validate_expectations(s)?;
+        Ok(window)
     }
 
     /// The name, the clock and the duration.
@@ -126,8 +128,9 @@ impl Checker<'_> {
         Ok(())
     }
 
-    /// `[map]` and `[planner]`: the region, the resolution, the model and the rules.
-    fn validate_map(&self, s: &Scenario) -> Result<()> {
+    /// `[map]` and `[planner]`: the region, the resolution, the model and the rules. Returns the map's window
+    /// ([`super::MapSettings::window_on`]).
+    fn validate_map(&self, s: &Scenario) -> Result<oeg::GridWindow> {
         use KeySeg::Key as K;
         // The map.
         let m = &s.map;
@@ -142,13 +145,15 @@ impl Checker<'_> {
                 )
             },
         )?;
-        if let Err(e) = oeg::GridGeometry::new(m.resolution_m) {
-            return Err(self.error(&[K("map"), K("resolution_m")], e.to_string()));
-        }
-        let cells = ((m.max_xy_m[0] - m.min_xy_m[0]) / m.resolution_m).ceil()
-            * ((m.max_xy_m[1] - m.min_xy_m[1]) / m.resolution_m).ceil();
-        self.check(cells <= MAX_MAP_CELLS as f64, &[K("map"), K("resolution_m")], || {
-            format!("the region holds {cells:.0} cells at this resolution, over the limit of {MAX_MAP_CELLS}; use a coarser resolution or a smaller region")
+        let geometry = oeg::GridGeometry::new(m.resolution_m)
+            .map_err(|e| self.error(&[K("map"), K("resolution_m")], e.to_string()))?;
+        let window = s
+            .map
+            .window_on(geometry)
+            .map_err(|e| self.error(&[K("map"), K("max_xy_m")], e.to_string()))?;
+        let cells = window.num_cells();
+        self.check(cells <= MAX_MAP_CELLS, &[K("map"), K("resolution_m")], || {
+            format!("the region holds {cells} cells at this resolution, over the limit of {MAX_MAP_CELLS}; use a coarser resolution or a smaller region")
         })?;
         if let Err(e) = m.model.validate() {
             return Err(self.error(&[K("map"), K("model")], e.to_string()));
@@ -183,7 +188,7 @@ impl Checker<'_> {
         if let Some(xy) = s.planner.goal_xy_m {
             self.inside(s, xy, &[K("planner"), K("goal_xy_m")])?;
         }
-        Ok(())
+        Ok(window)
     }
 
     /// `[navigation]`: the goal, the clocks, the controller and the planner.
@@ -283,15 +288,13 @@ impl Checker<'_> {
 
     /// The truth's cost over the map's region (after `[map]` and the robot's profile are known to make sense):
     /// its sample points, the steps of its running minimum and its memory, each within its limit.
-    fn validate_truth_cost(&self, s: &Scenario) -> Result<()> {
+    fn validate_truth_cost(&self, s: &Scenario, window: &oeg::GridWindow) -> Result<()> {
         use KeySeg::Key as K;
-        let m = &s.map;
-        let side = |k: usize| ((m.max_xy_m[k] - m.min_xy_m[k]) / m.resolution_m).ceil() as u64;
         let contact_m = f64::from(s.robot.profile().contact_distance_m());
         let cost = crate::truth::TruthCost::estimate(
-            side(0),
-            side(1),
-            m.resolution_m,
+            u64::from(window.region().num_x),
+            u64::from(window.region().num_y),
+            window.resolution_m(),
             crate::truth::DEFAULT_SAMPLES_PER_SIDE,
             contact_m,
         );
@@ -335,7 +338,7 @@ impl Checker<'_> {
     }
 
     /// `[robot]`: its decision limits, its drive and its odometry.
-    fn validate_robot(&self, s: &Scenario) -> Result<()> {
+    fn validate_robot(&self, s: &Scenario, window: &oeg::GridWindow) -> Result<()> {
         use KeySeg::{Index as I, Key as K};
         // The robot.
         let r = &s.robot;
@@ -348,7 +351,7 @@ impl Checker<'_> {
         if let Err(e) = r.profile().validate() {
             return Err(self.error(&[K("robot"), K("max_grade")], e.to_string()));
         }
-        self.validate_truth_cost(s)?;
+        self.validate_truth_cost(s, window)?;
         self.positive(r.max_speed_m_s, &[K("robot"), K("max_speed_m_s")], "speed in m/s")?;
         self.positive(
             r.max_turn_rate_deg_s,

@@ -61,6 +61,10 @@ pub struct LoadedScenario {
     pub source: ScenarioSource,
     /// The robot, from its URDF.
     pub robot: RobotModel,
+    /// The map's window onto the grid: `[map]`'s resolution and region, built once when the scenario is
+    /// checked ([`super::MapSettings::window_on`]). The truth, what the sensors could see, the recording, the
+    /// figures and the planner's files are laid out on it.
+    pub window: oeg::GridWindow,
 }
 
 impl LoadedScenario {
@@ -115,12 +119,13 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         let doc = toml::Table::deserialize(toml::de::Deserializer::from(parsed)).map_err(at_its_place)?;
         apply_preset(&mut scenario, doc).map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
     }
-    checker.validate(&scenario)?;
+    let window = checker.validate(&scenario)?;
     let robot = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
         scenario,
         source,
         robot,
+        window,
     })
 }
 
@@ -177,12 +182,13 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
         apply_preset(&mut scenario, doc.clone())
             .map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
     }
-    checker.validate(&scenario)?;
+    let window = checker.validate(&scenario)?;
     let robot = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
         scenario,
         source,
         robot,
+        window,
     })
 }
 

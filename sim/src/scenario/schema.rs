@@ -86,6 +86,22 @@ pub struct MapSettings {
     pub traversability: TraversabilityRule,
 }
 
+impl MapSettings {
+    /// The map's window onto a grid of `geometry` (the resolution, [`MapSettings::resolution_m`], checked by
+    /// the caller): the cells of the region from `min_xy_m` (included) to `max_xy_m` (excluded),
+    /// [`oeg::GridWindow::covering`]. A loaded scenario holds its own, [`crate::LoadedScenario::window`].
+    ///
+    /// # Errors
+    /// A region that is empty or beyond the grid's index range.
+    pub fn window_on(&self, geometry: oeg::GridGeometry) -> oeg::Result<oeg::GridWindow> {
+        oeg::GridWindow::covering(
+            geometry,
+            (self.min_xy_m[0], self.min_xy_m[1]),
+            (self.max_xy_m[0], self.max_xy_m[1]),
+        )
+    }
+}
+
 /// The run's planner check: a path on the map and on the truth, from a start to a goal. Every field optional.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields, default)]

@@ -306,33 +306,28 @@ fn simulate_group(
     .map_err(|e| e.to_string())?;
     let (simulation, maps) = (&simulated.simulation, &simulated.maps);
     let figures = simulated.navigation.as_ref().map(|n| n.summary.figures());
-    // One truth per grid and region (runs that differ only in the model share it); a closed-loop run's was
-    // taken before its loop.
-    let mut truths: Vec<(oeg::GridGeometry, sim::truth::TruthRaster)> = Vec::new();
-    if let (Some((truth, _)), Some(map)) = (&simulated.truth, maps.first()) {
-        truths.push((*map.geometry(), truth.clone()));
+    // One truth per window (runs that differ only in the model share it); a closed-loop run's was taken
+    // before its loop.
+    let mut truths: Vec<sim::truth::TruthRaster> = Vec::new();
+    if let Some((truth, _)) = &simulated.truth {
+        truths.push(truth.clone());
     }
     let outcomes = loaded
         .iter()
         .zip(maps)
         .map(|(l, map)| {
-            let s = &l.as_ref().map_err(Clone::clone)?.scenario;
-            let geometry = *map.geometry();
-            let region = crate::pipeline::region_of(s, &geometry).map_err(|e| e.to_string())?;
-            let k = match truths
-                .iter()
-                .position(|(g, t)| *g == geometry && t.region == region)
-            {
+            let l = l.as_ref().map_err(Clone::clone)?;
+            let s = &l.scenario;
+            let k = match truths.iter().position(|t| t.window == l.window) {
                 Some(k) => k,
                 None => {
-                    let truth =
-                        crate::pipeline::truth_of(s, simulation.world(), &geometry, &Progress::hidden())
-                            .map_err(|e| e.to_string())?;
-                    truths.push((geometry, truth));
+                    let truth = crate::pipeline::truth_of(l, simulation.world(), &Progress::hidden())
+                        .map_err(|e| e.to_string())?;
+                    truths.push(truth);
                     truths.len() - 1
                 }
             };
-            let truth = &truths[k].1;
+            let truth = &truths[k];
             let evaluation = crate::judge::evaluate(
                 s,
                 map,
