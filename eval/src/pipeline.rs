@@ -105,22 +105,32 @@ pub struct RunReport {
 pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
     let path = &options.scenario;
     let text = oeg::read_text(path)?;
-    // The file alone first, so that its own errors name its lines; then the overrides, each named if it breaks
-    // the scenario.
-    let mut loaded = scenario::load_str(path, &text)?;
-    if !options.overrides.is_empty() {
-        let doc: toml::Table = toml::from_str(&text).map_err(|e| EvalError::Input {
-            path: path.clone(),
-            message: format!("not valid TOML: {}", e.message()),
-        })?;
-        loaded = crate::settings::resolve_with(&doc, &options.overrides, |doc| {
-            scenario::load_doc(path, &text, doc).map_err(|e| SettingError::invalid(scenario_message(&e)))
-        })
-        .map_err(|e| EvalError::Input {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
-    }
+    let mut loaded = if options.overrides.is_empty() {
+        scenario::load_str(path, &text)?
+    } else {
+        // The scenario is read once, with the overrides; only when that fails is the file read alone, so
+        // that its own errors name its lines, and otherwise the override that breaks it is named.
+        let with_overrides = toml::from_str::<toml::Table>(&text).ok().map(|doc| {
+            crate::settings::resolve_with(&doc, &options.overrides, |doc| {
+                scenario::load_doc(path, &text, doc).map_err(|e| SettingError::invalid(scenario_message(&e)))
+            })
+        });
+        match with_overrides {
+            Some(Ok(loaded)) => loaded,
+            failed => {
+                // A file that does not read on its own (TOML included) is named at its line first.
+                scenario::load_str(path, &text)?;
+                let message = match failed {
+                    Some(Err(e)) => e.to_string(),
+                    _ => "not valid TOML".into(),
+                };
+                return Err(EvalError::Input {
+                    path: path.clone(),
+                    message,
+                });
+            }
+        }
+    };
     if let Some(seed) = options.seed {
         loaded.scenario.seed = seed;
     }
@@ -444,17 +454,11 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
     // The work, its errors naming a file where it would be in the output folder, not in the staging that is
     // removed when the job fails.
     let work = || -> Result<_> {
-        // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]` keys,
-        // such as height thresholding, still apply), through the same door as `--set map.preset=<preset>`.
+        // The compared model: the scenario as if its `[map]` said `preset = "<preset>"` (its own `[map.model]`
+        // keys, such as height thresholding, still apply), resolved from the document already read.
         let compared: Option<(oeg::MapPreset, scenario::Scenario)> = match options.compare {
             None => None,
-            Some(preset) => {
-                let mut with_preset = options.clone();
-                with_preset
-                    .overrides
-                    .push(format!("map.preset={}", preset.name()));
-                Some((preset, load(&with_preset)?.scenario))
-            }
+            Some(preset) => Some((preset, loaded.with_preset(preset)?.scenario)),
         };
         let mut settings = vec![&s.map];
         if let Some((_, c)) = &compared {

@@ -198,12 +198,13 @@ fn invalid(e: oeg::Error) -> SettingError {
 
 impl Checked for MapJobSettings {
     fn check(&self) -> Result<(), SettingError> {
-        let r = self.map.resolution_m;
-        if !(r.is_finite() && (0.001..=100.0).contains(&r)) {
-            return Err(SettingError::invalid(format!(
-                "map.resolution_m: expected a cell size in [0.001, 100] m, got {r}"
-            )));
-        }
+        // The one rule for a cell size: the grid's.
+        oeg::GridGeometry::new(self.map.resolution_m).map_err(|e| match e {
+            oeg::Error::InvalidSetting { name, message } => {
+                SettingError::invalid(format!("map.{name}: {message}"))
+            }
+            other => invalid(other),
+        })?;
         self.map.model.validate().map_err(invalid)?;
         self.map.traversability.validate().map_err(invalid)?;
         self.robot.validate().map_err(invalid)

@@ -65,9 +65,44 @@ pub struct LoadedScenario {
     /// checked ([`super::MapSettings::window_on`]). The truth, what the sensors could see, the recording, the
     /// figures and the planner's files are laid out on it.
     pub window: oeg::GridWindow,
+    /// The settings document the scenario was read from: the file, with any overrides applied. A model
+    /// compared with the scenario's own ([`LoadedScenario::with_preset`]) is resolved from it.
+    pub document: toml::Table,
 }
 
 impl LoadedScenario {
+    /// The same scenario under the named model `preset`: its `[map.model]` keys and `[map] traversability`
+    /// still apply over the preset's ([`expand_map_preset`], as if the document said `preset = "<name>"`).
+    /// Nothing else is read or built again: the world, the robot and the window are the scenario's.
+    ///
+    /// # Errors
+    /// [`SimError::Scenario`] when the model under `preset` makes no sense.
+    pub fn with_preset(&self, preset: oeg::MapPreset) -> Result<LoadedScenario> {
+        let mut document = self.document.clone();
+        if let Some(toml::Value::Table(map)) = document.get_mut("map") {
+            map.insert("preset".into(), toml::Value::String(preset.name().into()));
+        }
+        let error = |message: String| SimError::Scenario {
+            path: self.source.path.clone(),
+            position: None,
+            message: format!("map (with preset = \"{}\"): {message}", preset.name()),
+        };
+        let mut scenario = self.scenario.clone();
+        scenario.map.preset = preset;
+        apply_preset(&mut scenario, document.clone()).map_err(error)?;
+        scenario.map.model.validate().map_err(|e| error(e.to_string()))?;
+        scenario
+            .map
+            .traversability
+            .validate()
+            .map_err(|e| error(e.to_string()))?;
+        Ok(LoadedScenario {
+            scenario,
+            document,
+            ..self.clone()
+        })
+    }
+
     /// The files the scenario was read from: the scenario, its robot's URDF and its terrain image, if any.
     pub fn files(&self) -> Vec<std::path::PathBuf> {
         let mut files = vec![
@@ -115,9 +150,10 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source: &source,
         document: Some(parsed.get_ref().clone()),
     };
+    let document = toml::Table::deserialize(toml::de::Deserializer::from(parsed)).map_err(at_its_place)?;
     if scenario.map.preset != oeg::MapPreset::Paper {
-        let doc = toml::Table::deserialize(toml::de::Deserializer::from(parsed)).map_err(at_its_place)?;
-        apply_preset(&mut scenario, doc).map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
+        apply_preset(&mut scenario, document.clone())
+            .map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
     }
     let window = checker.validate(&scenario)?;
     let robot = load_robot(&checker, &scenario)?;
@@ -126,6 +162,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source,
         robot,
         window,
+        document,
     })
 }
 
@@ -189,6 +226,7 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
         source,
         robot,
         window,
+        document: doc.clone(),
     })
 }
 
