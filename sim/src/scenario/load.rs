@@ -109,7 +109,7 @@ impl LoadedScenario {
             self.source.path.clone(),
             self.source.resolve(&self.scenario.robot.urdf),
         ];
-        if let super::schema::Terrain::Image { path, .. } = &self.scenario.terrain {
+        if let super::scene::Terrain::Image { path, .. } = &self.scenario.terrain {
             files.push(self.source.resolve(path));
         }
         files

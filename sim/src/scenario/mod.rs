@@ -5,6 +5,7 @@ pub mod exact;
 pub mod heightmap;
 mod load;
 mod navigation;
+mod scene;
 mod schema;
 pub mod sensors;
 
@@ -14,5 +15,6 @@ pub use load::{
     MAX_TRUTH_SAMPLES, expand_map_preset, load, load_doc, load_str, position_of,
 };
 pub use navigation::*;
+pub use scene::*;
 pub use schema::*;
 pub use sensors::{NoiseSettings, SensorKind, SensorMount};
