@@ -8,6 +8,7 @@
 //! the controller's command moves the robot in the world, settled on the terrain. The judge watches the true
 //! footprint against the truth ([`contact`]); nothing the robot decides reads the truth.
 
+mod closed_loop;
 pub mod contact;
 pub mod controller;
 pub mod external;
@@ -22,11 +23,12 @@ use sim::truth::TruthRaster;
 use crate::error::{EvalError, Result};
 use crate::mapping::Mapping;
 use crate::progress::Progress;
+pub use closed_loop::navigate;
 pub use contact::APPROACH_WINDOW_M;
 use contact::ContactWatch;
-use controller::{Command, PurePursuit};
+use controller::Command;
 use external::ExternalPlanner;
-use record::{Event, EventKind, NavigationSummary, Outcome, PlannedPath, TrajectoryRow};
+use record::{Event, EventKind, NavigationSummary, PlannedPath, TrajectoryRow};
 
 /// The most map snapshots kept for event images.
 pub const MAX_SNAPSHOTS: usize = 6;
@@ -167,253 +169,6 @@ enum Replan {
     Path(Vec<(f64, f64)>),
     NoPath { closed_by: String },
     Failed { message: String, timed_out: bool },
-}
-
-/// Runs the scripted drive, then navigates to the goal until it is reached, the robot is stuck, or the time
-/// runs out. Every map of `mapping` integrates every scan; the robot plans on the first.
-///
-/// # Errors
-/// A scan a map rejects, or a map file for an external planner that cannot be written.
-pub fn navigate(
-    mapping: &mut Mapping,
-    inputs: &NavigationInputs<'_>,
-    progress: &Progress,
-) -> Result<NavigationLog> {
-    let s = inputs.scenario;
-    let n = inputs.settings;
-    let mut watch = ContactWatch::new(s, inputs.truth, inputs.footprint);
-    let mut log = Recorder::default();
-    let dt = s.tick_s;
-
-    // Progress counts simulated seconds: a closed loop's scans do not say how far it is from its goal.
-    mapping.count_simulated_time = true;
-    progress.set_unit("s simulated");
-    progress.set_length(s.duration_s.ceil() as u64);
-    // The scripted drive, one tick at a time, so that the trajectory and the watch see all of it.
-    let drive_end = mapping.simulation.world().drive_end_s().min(s.duration_s);
-    let ticks = (drive_end / dt).ceil() as u64;
-    for k in 1..=ticks {
-        let t = (k as f64 * dt).min(drive_end);
-        step_to(mapping, t, progress)?;
-        log.sample(mapping, Command::default(), "scripted", None);
-        log.watch(&mut watch, mapping);
-    }
-
-    let start = mapping.simulation.world().planar_pose();
-    let t0 = mapping.simulation.world().time_s();
-    let end = n
-        .time_limit_s
-        .map_or(s.duration_s, |l| (t0 + l).min(s.duration_s));
-    // The bar's end is the time limit: the robot may reach its goal sooner, never later.
-    progress.set_length(end.ceil() as u64);
-    let controller = PurePursuit {
-        lookahead_m: n.lookahead_m,
-        speed_m_s: n.speed_m_s,
-        max_turn_rate_rad_s: s.robot.max_turn_rate_deg_s.to_radians(),
-    };
-    let (mut path, mut progress_index, mut plan_index): (Vec<(f64, f64)>, usize, Option<u64>) =
-        (Vec::new(), 0, None);
-    let mut state = "following";
-    let mut had_path = true;
-    let (mut anchor, mut anchor_t) = ((start.x_m, start.y_m), t0);
-    let mut next_replan = t0;
-    let mut planner_wall_time_s = 0.0;
-    let mut wall_time_dependent = false;
-    let mut plan_budget = PlanBudget::new(MAX_KEPT_PLAN_POINTS);
-    let (mut replans, mut no_path_replans, mut failures) = (0u64, 0u64, 0u64);
-    let mut k = 0u64;
-    // The recovery sequence (nav2's, before it gives up): the behaviour under way and until when, and how many
-    // of the sequence's behaviours were tried since the robot last made progress.
-    let sequence = recovery_sequence(n);
-    let (mut recovering, mut tried): (Option<(Recovery, f64)>, usize) = (None, 0);
-    let outcome = loop {
-        let t = t0 + k as f64 * dt;
-        let estimated = estimated_pose(mapping);
-        // The goal checker reads the estimated pose, as a robot's does.
-        if (estimated.x_m - n.goal_xy_m[0]).hypot(estimated.y_m - n.goal_xy_m[1]) <= n.goal_tolerance_m {
-            log.event(
-                mapping,
-                EventKind::Reached,
-                "the estimated position is within the goal tolerance",
-            );
-            break Outcome::Reached;
-        }
-        if let Some((_, until)) = recovering
-            && t >= until - 1e-9
-        {
-            // The behaviour is over: plan again now, and give the progress checker a fresh window.
-            recovering = None;
-            next_replan = t;
-            let now = mapping.simulation.world().planar_pose();
-            (anchor, anchor_t) = ((now.x_m, now.y_m), t);
-        }
-        if recovering.is_none() && t - anchor_t >= n.stuck_time_s - 1e-9 {
-            let Some(behaviour) = sequence.get(tried).copied() else {
-                log.event(
-                    mapping,
-                    EventKind::Stuck,
-                    &format!(
-                        "moved less than {} m in {} s, after the recovery sequence ({})",
-                        n.stuck_radius_m,
-                        n.stuck_time_s,
-                        describe_sequence(&sequence)
-                    ),
-                );
-                break Outcome::Stuck;
-            };
-            tried += 1;
-            let e = log.event(mapping, EventKind::Recovery, &behaviour.describe());
-            log.snapshot(mapping, inputs, e)?;
-            let turn_rate = s.robot.max_turn_rate_deg_s.to_radians();
-            recovering = Some((
-                behaviour,
-                t + behaviour.duration_s(estimated, n.goal_xy_m, turn_rate),
-            ));
-            (path, plan_index, state) = (Vec::new(), None, "recovery");
-        }
-        if t >= end - 1e-9 {
-            log.event(mapping, EventKind::TimeLimit, "the time limit ran out");
-            break Outcome::TimeLimit;
-        }
-        if recovering.is_none() && t >= next_replan - 1e-9 {
-            next_replan += n.replan_period_s;
-            replans += 1;
-            let wall = std::time::Instant::now();
-            let result = replan(mapping, inputs, estimated)?;
-            planner_wall_time_s += wall.elapsed().as_secs_f64();
-            match result {
-                Replan::Path(points) => {
-                    plan_index = Some(log.plans.len() as u64);
-                    log.plans.push(PlannedPath {
-                        time_s: round(t),
-                        points: plan_budget.keep(&points),
-                    });
-                    (path, progress_index, state, had_path) = (points, 0, "following", true);
-                }
-                Replan::NoPath { closed_by } => {
-                    no_path_replans += 1;
-                    if had_path {
-                        let e = log.event(
-                            mapping,
-                            EventKind::NoPath,
-                            "no path on the map from the estimated pose to the goal",
-                        );
-                        log.summary_events[e].closed_by = closed_by;
-                        log.snapshot(mapping, inputs, e)?;
-                    }
-                    (path, plan_index, state, had_path) = (Vec::new(), None, "no_path", false);
-                }
-                Replan::Failed { message, timed_out } => {
-                    failures += 1;
-                    wall_time_dependent |= timed_out;
-                    let e = log.event(mapping, EventKind::PlannerFailed, &message);
-                    log.snapshot(mapping, inputs, e)?;
-                    (path, plan_index, state) = (Vec::new(), None, "planner_failed");
-                }
-            }
-        }
-        let command = match recovering {
-            Some((behaviour, _)) => behaviour.command(
-                estimated,
-                n.goal_xy_m,
-                s.robot.max_turn_rate_deg_s.to_radians(),
-                dt,
-            ),
-            None => controller.command(estimated, &path, &mut progress_index),
-        };
-        mapping
-            .simulation
-            .world_mut()
-            .command(command.speed_m_s, command.turn_rate_rad_s);
-        k += 1;
-        let t_next = (t0 + k as f64 * dt).min(end);
-        step_to(mapping, t_next, progress)?;
-        log.sample(mapping, command, state, plan_index);
-        if let Some(e) = log.watch(&mut watch, mapping) {
-            log.snapshot(mapping, inputs, e)?;
-        }
-        let now = mapping.simulation.world().planar_pose();
-        if recovering.is_none() && (now.x_m - anchor.0).hypot(now.y_m - anchor.1) >= n.stuck_radius_m {
-            // Progress: the sequence starts afresh at the next stall.
-            (anchor, anchor_t, tried) = ((now.x_m, now.y_m), t_next, 0);
-        }
-    };
-    mapping.simulation.world_mut().command(0.0, 0.0);
-    if let Some(row) = log.trajectory.last_mut() {
-        row.planner_state = match outcome {
-            Outcome::Reached => "reached",
-            Outcome::Stuck => "stuck",
-            Outcome::TimeLimit => "time_limit",
-        };
-    }
-    if let Some((d, time_s, pose, cell)) = watch.closest {
-        log.summary_events.push(Event {
-            time_s: round(time_s),
-            kind: EventKind::ClosestApproach,
-            x_m: round(pose.x_m),
-            y_m: round(pose.y_m),
-            yaw_deg: round(pose.yaw_rad.to_degrees()),
-            obstacle: watch.obstacle_of(cell),
-            distance_m: Some(round(d)),
-            observable: None,
-            closed_by: String::new(),
-            message: "the closest the footprint came to a truly blocked cell".into(),
-        });
-        log.summary_events.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-    }
-    let end_pose = mapping.simulation.world().planar_pose();
-    let driven = end_pose.distance_m - start.distance_m;
-    let truth_path = truth_shortest_path(inputs, (start.x_m, start.y_m))?;
-    let reached = outcome == Outcome::Reached;
-    let count_contacts = |observable: Option<bool>| {
-        log.summary_events
-            .iter()
-            .filter(|e| e.kind == EventKind::Contact && observable.is_none_or(|o| e.observable == Some(o)))
-            .count() as u64
-    };
-    let (contacts, contacts_observable) = (count_contacts(None), count_contacts(Some(true)));
-    let summary = NavigationSummary {
-        scenario: s.name.clone(),
-        seed: s.seed,
-        outcome,
-        reached,
-        planner: match inputs.planner {
-            PlannerSource::Builtin => "astar",
-            PlannerSource::External(_) => "external",
-            PlannerSource::Callback(_) => "callback",
-        },
-        start_xy_m: [round(start.x_m), round(start.y_m)],
-        goal_xy_m: n.goal_xy_m,
-        start_time_s: round(t0),
-        time_s: round(mapping.simulation.world().time_s() - t0),
-        driven_length_m: round(driven),
-        truth_shortest_path_m: truth_path.map(round),
-        length_ratio: truth_path.filter(|_| reached).map(|p| round(driven / p)),
-        final_distance_to_goal_m: round((end_pose.x_m - n.goal_xy_m[0]).hypot(end_pose.y_m - n.goal_xy_m[1])),
-        replans,
-        no_path_replans,
-        planner_failures: failures,
-        contacts,
-        contacts_observable,
-        contacts_blind: contacts - contacts_observable,
-        closest_approach_m: watch.closest.map(|c| round(c.0)),
-        footprint_m: [
-            round(inputs.footprint.min_x_m),
-            round(inputs.footprint.max_x_m),
-            round(inputs.footprint.min_y_m),
-            round(inputs.footprint.max_y_m),
-        ],
-        wall_time_dependent,
-        plan_points_dropped: plan_budget.dropped,
-        events: log.summary_events,
-    };
-    Ok(NavigationLog {
-        trajectory: log.trajectory,
-        plans: log.plans,
-        summary,
-        snapshots: log.snapshots,
-        planner_wall_time_s,
-    })
 }
 
 /// Takes the scans up to `t_s` and moves the world there.
