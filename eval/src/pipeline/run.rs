@@ -340,12 +340,43 @@ fn write_run(
     write_json(&timing_path, &timing)?;
     files.push(timing_path);
     // The page that shows the run, last: it links every file above.
+    let compared_run = compared.as_ref().map(|(preset, c, _, e)| (*preset, c, e));
+    let (page, outcomes) = write_page(stage, options, s, &evaluation, compared_run, navigation, &files)?;
+    files.push(page);
+    let Evaluation {
+        metrics,
+        failed,
+        obstacles,
+        ..
+    } = evaluation;
+    Ok(RunWritten {
+        files,
+        metrics,
+        failed,
+        obstacles,
+        compared: compared.map(|(preset, _, _, e)| (preset, e.metrics)),
+        outcomes,
+        timing,
+    })
+}
+
+/// Writes `report.html`, the page that shows the run's models (`compared`: the compared model's preset,
+/// scenario and evaluation) and links `files`; returns it and what each model's map made the robot do.
+fn write_page(
+    stage: &Path,
+    options: &RunOptions,
+    s: &scenario::Scenario,
+    evaluation: &Evaluation,
+    compared: Option<(oeg::MapPreset, &scenario::Scenario, &Evaluation)>,
+    navigation: Option<&NavigationLog>,
+    files: &[PathBuf],
+) -> Result<(PathBuf, Vec<crate::judge::outcome::Outcome>)> {
     let mut models = vec![ModelRun {
         scenario: s,
-        evaluation: &evaluation,
+        evaluation,
         dir: "",
     }];
-    if let Some((preset, c, _, e)) = &compared {
+    if let Some((preset, c, e)) = compared {
         models.push(ModelRun {
             scenario: c,
             evaluation: e,
@@ -363,23 +394,8 @@ fn write_run(
             .filter_map(|f| f.strip_prefix(stage).ok().map(Path::to_path_buf))
             .collect(),
     };
-    files.push(write_run_page(stage, &page)?);
-    let outcomes = page.models.iter().map(ModelRun::outcome).collect();
-    let Evaluation {
-        metrics,
-        failed,
-        obstacles,
-        ..
-    } = evaluation;
-    Ok(RunWritten {
-        files,
-        metrics,
-        failed,
-        obstacles,
-        compared: compared.map(|(preset, _, _, e)| (preset, e.metrics)),
-        outcomes,
-        timing,
-    })
+    let path = write_run_page(stage, &page)?;
+    Ok((path, page.models.iter().map(ModelRun::outcome).collect()))
 }
 
 /// `timing.json`'s figures: the simulation's and the maps' wall times (`num_maps` maps of the same rays), the
