@@ -14,8 +14,6 @@ draws them north up in world metres.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import os
 import tempfile
@@ -110,9 +108,10 @@ class Layer(NamedTuple):
 class RunResult(NamedTuple):
     """What :func:`run_scenario` returns."""
 
-    #: ``metrics.json`` as a dict (every key in the project's ``docs/metrics.md``).
+    #: ``metrics.json`` as a dict (every key in the project's ``docs/metrics.md``), ``None`` where it writes
+    #: ``null``.
     metrics: Dict[str, Any]
-    #: ``obstacles.csv``: a pandas DataFrame when pandas is installed, else a list of dicts of strings.
+    #: ``obstacles.csv``'s rows: a pandas DataFrame when pandas is installed, else a list of dicts.
     obstacles: Any
     #: The scenario's expectations that failed, each with its measured and required value.
     failed: List[str]
@@ -162,8 +161,7 @@ class Map:
     @property
     def model(self) -> Dict[str, Any]:
         """Every model option, as the scenario files and the map file's header spell them."""
-        options: Dict[str, Any] = json.loads(self._map.model)
-        return options
+        return dict(self._map.model)
 
     def integrate(
         self,
@@ -304,14 +302,6 @@ def _overrides(
     return [str(o) for o in overrides]
 
 
-def _table(text: str) -> Any:
-    try:
-        import pandas as pd  # type: ignore[import-untyped, unused-ignore]
-    except ImportError:
-        return list(csv.DictReader(io.StringIO(text)))
-    return pd.read_csv(io.StringIO(text))
-
-
 def run_scenario(
     path: PathLike,
     overrides: Union[Mapping[str, SettingValue], Sequence[str], None] = None,
@@ -346,12 +336,12 @@ def run_scenario(
         m, o, failed, out_dir = _oeg.run_scenario(
             os.fspath(path), _overrides(overrides), os.fspath(out), seed, compare, planner
         )
-        return RunResult(json.loads(m), _table(o), failed, Path(out_dir))
+        return RunResult(dict(m), _records(o), failed, Path(out_dir))
     with tempfile.TemporaryDirectory(prefix="oeg-run-") as tmp:
         m, o, failed, _ = _oeg.run_scenario(
             os.fspath(path), _overrides(overrides), os.path.join(tmp, "run"), seed, compare, planner
         )
-    return RunResult(json.loads(m), _table(o), failed, None)
+    return RunResult(dict(m), _records(o), failed, None)
 
 
 def load_sweep(path: PathLike) -> Any:
@@ -417,8 +407,7 @@ class Truth:
     @property
     def robot(self) -> Dict[str, Any]:
         """The robot's decision profile: ``max_step_m``, ``height_m``, ``max_grade``."""
-        robot: Dict[str, Any] = json.loads(self._truth.robot)
-        return robot
+        return dict(self._truth.robot)
 
     def layers(self) -> Dict[str, npt.NDArray[Any]]:
         """The truth as ``(num_y, num_x)`` arrays, row 0 the minimum y (``imshow(origin="lower")``).
@@ -473,8 +462,7 @@ def truth(
     return Truth(_oeg.truth(os.fspath(scenario), _overrides(overrides), seed, observability))
 
 
-def _records(text: str) -> Any:
-    rows = json.loads(text)
+def _records(rows: List[Dict[str, Any]]) -> Any:
     try:
         import pandas as pd  # type: ignore[import-untyped, unused-ignore]
     except ImportError:
@@ -538,4 +526,4 @@ def score(
         floats("variance", variance),
         floats("occupancy", occupancy),
     )
-    return Score(json.loads(m), _records(o), _records(p))
+    return Score(dict(m), _records(o), _records(p))

@@ -27,8 +27,8 @@ class Map:
     def num_scans(self) -> int:
         """Scans integrated so far."""
     @property
-    def model(self) -> str:
-        """The model options as JSON."""
+    def model(self) -> Dict[str, Any]:
+        """The model options."""
     def integrate(
         self,
         origin_xyz: Any,
@@ -71,8 +71,8 @@ class Truth:
     def has_observability(self) -> bool:
         """Whether the observability layers exist."""
     @property
-    def robot(self) -> str:
-        """The robot's decision profile as JSON."""
+    def robot(self) -> Dict[str, Any]:
+        """The robot's decision profile."""
     def layers(self) -> Dict[str, npt.NDArray[Any]]:
         """The truth's layers as ``(num_y, num_x)`` arrays."""
 
@@ -87,8 +87,8 @@ def score(
     elevation: Optional[npt.NDArray[np.float64]] = None,
     variance: Optional[npt.NDArray[np.float64]] = None,
     occupancy: Optional[npt.NDArray[np.float64]] = None,
-) -> Tuple[str, str, str]:
-    """Scores another mapper's arrays; returns the metrics, the obstacles and the plan rows as JSON."""
+) -> Tuple[Dict[str, Any], List[Dict[str, Any]], List[Dict[str, Any]]]:
+    """Scores another mapper's arrays; returns the metrics, the obstacles' rows and the plan's rows."""
 
 def load(path: str, memory_limit_bytes: Optional[int] = None) -> Map:
     """Loads a map file."""
@@ -113,5 +113,5 @@ def run_scenario(
     seed: Optional[int] = None,
     compare: Optional[str] = None,
     planner: Optional[Callable[..., Any]] = None,
-) -> Tuple[str, str, List[str], str]:
-    """Runs a scenario; returns metrics JSON, obstacles CSV, failed expectations and the output folder."""
+) -> Tuple[Dict[str, Any], List[Dict[str, Any]], List[str], str]:
+    """Runs a scenario; returns its metrics, its obstacles' rows, the failed expectations and the output folder."""
