@@ -539,6 +539,23 @@ fn check_path_finds_the_first_contact_and_passes_a_path_round_the_wall() {
     assert!(e.contains("broken.csv:2: y `north` is not a number"), "{e}");
     assert_eq!(e.matches("broken.csv").count(), 1, "the file named once: {e}");
     assert!(!dir.join("c").exists(), "nothing written for a broken path");
+    // A map of another cell size is refused by name, not judged cell by cell against unrelated truth cells.
+    let coarse = dir.join("coarse.oeg");
+    oeg::save_map(&oeg::Map::new(oeg::MapConfig::new(0.1)).expect("map"), &coarse).expect("saved");
+    let e = err(&oeg(&[
+        "check-path",
+        s(&scene("nav_wall")),
+        s(&round),
+        "--map",
+        s(&coarse),
+        "--out",
+        s(&dir.join("f")),
+    ]));
+    assert!(
+        e.contains("coarse.oeg") && e.contains("a map of 0.1 m cells; the scenario's truth has 0.05 m cells"),
+        "{e}"
+    );
+    assert!(!dir.join("f").exists(), "nothing written for a refused map");
     // A long path (2,000 points back and forth beside the wall, 4 km) is checked with one flag a cell, not every
     // pose's cells; one over the pose limit (3,000 km) is refused before the work.
     let zigzag = |name: &str, n: usize, far: f64| {

@@ -98,6 +98,18 @@ pub fn run_job(job: &CheckPathJob) -> Result<(PathCheck, Vec<PathBuf>)> {
     let verdicts = match &job.map {
         Some(path) => {
             let map = oeg::load_map(path)?;
+            // The map's cells are judged against the truth's, one to one: another cell size would compare
+            // unrelated cells.
+            let (mine, truths) = (map.geometry().resolution_m(), truth.window.resolution_m());
+            if mine != truths {
+                return Err(EvalError::Input {
+                    path: path.clone(),
+                    message: format!(
+                        "a map of {mine} m cells; the scenario's truth has {truths} m cells: judge a map made at \
+                         the scenario's resolution, or give the scenario that one (--set map.resolution_m={mine})"
+                    ),
+                });
+            }
             Some(Verdicts::new(&map, &truth, s.map.traversability)?)
         }
         None => None,
