@@ -7,27 +7,30 @@
 //!
 //! | Wing | What it holds |
 //! |---|---|
-//! | [`error`], [`output`], [`lock`], [`progress`] | errors, atomic outputs and staged folders, locks, progress |
+//! | [`error`], [`output`], `lock`, [`progress`] | errors, atomic outputs and staged folders, locks, progress |
 //! | [`settings`] | `--set key=value` overrides and every job's settings table |
 //! | [`judge`] | the verdict raster and what reads it: metrics, obstacles, wrong cells, the plan check |
 //! | [`figures`] | the rasteriser and every figure |
-//! | [`mapping`] | a simulation feeding its scans into one map per model |
+//! | `mapping` | a simulation feeding its scans into one map per model |
 //! | [`navigation`] | closed-loop runs: replanning, the controller, external planners, contacts |
-//! | [`pipeline`], [`report`] | simulate, map, truth, judge; the run's report files |
+//! | [`pipeline`], `report` | simulate, map, truth, judge; the run's report files |
 //! | [`jobs`] | one module per command; no job calls another |
+//!
+//! The wings in plain type (`lock`, `mapping`, `report`, and `recording`, the MCAP writer) are the crate's own:
+//! the program, the Python package, the fuzz targets and the tests reach them only through the jobs.
 
 pub mod error;
 pub mod figures;
 pub mod jobs;
 pub mod judge;
-pub mod lock;
-pub mod mapping;
+pub(crate) mod lock;
+pub(crate) mod mapping;
 pub mod navigation;
 pub mod output;
 pub mod pipeline;
 pub mod progress;
-pub mod recording;
-pub mod report;
+pub(crate) mod recording;
+pub(crate) mod report;
 pub mod scoring;
 pub mod settings;
 #[cfg(test)]

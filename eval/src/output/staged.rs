@@ -32,7 +32,7 @@ const MOUNT_STAGING: &str = ".oeg-staging.";
 /// Only folders that a job wrote (they hold [`OUTPUT_MARKER`], or, written by an earlier version, the pair of
 /// files their job always wrote and nothing that job does not write) or empty folders are replaced: a folder of
 /// someone else's files is an error, before any work is done. Two jobs committing the same folder take turns (a
-/// lock file, [`crate::lock`]), so each leaves it whole and the last one's results stay.
+/// lock file, `lock`), so each leaves it whole and the last one's results stay.
 #[derive(Debug)]
 pub struct Staged {
     target: PathBuf,

@@ -1,6 +1,6 @@
 //! The one pipeline every scenario job shares: load a scenario with its overrides, simulate the drive and the
 //! sensors, integrate the scans into one map per model, compute the truth, judge the map ([`crate::judge`]) and
-//! write the run's report ([`crate::report`]). `oeg run` and `oeg suite` run it whole; `oeg sweep` and
+//! write the run's report (`report`). `oeg run` and `oeg suite` run it whole; `oeg sweep` and
 //! `oeg preview` call its stages.
 
 mod run;

@@ -109,8 +109,8 @@ fn finish_recording(
     Ok(recording.finish()?)
 }
 
-/// Runs a scenario end to end and writes its report, in stages: [`load`], [`simulate_run`] (the drive, the
-/// sensors and the maps), [`judge_run`] (the truth and the verdicts), [`write_run`] (the report, the recording,
+/// Runs a scenario end to end and writes its report, in stages: [`load`], `simulate_run` (the drive, the
+/// sensors and the maps), `judge_run` (the truth and the verdicts), `write_run` (the report, the recording,
 /// the comparison, the timing and the page). The output folder is written all or nothing.
 ///
 /// # Errors

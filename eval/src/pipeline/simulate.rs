@@ -17,7 +17,7 @@ use crate::progress::Progress;
 use crate::recording::Recording;
 
 /// Simulates `loaded` once and integrates every scan, at the estimated pose, into one map per entry of
-/// `maps` (see [`Mapping::new`]). The simulation is returned at the end of its drive.
+/// `maps` (one map per entry, as a sweep shares a simulation). The simulation is returned at the end of its drive.
 ///
 /// # Errors
 /// A world or map that cannot be built, or a scan the map rejects.

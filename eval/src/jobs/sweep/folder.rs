@@ -7,7 +7,7 @@
 //!   (someone's files, an `oeg run` folder), the file system's root, the current folder and a symbolic link are
 //!   refused, naming the folder and what was expected.
 //! * `oeg sweep report DIR` writes only into such a folder (a merged one too: `oeg sweep merge` marks it).
-//! * One invocation works in a folder at a time: its `.lock` ([`crate::lock`]).
+//! * One invocation works in a folder at a time: its `.lock` (`lock`).
 //! * Every write inside the folder refuses a symbolic link on its way ([`SweepFolder::check`]): a link planted
 //!   as `runs.csv`, `plots/` or `runs/<id>` never makes the owner's next run or report write outside the folder.
 
