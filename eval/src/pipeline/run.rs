@@ -134,19 +134,11 @@ pub fn run_scenario(options: &RunOptions, progress: &Progress) -> Result<RunRepo
         let judged = judge_run(&loaded, run, progress)?;
         write_run(&loaded, options, staged.dir(), judged, total_start)
     };
-    let written = staged.explained(work())?;
-    let files = written.files.iter().map(|f| staged.final_path(f)).collect();
+    let mut report = staged.explained(work())?;
+    report.files = report.files.iter().map(|f| staged.final_path(f)).collect();
+    report.out_dir = out_dir;
     staged.commit()?;
-    Ok(RunReport {
-        metrics: written.metrics,
-        timing: written.timing,
-        failed: written.failed,
-        obstacles: written.obstacles,
-        compared: written.compared,
-        outcomes: written.outcomes,
-        out_dir,
-        files,
-    })
+    Ok(report)
 }
 
 /// A run after its simulation: the maps, and what else the drive left.
@@ -255,27 +247,16 @@ fn judge_run(
     })
 }
 
-/// What [`write_run`] wrote and what the run's report returns.
-struct RunWritten {
-    files: Vec<PathBuf>,
-    metrics: Metrics,
-    failed: Vec<FailedExpectation>,
-    obstacles: Vec<crate::judge::obstacles::ObstacleDecision>,
-    compared: Option<(oeg::MapPreset, Metrics)>,
-    outcomes: Vec<crate::judge::outcome::Outcome>,
-    timing: RunTiming,
-}
-
 /// The writing stage, into the staging folder `stage`: each model's report, the closed loop's records, what
 /// the sensors could see, the planner's files, the recording, the comparison, `timing.json`, and last the page
-/// that links them all.
+/// that links them all. The report's folder and files are the staging's, until the staging is committed.
 fn write_run(
     loaded: &scenario::LoadedScenario,
     options: &RunOptions,
     stage: &Path,
     judged: RunJudged,
     total_start: Instant,
-) -> Result<RunWritten> {
+) -> Result<RunReport> {
     let s = &loaded.scenario;
     let RunJudged {
         run,
@@ -349,14 +330,15 @@ fn write_run(
         obstacles,
         ..
     } = evaluation;
-    Ok(RunWritten {
-        files,
+    Ok(RunReport {
         metrics,
+        timing,
         failed,
         obstacles,
         compared: compared.map(|(preset, _, _, e)| (preset, e.metrics)),
         outcomes,
-        timing,
+        out_dir: stage.to_path_buf(),
+        files,
     })
 }
 
