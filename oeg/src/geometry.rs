@@ -231,7 +231,8 @@ impl GridWindow {
             return Err(Error::setting(
                 "region",
                 format!(
-                    "the rectangle from {min_xy_m:?} to {max_xy_m:?} m is empty; expected its max corner above                      its min corner on both axes"
+                    "the rectangle from {min_xy_m:?} to {max_xy_m:?} m is empty; expected its max corner above \
+                     its min corner on both axes"
                 ),
             ));
         }
@@ -275,20 +276,6 @@ impl GridWindow {
     /// The row-major offset of the cell holding the world point `(x, y)`, or `None` outside the window.
     pub fn offset_of(&self, x_m: f64, y_m: f64) -> Option<usize> {
         self.region.offset(self.geometry.cell_of(x_m, y_m)?)
-    }
-
-    /// The world coordinates of the centre of the cell at row-major `offset`.
-    pub fn center_of_offset(&self, offset: usize) -> (f64, f64) {
-        let num_x = self.region.num_x as usize;
-        self.geometry.cell_center(
-            self.region
-                .cell_at((offset % num_x) as u32, (offset / num_x) as u32),
-        )
-    }
-
-    /// A window onto the same grid over other cells.
-    pub fn with_region(&self, region: CellRegion) -> Self {
-        Self::new(self.geometry, region)
     }
 }
 
@@ -361,8 +348,6 @@ mod tests {
         // A corner inside a cell takes that cell whole.
         let w = GridWindow::covering(g, (0.03, 0.0), (0.08, 0.05)).expect("valid");
         assert_eq!((w.region().num_x, w.region().num_y), (2, 1));
-        let (x, y) = w.center_of_offset(1);
-        assert!((x - 0.075).abs() < 1e-12 && (y - 0.025).abs() < 1e-12);
         assert_eq!(w.min_corner_m(), (0.0, 0.0));
     }
 
