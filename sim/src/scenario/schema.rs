@@ -188,17 +188,20 @@ fn default_base_link() -> String {
     "base_link".into()
 }
 
-/// Default largest step, metres: the paper's Pioneer 3-AT climbs 3.5 cm.
-pub const DEFAULT_MAX_STEP_M: f64 = 0.035;
-/// Default robot height, metres: the paper's 0.46 m.
-pub const DEFAULT_ROBOT_HEIGHT_M: f64 = 0.46;
-
-fn default_max_step() -> f64 {
-    DEFAULT_MAX_STEP_M
+/// A default of the robot's decision profile, from its one home in `oeg` (in f32, as the decisions use it),
+/// as the number a scenario file would spell: 0.035 m, not the f32's 0.035000000149 m.
+fn as_written(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::from(v))
 }
 
+/// The paper's Pioneer 3-AT climbs 3.5 cm (`oeg::DEFAULT_MAX_STEP_M`).
+fn default_max_step() -> f64 {
+    as_written(oeg::DEFAULT_MAX_STEP_M)
+}
+
+/// The paper's robot is 0.46 m tall (`oeg::DEFAULT_ROBOT_HEIGHT_M`).
 fn default_height() -> f64 {
-    DEFAULT_ROBOT_HEIGHT_M
+    as_written(oeg::DEFAULT_ROBOT_HEIGHT_M)
 }
 
 /// Default top speed, m/s (Pioneer 3-AT datasheet).
@@ -282,5 +285,18 @@ impl ScenarioSource {
         self.path
             .parent()
             .map_or_else(|| relative.to_path_buf(), |dir| dir.join(relative))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_robot_s_defaults_are_oeg_s_as_a_file_spells_them() {
+        assert_eq!(default_max_step(), 0.035);
+        assert_eq!(default_height(), 0.46);
+        assert_eq!(default_max_step() as f32, oeg::DEFAULT_MAX_STEP_M);
+        assert_eq!(default_height() as f32, oeg::DEFAULT_ROBOT_HEIGHT_M);
     }
 }
