@@ -18,14 +18,20 @@ fn json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).expect("read")).expect("json")
 }
 
-#[test]
-fn check_path_finds_the_first_contact_and_passes_a_path_round_the_wall() {
-    let dir = temp_dir("nav", "check-path");
-    let write = |name: &str, text: &str| {
-        let p = dir.join(name);
+/// A fresh folder for one test, and a writer of its input files.
+fn folder(name: &str) -> (PathBuf, impl Fn(&str, &str) -> PathBuf) {
+    let dir = temp_dir("check-path", name);
+    let at = dir.clone();
+    (dir, move |file: &str, text: &str| {
+        let p = at.join(file);
         std::fs::write(&p, text).expect("path");
         p
-    };
+    })
+}
+
+#[test]
+fn check_path_finds_the_first_contact_and_passes_a_path_round_the_wall() {
+    let (dir, write) = folder("wall");
     let straight = write("straight.csv", "x_m,y_m\n0,0\n5.5,0\n");
     let e = err(&oeg(&[
         "check-path",
@@ -84,6 +90,11 @@ fn check_path_finds_the_first_contact_and_passes_a_path_round_the_wall() {
         "{e}"
     );
     assert!(!dir.join("f").exists(), "nothing written for a refused map");
+}
+
+#[test]
+fn a_long_path_is_checked_within_its_bound_and_a_longer_one_is_refused() {
+    let (dir, write) = folder("long");
     // A long path (2,000 points back and forth beside the wall, 4 km) is checked with one flag a cell, not every
     // pose's cells; one over the pose limit (3,000 km) is refused before the work.
     let zigzag = |name: &str, n: usize, far: f64| {
