@@ -7,7 +7,7 @@
 //!
 //! | Wing | What it holds |
 //! |---|---|
-//! | [`error`], [`output`], `lock`, [`progress`] | errors, atomic outputs and staged folders, locks, progress |
+//! | [`error`], `output`, `lock`, [`progress`] | errors, atomic outputs and staged folders, locks, progress |
 //! | [`settings`] | `--set key=value` overrides and every job's settings table |
 //! | [`judge`] | the verdict raster and what reads it: metrics, obstacles, wrong cells, the plan check |
 //! | [`figures`] | the rasteriser and every figure |
@@ -16,7 +16,7 @@
 //! | [`pipeline`], `report` | simulate, map, truth, judge; the run's report files |
 //! | [`jobs`] | one module per command; no job calls another |
 //!
-//! The wings in plain type (`lock`, `mapping`, `report`, and `recording`, the MCAP writer) are the crate's own:
+//! The wings in plain type (`output`, `lock`, `mapping`, `report`, and `recording`, the MCAP writer) are the crate's own:
 //! the program, the Python package, the fuzz targets and the tests reach them only through the jobs.
 
 pub mod error;
@@ -26,7 +26,7 @@ pub mod judge;
 pub(crate) mod lock;
 pub(crate) mod mapping;
 pub mod navigation;
-pub mod output;
+pub(crate) mod output;
 pub mod pipeline;
 pub mod progress;
 pub(crate) mod recording;

@@ -1,6 +1,6 @@
 //! One file per command of the `oeg` program (rerun's `commands/` layout): each job takes its options, does its
 //! work through the shared wings ([`crate::pipeline`], [`crate::judge`], [`crate::settings`],
-//! [`crate::figures`], [`crate::output`]) and returns what it did. No job calls another; `oeg demo` is
+//! [`crate::figures`], `output`) and returns what it did. No job calls another; `oeg demo` is
 //! `oeg map` on built-in scans, so it lives in the map job's folder ([`map::demo`]).
 
 pub mod check_path;

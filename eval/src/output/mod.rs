@@ -13,7 +13,7 @@ use serde::Serialize;
 use crate::error::{EvalError, Result};
 
 pub use base64::base64;
-pub use markdown::{markdown_rows, markdown_table, write_markdown_rows};
+pub use markdown::{markdown_rows, write_markdown_rows};
 pub use staged::{OUTPUT_MARKER, Staged};
 
 /// The unit a key's suffix names, as the outputs spell their keys (`..._m` metres, `..._m2` square metres,
@@ -142,6 +142,7 @@ pub fn write_table<'a, T: CsvRow + 'a>(path: &Path, rows: impl IntoIterator<Item
 }
 
 /// The header `csv` derives from a struct row's field names (for the tests of [`CsvRow::COLUMNS`]).
+#[cfg(test)]
 pub fn derived_header<T: Serialize>(row: &T) -> Vec<String> {
     let mut w = csv::Writer::from_writer(Vec::new());
     if w.serialize(row).is_err() {

@@ -110,11 +110,6 @@ impl Staged {
         &self.staging
     }
 
-    /// The output folder the job's files end up in.
-    pub fn target(&self) -> &Path {
-        &self.target
-    }
-
     /// Where a file written at `staged` (inside [`Staged::dir`]) lies once committed.
     pub fn final_path(&self, staged: &Path) -> PathBuf {
         staged

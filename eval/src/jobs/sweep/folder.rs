@@ -1,6 +1,6 @@
 //! A sweep's output folder: whose it is, one invocation at a time, and writes that never leave it.
 //!
-//! A sweep folder is not replaced whole like a job's ([`crate::output::Staged`]): it is resumed, run by run.
+//! A sweep folder is not replaced whole like a job's (`output::Staged`): it is resumed, run by run.
 //! So it has its own marker, [`SWEEP_MARKER`], and its own rule, checked before any work:
 //! * `oeg sweep run --out DIR` creates `DIR`, adopts an empty folder, or resumes a folder that holds the marker
 //!   (or, written by an earlier version, only entries a sweep writes, `plan.json` among them). Any other folder
@@ -174,7 +174,7 @@ impl SweepFolder {
         crate::output::write_bytes(path, bytes)
     }
 
-    /// [`crate::output::write_json`] inside.
+    /// `output::write_json` inside.
     ///
     /// # Errors
     /// As [`SweepFolder::write_bytes`].
@@ -183,7 +183,7 @@ impl SweepFolder {
         crate::output::write_json(path, value)
     }
 
-    /// [`crate::output::write_csv`] inside.
+    /// `output::write_csv` inside.
     ///
     /// # Errors
     /// As [`SweepFolder::write_bytes`].
@@ -197,7 +197,7 @@ impl SweepFolder {
         crate::output::write_csv(path, columns, rows)
     }
 
-    /// [`crate::output::write_table`] inside.
+    /// `output::write_table` inside.
     ///
     /// # Errors
     /// As [`SweepFolder::write_bytes`].
