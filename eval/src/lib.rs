@@ -16,8 +16,11 @@
 //! | [`pipeline`], `report` | simulate, map, truth, judge; the run's report files |
 //! | [`jobs`] | one module per command; no job calls another |
 //!
-//! The wings in plain type (`output`, `lock`, `mapping`, `report`, and `recording`, the MCAP writer) are the crate's own:
-//! the program, the Python package, the fuzz targets and the tests reach them only through the jobs.
+//! The wings in plain type (`output`, `lock`, `mapping`, `report`, and `recording`, the MCAP writer) are the
+//! crate's own, as are the parts of the public wings that nothing outside reads (the figures' canvas and
+//! charts, the judge's ghosts, obstacles and wrong cells, the closed loop's controller, contacts and records,
+//! the sweep's folder, generator, presets and statistics): the program, the Python package, the fuzz targets
+//! and the tests reach them only through the jobs and the types they return.
 
 pub mod error;
 pub mod figures;

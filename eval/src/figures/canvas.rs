@@ -312,7 +312,7 @@ impl Canvas {
         }
     }
 
-    /// Anti-aliased text (the embedded DejaVu Sans, [`super::font`]) with the top-left corner of its line at
+    /// Anti-aliased text (the embedded DejaVu Sans, `font`) with the top-left corner of its line at
     /// `(x, y)`; `scale` 1 for labels, 2 for titles.
     pub fn text(&mut self, x: i64, y: i64, text: &str, scale: usize, color: Rgb) {
         self.shapes.push(Shape::Text {
@@ -368,7 +368,7 @@ impl Canvas {
         out
     }
 
-    /// The drawing as an SVG document ([`super::svg`]).
+    /// The drawing as an SVG document (the `svg` writer).
     pub fn to_svg(&self) -> String {
         super::svg::to_svg(self)
     }

@@ -84,11 +84,6 @@ impl Frame {
 }
 
 impl Chart {
-    /// Draws the chart as a PNG.
-    pub fn to_png(&self) -> Vec<u8> {
-        self.draw().to_png()
-    }
-
     /// Draws the chart: the intervals' bands, the axes, the bands' edges, the lines and markers, the legend
     /// and the title.
     pub fn draw(&self) -> Canvas {

@@ -311,7 +311,7 @@ impl Figure {
         self.canvas.to_png()
     }
 
-    /// The finished image as an SVG document ([`super::svg`]).
+    /// The finished image as an SVG document (the `svg` writer).
     pub fn to_svg(&self) -> String {
         super::svg::to_svg(&self.canvas)
     }

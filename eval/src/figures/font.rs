@@ -10,9 +10,6 @@ use ab_glyph::{Font as _, FontRef, GlyphId, PxScale, ScaleFont as _, point};
 /// `eval/assets/fonts/LICENSE-DejaVu.txt`.
 pub const FONT_FILE: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
 
-/// The font's family name, as SVG figures and HTML pages refer to it.
-pub const FONT_FAMILY: &str = "DejaVu Sans";
-
 fn font() -> &'static FontRef<'static> {
     static FONT: OnceLock<FontRef<'static>> = OnceLock::new();
     FONT.get_or_init(|| {

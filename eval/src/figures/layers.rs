@@ -57,7 +57,7 @@ pub fn scalar_figure_of(
 }
 
 /// The fill of each traversability class. Blocked is the grey and uncertain the dotted blue of the same
-/// decisions on `decisions.png` ([`verdict_fill`]), so that a class looks the same in every figure; red is
+/// decisions on `decisions.png` (`verdict_fill`), so that a class looks the same in every figure; red is
 /// kept for unsafe cells, which only a comparison with the truth can tell.
 pub fn traversability_fill(t: Traversability) -> Fill {
     match t {

@@ -3,16 +3,16 @@
 //!
 //! Drawn with a small built-in rasteriser (lines, rectangles, hatching) and anti-aliased text in the embedded
 //! DejaVu Sans (`ab_glyph`), so that images are byte-identical across machines and the build stays light. The
-//! canvas records what it draws, so the same figure can also be written as SVG ([`svg`]).
+//! canvas records what it draws, so the same figure can also be written as SVG (`svg`).
 
-pub mod canvas;
-pub mod chart;
-pub mod colormap;
-pub mod comparison;
-pub mod figure;
-pub mod font;
+pub(crate) mod canvas;
+pub(crate) mod chart;
+pub(crate) mod colormap;
+pub(crate) mod comparison;
+pub(crate) mod figure;
+pub(crate) mod font;
 mod layers;
-pub mod svg;
+pub(crate) mod svg;
 
 use std::path::{Path, PathBuf};
 

@@ -7,7 +7,7 @@ use crate::pipeline::RunReport;
 pub const DEFAULT_SCENARIO: &str = "scenarios/default.toml";
 
 /// The run's summary: what each model's map made the robot do, its wrong cells and its regression bounds
-/// ([`crate::judge::outcome::Outcome::lines`]), then the sensor log, the wall times and the report's path.
+/// (`Outcome::lines`), then the sensor log, the wall times and the report's path.
 pub fn summary_lines(report: &RunReport) -> Vec<String> {
     let m = &report.metrics;
     let mut lines: Vec<String> = report.outcomes.iter().flat_map(|o| o.lines()).collect();

@@ -25,7 +25,7 @@ pub struct SuiteRow {
     /// complete). Bounds set from a measured run catch a change; they do not say the map is right.
     pub status: String,
     /// What the map made the robot do: `safe`, `unsafe` (the planned path near a truly blocked cell, or a
-    /// closed-loop contact) or `no path` ([`Safety`]); empty for a run that could not complete.
+    /// closed-loop contact) or `no path` (`Safety`); empty for a run that could not complete.
     pub safety: String,
     /// Coverage of the map region. The metrics are empty for a row with status `error`: the run measured
     /// nothing (an empty CSV field, `null` in JSON).

@@ -78,7 +78,7 @@ pub struct Metrics {
     pub doubts: BTreeMap<String, Option<u64>>,
     /// Scored cells under a structure (a gap higher than a step within 3 m above the ground).
     pub num_clearance_cells: u64,
-    /// DynamicMap's SA adapted to cells ([`crate::judge::ghosts`]): of the truly blocked cells a ray could have
+    /// DynamicMap's SA adapted to cells (`judge::ghosts`): of the truly blocked cells a ray could have
     /// told about and no actor passed through, the fraction mapped blocked or uncertain (null: none).
     pub static_accuracy: f64,
     /// DynamicMap's DA: of the cells an actor covered and left (truly drivable, scored, not uncertain only for

@@ -5,17 +5,17 @@
 //! truth's region: the testbed's own map and another mapper's arrays are judged by the same code
 //! ([`evaluate`], [`score`]).
 //!
-//! The modules depend one way: [`estimate`], [`verdict`] <- [`metrics`], [`ghosts`], [`plan_check`],
-//! [`obstacles`], [`wrong_cells`] <- [`Evaluation`] <- the figures and the report.
+//! The modules depend one way: [`estimate`], [`verdict`] <- [`metrics`], `ghosts`, [`plan_check`],
+//! `obstacles`, `wrong_cells` <- [`Evaluation`] <- the figures and the report.
 
 pub mod estimate;
-pub mod ghosts;
+pub(crate) mod ghosts;
 pub mod metrics;
-pub mod obstacles;
-pub mod outcome;
+pub(crate) mod obstacles;
+pub(crate) mod outcome;
 pub mod plan_check;
 pub mod verdict;
-pub mod wrong_cells;
+pub(crate) mod wrong_cells;
 
 use oeg::Map;
 use sim::scenario;

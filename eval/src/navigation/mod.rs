@@ -1,18 +1,18 @@
 //! Closed-loop navigation (`[navigation]` in a scenario): the robot plans on the map it has *now*, drives a
 //! little, maps, and plans again, as nav2 runs a robot: a planner at a replanning rate, a controller (pure
-//! pursuit, [`controller`]) at the simulation's tick, a goal checker and a progress checker.
+//! pursuit, `controller`) at the simulation's tick, a goal checker and a progress checker.
 //!
 //! At every tick the sensors scan the world at the robot's true pose and the maps integrate the scans at the
 //! estimated pose (odometry drift as in a scripted drive); at every replanning time the planner plans from
 //! the estimated pose to the goal on the run's map, the built-in A* or an external program ([`external`]);
 //! the controller's command moves the robot in the world, settled on the terrain. The judge watches the true
-//! footprint against the truth ([`contact`]); nothing the robot decides reads the truth.
+//! footprint against the truth (`contact`); nothing the robot decides reads the truth.
 
 mod closed_loop;
-pub mod contact;
-pub mod controller;
+pub(crate) mod contact;
+pub(crate) mod controller;
 pub mod external;
-pub mod record;
+pub(crate) mod record;
 
 use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability, UncertainCells, UnknownCells};
 

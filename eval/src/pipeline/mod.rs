@@ -30,7 +30,7 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
     /// Replaces the scenario's seed.
     pub seed: Option<u64>,
-    /// `key=value` overrides (see [`crate::settings::overrides`]).
+    /// `key=value` overrides (see `settings::overrides`).
     pub overrides: Vec<String>,
     /// Also maps the same sensor log as if the scenario's `[map]` said `preset = "<preset>"` (its own
     /// `[map.model]` keys still apply), and writes that report into `<out>/<preset>/` with a side-by-side

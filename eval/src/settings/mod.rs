@@ -1,5 +1,5 @@
 //! One door for settings: every job that takes settings (`oeg run`, `oeg suite`, `oeg map`, `oeg plan`,
-//! `oeg sweep`) takes them as `--set key=value` ([`crate::settings::overrides`]), resolved here against one table of
+//! `oeg sweep`) takes them as `--set key=value` (`settings::overrides`), resolved here against one table of
 //! keys. The keys are the scenario file's (`docs/scenario-format.md`): `map.model.p_max` means the same
 //! thing in a scenario, on `oeg run --set`, on `oeg map --set` and in a sweep's axis. Jobs without a scenario
 //! take the part of the table they use:
@@ -16,7 +16,7 @@
 //! An override that makes the settings invalid is named in the error (`--set map.model.p_max=2: ...`), by
 //! [`resolve_with`], which `oeg run` and `oeg suite` use too, with the scenario check as the reader.
 
-pub mod overrides;
+pub(crate) mod overrides;
 
 use serde::Deserialize;
 use serde::de::DeserializeOwned;

@@ -235,7 +235,7 @@ fn check_coverage(dir: &Path, plan: &Json, rows: &[Json]) -> Result<usize> {
 /// then every plot's title says which part of the plan it shows.
 ///
 /// # Errors
-/// Not a sweep's folder ([`SweepFolder::open`]), missing or malformed `plan.json`, `runs.jsonl` or
+/// Not a sweep's folder (`SweepFolder::open`), missing or malformed `plan.json`, `runs.jsonl` or
 /// `obstacles.csv`, a plan with no runs, rows of another plan, an incomplete study without `partial`, or a
 /// failed write.
 pub fn report(dir: &Path, partial: bool, figures: ImageFormats) -> Result<ReportSummary> {

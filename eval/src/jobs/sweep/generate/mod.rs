@@ -16,5 +16,4 @@ mod spec;
 #[cfg(test)]
 mod tests;
 
-pub use checks::MAX_PER_KIND;
 pub use spec::*;
