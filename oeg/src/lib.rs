@@ -47,7 +47,7 @@ pub use model::{
     overhead_significant, p_occ, probability_from_log_odds, ray_bound, spread_variance, surface_level,
     update_ceiling, update_log_odds, vertical_variance,
 };
-pub use preset::{MapPreset, ROBUST_HEIGHT_MARGIN_M, STATIC_MAX_DEPTH_M};
+pub use preset::{MapModel, MapPreset, ModelChoice, ModelKeys, ROBUST_HEIGHT_MARGIN_M, STATIC_MAX_DEPTH_M};
 
 // The decision: where the robot can drive, and a planner that uses it.
 pub use footprint::{Footprint, Pose2};

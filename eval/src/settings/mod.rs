@@ -135,14 +135,20 @@ impl Default for InputSettings {
 pub struct MapPart {
     /// Cell size, metres.
     pub resolution_m: f64,
-    /// The named model the options start from (expanded into `model` and `traversability` before reading).
+    /// The named model the options start from.
     #[serde(default)]
     pub preset: oeg::MapPreset,
-    /// The model.
-    #[serde(default)]
+    /// The `[map.model]` keys given over the preset's options.
+    #[serde(default, rename = "model")]
+    pub model_keys: oeg::ModelKeys,
+    /// The step rule of the traversability image, unless the preset's.
+    #[serde(default, rename = "traversability")]
+    pub traversability_key: Option<oeg::TraversabilityRule>,
+    /// The model, resolved for `[robot]` once the settings are read ([`oeg::ModelChoice::resolve`]).
+    #[serde(skip)]
     pub model: oeg::ModelOptions,
-    /// The step rule of the traversability image.
-    #[serde(default)]
+    /// The step rule, resolved with the model.
+    #[serde(skip)]
     pub traversability: oeg::TraversabilityRule,
 }
 
@@ -166,7 +172,11 @@ pub struct MapJobSettings {
 pub struct PlanMapPart {
     /// The named model whose step rule applies unless `traversability` is given.
     pub preset: oeg::MapPreset,
-    /// The step rule.
+    /// The step rule, unless the preset's.
+    #[serde(rename = "traversability")]
+    pub traversability_key: Option<oeg::TraversabilityRule>,
+    /// The step rule, resolved once the settings are read.
+    #[serde(skip)]
     pub traversability: oeg::TraversabilityRule,
 }
 
@@ -184,6 +194,10 @@ pub struct PlanJobSettings {
 
 /// Settings that can check themselves for sense.
 pub trait Checked: DeserializeOwned {
+    /// Resolves what is derived from what was read: the model from its preset and keys
+    /// ([`oeg::ModelChoice::resolve`], the one rule a scenario's loader uses too).
+    fn resolve(&mut self);
+
     /// What makes no sense, if anything.
     ///
     /// # Errors
@@ -197,6 +211,17 @@ fn invalid(e: oeg::Error) -> SettingError {
 }
 
 impl Checked for MapJobSettings {
+    fn resolve(&mut self) {
+        let model = oeg::ModelChoice {
+            preset: self.map.preset,
+            keys: self.map.model_keys,
+            traversability: self.map.traversability_key,
+        }
+        .resolve(&self.robot);
+        self.map.model = model.options;
+        self.map.traversability = model.rule;
+    }
+
     fn check(&self) -> Result<(), SettingError> {
         // The one rule for a cell size: the grid's.
         oeg::GridGeometry::new(self.map.resolution_m).map_err(|e| match e {
@@ -212,6 +237,15 @@ impl Checked for MapJobSettings {
 }
 
 impl Checked for PlanJobSettings {
+    fn resolve(&mut self) {
+        let choice = oeg::ModelChoice {
+            preset: self.map.preset,
+            traversability: self.map.traversability_key,
+            ..oeg::ModelChoice::default()
+        };
+        self.map.traversability = choice.resolve(&self.robot).rule;
+    }
+
     fn check(&self) -> Result<(), SettingError> {
         self.planner.validate().map_err(|e| match e {
             oeg::Error::InvalidSetting { name, message } => {
@@ -224,14 +258,14 @@ impl Checked for PlanJobSettings {
     }
 }
 
-/// Reads settings of type `T` from a document: `[map] preset` expanded, the schema, then `T`'s own check.
+/// Reads settings of type `T` from a document: the schema, what is derived from it ([`Checked::resolve`]),
+/// then `T`'s own check.
 fn read<T: Checked>(doc: &Table) -> Result<T, SettingError> {
-    let mut doc = doc.clone();
-    sim::scenario::expand_map_preset(&mut doc).map_err(|e| SettingError::invalid(e.to_string()))?;
     // Read from the document itself: no trip through TOML text.
-    let value: T = toml::Value::Table(doc)
+    let mut value: T = toml::Value::Table(doc.clone())
         .try_into()
         .map_err(|e: toml::de::Error| SettingError::invalid(e.message().trim()))?;
+    value.resolve();
     value.check()?;
     Ok(value)
 }
@@ -344,6 +378,39 @@ mod tests {
         assert_eq!(s.map.model.max_height_m, Some(0.5));
         assert_eq!(s.input.pcd_frame, oeg::PcdFrame::Optical);
         assert!((s.robot.max_step_m - 0.05).abs() < 1e-12);
+    }
+
+    /// `oeg map` and `oeg plan` resolve a preset by the rule a scenario's loader uses: the preset's options
+    /// for the given robot, the given keys over them, and the preset's step rule unless one is given.
+    #[test]
+    fn a_preset_resolves_for_the_robot_with_the_given_keys_over_it() {
+        let robot = oeg::RobotProfile {
+            height_m: 0.8,
+            ..oeg::RobotProfile::default()
+        };
+        let s: MapJobSettings = resolve(
+            &map_base(),
+            &[
+                "map.preset=robust".into(),
+                "map.model.p_max=0.9".into(),
+                "robot.height_m=0.8".into(),
+            ],
+        )
+        .expect("valid");
+        let expected = oeg::ModelOptions {
+            p_max: 0.9,
+            ..oeg::MapPreset::Robust.model(&robot)
+        };
+        assert_eq!(s.map.model, expected);
+        assert_eq!(s.map.traversability, oeg::MapPreset::Robust.traversability());
+        let plan: PlanJobSettings = plan_settings(&["map.preset=robust".into()]).expect("valid");
+        assert_eq!(plan.map.traversability, oeg::MapPreset::Robust.traversability());
+        let plan: PlanJobSettings = plan_settings(&[
+            "map.preset=robust".into(),
+            "map.traversability={ kind = \"absolute\" }".into(),
+        ])
+        .expect("valid");
+        assert_eq!(plan.map.traversability, oeg::TraversabilityRule::Absolute);
     }
 
     #[test]

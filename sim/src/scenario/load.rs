@@ -65,23 +65,16 @@ pub struct LoadedScenario {
     /// checked ([`super::MapSettings::window_on`]). The truth, what the sensors could see, the recording, the
     /// figures and the planner's files are laid out on it.
     pub window: oeg::GridWindow,
-    /// The settings document the scenario was read from: the file, with any overrides applied. A model
-    /// compared with the scenario's own ([`LoadedScenario::with_preset`]) is resolved from it.
-    pub document: toml::Table,
 }
 
 impl LoadedScenario {
     /// The same scenario under the named model `preset`: its `[map.model]` keys and `[map] traversability`
-    /// still apply over the preset's ([`expand_map_preset`], as if the document said `preset = "<name>"`).
+    /// still apply over the preset's ([`super::MapSettings::resolve`], as if the file said `preset = "<name>"`).
     /// Nothing else is read or built again: the world, the robot and the window are the scenario's.
     ///
     /// # Errors
     /// [`SimError::Scenario`] when the model under `preset` makes no sense.
     pub fn with_preset(&self, preset: oeg::MapPreset) -> Result<LoadedScenario> {
-        let mut document = self.document.clone();
-        if let Some(toml::Value::Table(map)) = document.get_mut("map") {
-            map.insert("preset".into(), toml::Value::String(preset.name().into()));
-        }
         let error = |message: String| SimError::Scenario {
             path: self.source.path.clone(),
             position: None,
@@ -89,7 +82,7 @@ impl LoadedScenario {
         };
         let mut scenario = self.scenario.clone();
         scenario.map.preset = preset;
-        apply_preset(&mut scenario, document.clone()).map_err(error)?;
+        scenario.map.resolve(&scenario.robot.profile());
         scenario.map.model.validate().map_err(|e| error(e.to_string()))?;
         scenario
             .map
@@ -98,7 +91,6 @@ impl LoadedScenario {
             .map_err(|e| error(e.to_string()))?;
         Ok(LoadedScenario {
             scenario,
-            document,
             ..self.clone()
         })
     }
@@ -150,11 +142,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source: &source,
         document: Some(parsed.get_ref().clone()),
     };
-    let document = toml::Table::deserialize(toml::de::Deserializer::from(parsed)).map_err(at_its_place)?;
-    if scenario.map.preset != oeg::MapPreset::Paper {
-        apply_preset(&mut scenario, document.clone())
-            .map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
-    }
+    scenario.map.resolve(&scenario.robot.profile());
     let window = checker.validate(&scenario)?;
     let robot = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
@@ -162,7 +150,6 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source,
         robot,
         window,
-        document,
     })
 }
 
@@ -215,10 +202,7 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
         source: &source,
         document: None,
     };
-    if scenario.map.preset != oeg::MapPreset::Paper {
-        apply_preset(&mut scenario, doc.clone())
-            .map_err(|message| checker.error(&[KeySeg::Key("map")], message))?;
-    }
+    scenario.map.resolve(&scenario.robot.profile());
     let window = checker.validate(&scenario)?;
     let robot = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
@@ -226,93 +210,7 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
         source,
         robot,
         window,
-        document: doc.clone(),
     })
-}
-
-/// A value of a settings document that cannot be read, by its dotted key (`map.preset`, `robot.height_m`).
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{key}: {message}")]
-pub struct InvalidValue {
-    /// The value's dotted key.
-    pub key: String,
-    /// What is wrong and what was expected.
-    pub message: String,
-}
-
-/// Applies the scenario's `[map] preset` to its model and step rule: the keys the file gives in `[map.model]`
-/// and `[map] traversability` over the preset's.
-fn apply_preset(scenario: &mut Scenario, mut doc: toml::Table) -> std::result::Result<(), String> {
-    expand_map_preset(&mut doc).map_err(|e| e.to_string())?;
-    let map = doc
-        .get("map")
-        .cloned()
-        .unwrap_or_else(|| toml::Value::Table(toml::Table::new()));
-    let map: super::MapSettings = map
-        .try_into()
-        .map_err(|e: toml::de::Error| e.message().to_string())?;
-    scenario.map.model = map.model;
-    scenario.map.traversability = map.traversability;
-    Ok(())
-}
-
-/// Expands `[map] preset` in a settings document (a scenario, or the settings of `oeg map` and `oeg plan`):
-/// `[map.model]` becomes the preset's options (for the robot of `[robot]`) with the document's own
-/// `[map.model]` keys over them, and `[map] traversability` the preset's rule unless the document gives one.
-/// `paper`, or no preset, changes nothing.
-///
-/// # Errors
-/// A preset name or a `[robot]` that does not read.
-pub fn expand_map_preset(doc: &mut toml::Table) -> std::result::Result<(), InvalidValue> {
-    let invalid = |key: &str, message: String| InvalidValue {
-        key: key.to_string(),
-        message,
-    };
-    let Some(map) = doc.get("map").and_then(toml::Value::as_table) else {
-        return Ok(());
-    };
-    let preset: oeg::MapPreset = match map.get("preset") {
-        None => return Ok(()),
-        Some(v) => v
-            .clone()
-            .try_into()
-            .map_err(|e: toml::de::Error| invalid("map.preset", e.message().to_string()))?,
-    };
-    if preset == oeg::MapPreset::Paper {
-        return Ok(());
-    }
-    let robot = doc.get("robot").and_then(toml::Value::as_table);
-    let number = |key: &str, default: f32| -> std::result::Result<f32, InvalidValue> {
-        match robot.and_then(|r| r.get(key)) {
-            None => Ok(default),
-            Some(v) => v
-                .as_float()
-                .or_else(|| v.as_integer().map(|i| i as f64))
-                .map(|x| x as f32)
-                .ok_or_else(|| invalid(&format!("robot.{key}"), "expected a number".into())),
-        }
-    };
-    let profile = oeg::RobotProfile {
-        max_step_m: number("max_step_m", oeg::DEFAULT_MAX_STEP_M)?,
-        height_m: number("height_m", oeg::DEFAULT_ROBOT_HEIGHT_M)?,
-        max_grade: number("max_grade", oeg::DEFAULT_MAX_GRADE)?,
-    };
-    let mut model =
-        toml::Table::try_from(preset.model(&profile)).map_err(|e| invalid("map.model", e.to_string()))?;
-    if let Some(given) = map.get("model").and_then(toml::Value::as_table) {
-        for (k, v) in given {
-            model.insert(k.clone(), v.clone());
-        }
-    }
-    let mut map = map.clone();
-    map.insert("model".into(), toml::Value::Table(model));
-    if !map.contains_key("traversability") {
-        let rule = toml::Value::try_from(preset.traversability())
-            .map_err(|e| invalid("map.traversability", e.to_string()))?;
-        map.insert("traversability".into(), rule);
-    }
-    doc.insert("map".into(), toml::Value::Table(map));
-    Ok(())
 }
 
 /// The byte offset of the value at `path` in a parsed TOML document, or of its nearest existing parent.

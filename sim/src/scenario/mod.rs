@@ -10,9 +10,9 @@ mod schema;
 pub mod sensors;
 
 pub use load::{
-    InvalidValue, KeySeg, LoadedScenario, MAX_CELL_VISITS_PER_RUN, MAX_DURATION_S, MAX_LENGTH_M,
-    MAX_MAP_CELLS, MAX_OBJECTS, MAX_PARTS, MAX_RAYS_PER_RUN, MAX_TRUTH_BYTES, MAX_TRUTH_FILTER_STEPS,
-    MAX_TRUTH_SAMPLES, expand_map_preset, load, load_doc, load_str, position_of,
+    KeySeg, LoadedScenario, MAX_CELL_VISITS_PER_RUN, MAX_DURATION_S, MAX_LENGTH_M, MAX_MAP_CELLS,
+    MAX_OBJECTS, MAX_PARTS, MAX_RAYS_PER_RUN, MAX_TRUTH_BYTES, MAX_TRUTH_FILTER_STEPS, MAX_TRUTH_SAMPLES,
+    load, load_doc, load_str, position_of,
 };
 pub use navigation::*;
 pub use scene::*;

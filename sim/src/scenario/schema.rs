@@ -74,20 +74,44 @@ pub struct MapSettings {
     pub max_xy_m: [f64; 2],
     /// Cell size, metres.
     pub resolution_m: f64,
-    /// The named model the options start from (`paper`, the default, or `robust`: `oeg::MapPreset`). The
-    /// keys given in `model` and `traversability` replace the preset's.
+    /// The named model the options start from (`paper`, the default, `static` or `robust`:
+    /// `oeg::MapPreset`). The keys given in `model` and `traversability` replace the preset's.
     #[serde(default)]
     pub preset: oeg::MapPreset,
-    /// The OEG model options (`oeg::ModelOptions`; every field optional, defaults documented there). After
-    /// loading: the preset's options with the file's keys applied over them.
-    #[serde(default)]
+    /// The `[map.model]` keys as the file gives them (`oeg::ModelOptions`' names; every one optional).
+    #[serde(default, rename = "model")]
+    pub model_keys: oeg::ModelKeys,
+    /// `[map] traversability` as the file gives it: the step rule, unless the preset's.
+    #[serde(default, rename = "traversability")]
+    pub traversability_key: Option<TraversabilityRule>,
+    /// The model's options, resolved when the scenario is loaded ([`MapSettings::resolve`]): the preset's for
+    /// the scenario's robot, with `[map.model]`'s keys over them.
+    #[serde(skip)]
     pub model: ModelOptions,
-    /// How the map's step decision is taken.
-    #[serde(default)]
+    /// The step rule, resolved with the options: `[map] traversability`, or the preset's.
+    #[serde(skip)]
     pub traversability: TraversabilityRule,
 }
 
 impl MapSettings {
+    /// The model as the file chooses it: the preset, and the keys and the rule it gives over the preset's.
+    pub fn choice(&self) -> oeg::ModelChoice {
+        oeg::ModelChoice {
+            preset: self.preset,
+            keys: self.model_keys,
+            traversability: self.traversability_key,
+        }
+    }
+
+    /// Resolves [`MapSettings::model`] and [`MapSettings::traversability`] from the file's choice for `robot`
+    /// ([`oeg::ModelChoice::resolve`], the one rule). The loader calls it; so does a change of preset
+    /// ([`crate::LoadedScenario::with_preset`]).
+    pub fn resolve(&mut self, robot: &oeg::RobotProfile) {
+        let model = self.choice().resolve(robot);
+        self.model = model.options;
+        self.traversability = model.rule;
+    }
+
     /// The map's window onto a grid of `geometry` (the resolution, [`MapSettings::resolution_m`], checked by
     /// the caller): the cells of the region from `min_xy_m` (included) to `max_xy_m` (excluded),
     /// [`oeg::GridWindow::covering`]. A loaded scenario holds its own, [`crate::LoadedScenario::window`].
