@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The architecture's layering (ARCHITECTURE.md), checked: the map crate `oeg` knows nothing of the simulation or
-# the evaluation, and Rapier's types (rapier3d, parry3d) appear in `sim` only; the map crate's modules are private
-# (its API is the list of re-exports in oeg/src/lib.rs); no job of `oeg_eval` (eval/src/jobs/) imports another.
+# the evaluation, nor the files' crate `oeg-files` of any of them; Rapier's types (rapier3d, parry3d) appear in
+# `sim` only; the map crate's modules are private (its API is the list of re-exports in oeg/src/lib.rs); no job of
+# `oeg_eval` (eval/src/jobs/) imports another.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 status=0
@@ -17,6 +18,14 @@ if hits=$(grep -rnE '\b(rapier3d|parry3d)::' --include='*.rs' oeg eval src tests
     echo "$hits" >&2
     status=1
 fi
+# The files' crate sits under the map: it knows nothing of the map, the simulation or the evaluation.
+files_deps=$(cargo tree -p oeg-files -e normal --prefix none --format '{p}' | awk '{print $1}' | sort -u)
+for forbidden in oeg sim oeg-eval rapier3d parry3d; do
+    if grep -qx "$forbidden" <<<"$files_deps"; then
+        echo "layering: oeg-files depends on $forbidden" >&2
+        status=1
+    fi
+done
 for package in oeg-eval oeg-testbed oeg-fuzz; do
     direct=$(cargo tree -p "$package" -e normal --depth 1 --prefix none --format '{p}' | awk '{print $1}')
     if grep -qxE 'rapier3d|parry3d' <<<"$direct"; then

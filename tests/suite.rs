@@ -30,7 +30,7 @@ fn check_golden(out: &Path) {
         .flat_map(|n| [(*n, "metrics.json", "digest"), (*n, "map.oeg", "map.digest")])
     {
         let bytes = std::fs::read(out.join(name).join(file)).expect(file);
-        let digest = format!("{:016x}\n", oeg::fnv1a64(&bytes));
+        let digest = format!("{:016x}\n", oeg_files::fnv1a64(&bytes));
         let golden = root().join("tests/golden").join(format!("{name}.{suffix}"));
         if bless {
             std::fs::write(&golden, &digest).expect("write golden digest");

@@ -2,6 +2,13 @@
 
 use std::path::PathBuf;
 
+/// A file's problem met by the testbed's own files (outputs, rows, sweeps), as the map crate reports it.
+impl From<oeg_files::FileError> for EvalError {
+    fn from(e: oeg_files::FileError) -> Self {
+        Self::Map(e.into())
+    }
+}
+
 /// What can go wrong while running an evaluation job.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

@@ -240,7 +240,7 @@ fn same_file(_path: &Path, _file: &std::fs::File) -> bool {
 }
 
 fn first_line(path: &str) -> String {
-    oeg::read_text(Path::new(path))
+    oeg_files::read_text(Path::new(path))
         .ok()
         .and_then(|t| t.lines().next().map(|l| l.trim().to_string()))
         .unwrap_or_default()
@@ -263,7 +263,7 @@ fn boot_id() -> String {
 
 /// A process's start time in clock ticks since boot, from `/proc/<pid>/stat`; `None` where it is not listed.
 fn process_start(pid: u32) -> Option<u64> {
-    let stat = oeg::read_text(Path::new(&format!("/proc/{pid}/stat"))).ok()?;
+    let stat = oeg_files::read_text(Path::new(&format!("/proc/{pid}/stat"))).ok()?;
     // The command name (field 2) is in parentheses and may hold spaces: fields are counted after its end.
     let rest = &stat[stat.rfind(')')? + 1..];
     rest.split_whitespace().nth(19)?.parse().ok()

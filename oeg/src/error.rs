@@ -67,11 +67,13 @@ impl Error {
             message: message.into(),
         }
     }
+}
 
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Self::Io {
-            path: path.into(),
-            source,
+impl From<oeg_files::FileError> for Error {
+    fn from(e: oeg_files::FileError) -> Self {
+        match e {
+            oeg_files::FileError::Parse { path, message } => Self::Parse { path, message },
+            oeg_files::FileError::Io { path, source } => Self::Io { path, source },
         }
     }
 }

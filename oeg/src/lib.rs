@@ -64,10 +64,6 @@ pub use traversability::{
 
 // Files: real range data in (OctoMap scan graphs, PCL point clouds), maps out and back, and the framing and
 // atomic writes the testbed's own files share.
-pub use io::container::{
-    ContainerPrefix, FramedWriter, check_container_checksum, container_prefix_bytes, read_container_prefix,
-    seal_container,
-};
 pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_graph};
 pub use io::mapfile::{
     MapFileHeader, load_map, load_map_within, map_from_bytes, map_to_bytes, read_map_header, save_map,
@@ -81,7 +77,3 @@ pub use io::pcd::{
     read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd,
 };
 pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
-pub use io::{
-    AtomicFile, Fnv1a64, MAX_TEXT_INPUT_BYTES, fnv1a64, output_target, read_bounded, read_text, stale_owners,
-    unique_suffix, unit_quaternion, write_atomically,
-};

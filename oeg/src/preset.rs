@@ -101,7 +101,10 @@ impl MapPreset {
 /// for field (its documentation has the defaults).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-#[allow(missing_docs, reason = "each field is `ModelOptions`' field of the same name, documented there")]
+#[allow(
+    missing_docs,
+    reason = "each field is `ModelOptions`' field of the same name, documented there"
+)]
 pub struct ModelKeys {
     pub log_odds_min: Option<f32>,
     pub log_odds_max: Option<f32>,

@@ -76,14 +76,21 @@ pub enum SimError {
     Map(#[from] oeg::Error),
 }
 
+/// A file's problem met by the simulator's own files (the sensor log), as the map crate reports it.
+impl From<oeg_files::FileError> for SimError {
+    fn from(e: oeg_files::FileError) -> Self {
+        Self::Map(e.into())
+    }
+}
+
 /// Short for `Result<T, SimError>`.
 pub type Result<T, E = SimError> = std::result::Result<T, E>;
 
-/// Reads a text input (a scenario, a URDF) within `oeg::MAX_TEXT_INPUT_BYTES`; an unreadable or oversized
+/// Reads a text input (a scenario, a URDF) within `oeg_files::MAX_TEXT_INPUT_BYTES`; an unreadable or oversized
 /// file is a [`SimError::Io`] naming it.
 pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
-    oeg::read_text(path).map_err(|e| match e {
-        oeg::Error::Io { path, source } => SimError::Io { path, source },
+    oeg_files::read_text(path).map_err(|e| match e {
+        oeg_files::FileError::Io { path, source } => SimError::Io { path, source },
         other => other.into(),
     })
 }

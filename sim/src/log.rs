@@ -1,5 +1,5 @@
 //! Recorded sensor logs (`.oeglog`), version 1: every scan of a run, so the same data can be replayed through
-//! different map settings. The framing is the map file's ([`oeg::FramedWriter`], [`oeg::read_container_prefix`]). Little-endian throughout:
+//! different map settings. The framing is the map file's ([`oeg_files::FramedWriter`], [`oeg_files::read_container_prefix`]). Little-endian throughout:
 //!
 //! ```text
 //! 8    magic "OEGLOG\r\n"
@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Translation3, Vector3};
 use oeg::RayKind;
-use oeg::unit_quaternion;
-use oeg::{FramedWriter, check_container_checksum, read_container_prefix};
+use oeg_files::unit_quaternion;
+use oeg_files::{FramedWriter, check_container_checksum, read_container_prefix};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
@@ -164,8 +164,8 @@ pub const MAX_LOG_BYTES: u64 = 64 << 30;
 /// number or version, a malformed header, a truncated record, a bad ray kind, a non-finite number, a scan
 /// count that disagrees with the records, or a checksum mismatch.
 pub fn read_log(path: &Path) -> Result<SensorLog> {
-    let data = oeg::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
-        oeg::Error::Io { source, .. } => SimError::Io {
+    let data = oeg_files::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
+        oeg_files::FileError::Io { source, .. } => SimError::Io {
             path: path.to_path_buf(),
             source,
         },

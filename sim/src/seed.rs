@@ -11,7 +11,7 @@ pub type Stream = Xoshiro256PlusPlus;
 /// The sub-stream `name` of `seed` (for example `"odometry"`, `"bush/3"`, `"sensor/laser_left"`).
 pub fn stream(seed: u64, name: &str) -> Stream {
     // FNV-1a of the name, mixed with the seed by SplitMix64 so nearby seeds give unrelated streams.
-    let h = oeg::fnv1a64(name.as_bytes());
+    let h = oeg_files::fnv1a64(name.as_bytes());
     let mut z = seed.wrapping_add(h).wrapping_add(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);

@@ -82,7 +82,7 @@ fn record_mcap(
     }
     // The static world's truth, people left out, as a run's recording has it.
     recording.truth(&crate::pipeline::truth_of(loaded, sim.world(), progress)?)?;
-    oeg::write_atomically(out, &recording.finish()?)?;
+    oeg_files::write_atomically(out, &recording.finish()?)?;
     Ok(num_scans)
 }
 
@@ -98,7 +98,7 @@ pub fn record(
     progress: &Progress,
 ) -> Result<RecordReport> {
     // Refuse an output that is not a regular file before simulating anything.
-    oeg::output_target(out)?;
+    oeg_files::output_target(out)?;
     let mut loaded = scenario::load(path)?;
     if let Some(seed) = seed {
         loaded.scenario.seed = seed;

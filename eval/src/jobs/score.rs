@@ -61,7 +61,7 @@ const MAX_NPY_BYTES: u64 = MAX_FOREIGN_CELLS * 8 + (1 << 16);
 
 /// Reads a 2D `.npy` file.
 fn read_npy(path: &Path) -> Result<NpyArray> {
-    let bytes = oeg::read_bounded(path, MAX_NPY_BYTES)?;
+    let bytes = oeg_files::read_bounded(path, MAX_NPY_BYTES)?;
     Ok(NpyArray::from_bytes(path, &bytes)?)
 }
 
@@ -116,8 +116,8 @@ fn read_sidecar(path: &Path) -> Result<Sidecar> {
         path: path.to_path_buf(),
         message,
     };
-    let json: serde_json::Value =
-        serde_json::from_str(&oeg::read_text(path)?).map_err(|e| fail(format!("line {}: {e}", e.line())))?;
+    let json: serde_json::Value = serde_json::from_str(&oeg_files::read_text(path)?)
+        .map_err(|e| fail(format!("line {}: {e}", e.line())))?;
     let number = |v: &serde_json::Value, what: &str| {
         v.as_f64()
             .filter(|x| x.is_finite())

@@ -60,7 +60,7 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
         message: format!("cannot serialise: {e}"),
     })?;
     bytes.push(b'\n');
-    Ok(oeg::write_atomically(path, &bytes)?)
+    Ok(oeg_files::write_atomically(path, &bytes)?)
 }
 
 /// Writes bytes (an image, a map).
@@ -68,7 +68,7 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 /// # Errors
 /// As [`write_json`].
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    Ok(oeg::write_atomically(path, bytes)?)
+    Ok(oeg_files::write_atomically(path, bytes)?)
 }
 
 /// A row type of a CSV table: its columns, in the order its fields serialise. Each implementation is checked

@@ -68,29 +68,29 @@ impl Staged {
             _ => PathBuf::from("."),
         };
         let staging = if in_place {
-            for stale in oeg::stale_owners(target, MOUNT_STAGING, "") {
+            for stale in oeg_files::stale_owners(target, MOUNT_STAGING, "") {
                 let _ = std::fs::remove_dir_all(target.join(stale));
             }
-            target.join(format!("{MOUNT_STAGING}{}", oeg::unique_suffix()))
+            target.join(format!("{MOUNT_STAGING}{}", oeg_files::unique_suffix()))
         } else {
             create_dir(&parent)?;
             // A job killed between the two renames of its swap left no output folder and the previous one
             // aside: put it back, so the previous results stay whatever this job does.
-            let mut set_aside = oeg::stale_owners(&parent, &format!(".{name}.old."), "");
+            let mut set_aside = oeg_files::stale_owners(&parent, &format!(".{name}.old."), "");
             set_aside.sort();
             if !target.exists()
                 && let Some(previous) = set_aside.pop()
             {
                 let _ = restore(&parent.join(previous), target);
             }
-            for stale in
-                set_aside
-                    .into_iter()
-                    .chain(oeg::stale_owners(&parent, &format!(".{name}.staging."), ""))
-            {
+            for stale in set_aside.into_iter().chain(oeg_files::stale_owners(
+                &parent,
+                &format!(".{name}.staging."),
+                "",
+            )) {
                 let _ = std::fs::remove_dir_all(parent.join(stale));
             }
-            parent.join(format!(".{name}.staging.{}", oeg::unique_suffix()))
+            parent.join(format!(".{name}.staging.{}", oeg_files::unique_suffix()))
         };
         create_dir(&staging)?;
         let marker = format!(
@@ -159,7 +159,7 @@ impl Staged {
         let aside = self.target.exists().then(|| {
             let name = self.target.file_name().unwrap_or_default().to_string_lossy();
             self.target
-                .with_file_name(format!(".{name}.old.{}", oeg::unique_suffix()))
+                .with_file_name(format!(".{name}.old.{}", oeg_files::unique_suffix()))
         });
         if let Some(aside) = &aside {
             std::fs::rename(&self.target, aside).map_err(|source| EvalError::Io {
@@ -191,7 +191,7 @@ impl Staged {
         check_replaceable(&self.target)?;
         let aside = self
             .target
-            .join(format!("{MOUNT_STAGING}{}.old", oeg::unique_suffix()));
+            .join(format!("{MOUNT_STAGING}{}.old", oeg_files::unique_suffix()));
         create_dir(&aside)?;
         for entry in std::fs::read_dir(&self.target).map_err(io(&self.target))? {
             let name = entry.map_err(io(&self.target))?.file_name();

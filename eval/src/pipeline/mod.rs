@@ -57,7 +57,7 @@ pub struct RunOptions {
 /// A bad override, or a scenario that (after the overrides) is invalid.
 pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
     let path = &options.scenario;
-    let text = oeg::read_text(path)?;
+    let text = oeg_files::read_text(path)?;
     let mut loaded = if options.overrides.is_empty() {
         scenario::load_str(path, &text)?
     } else {

@@ -177,7 +177,7 @@ fn read_pose(r: &mut ByteReader<'_>, what: What<'_>) -> Result<Isometry3<f64>> {
         finite(r, *v, what)?;
     }
     let rotation = unit_quaternion(q[0], q[1], q[2], q[3])
-        .ok_or_else(|| r.error(format!("{what} has a zero rotation quaternion")))?;
+        .ok_or_else(|| r.error::<crate::Error>(format!("{what} has a zero rotation quaternion")))?;
     Ok(Isometry3::from_parts(Translation3::from(t), rotation))
 }
 

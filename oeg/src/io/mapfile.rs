@@ -143,7 +143,7 @@ pub fn map_to_bytes(map: &Map) -> Vec<u8> {
 /// # Errors
 /// [`Error::Io`] naming the file.
 pub fn save_map(map: &Map, path: &Path) -> Result<()> {
-    write_atomically(path, &map_to_bytes(map))
+    Ok(write_atomically(path, &map_to_bytes(map))?)
 }
 
 /// Reads only the header of a map file (and checks magic, version and checksum).
@@ -209,7 +209,7 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
     let header = MapFileHeader {
         file_version: prefix.version,
         ..serde_json::from_slice(prefix.header)
-            .map_err(|e| r.error_at(16, format!("malformed header: {e}")))?
+            .map_err(|e| r.error_at::<Error>(16, format!("malformed header: {e}")))?
     };
     if header.tile_size as usize != TILE_SIZE {
         return Err(r.error_at(
@@ -257,7 +257,8 @@ fn parse(path: &Path, data: &[u8], build: Option<u64>) -> Result<(MapFileHeader,
         memory_limit_bytes: limit_bytes,
         ..header.config
     };
-    let mut map = Map::new(config).map_err(|e| r.error_at(16, format!("invalid map settings: {e}")))?;
+    let mut map =
+        Map::new(config).map_err(|e| r.error_at::<Error>(16, format!("invalid map settings: {e}")))?;
     read_tiles(
         &mut r,
         path,
@@ -357,7 +358,7 @@ fn read_ceiling(r: &mut ByteReader<'_>, what: &str, k: usize, with_clear: bool) 
     let (z_m, var_m2, log_odds) = (r.f32(what)?, r.f32(what)?, r.f32(what)?);
     let side = r.take(1, what)?[0];
     let seen_from = SeenFrom::from_byte(side).ok_or_else(|| {
-        r.error_at(
+        r.error_at::<Error>(
             at + 12,
             format!("{what}, cell {k}: side {side} is not 0 (above), 1 (below) or 2 (both)"),
         )

@@ -387,10 +387,10 @@ fn decision_of_grey(grey: u8, maxval: u8, yaml: &Nav2Yaml) -> Traversability {
 /// mode other than `trinary`, a rotated origin, an image that is not an 8-bit binary PGM or has more than
 /// `max_cells` pixels, or a truncated image; [`Error::Io`] for a file that cannot be read.
 pub fn read_nav2_map(yaml_path: &Path, max_cells: u64) -> Result<Nav2Map> {
-    let yaml = parse_nav2_yaml(yaml_path, &crate::io::read_text(yaml_path)?)?;
+    let yaml = parse_nav2_yaml(yaml_path, &oeg_files::read_text(yaml_path)?)?;
     let image = yaml_path.parent().unwrap_or(Path::new("")).join(&yaml.image);
     // The header is a few dozen bytes: a file this long holds at most `max_cells` pixels.
-    let bytes = crate::io::read_bounded(&image, max_cells.saturating_add(4096))?;
+    let bytes = oeg_files::read_bounded(&image, max_cells.saturating_add(4096))?;
     decode(&yaml, image, &bytes, max_cells)
 }
 

@@ -25,7 +25,7 @@ fn error(path: &Path, message: String) -> HeightmapError {
 /// # Errors
 /// As [`decode_greyscale_png`], and a file that cannot be read.
 pub fn read_greyscale_png(path: &Path) -> Result<(usize, usize, Vec<f64>), HeightmapError> {
-    let bytes = oeg::read_bounded(path, MAX_TERRAIN_FILE_BYTES)
+    let bytes = oeg_files::read_bounded(path, MAX_TERRAIN_FILE_BYTES)
         .map_err(|e| error(path, format!("cannot open the terrain image: {e}")))?;
     decode_greyscale_png(path, &bytes)
 }

@@ -358,7 +358,7 @@ fn write_map_files(job: &MapJob, map: &Map, stage: &Path) -> Result<(Vec<PathBuf
     if job.keep_inputs {
         for input in &job.inputs {
             let name = input.file_name().unwrap_or_default();
-            let bytes = oeg::read_bounded(input, job.config.memory_limit_bytes)?;
+            let bytes = oeg_files::read_bounded(input, job.config.memory_limit_bytes)?;
             let kept = stage.join(name);
             write_bytes(&kept, &bytes)?;
             files.push(kept);

@@ -89,7 +89,7 @@ pub fn to_json(v: &Value) -> serde_json::Value {
 /// A hash of a document, 16 hex digits.
 fn digest(prefix: &str, doc: &Table) -> String {
     let text = format!("{prefix}\n{}", toml::to_string(doc).unwrap_or_default());
-    format!("{:016x}", oeg::fnv1a64(text.as_bytes()))
+    format!("{:016x}", oeg_files::fnv1a64(text.as_bytes()))
 }
 
 impl SweepPlan {
@@ -128,7 +128,7 @@ impl SweepPlan {
             } else {
                 vec![K("scenarios"), I(k)]
             };
-            let text = oeg::read_text(base)
+            let text = oeg_files::read_text(base)
                 .map_err(|e| sweep.error(&at_base, format!("cannot read the base scenario: {e}")))?;
             let base_doc: Table = toml::from_str(&text).map_err(|e| EvalError::At {
                 path: base.clone(),
@@ -181,7 +181,7 @@ impl SweepPlan {
     fn check_runs(&self) -> Result<()> {
         for run in &self.runs {
             run.load().map_err(|e| {
-                if let Some(own) = oeg::read_text(&run.base)
+                if let Some(own) = oeg_files::read_text(&run.base)
                     .ok()
                     .and_then(|text| base_error(&self.sweep, &run.base, &text))
                 {

@@ -139,7 +139,7 @@ struct Axis {
 }
 
 fn read_rows(path: &Path) -> Result<Vec<Json>> {
-    let bytes = oeg::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
+    let bytes = oeg_files::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
     let text = String::from_utf8_lossy(&bytes);
     text.lines()
         .enumerate()
@@ -154,7 +154,7 @@ fn read_rows(path: &Path) -> Result<Vec<Json>> {
 }
 
 fn read_obstacles(path: &Path) -> Result<Vec<BTreeMap<String, String>>> {
-    let bytes = oeg::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
+    let bytes = oeg_files::read_bounded(path, super::rows::MAX_TABLE_BYTES)?;
     let mut r = csv::Reader::from_reader(bytes.as_slice());
     r.deserialize()
         .map(|row| {

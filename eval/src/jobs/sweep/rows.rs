@@ -147,7 +147,7 @@ pub const MAX_TABLE_BYTES: u64 = 1 << 30;
 /// A missing or unreadable file, over [`MAX_TABLE_BYTES`], or not a JSON object.
 pub fn read_plan(dir: &Path) -> Result<Json> {
     let path = dir.join("plan.json");
-    let bytes = oeg::read_bounded(&path, MAX_TABLE_BYTES)?;
+    let bytes = oeg_files::read_bounded(&path, MAX_TABLE_BYTES)?;
     match serde_json::from_slice(&bytes) {
         Ok(plan @ Json::Object(_)) => Ok(plan),
         Ok(_) => Err(EvalError::Input {
@@ -171,9 +171,9 @@ pub const MAX_ROW_BYTES: u64 = 64 << 20;
 /// A file that is not the row of run `id`: not JSON, not an object with a `row` object (whose `id` is `id` and
 /// whose `status` is `ok` or `error`) and an `obstacles` list of objects; a copied row names another run.
 pub fn read_record(path: &Path, id: &str) -> Result<Option<(Json, Vec<Json>)>> {
-    let bytes = match oeg::read_bounded(path, MAX_ROW_BYTES) {
+    let bytes = match oeg_files::read_bounded(path, MAX_ROW_BYTES) {
         Ok(b) => b,
-        Err(oeg::Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+        Err(oeg_files::FileError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
             return Ok(None);
         }
         Err(e) => return Err(e.into()),

@@ -154,7 +154,7 @@ impl Sweep {
     /// [`EvalError::At`] with file, line and column: syntax, an unknown key, a value of the wrong type, an
     /// empty axis, a range with step 0, a generator range with min above max, an unknown preset.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = oeg::read_text(path)?;
+        let text = oeg_files::read_text(path)?;
         Self::from_str(path, &text)
     }
 

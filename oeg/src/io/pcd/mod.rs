@@ -339,7 +339,7 @@ fn decompress_body(
     let start = r.pos();
     let block = r.take(compressed, "the compressed block")?;
     let field_major = lzf::decompress(block, uncompressed)
-        .map_err(|m| r.error_at(start, format!("corrupt compressed block: {m}")))?;
+        .map_err(|m| r.error_at::<Error>(start, format!("corrupt compressed block: {m}")))?;
     // Field-major (all x, then all y, ...) back to records.
     let mut records = vec![0u8; body_bytes];
     let mut offset_in_block = 0;
@@ -548,7 +548,7 @@ pub fn write_pcd(path: &Path, cloud: &PcdCloud, encoding: PcdEncoding) -> Result
             out.extend_from_slice(&packed);
         }
     }
-    write_atomically(path, &out)
+    Ok(write_atomically(path, &out)?)
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 //! 12      4     u32 length H of the header
 //! 16      H     header, UTF-8 JSON (the format's own)
 //! 16+H    ...   body (the format's own records)
-//! end-8   8     u64 FNV-1a-64 checksum of every byte before it ([`super::fnv1a64`])
+//! end-8   8     u64 FNV-1a-64 checksum of every byte before it ([`crate::fnv1a64`])
 //! ```
 //!
 //! Both formats were version 1 with exactly this framing before it was shared, so their bytes are unchanged.
@@ -16,8 +16,8 @@
 
 use std::path::Path;
 
-use super::{AtomicFile, ByteReader, Fnv1a64};
 use crate::error::Result;
+use crate::{AtomicFile, ByteReader, Fnv1a64};
 
 /// A container's prefix as read: the header's JSON and where the body starts.
 #[derive(Debug)]
@@ -33,7 +33,7 @@ pub struct ContainerPrefix<'a> {
 /// Reads the prefix of a container of `format` (its name for messages) with `magic` and one of the `versions`.
 ///
 /// # Errors
-/// [`crate::Error::Parse`] naming the file and byte: a wrong magic number, another version, or a header
+/// [`crate::FileError::Parse`] naming the file and byte: a wrong magic number, another version, or a header
 /// that runs past the end of the file.
 pub fn read_container_prefix<'a>(
     path: &'a Path,
@@ -69,7 +69,7 @@ pub fn read_container_prefix<'a>(
 /// Checks that `data` ends, right after `body_end`, in the checksum of every byte before it.
 ///
 /// # Errors
-/// [`crate::Error::Parse`] naming the file and byte: a missing or short checksum, bytes after it, or a
+/// [`crate::FileError::Parse`] naming the file and byte: a missing or short checksum, bytes after it, or a
 /// mismatch.
 pub fn check_container_checksum(path: &Path, data: &[u8], body_end: usize) -> Result<()> {
     let mut r = ByteReader::new(path, data);
@@ -78,7 +78,7 @@ pub fn check_container_checksum(path: &Path, data: &[u8], body_end: usize) -> Re
     if r.remaining() != 0 {
         return Err(r.error("unexpected bytes after the checksum"));
     }
-    if super::fnv1a64(&data[..body_end]) != stored {
+    if crate::fnv1a64(&data[..body_end]) != stored {
         return Err(r.error_at(body_end, "checksum mismatch: the file is corrupt"));
     }
     Ok(())
@@ -96,7 +96,7 @@ pub fn container_prefix_bytes(magic: &[u8; 8], version: u32, header_json: &[u8])
 
 /// Appends the checksum of everything in `bytes` to it: the container is complete.
 pub fn seal_container(bytes: &mut Vec<u8>) {
-    let checksum = super::fnv1a64(bytes);
+    let checksum = crate::fnv1a64(bytes);
     bytes.extend_from_slice(&checksum.to_le_bytes());
 }
 
@@ -125,7 +125,7 @@ impl FramedWriter {
     /// Appends body bytes.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the file.
+    /// [`crate::FileError::Io`] naming the file.
     pub fn write(&mut self, bytes: &[u8]) -> Result<()> {
         self.hash.update(bytes);
         self.file.write_all(bytes)
@@ -134,7 +134,7 @@ impl FramedWriter {
     /// Writes the checksum and moves the file into place.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the file.
+    /// [`crate::FileError::Io`] naming the file.
     pub fn finish(mut self) -> Result<()> {
         let checksum = self.hash.value().to_le_bytes();
         self.file.write_all(&checksum)?;

@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
+use crate::error::{FileError, Result};
 
 /// Writes `bytes` to `path` atomically (an [`AtomicFile`] written at once), so a reader never sees half a
 /// file and a failed write leaves no partial output.
@@ -36,7 +36,7 @@ impl AtomicFile {
     /// Starts writing `path`.
     ///
     /// # Errors
-    /// [`Error::Io`] naming `path` when it is not a regular file (or absent), or the temporary file cannot be
+    /// [`FileError::Io`] naming `path` when it is not a regular file (or absent), or the temporary file cannot be
     /// created.
     pub fn create(path: &Path) -> Result<Self> {
         let target = output_target(path)?;
@@ -46,7 +46,7 @@ impl AtomicFile {
             .write(true)
             .create_new(true)
             .open(&tmp)
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| FileError::io(path, e))?;
         Ok(Self {
             path: path.to_path_buf(),
             target,
@@ -58,11 +58,11 @@ impl AtomicFile {
     /// Appends `bytes`.
     ///
     /// # Errors
-    /// [`Error::Io`] naming the file.
+    /// [`FileError::Io`] naming the file.
     pub fn write_all(&mut self, bytes: &[u8]) -> Result<()> {
         match self.out.as_mut() {
-            Some(out) => out.write_all(bytes).map_err(|e| Error::io(&self.path, e)),
-            None => Err(Error::io(
+            Some(out) => out.write_all(bytes).map_err(|e| FileError::io(&self.path, e)),
+            None => Err(FileError::io(
                 &self.path,
                 std::io::Error::other("the file was already committed"),
             )),
@@ -72,14 +72,14 @@ impl AtomicFile {
     /// Flushes the file to disk and renames it over `path`.
     ///
     /// # Errors
-    /// [`Error::Io`] naming the file; the temporary file is removed and `path` is left as it was.
+    /// [`FileError::Io`] naming the file; the temporary file is removed and `path` is left as it was.
     #[expect(
         clippy::disallowed_methods,
         reason = "this is the one place a finished file is renamed into place"
     )]
     pub fn commit(mut self) -> Result<()> {
         let out = self.out.take().ok_or_else(|| {
-            Error::io(
+            FileError::io(
                 &self.path,
                 std::io::Error::other("the file was already committed"),
             )
@@ -91,7 +91,7 @@ impl AtomicFile {
             .and_then(|()| std::fs::rename(&self.tmp, &self.target));
         result.map_err(|e| {
             let _ = std::fs::remove_file(&self.tmp);
-            Error::io(&self.path, e)
+            FileError::io(&self.path, e)
         })
     }
 }
@@ -109,11 +109,11 @@ impl Drop for AtomicFile {
 /// regular file a symbolic link at `path` points to.
 ///
 /// # Errors
-/// [`Error::Io`] naming `path` when it is a folder, a device, a FIFO, a socket, a symbolic link to one of them
+/// [`FileError::Io`] naming `path` when it is a folder, a device, a FIFO, a socket, a symbolic link to one of them
 /// or a dangling symbolic link: outputs are only ever written to regular files.
 pub fn output_target(path: &Path) -> Result<PathBuf> {
     let refuse = |what: &str| {
-        Error::io(
+        FileError::io(
             path,
             std::io::Error::new(
                 std::io::ErrorKind::InvalidInput,
@@ -125,7 +125,7 @@ pub fn output_target(path: &Path) -> Result<PathBuf> {
     match std::fs::metadata(path) {
         Ok(m) if m.is_file() => match link {
             Ok(l) if l.file_type().is_symlink() => {
-                std::fs::canonicalize(path).map_err(|e| Error::io(path, e))
+                std::fs::canonicalize(path).map_err(|e| FileError::io(path, e))
             }
             _ => Ok(path.to_path_buf()),
         },
@@ -135,7 +135,7 @@ pub fn output_target(path: &Path) -> Result<PathBuf> {
             Ok(_) => Err(refuse("is a dangling symbolic link")),
             Err(_) => Ok(path.to_path_buf()),
         },
-        Err(e) => Err(Error::io(path, e)),
+        Err(e) => Err(FileError::io(path, e)),
     }
 }
 
