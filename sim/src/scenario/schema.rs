@@ -185,16 +185,17 @@ pub struct RobotSettings {
     /// The URDF link that is the robot's base (its pose is the robot's pose).
     #[serde(default = "default_base_link")]
     pub base_link: String,
-    /// Largest step the robot climbs, metres (decisions).
+    /// Largest step the robot climbs, metres (decisions: `oeg::RobotProfile::max_step_m`, whose type and
+    /// default, `oeg::DEFAULT_MAX_STEP_M`, it has).
     #[serde(default = "default_max_step")]
-    pub max_step_m: f64,
-    /// Robot height, metres (decisions: it passes under higher structures).
+    pub max_step_m: f32,
+    /// Robot height, metres (decisions: it passes under higher structures; `oeg::RobotProfile::height_m`).
     #[serde(default = "default_height")]
-    pub height_m: f64,
+    pub height_m: f32,
     /// Steepest grade the robot climbs, rise over run (decisions: with `max_step_m` it sets the contact
-    /// distance of a step, `max_step_m / max_grade`).
+    /// distance of a step, `max_step_m / max_grade`; `oeg::RobotProfile::max_grade`).
     #[serde(default = "default_max_grade")]
-    pub max_grade: f64,
+    pub max_grade: f32,
     /// Top speed, m/s: the Pioneer 3-AT's datasheet gives 0.7 (closed-loop runs).
     #[serde(default = "default_max_speed")]
     pub max_speed_m_s: f64,
@@ -212,20 +213,17 @@ fn default_base_link() -> String {
     "base_link".into()
 }
 
-/// A default of the robot's decision profile, from its one home in `oeg` (in f32, as the decisions use it),
-/// as the number a scenario file would spell: 0.035 m, not the f32's 0.035000000149 m.
-fn as_written(v: f32) -> f64 {
-    v.to_string().parse().unwrap_or(f64::from(v))
+/// The decision profile's defaults, from their one home: `oeg::RobotProfile::default()`.
+fn default_max_step() -> f32 {
+    oeg::RobotProfile::default().max_step_m
 }
 
-/// The paper's Pioneer 3-AT climbs 3.5 cm (`oeg::DEFAULT_MAX_STEP_M`).
-fn default_max_step() -> f64 {
-    as_written(oeg::DEFAULT_MAX_STEP_M)
+fn default_height() -> f32 {
+    oeg::RobotProfile::default().height_m
 }
 
-/// The paper's robot is 0.46 m tall (`oeg::DEFAULT_ROBOT_HEIGHT_M`).
-fn default_height() -> f64 {
-    as_written(oeg::DEFAULT_ROBOT_HEIGHT_M)
+fn default_max_grade() -> f32 {
+    oeg::RobotProfile::default().max_grade
 }
 
 /// Default top speed, m/s (Pioneer 3-AT datasheet).
@@ -241,17 +239,13 @@ fn default_max_turn_rate() -> f64 {
     DEFAULT_MAX_TURN_RATE_DEG_S
 }
 
-fn default_max_grade() -> f64 {
-    f64::from(oeg::DEFAULT_MAX_GRADE)
-}
-
 impl RobotSettings {
     /// The robot as the decisions see it (the truth's and the map's): one type, `oeg::RobotProfile`.
     pub fn profile(&self) -> oeg::RobotProfile {
         oeg::RobotProfile {
-            max_step_m: self.max_step_m as f32,
-            height_m: self.height_m as f32,
-            max_grade: self.max_grade as f32,
+            max_step_m: self.max_step_m,
+            height_m: self.height_m,
+            max_grade: self.max_grade,
         }
     }
 }

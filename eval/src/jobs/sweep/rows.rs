@@ -17,9 +17,9 @@ pub struct Outcome {
     /// The map judged against the truth.
     pub evaluation: crate::judge::Evaluation,
     /// The robot's step, metres.
-    pub max_step_m: f64,
+    pub max_step_m: f32,
     /// The robot's height, metres.
-    pub height_m: f64,
+    pub height_m: f32,
 }
 
 /// The finished-run marker of a run.
@@ -96,9 +96,9 @@ pub fn obstacle_rows(run: &Run, o: &Outcome) -> Vec<Json> {
         .iter()
         .map(|d| {
             let (threshold, decides) = if d.kind == "overhang" {
-                (o.height_m, "clearance")
+                (f64::from(o.height_m), "clearance")
             } else {
-                (o.max_step_m, "step")
+                (f64::from(o.max_step_m), "step")
             };
             let mut row = lead_columns(run);
             row.insert("obstacle".into(), Json::from(d.index));

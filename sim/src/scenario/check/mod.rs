@@ -48,8 +48,14 @@ impl Checker<'_> {
         }
     }
 
-    fn positive(&self, v: f64, path: &[KeySeg<'_>], what: &str) -> Result<()> {
-        self.check(v.is_finite() && v > 0.0, path, || {
+    fn positive<V: Into<f64> + Copy + std::fmt::Display>(
+        &self,
+        v: V,
+        path: &[KeySeg<'_>],
+        what: &str,
+    ) -> Result<()> {
+        let x: f64 = v.into();
+        self.check(x.is_finite() && x > 0.0, path, || {
             format!("expected a positive {what}, got {v}")
         })
     }
