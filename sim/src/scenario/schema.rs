@@ -311,10 +311,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_robot_s_defaults_are_oeg_s_as_a_file_spells_them() {
-        assert_eq!(default_max_step(), 0.035);
-        assert_eq!(default_height(), 0.46);
-        assert_eq!(default_max_step() as f32, oeg::DEFAULT_MAX_STEP_M);
-        assert_eq!(default_height() as f32, oeg::DEFAULT_ROBOT_HEIGHT_M);
+    fn the_robot_s_decision_defaults_are_the_profile_s() {
+        let robot: RobotSettings = toml::from_str(
+            "urdf = \"robot.urdf\"\n[drive]\nwaypoints_xy_m = [[0.0, 0.0]]\nspeed_m_s = 0.5\n",
+        )
+        .expect("a robot with its decision keys left out");
+        assert_eq!(robot.profile(), oeg::RobotProfile::default());
     }
 }
