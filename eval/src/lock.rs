@@ -19,7 +19,7 @@ use crate::error::{EvalError, Result};
 
 /// What identifies a lock's holder beyond its process id.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Holder {
+pub(crate) struct Holder {
     /// The host name.
     pub host: String,
     /// The process id.
@@ -32,7 +32,7 @@ pub struct Holder {
 
 impl Holder {
     /// This process.
-    pub fn this_process() -> Self {
+    pub(crate) fn this_process() -> Self {
         let pid = std::process::id();
         Self {
             host: host_name(),
@@ -44,7 +44,7 @@ impl Holder {
 
     /// Reads a lock file's record (`host=... pid=... boot=... start=...`); `None` for anything else (a file
     /// being written, or written by an earlier version: a bare process id).
-    pub fn parse(text: &str) -> Option<Self> {
+    pub(crate) fn parse(text: &str) -> Option<Self> {
         let mut holder = Self {
             host: String::new(),
             pid: 0,
@@ -76,7 +76,7 @@ impl Holder {
     /// Whether the holder is known to have ended: on this host, its process is gone or the id now names
     /// another process (started at another time, or the machine rebooted). A holder on another host is never
     /// known to have ended.
-    pub fn is_gone(&self) -> bool {
+    pub(crate) fn is_gone(&self) -> bool {
         let here = Self::this_process();
         if self.host != here.host {
             return false;
@@ -100,7 +100,7 @@ impl std::fmt::Display for Holder {
 
 /// Why a lock could not be taken.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Busy {
+pub(crate) enum Busy {
     /// A live process holds the operating system's lock on the file (its record, if it could be read).
     Locked(Option<Holder>),
     /// The file system has no locks, and the record names a holder that is not known to have ended.
@@ -109,7 +109,7 @@ pub enum Busy {
 
 impl Busy {
     /// Who holds it, for messages, with what to do if that is wrong.
-    pub fn describe(&self, lock: &Path) -> String {
+    pub(crate) fn describe(&self, lock: &Path) -> String {
         match self {
             Self::Locked(Some(h)) => format!(
                 "{h} holds the lock {} (the operating system's lock on it is held, so a process holds it; if no \
@@ -135,7 +135,7 @@ impl Busy {
 
 /// A held lock file; dropped, it removes the file and releases the lock.
 #[derive(Debug)]
-pub struct LockFile {
+pub(crate) struct LockFile {
     path: PathBuf,
     _file: std::fs::File,
 }
@@ -146,7 +146,7 @@ impl LockFile {
     /// # Errors
     /// [`EvalError::Io`] naming the file when it cannot be opened or written (a folder, a link, a read-only
     /// folder).
-    pub fn try_take(path: &Path) -> Result<std::result::Result<Self, Busy>> {
+    pub(crate) fn try_take(path: &Path) -> Result<std::result::Result<Self, Busy>> {
         let io = |source| EvalError::Io {
             path: path.to_path_buf(),
             source,

@@ -59,9 +59,9 @@ struct Recorded {
 }
 
 /// Ranges of the blind band, metres: every half metre.
-pub const BLIND_BAND_STEP_M: f64 = 0.5;
+pub(crate) const BLIND_BAND_STEP_M: f64 = 0.5;
 /// The farthest range of the blind band, metres (or the sensors' longest range, if shorter).
-pub const BLIND_BAND_MAX_M: f64 = 20.0;
+pub(crate) const BLIND_BAND_MAX_M: f64 = 20.0;
 
 impl Mapping {
     /// A simulation at time 0 and empty maps, one per entry of `maps` (the map settings of runs that share

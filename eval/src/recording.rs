@@ -12,18 +12,18 @@ use oeg::{GridWindow, LayerKind, Map, RobotProfile, TraversabilityRule};
 use serde_json::{Value, json};
 
 /// The frame every message is placed in: the scenario's world, metres, z up.
-pub const WORLD_FRAME: &str = "world";
+pub(crate) const WORLD_FRAME: &str = "world";
 /// The robot's true base frame.
-pub const BASE_FRAME: &str = "base_link";
+pub(crate) const BASE_FRAME: &str = "base_link";
 /// The robot's base frame where odometry believes it is (the pose the map integrates at).
-pub const ESTIMATED_BASE_FRAME: &str = "base_link_estimated";
+pub(crate) const ESTIMATED_BASE_FRAME: &str = "base_link_estimated";
 /// The map's layers are recorded once per this many seconds of simulated time, and at the end.
-pub const DEFAULT_GRID_PERIOD_S: f64 = 1.0;
+pub(crate) const DEFAULT_GRID_PERIOD_S: f64 = 1.0;
 
-pub use crate::error::RecordingError;
+pub(crate) use crate::error::RecordingError;
 
 /// The Foxglove schemas used, as JSON schemas (the fields this recording writes, with their types), by name.
-pub fn schemas() -> BTreeMap<&'static str, Value> {
+pub(crate) fn schemas() -> BTreeMap<&'static str, Value> {
     let time = json!({"type": "object", "properties": {
         "sec": {"type": "integer", "minimum": 0},
         "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999}},

@@ -11,7 +11,7 @@ use crate::geometry::{CellIndex, GridGeometry};
 
 /// One cell crossed by a ray, with the part of the ray inside it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CellCrossing {
+pub(crate) struct CellCrossing {
     /// The cell.
     pub cell: CellIndex,
     /// Ray parameter where the projection enters the cell.
@@ -22,7 +22,7 @@ pub struct CellCrossing {
 
 /// Iterator over the cells crossed by a ray's ground projection. No allocation.
 #[derive(Debug, Clone)]
-pub struct GroundTraversal {
+pub(crate) struct GroundTraversal {
     start: CellIndex,
     cell: CellIndex,
     end: CellIndex,
@@ -45,7 +45,7 @@ impl GroundTraversal {
     /// length (metres for a unit direction). Returns `None` if either end is not finite or lies outside the
     /// `i32` index range, or if `l_end < l_start`.
     #[inline(always)]
-    pub fn new(
+    pub(crate) fn new(
         geometry: &GridGeometry,
         origin_xy_m: (f64, f64),
         direction_xy: (f64, f64),
@@ -110,12 +110,12 @@ impl GroundTraversal {
 
 impl GroundTraversal {
     /// The cell the walk starts in (before any step).
-    pub fn first_cell(&self) -> CellIndex {
+    pub(crate) fn first_cell(&self) -> CellIndex {
         self.start
     }
 
     /// The cell the walk ends in.
-    pub fn last_cell(&self) -> CellIndex {
+    pub(crate) fn last_cell(&self) -> CellIndex {
         self.end
     }
 }

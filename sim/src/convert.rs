@@ -4,32 +4,32 @@ use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vect
 use rapier3d::math::{Pose, Rotation, Vector};
 
 /// A nalgebra point or vector as Rapier's vector (f32).
-pub fn to_vector(v: &Vector3<f64>) -> Vector {
+pub(crate) fn to_vector(v: &Vector3<f64>) -> Vector {
     Vector::new(v.x as f32, v.y as f32, v.z as f32)
 }
 
 /// A point as Rapier's vector.
-pub fn point_to_vector(p: &Point3<f64>) -> Vector {
+pub(crate) fn point_to_vector(p: &Point3<f64>) -> Vector {
     to_vector(&p.coords)
 }
 
 /// Rapier's vector as a nalgebra point.
-pub fn to_point(v: Vector) -> Point3<f64> {
+pub(crate) fn to_point(v: Vector) -> Point3<f64> {
     Point3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z))
 }
 
 /// A rotation as Rapier's quaternion.
-pub fn to_rotation(q: &UnitQuaternion<f64>) -> Rotation {
+pub(crate) fn to_rotation(q: &UnitQuaternion<f64>) -> Rotation {
     Rotation::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32).normalize()
 }
 
 /// An isometry as Rapier's pose.
-pub fn to_pose(iso: &Isometry3<f64>) -> Pose {
+pub(crate) fn to_pose(iso: &Isometry3<f64>) -> Pose {
     Pose::from_parts(to_vector(&iso.translation.vector), to_rotation(&iso.rotation))
 }
 
 /// Rapier's pose as an isometry.
-pub fn from_pose(pose: &Pose) -> Isometry3<f64> {
+pub(crate) fn from_pose(pose: &Pose) -> Isometry3<f64> {
     let q = pose.rotation;
     Isometry3::from_parts(
         Translation3::from(to_point(pose.translation).coords),

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use sim::scenario::{self, LoadedScenario};
 
 /// The shipped robot description.
-pub fn urdf_path() -> PathBuf {
+pub(crate) fn urdf_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenarios/robots/pioneer3at.urdf")
         .canonicalize()
@@ -19,7 +19,7 @@ pub fn urdf_path() -> PathBuf {
 }
 
 /// A fresh temporary folder for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
+pub(crate) fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("sim-test-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -27,7 +27,7 @@ pub fn temp_dir(name: &str) -> PathBuf {
 }
 
 /// A minimal valid scenario over x in [-2, 10], y in [-4, 4] with `extra` TOML appended.
-pub fn scenario_text(extra: &str) -> String {
+pub(crate) fn scenario_text(extra: &str) -> String {
     format!(
         r#"name = "test"
 seed = 7
@@ -52,7 +52,7 @@ speed_m_s = 1.0
 }
 
 /// Writes `text` as `name.toml` in a fresh folder and loads it.
-pub fn load_text(name: &str, text: &str) -> Result<LoadedScenario, sim::SimError> {
+pub(crate) fn load_text(name: &str, text: &str) -> Result<LoadedScenario, sim::SimError> {
     let dir = temp_dir(name);
     let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, text).expect("write");

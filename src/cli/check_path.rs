@@ -6,7 +6,7 @@ use oeg_eval::jobs::check_path::{CheckPathJob, run_job};
 
 /// `oeg check-path`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct CheckPathArgs {
+pub(crate) struct CheckPathArgs {
     /// The scenario whose world is the truth (.toml).
     scenario: PathBuf,
     /// The path: lines of x,y in metres, world frame, an optional header (x_m,y_m) and # comments.
@@ -23,7 +23,7 @@ pub struct CheckPathArgs {
 }
 
 /// Checks the path, prints what it found, fails when the footprint touches a truly blocked cell.
-pub fn run(args: &CheckPathArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &CheckPathArgs) -> anyhow::Result<()> {
     let job = CheckPathJob {
         scenario: args.scenario.clone(),
         overrides: args.overrides.clone(),

@@ -8,14 +8,14 @@ use super::map::{MapArgs, print_report};
 
 /// `oeg demo`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct DemoArgs {
+pub(crate) struct DemoArgs {
     /// Output folder.
     #[arg(long, default_value = "out/demo")]
     out: PathBuf,
 }
 
 /// Maps the demonstration scans at 5 cm and says what was written.
-pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let map_args = MapArgs {
         inputs: Vec::new(),
         resolution: 0.05,

@@ -5,13 +5,13 @@ use std::path::PathBuf;
 
 /// `oeg inspect`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct InspectArgs {
+pub(crate) struct InspectArgs {
     /// A map file written by `oeg map` (map.oeg).
     map: PathBuf,
 }
 
 /// Prints the map's header and statistics.
-pub fn run(args: &InspectArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &InspectArgs) -> anyhow::Result<()> {
     let text = oeg_eval::jobs::inspect::inspect(&args.map)?;
     let _ = write!(std::io::stdout(), "{text}");
     Ok(())

@@ -9,7 +9,7 @@ use oeg_eval::progress::Progress;
 
 /// `oeg map`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct MapArgs {
+pub(crate) struct MapArgs {
     /// Input files: .graph (OctoMap scan graph), .pcd (ascii, binary or binary_compressed), .oeglog (a
     /// sensor log of `oeg record`).
     #[arg(required = true)]
@@ -42,7 +42,7 @@ pub struct MapArgs {
 
 impl MapArgs {
     /// The job these arguments ask for, its settings resolved.
-    pub fn job(&self) -> anyhow::Result<MapJob> {
+    pub(crate) fn job(&self) -> anyhow::Result<MapJob> {
         let settings = oeg_eval::settings::map_settings(self.resolution, &self.overrides)?;
         Ok(MapJob {
             inputs: self.inputs.clone(),
@@ -69,7 +69,7 @@ impl MapArgs {
 }
 
 /// One line on the map and one per file written.
-pub fn print_report(report: &MapReport) {
+pub(crate) fn print_report(report: &MapReport) {
     let s = &report.summary;
     say!(
         "mapped {} scans, {} rays at {} m: {} cells observed ({} free, {} traversable, {} blocked), {} bytes; \
@@ -91,7 +91,7 @@ pub fn print_report(report: &MapReport) {
 }
 
 /// Maps the inputs and says what was written.
-pub fn run(args: &MapArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &MapArgs) -> anyhow::Result<()> {
     let report = oeg_eval::jobs::map::run(&args.job()?, &Progress::new(0, "scans"))?;
     print_report(&report);
     Ok(())

@@ -1,23 +1,23 @@
 //! One file per command: its arguments (clap's derive) and the few lines that call the job in `oeg_eval` and
 //! print what it did.
 
-pub mod check_path;
-pub mod demo;
-pub mod inspect;
-pub mod map;
-pub mod plan;
-pub mod preview;
-pub mod record;
-pub mod run;
-pub mod score;
-pub mod suite;
-pub mod sweep;
-pub mod validate;
+pub(crate) mod check_path;
+pub(crate) mod demo;
+pub(crate) mod inspect;
+pub(crate) mod map;
+pub(crate) mod plan;
+pub(crate) mod preview;
+pub(crate) mod record;
+pub(crate) mod run;
+pub(crate) mod score;
+pub(crate) mod suite;
+pub(crate) mod sweep;
+pub(crate) mod validate;
 
 /// A command's answer that is not success and not an error, with its own exit status (`oeg plan`'s "no
 /// path" is 3): `main` prints the message and exits with the code.
 #[derive(Debug)]
-pub struct Status {
+pub(crate) struct Status {
     /// The exit status.
     pub code: u8,
     /// What to print.

@@ -6,7 +6,7 @@ use oeg_eval::jobs::plan::{PlanJob, run_job};
 
 /// `oeg plan`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct PlanArgs {
+pub(crate) struct PlanArgs {
     /// A map file (map.oeg, from `oeg map` or `oeg run`).
     map: PathBuf,
     /// Start, world frame, metres: X,Y.
@@ -46,7 +46,7 @@ fn parse_xy(text: &str) -> Result<(f64, f64), String> {
 }
 
 /// Plans, says whether a path was found and names the files written.
-pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &PlanArgs) -> anyhow::Result<()> {
     let settings = oeg_eval::settings::plan_settings(&args.overrides)?;
     let job = PlanJob {
         map: args.map.clone(),
@@ -87,4 +87,4 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
 }
 
 /// `oeg plan`'s exit status when there is no path (its files are written): 1 is an error, 2 bad arguments.
-pub const NO_PATH_EXIT_CODE: u8 = 3;
+pub(crate) const NO_PATH_EXIT_CODE: u8 = 3;

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 /// `oeg preview`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct PreviewArgs {
+pub(crate) struct PreviewArgs {
     /// A scenario file (.toml).
     scenario: PathBuf,
     /// Output folder.
@@ -16,7 +16,7 @@ pub struct PreviewArgs {
 }
 
 /// Draws the preview and names the files written.
-pub fn run(args: &PreviewArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &PreviewArgs) -> anyhow::Result<()> {
     for f in oeg_eval::jobs::preview::preview(
         &args.scenario,
         &args.out,

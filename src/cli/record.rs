@@ -8,7 +8,7 @@ use oeg_eval::progress::Progress;
 
 /// `oeg record`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct RecordArgs {
+pub(crate) struct RecordArgs {
     /// A scenario file (.toml).
     scenario: PathBuf,
     /// The file to write (.oeglog, .graph with --format graph, .mcap with --format mcap).
@@ -34,7 +34,7 @@ enum FormatArg {
 }
 
 /// Records the scans and says what was written.
-pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &RecordArgs) -> anyhow::Result<()> {
     let format = match args.format {
         FormatArg::Log => RecordFormat::Log,
         FormatArg::Graph => RecordFormat::Graph,

@@ -8,7 +8,7 @@ use oeg_eval::progress::Progress;
 
 /// `oeg run`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct RunArgs {
+pub(crate) struct RunArgs {
     /// A scenario file (.toml).
     scenario: PathBuf,
     /// Output folder [default: out/<scenario name>].
@@ -47,7 +47,7 @@ pub struct RunArgs {
 impl RunArgs {
     /// What `oeg` with no arguments runs: the default scenario, with the paper's model and the recommended one
     /// side by side.
-    pub fn default_run() -> Self {
+    pub(crate) fn default_run() -> Self {
         Self {
             scenario: PathBuf::from(DEFAULT_SCENARIO),
             out: None,
@@ -63,7 +63,7 @@ impl RunArgs {
 }
 
 /// Runs the scenario, prints its summary, fails when an expectation is not met.
-pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     if !args.scenario.exists() && args.scenario == Path::new(DEFAULT_SCENARIO) {
         anyhow::bail!(
             "{DEFAULT_SCENARIO} not found: run `oeg` from the repository root, or give a scenario: oeg run FILE"

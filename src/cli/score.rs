@@ -8,7 +8,7 @@ use oeg_eval::progress::Progress;
 /// `oeg score`'s arguments.
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("grid").required(true).args(["layers", "nav2", "decisions"])))]
-pub struct ScoreArgs {
+pub(crate) struct ScoreArgs {
     /// The scenario whose truth judges the map (.toml).
     scenario: PathBuf,
     /// A layers.json sidecar (as `oeg map --planner-files` writes it): the grid, and the .npy files of the
@@ -58,7 +58,7 @@ pub struct ScoreArgs {
 }
 
 /// Scores the map and prints its verdict counts.
-pub fn run(args: &ScoreArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &ScoreArgs) -> anyhow::Result<()> {
     let grid = match (&args.layers, &args.nav2, &args.decisions) {
         (Some(l), _, _) => GridSource::Layers(l.clone()),
         (_, Some(n), _) => GridSource::Nav2(n.clone()),

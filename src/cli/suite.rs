@@ -6,7 +6,7 @@ use oeg_eval::jobs::suite;
 
 /// `oeg suite`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct SuiteArgs {
+pub(crate) struct SuiteArgs {
     /// Scenario files or folders.
     #[arg(required = true)]
     paths: Vec<PathBuf>,
@@ -27,7 +27,7 @@ pub struct SuiteArgs {
 }
 
 /// Runs the suite, prints its table, fails if any scenario did not pass.
-pub fn run(args: &SuiteArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &SuiteArgs) -> anyhow::Result<()> {
     let jobs = args.jobs.map_or_else(oeg_eval::jobs::default_jobs, usize::from);
     eprintln!("{}", suite::table_header());
     let rows = suite::suite(

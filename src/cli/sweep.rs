@@ -11,7 +11,7 @@ use oeg_eval::progress::Progress;
 
 /// `oeg sweep`'s sub-commands.
 #[derive(Subcommand, Debug)]
-pub enum SweepCommand {
+pub(crate) enum SweepCommand {
     /// Print the plan: every run's id, axis values and seed, and how many simulations they share.
     Plan {
         /// A sweep file (.toml).
@@ -87,7 +87,7 @@ pub enum SweepCommand {
 }
 
 /// Runs one sub-command and says what it did.
-pub fn run(command: SweepCommand) -> anyhow::Result<()> {
+pub(crate) fn run(command: SweepCommand) -> anyhow::Result<()> {
     match command {
         SweepCommand::Plan { file, overrides } => print_plan(&load(&file, &overrides)?),
         SweepCommand::Run {

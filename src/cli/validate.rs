@@ -6,14 +6,14 @@ use oeg_eval::jobs::preview;
 
 /// `oeg validate`'s arguments.
 #[derive(clap::Args, Debug)]
-pub struct ValidateArgs {
+pub(crate) struct ValidateArgs {
     /// Scenario files (.toml).
     #[arg(required = true)]
     scenarios: Vec<PathBuf>,
 }
 
 /// Prints one line per file; fails if any is invalid.
-pub fn run(args: &ValidateArgs) -> anyhow::Result<()> {
+pub(crate) fn run(args: &ValidateArgs) -> anyhow::Result<()> {
     let mut num_bad = 0;
     for path in &args.scenarios {
         match preview::validate(path) {

@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs `oeg` with `args`.
-pub fn oeg(args: &[&str]) -> Output {
+pub(crate) fn oeg(args: &[&str]) -> Output {
     oeg_with_threads(args, None)
 }
 
 /// Runs `oeg` with `args`, with `RAYON_NUM_THREADS` set when `threads` is given.
-pub fn oeg_with_threads(args: &[&str], threads: Option<&str>) -> Output {
+pub(crate) fn oeg_with_threads(args: &[&str], threads: Option<&str>) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_oeg"));
     c.args(args);
     if let Some(t) = threads {
@@ -21,7 +21,7 @@ pub fn oeg_with_threads(args: &[&str], threads: Option<&str>) -> Output {
 }
 
 /// A fresh, empty temporary folder for one test (`group` keeps test files apart).
-pub fn temp_dir(group: &str, name: &str) -> PathBuf {
+pub(crate) fn temp_dir(group: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("oeg-{group}-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -29,17 +29,17 @@ pub fn temp_dir(group: &str, name: &str) -> PathBuf {
 }
 
 /// The repository root.
-pub fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// A path as a command-line argument.
-pub fn s(p: &Path) -> &str {
+pub(crate) fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
 }
 
 /// The standard output of a command that succeeded; a failure panics with both outputs.
-pub fn ok(o: &Output) -> String {
+pub(crate) fn ok(o: &Output) -> String {
     assert!(
         o.status.success(),
         "oeg failed: {}\n{}",
@@ -50,7 +50,7 @@ pub fn ok(o: &Output) -> String {
 }
 
 /// The error of a command that failed with an error, not a panic (a panic exits with 101).
-pub fn err(o: &Output) -> String {
+pub(crate) fn err(o: &Output) -> String {
     let e = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(
         !o.status.success(),
@@ -65,7 +65,7 @@ pub fn err(o: &Output) -> String {
 /// The error of `oeg sweep plan` on the sweep file `dir/NAME.toml`: `name = "NAME"`, `seed = 1`, the shipped
 /// smoke base as its one scenario (lines 1 to 3), then `body` from line 4.
 #[expect(clippy::disallowed_methods, reason = "a test writes its input directly")]
-pub fn sweep_plan_error(dir: &Path, name: &str, body: &str) -> String {
+pub(crate) fn sweep_plan_error(dir: &Path, name: &str, body: &str) -> String {
     let base = root().join("sweeps/bases/smoke.toml");
     let path = dir.join(format!("{name}.toml"));
     let head = format!("name = \"{name}\"\nseed = 1\nscenarios = [{:?}]\n", s(&base));
@@ -76,7 +76,7 @@ pub fn sweep_plan_error(dir: &Path, name: &str, body: &str) -> String {
 /// Checks a written HTML page the way a browser reads it: it parses as HTML5 with no parse error, and every
 /// link and image it references (`href`, `src`) that is not a web address or an anchor resolves to a file
 /// written beside it. Returns the page's text.
-pub fn check_page(page: &Path) -> String {
+pub(crate) fn check_page(page: &Path) -> String {
     use html5ever::tendril::TendrilSink;
     use markup5ever_rcdom::{Handle, NodeData, RcDom};
     let text = std::fs::read_to_string(page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
@@ -132,7 +132,7 @@ pub fn check_page(page: &Path) -> String {
 /// Checks an SVG figure written beside its PNG: it parses as XML, its root is an `svg` element as wide and
 /// tall as the PNG, every glyph it places is defined in it, and every embedded image is a PNG. Returns the
 /// number of text lines it carries as vectors.
-pub fn check_svg(svg: &Path) -> usize {
+pub(crate) fn check_svg(svg: &Path) -> usize {
     let text = std::fs::read_to_string(svg).unwrap_or_else(|e| panic!("{}: {e}", svg.display()));
     let doc = roxmltree::Document::parse(&text).unwrap_or_else(|e| panic!("{}: not XML: {e}", svg.display()));
     let root = doc.root_element();

@@ -10,9 +10,9 @@ use super::font;
 pub type Rgb = [u8; 3];
 
 /// Black.
-pub const BLACK: Rgb = [0, 0, 0];
+pub(crate) const BLACK: Rgb = [0, 0, 0];
 /// White.
-pub const WHITE: Rgb = [255, 255, 255];
+pub(crate) const WHITE: Rgb = [255, 255, 255];
 
 /// One recorded drawing operation, in pixel coordinates (row 0 at the top); see [`Canvas::shapes`].
 #[derive(Debug, Clone, PartialEq)]

@@ -12,7 +12,7 @@ const BOTTOM: usize = 56;
 const LEGEND_GAP: usize = 24;
 
 /// Distinct series colours (Okabe-Ito, readable by colour-blind readers).
-pub const SERIES_COLORS: [Rgb; 7] = [
+pub(crate) const SERIES_COLORS: [Rgb; 7] = [
     [0, 114, 178],
     [213, 94, 0],
     [0, 158, 115],
@@ -24,7 +24,7 @@ pub const SERIES_COLORS: [Rgb; 7] = [
 
 /// One point: `x`, `y`, and the band `[low, high]` (NaN: no band there).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Point {
+pub(crate) struct Point {
     /// Position along x.
     pub x: f64,
     /// Value.
@@ -37,7 +37,7 @@ pub struct Point {
 
 /// A line with its band.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Series {
+pub(crate) struct Series {
     /// Legend label.
     pub label: String,
     /// Points, sorted by x.
@@ -46,7 +46,7 @@ pub struct Series {
 
 /// A chart to draw.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Chart {
+pub(crate) struct Chart {
     /// Title.
     pub title: String,
     /// x-axis label, with units.
@@ -86,7 +86,7 @@ impl Frame {
 impl Chart {
     /// Draws the chart: the intervals' bands, the axes, the bands' edges, the lines and markers, the legend
     /// and the title.
-    pub fn draw(&self) -> Canvas {
+    pub(crate) fn draw(&self) -> Canvas {
         let frame = self.frame();
         let legend_w = self
             .series

@@ -14,7 +14,7 @@ use crate::judge::verdict::Verdict;
 
 /// The verdicts of `decisions.png`, in legend order, with their legend text and fill. The wrong and the
 /// uncertain decisions are textured, so that the classes stay apart in grey scale.
-pub const DECISION_CLASSES: [(Verdict, &str, Fill); 6] = [
+pub(crate) const DECISION_CLASSES: [(Verdict, &str, Fill); 6] = [
     (
         Verdict::NotScored,
         "not observed",
@@ -48,7 +48,7 @@ pub const DECISION_CLASSES: [(Verdict, &str, Fill); 6] = [
 ];
 
 /// The fill of a verdict on `decisions.png`.
-pub fn verdict_fill(v: Verdict) -> Fill {
+pub(crate) fn verdict_fill(v: Verdict) -> Fill {
     DECISION_CLASSES
         .iter()
         .find(|(c, ..)| *c == v)
@@ -59,7 +59,7 @@ pub fn verdict_fill(v: Verdict) -> Fill {
 const OUTLINE: Rgb = [0, 0, 0];
 
 /// The scenario's drive as a polyline of world points.
-pub fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
+pub(crate) fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
     s.robot
         .drive
         .waypoints_xy_m
@@ -69,7 +69,7 @@ pub fn drive_polyline(s: &Scenario) -> Vec<(f64, f64)> {
 }
 
 /// The true elevation of every cell, with a colour bar over its range.
-pub fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
+pub(crate) fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
     let elevations: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
     let (lo, hi) = finite_range(&elevations).unwrap_or((0.0, 1.0));
     let legend = Legend::ColorBar {
@@ -92,7 +92,7 @@ pub fn truth_elevation_figure(truth: &TruthRaster, title: &str) -> Figure {
 /// What a closed-loop run adds to its decisions image: the trajectory the robot truly drove and some of the
 /// paths it planned on the way.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct Overlay {
+pub(crate) struct Overlay {
     /// The true trajectory, world points.
     pub trajectory: Vec<(f64, f64)>,
     /// Planned paths, world points each.
@@ -100,13 +100,13 @@ pub struct Overlay {
 }
 
 /// The driven trajectory on the images.
-pub const DRIVEN: Rgb = [0, 150, 60];
+pub(crate) const DRIVEN: Rgb = [0, 150, 60];
 /// Paths planned on the way, on the images.
-pub const REPLANNED: Rgb = [190, 120, 230];
+pub(crate) const REPLANNED: Rgb = [190, 120, 230];
 
 impl Overlay {
     /// Draws the plans, then the trajectory over them.
-    pub fn draw(&self, fig: &mut Figure) {
+    pub(crate) fn draw(&self, fig: &mut Figure) {
         for p in &self.plans {
             fig.polyline(p, REPLANNED);
         }
@@ -114,7 +114,7 @@ impl Overlay {
     }
 
     /// The legend entries of what [`Overlay::draw`] draws.
-    pub fn legend(&self) -> Vec<(String, Fill)> {
+    pub(crate) fn legend(&self) -> Vec<(String, Fill)> {
         vec![
             ("driven (true pose)".into(), DRIVEN.into()),
             (
@@ -130,7 +130,7 @@ impl Overlay {
 ///
 /// # Errors
 /// A failed write.
-pub fn write(
+pub(crate) fn write(
     out_dir: &Path,
     s: &Scenario,
     map: &Map,
@@ -192,7 +192,7 @@ pub fn write(
 
 /// `decisions.png`: every cell's verdict, the drive, the obstacles' footprints and names, and the path planned
 /// on the map; titled `title` with the counts.
-pub fn decisions_figure(
+pub(crate) fn decisions_figure(
     s: &Scenario,
     geometry: &oeg::GridGeometry,
     evaluation: &Evaluation,
@@ -257,7 +257,7 @@ pub fn decisions_figure(
 
 /// The map's decisions at an event of a closed-loop run, judged against the truth, with the trajectory up
 /// to the event and a marker where the robot was.
-pub fn event_figure(
+pub(crate) fn event_figure(
     s: &Scenario,
     truth: &TruthRaster,
     decisions: &[oeg::Traversability],
@@ -292,7 +292,7 @@ pub fn event_figure(
 /// `observability.png`: per cell, what a ray of the sensors could have told (a ray ended on the cell: its
 /// step; a ray crossed its band between a step and the robot's height: its clearance), and the truly blocked
 /// cells no ray could have told about.
-pub fn observability_figure(
+pub(crate) fn observability_figure(
     s: &Scenario,
     observability: &sim::observability::Observability,
     verdicts: &crate::judge::verdict::Verdicts,

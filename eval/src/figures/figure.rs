@@ -334,7 +334,7 @@ fn pixel_runs(num_px: usize, px_per_cell: f64, num_cells: u32) -> Vec<(u32, usiz
 
 /// "Nice" tick positions (steps of 1, 2 or 5 times a power of ten, about six of them) within `[lo, hi]`, with
 /// their labels.
-pub fn ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+pub(crate) fn ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
     let span = hi - lo;
     if !(span.is_finite() && span > 0.0) {
         return vec![(lo, format!("{lo}"))];

@@ -8,7 +8,7 @@ use ab_glyph::{Font as _, FontRef, GlyphId, PxScale, ScaleFont as _, point};
 
 /// The embedded font file: DejaVu Sans 2.37, subset (`eval/assets/fonts/README.md`). Its licence is
 /// `eval/assets/fonts/LICENSE-DejaVu.txt`.
-pub const FONT_FILE: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
+pub(crate) const FONT_FILE: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
 
 fn font() -> &'static FontRef<'static> {
     static FONT: OnceLock<FontRef<'static>> = OnceLock::new();
@@ -20,7 +20,7 @@ fn font() -> &'static FontRef<'static> {
 
 /// The text size of a `scale`, as `ab_glyph` measures it (the line's height, ascent to descent, in pixels;
 /// an em is 0.86 of it): 1 for labels and ticks (an em of 13 pixels), 2 for titles.
-pub fn size_px(scale: usize) -> f32 {
+pub(crate) fn size_px(scale: usize) -> f32 {
     match scale {
         0 | 1 => 15.0,
         2 => 22.0,
@@ -29,7 +29,7 @@ pub fn size_px(scale: usize) -> f32 {
 }
 
 /// The height of a line of text at `scale`, pixels: the font's ascent to its descent.
-pub fn line_height(scale: usize) -> usize {
+pub(crate) fn line_height(scale: usize) -> usize {
     let f = font().as_scaled(PxScale::from(size_px(scale)));
     (f.ascent() - f.descent()).ceil() as usize
 }
@@ -54,13 +54,13 @@ fn layout(text: &str, scale: usize) -> (Vec<(GlyphId, f32)>, f32) {
 }
 
 /// The width of `text` at `scale`, pixels (advances and kerning).
-pub fn width(text: &str, scale: usize) -> usize {
+pub(crate) fn width(text: &str, scale: usize) -> usize {
     layout(text, scale).1.ceil() as usize
 }
 
 /// A glyph where a line of text draws it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlacedGlyph {
+pub(crate) struct PlacedGlyph {
     /// The glyph's id in the embedded font.
     pub id: u16,
     /// Its outline's origin (on the baseline), pixels right of the line's left edge.
@@ -71,7 +71,7 @@ pub struct PlacedGlyph {
 
 /// Where each glyph of `text` at `scale` is drawn, with the pixels per font unit. [`rasterize`] places
 /// glyphs the same way.
-pub fn placed_glyphs(text: &str, scale: usize) -> (Vec<PlacedGlyph>, f32) {
+pub(crate) fn placed_glyphs(text: &str, scale: usize) -> (Vec<PlacedGlyph>, f32) {
     let f = font().as_scaled(PxScale::from(size_px(scale)));
     let baseline = f.ascent().round();
     let glyphs = layout(text, scale)
@@ -88,7 +88,7 @@ pub fn placed_glyphs(text: &str, scale: usize) -> (Vec<PlacedGlyph>, f32) {
 
 /// The outline of glyph `id` as SVG path data, in font units with y pointing up; `None` for a glyph with
 /// no outline (a space).
-pub fn outline_path(id: u16) -> Option<String> {
+pub(crate) fn outline_path(id: u16) -> Option<String> {
     use ab_glyph::OutlineCurve::{Cubic, Line, Quad};
     use std::fmt::Write as _;
     let outline = font().outline(GlyphId(id))?;
@@ -122,7 +122,7 @@ pub fn outline_path(id: u16) -> Option<String> {
 
 /// Calls `coverage(x, y, c)` for each pixel of `text` at `scale` with its coverage `c` in (0, 1], the line's
 /// top-left corner at (0, 0). Characters the font lacks are drawn as its missing-glyph box.
-pub fn rasterize(text: &str, scale: usize, mut coverage: impl FnMut(i64, i64, f32)) {
+pub(crate) fn rasterize(text: &str, scale: usize, mut coverage: impl FnMut(i64, i64, f32)) {
     let f = font().as_scaled(PxScale::from(size_px(scale)));
     for (id, caret) in layout(text, scale).0 {
         // Each glyph starts on a whole pixel, so the same letter looks the same wherever it falls.

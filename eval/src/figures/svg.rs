@@ -19,7 +19,7 @@ fn hex(c: Rgb) -> String {
 }
 
 /// The canvas as an SVG document. Deterministic: the same drawing gives the same bytes.
-pub fn to_svg(canvas: &Canvas) -> String {
+pub(crate) fn to_svg(canvas: &Canvas) -> String {
     let (w, h) = (canvas.width(), canvas.height());
     let mut out = String::new();
     // Writing into a String cannot fail; the results are ignored.

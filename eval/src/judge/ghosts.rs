@@ -56,7 +56,7 @@ fn fraction(part: u64, whole: u64) -> Option<f64> {
 
 /// Per cell of `window`: whether an actor's footprint covered its centre at some time of `[0, end_s]`, and
 /// whether one covers it at `end_s`. Each actor's path is followed in steps of at most half a cell.
-pub fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> (Vec<bool>, Vec<bool>) {
+pub(crate) fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> (Vec<bool>, Vec<bool>) {
     let n = window.num_cells() as usize;
     let (mut swept, mut at_end) = (vec![false; n], vec![false; n]);
     let res = window.resolution_m();
@@ -129,7 +129,7 @@ fn mark_disk(cells: &mut [bool], window: &GridWindow, (x, y): (f64, f64), radius
 
 /// SA and DA's counts for the map judged in `verdicts` (with its observability marks), the actors of `s`
 /// over its whole duration; `doubts` says why the map left each cell undecided (empty: it does not say).
-pub fn count(s: &Scenario, verdicts: &Verdicts, doubts: &[Option<Doubt>]) -> GhostCounts {
+pub(crate) fn count(s: &Scenario, verdicts: &Verdicts, doubts: &[Option<Doubt>]) -> GhostCounts {
     let (swept, at_end) = actor_cells(&s.actors, s.duration_s, &verdicts.window);
     let mut c = GhostCounts::default();
     for k in 0..verdicts.verdict.len() {

@@ -99,7 +99,7 @@ fn footprint(o: &Obstacle) -> Footprint {
 }
 
 /// Whether the world point `p` lies in the obstacle's footprint.
-pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
+pub(crate) fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
     match footprint(o) {
         Footprint::Rect {
             pose,
@@ -114,7 +114,7 @@ pub fn footprint_contains(o: &Obstacle, p: Point2<f64>) -> bool {
 }
 
 /// The obstacle's footprint as a closed polygon of world points (a circle as 32 sides), for the images.
-pub fn footprint_outline(o: &Obstacle) -> Vec<(f64, f64)> {
+pub(crate) fn footprint_outline(o: &Obstacle) -> Vec<(f64, f64)> {
     match footprint(o) {
         Footprint::Rect {
             pose,
@@ -152,7 +152,7 @@ fn deciding_height(o: &Obstacle) -> f64 {
 /// cells that decide: the truly blocked ones for a blocked obstacle, every observed one for a passable one.
 /// It is `blocked` when most of them are mapped blocked, `uncertain` when most are mapped blocked or
 /// uncertain, `passable` otherwise, and `unseen` when none was observed.
-pub fn decisions(
+pub(crate) fn decisions(
     s: &Scenario,
     estimate: &Estimate,
     truth: &TruthRaster,

@@ -11,7 +11,7 @@ use crate::judge::verdict::{Verdict, Verdicts};
 /// One row of `wrong_cells.csv`. Empty fields are values that do not exist (no elevation estimate, no
 /// structure over the cell).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct WrongCell {
+pub(crate) struct WrongCell {
     /// Cell centre, world x, metres.
     pub x_m: f64,
     /// Cell centre, world y, metres.
@@ -42,7 +42,7 @@ pub struct WrongCell {
 /// The observed cells of the truth's region whose decision is wrong (verdict `unsafe` or `over_cautious`) or
 /// that the map could not judge (`uncertain`), row-major from the region's min corner, read from the run's
 /// verdict raster.
-pub fn wrong_cells(estimate: &Estimate, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
+pub(crate) fn wrong_cells(estimate: &Estimate, truth: &TruthRaster, verdicts: &Verdicts) -> Vec<WrongCell> {
     let geometry = *estimate.window.geometry();
     let mut rows = Vec::new();
     for (k, cell) in truth.window.region().cells().enumerate() {

@@ -10,7 +10,7 @@ pub const APPROACH_WINDOW_M: f64 = 2.0;
 
 /// The contacts and the closest approach over a run.
 #[derive(Debug, Clone)]
-pub struct ContactWatch<'a> {
+pub(crate) struct ContactWatch<'a> {
     scenario: &'a Scenario,
     truth: &'a TruthRaster,
     footprint: Footprint,
@@ -27,7 +27,7 @@ pub struct ContactWatch<'a> {
 
 /// A contact that began at this step.
 #[derive(Debug, Clone, PartialEq)]
-pub struct NewContact {
+pub(crate) struct NewContact {
     /// The truly blocked cell the footprint entered nearest the robot's centre.
     pub cell: CellIndex,
     /// Every truly blocked cell under the footprint.
@@ -38,7 +38,7 @@ pub struct NewContact {
 
 impl<'a> ContactWatch<'a> {
     /// A watch with no contact yet, on the truth's cells.
-    pub fn new(scenario: &'a Scenario, truth: &'a TruthRaster, footprint: Footprint) -> Self {
+    pub(crate) fn new(scenario: &'a Scenario, truth: &'a TruthRaster, footprint: Footprint) -> Self {
         let blocked: Vec<bool> = (0..truth.cells.len()).map(|k| truth.truly_blocked(k)).collect();
         let region = *truth.window.region();
         let blocked_columns = (0..region.num_y)
@@ -69,18 +69,18 @@ impl<'a> ContactWatch<'a> {
     }
 
     /// The truth the watch judges by.
-    pub fn truth(&self) -> &TruthRaster {
+    pub(crate) fn truth(&self) -> &TruthRaster {
         self.truth
     }
 
     /// The truth's window.
-    pub fn window(&self) -> &GridWindow {
+    pub(crate) fn window(&self) -> &GridWindow {
         &self.truth.window
     }
 
     /// Checks the robot at its true `pose` at `time_s`: a contact that begins here, if one does, and the
     /// closest approach updated.
-    pub fn check(&mut self, time_s: f64, pose: Pose2) -> Option<NewContact> {
+    pub(crate) fn check(&mut self, time_s: f64, pose: Pose2) -> Option<NewContact> {
         let truth = self.truth;
         let (geometry, region) = (truth.window.geometry(), *truth.window.region());
         let reach = self.footprint.length_m().hypot(self.footprint.width_m()) + APPROACH_WINDOW_M;
@@ -157,7 +157,7 @@ impl<'a> ContactWatch<'a> {
 
     /// The obstacle a blocked cell belongs to: the one whose footprint holds the cell's centre, else the one
     /// holding a corner of the cell, else `terrain`.
-    pub fn obstacle_of(&self, cell: CellIndex) -> String {
+    pub(crate) fn obstacle_of(&self, cell: CellIndex) -> String {
         let (x, y) = self.truth.window.geometry().cell_center(cell);
         let h = self.truth.window.resolution_m() / 2.0;
         let points = [

@@ -6,13 +6,13 @@
 use oeg::Pose2;
 
 /// Heading error above which the robot turns on the spot (nav2's `rotate_to_heading_min_angle`, 0.785 rad).
-pub const ROTATE_IN_PLACE_RAD: f64 = std::f64::consts::FRAC_PI_4;
+pub(crate) const ROTATE_IN_PLACE_RAD: f64 = std::f64::consts::FRAC_PI_4;
 /// The slowest approach speed, as a fraction of the cruise speed.
 const MIN_APPROACH_FRACTION: f64 = 0.25;
 
 /// The controller's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PurePursuit {
+pub(crate) struct PurePursuit {
     /// Distance along the path to the point steered at, metres.
     pub lookahead_m: f64,
     /// Cruise speed, m/s.
@@ -23,7 +23,7 @@ pub struct PurePursuit {
 
 /// A velocity command.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Command {
+pub(crate) struct Command {
     /// Forward speed, m/s.
     pub speed_m_s: f64,
     /// Turn rate, radians per second, counter-clockwise.
@@ -34,7 +34,7 @@ impl PurePursuit {
     /// The command that follows `path` (world points, start first) from `pose`. `progress` is the index of
     /// the path segment reached so far: the closest point is searched from there on, so the robot never
     /// steers back to a part of the path it has passed.
-    pub fn command(&self, pose: Pose2, path: &[(f64, f64)], progress: &mut usize) -> Command {
+    pub(crate) fn command(&self, pose: Pose2, path: &[(f64, f64)], progress: &mut usize) -> Command {
         let Some(&last) = path.last() else {
             return Command::default();
         };

@@ -130,7 +130,7 @@ impl crate::output::CsvRow for Event {
 
 /// One row of `plans.csv`: a point of a plan made at a replanning time.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PlanPointRow {
+pub(crate) struct PlanPointRow {
     /// The plan's index.
     pub plan: u64,
     /// When it was made, seconds.

@@ -1,7 +1,7 @@
 //! Standard base64 (RFC 4648, with padding): bytes in JSON messages and images inside SVG figures.
 
 /// Standard base64 (RFC 4648, with padding), as Foxglove's JSON encoding and SVG's data URLs carry bytes.
-pub fn base64(bytes: &[u8]) -> String {
+pub(crate) fn base64(bytes: &[u8]) -> String {
     const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {

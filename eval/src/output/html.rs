@@ -28,7 +28,7 @@ code,pre{font-family:'DejaVu Sans Mono',monospace;font-size:.9em}pre{background:
 overflow-x:auto}ul.files{columns:3 18em}.muted{color:#666}";
 
 /// Text made safe for HTML element content and attribute values.
-pub fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for ch in text.chars() {
         match ch {
@@ -45,7 +45,7 @@ pub fn escape(text: &str) -> String {
 
 /// A relative link's target: each path segment percent-encoded where it is not a plain file-name character,
 /// `/`-separated whatever the platform.
-pub fn href(relative: &std::path::Path) -> String {
+pub(crate) fn href(relative: &std::path::Path) -> String {
     relative
         .components()
         .map(|c| {
@@ -67,14 +67,14 @@ pub fn href(relative: &std::path::Path) -> String {
 
 /// A page being written: sections are appended in order, then [`Page::finish`] gives the document.
 #[derive(Debug, Clone)]
-pub struct Page {
+pub(crate) struct Page {
     title: String,
     body: String,
 }
 
 impl Page {
     /// An empty page titled `title` (shown as its heading).
-    pub fn new(title: &str) -> Self {
+    pub(crate) fn new(title: &str) -> Self {
         Self {
             title: title.to_string(),
             body: String::new(),
@@ -82,29 +82,29 @@ impl Page {
     }
 
     /// A section heading with an `id` to link to.
-    pub fn heading(&mut self, id: &str, text: &str) {
+    pub(crate) fn heading(&mut self, id: &str, text: &str) {
         self.body
             .push_str(&format!("<h2 id=\"{}\">{}</h2>\n", escape(id), escape(text)));
     }
 
     /// A paragraph of plain text.
-    pub fn paragraph(&mut self, text: &str) {
+    pub(crate) fn paragraph(&mut self, text: &str) {
         self.body.push_str(&format!("<p>{}</p>\n", escape(text)));
     }
 
     /// Markup written as given: the caller escapes what it holds.
-    pub fn raw(&mut self, html: &str) {
+    pub(crate) fn raw(&mut self, html: &str) {
         self.body.push_str(html);
         self.body.push('\n');
     }
 
     /// A table of text cells; numbers are right-aligned.
-    pub fn table<S: AsRef<str>>(&mut self, header: &[S], rows: &[Vec<String>]) {
+    pub(crate) fn table<S: AsRef<str>>(&mut self, header: &[S], rows: &[Vec<String>]) {
         self.body.push_str(&table_html(header, rows));
     }
 
     /// Figures side by side (one per `(image, caption)`), each image a link to itself at full size.
-    pub fn figures(&mut self, figures: &[(String, String)]) {
+    pub(crate) fn figures(&mut self, figures: &[(String, String)]) {
         self.body.push_str("<div class=\"row\">\n");
         for (src, caption) in figures {
             self.body.push_str(&format!(
@@ -117,7 +117,7 @@ impl Page {
     }
 
     /// A list of links, each `(target, text)`.
-    pub fn links(&mut self, links: &[(String, String)]) {
+    pub(crate) fn links(&mut self, links: &[(String, String)]) {
         self.body.push_str("<ul class=\"files\">\n");
         for (target, text) in links {
             self.body.push_str(&format!(
@@ -130,7 +130,7 @@ impl Page {
     }
 
     /// The whole document.
-    pub fn finish(self) -> String {
+    pub(crate) fn finish(self) -> String {
         format!(
             "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
              <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
@@ -150,7 +150,7 @@ fn is_number(cell: &str) -> bool {
 }
 
 /// A table of text cells as HTML.
-pub fn table_html<S: AsRef<str>>(header: &[S], rows: &[Vec<String>]) -> String {
+pub(crate) fn table_html<S: AsRef<str>>(header: &[S], rows: &[Vec<String>]) -> String {
     let mut out = String::from("<table>\n<thead><tr>");
     for h in header {
         out.push_str(&format!("<th>{}</th>", escape(h.as_ref())));
@@ -173,7 +173,7 @@ pub fn table_html<S: AsRef<str>>(header: &[S], rows: &[Vec<String>]) -> String {
 
 /// One CSV field as it reads in a page: whole numbers as they are, other numbers with 3 decimals (more for
 /// small ones), an empty field as `-`.
-pub fn field(text: &str) -> String {
+pub(crate) fn field(text: &str) -> String {
     if text.is_empty() {
         return "-".into();
     }
@@ -192,7 +192,7 @@ pub fn field(text: &str) -> String {
 ///
 /// # Errors
 /// [`TableError`] when the bytes are not CSV.
-pub fn csv_to_html(csv: &[u8], drop: &[&str]) -> Result<String, TableError> {
+pub(crate) fn csv_to_html(csv: &[u8], drop: &[&str]) -> Result<String, TableError> {
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(csv);
     let header = reader.headers()?.clone();
     let keep: Vec<usize> = (0..header.len())
@@ -215,7 +215,7 @@ pub fn csv_to_html(csv: &[u8], drop: &[&str]) -> Result<String, TableError> {
 ///
 /// # Errors
 /// As [`csv_to_html`], and a row that is not one flat record.
-pub fn rows_to_html<'a, T: CsvRow + 'a>(
+pub(crate) fn rows_to_html<'a, T: CsvRow + 'a>(
     rows: impl IntoIterator<Item = &'a T>,
     drop: &[&str],
 ) -> Result<String, TableError> {

@@ -12,7 +12,7 @@ use crate::error::{EvalError, Result};
 ///
 /// # Errors
 /// [`TableError`] when the bytes are not CSV.
-pub fn markdown_table(csv: &[u8], drop: &[&str]) -> std::result::Result<String, TableError> {
+pub(super) fn markdown_table(csv: &[u8], drop: &[&str]) -> std::result::Result<String, TableError> {
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(csv);
     let header = reader.headers()?.clone();
     let keep: Vec<usize> = (0..header.len())
@@ -49,7 +49,7 @@ fn cell(field: &str) -> String {
 ///
 /// # Errors
 /// As [`markdown_table`], and a row that is not one flat record.
-pub fn markdown_rows<'a, T: CsvRow + 'a>(
+pub(crate) fn markdown_rows<'a, T: CsvRow + 'a>(
     rows: impl IntoIterator<Item = &'a T>,
     drop: &[&str],
 ) -> std::result::Result<String, TableError> {
@@ -60,7 +60,7 @@ pub fn markdown_rows<'a, T: CsvRow + 'a>(
 ///
 /// # Errors
 /// [`EvalError::Input`] naming the file for a row that is not one flat record, and a failed write.
-pub fn write_markdown_rows<'a, T: CsvRow + 'a>(
+pub(crate) fn write_markdown_rows<'a, T: CsvRow + 'a>(
     path: &Path,
     rows: impl IntoIterator<Item = &'a T>,
     drop: &[&str],

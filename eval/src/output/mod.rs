@@ -2,7 +2,7 @@
 //! or nothing ([`Staged`]).
 
 mod base64;
-pub mod html;
+pub(crate) mod html;
 mod markdown;
 mod staged;
 
@@ -12,14 +12,14 @@ use serde::Serialize;
 
 use crate::error::{EvalError, Result};
 
-pub use base64::base64;
-pub use markdown::{markdown_rows, write_markdown_rows};
-pub use staged::{OUTPUT_MARKER, Staged};
+pub(crate) use base64::base64;
+pub(crate) use markdown::{markdown_rows, write_markdown_rows};
+pub(crate) use staged::{OUTPUT_MARKER, Staged};
 
 /// The unit a key's suffix names, as the outputs spell their keys (`..._m` metres, `..._m2` square metres,
 /// `..._s` seconds, `..._deg` degrees, `..._cells` cells, ...); `None` for a key without one (fractions,
 /// ratios, flags).
-pub fn unit_of(key: &str) -> Option<&'static str> {
+pub(crate) fn unit_of(key: &str) -> Option<&'static str> {
     const UNITS: [(&str, &str); 11] = [
         ("_m_per_sqrt_m", "m/\u{221a}m"),
         ("_deg_per_sqrt_m", "\u{b0}/\u{221a}m"),
@@ -43,7 +43,7 @@ pub fn unit_of(key: &str) -> Option<&'static str> {
 ///
 /// # Errors
 /// [`EvalError::Io`] naming the folder.
-pub fn create_dir(dir: &Path) -> Result<()> {
+pub(crate) fn create_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|source| EvalError::Io {
         path: dir.to_path_buf(),
         source,
@@ -54,7 +54,7 @@ pub fn create_dir(dir: &Path) -> Result<()> {
 ///
 /// # Errors
 /// [`EvalError::Map`] wrapping the I/O error, naming the file.
-pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
+pub(crate) fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let mut bytes = serde_json::to_vec_pretty(value).map_err(|e| EvalError::Input {
         path: path.to_path_buf(),
         message: format!("cannot serialise: {e}"),
@@ -67,7 +67,7 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 ///
 /// # Errors
 /// As [`write_json`].
-pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(oeg_files::write_atomically(path, bytes)?)
 }
 
@@ -83,7 +83,7 @@ pub trait CsvRow: Serialize {
 ///
 /// # Errors
 /// A row whose fields do not serialise as one flat record, as text.
-pub fn csv_bytes<T: Serialize>(
+pub(crate) fn csv_bytes<T: Serialize>(
     columns: &[&str],
     rows: impl IntoIterator<Item = T>,
 ) -> std::result::Result<Vec<u8>, TableError> {
@@ -101,7 +101,7 @@ pub fn csv_bytes<T: Serialize>(
 /// A table that cannot be written or read as CSV: a row that is not one flat record, or bytes that are not
 /// CSV (the caller names the file).
 #[derive(Debug, thiserror::Error)]
-pub enum TableError {
+pub(crate) enum TableError {
     /// From the CSV writer or reader.
     #[error("{0}")]
     Csv(#[from] csv::Error),
@@ -111,7 +111,7 @@ pub enum TableError {
 ///
 /// # Errors
 /// As [`csv_bytes`].
-pub fn csv_table<'a, T: CsvRow + 'a>(
+pub(crate) fn csv_table<'a, T: CsvRow + 'a>(
     rows: impl IntoIterator<Item = &'a T>,
 ) -> std::result::Result<Vec<u8>, TableError> {
     csv_bytes(T::COLUMNS, rows)
@@ -121,7 +121,7 @@ pub fn csv_table<'a, T: CsvRow + 'a>(
 ///
 /// # Errors
 /// [`EvalError::Input`] naming the file for a row that is not one flat record, and a failed write.
-pub fn write_csv<T: Serialize>(
+pub(crate) fn write_csv<T: Serialize>(
     path: &Path,
     columns: &[&str],
     rows: impl IntoIterator<Item = T>,
@@ -137,13 +137,16 @@ pub fn write_csv<T: Serialize>(
 ///
 /// # Errors
 /// As [`write_csv`].
-pub fn write_table<'a, T: CsvRow + 'a>(path: &Path, rows: impl IntoIterator<Item = &'a T>) -> Result<()> {
+pub(crate) fn write_table<'a, T: CsvRow + 'a>(
+    path: &Path,
+    rows: impl IntoIterator<Item = &'a T>,
+) -> Result<()> {
     write_csv(path, T::COLUMNS, rows)
 }
 
 /// The header `csv` derives from a struct row's field names (for the tests of [`CsvRow::COLUMNS`]).
 #[cfg(test)]
-pub fn derived_header<T: Serialize>(row: &T) -> Vec<String> {
+pub(crate) fn derived_header<T: Serialize>(row: &T) -> Vec<String> {
     let mut w = csv::Writer::from_writer(Vec::new());
     if w.serialize(row).is_err() {
         return Vec::new();
@@ -158,7 +161,7 @@ pub fn derived_header<T: Serialize>(row: &T) -> Vec<String> {
 
 /// A coordinate rounded to the micrometre for CSV files: cell centres such as `1180.5 * 0.1` print as
 /// `118.05`, not `118.05000000000001`.
-pub fn round_m(v_m: f64) -> f64 {
+pub(crate) fn round_m(v_m: f64) -> f64 {
     (v_m * 1e6).round() / 1e6
 }
 

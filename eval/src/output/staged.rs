@@ -8,7 +8,7 @@ use crate::error::{EvalError, Result};
 use crate::lock::LockFile;
 
 /// The name of the file that marks a folder as a job's output, which the next job writing there may replace.
-pub const OUTPUT_MARKER: &str = ".oeg-output";
+pub(crate) const OUTPUT_MARKER: &str = ".oeg-output";
 
 /// The prefix of a job's staging inside a mount point (see [`Staged`]), and of what it sets aside there.
 const MOUNT_STAGING: &str = ".oeg-staging.";
@@ -34,7 +34,7 @@ const MOUNT_STAGING: &str = ".oeg-staging.";
 /// someone else's files is an error, before any work is done. Two jobs committing the same folder take turns (a
 /// lock file, `lock`), so each leaves it whole and the last one's results stay.
 #[derive(Debug)]
-pub struct Staged {
+pub(crate) struct Staged {
     target: PathBuf,
     staging: PathBuf,
     in_place: bool,
@@ -51,7 +51,7 @@ impl Staged {
     /// # Errors
     /// [`EvalError::Io`] naming `target` when it is a file or a folder that no job wrote, or when a folder
     /// cannot be created; [`EvalError::Input`] naming the input that `target` holds.
-    pub fn begin(target: &Path, inputs: &[&Path]) -> Result<Self> {
+    pub(crate) fn begin(target: &Path, inputs: &[&Path]) -> Result<Self> {
         check_not_an_input(target, inputs)?;
         Self::begin_as(target, is_mount_point(target))
     }
@@ -106,12 +106,12 @@ impl Staged {
     }
 
     /// The folder the job writes into until [`Staged::commit`].
-    pub fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         &self.staging
     }
 
     /// Where a file written at `staged` (inside [`Staged::dir`]) lies once committed.
-    pub fn final_path(&self, staged: &Path) -> PathBuf {
+    pub(crate) fn final_path(&self, staged: &Path) -> PathBuf {
         staged
             .strip_prefix(&self.staging)
             .map_or_else(|_| staged.to_path_buf(), |rel| self.target.join(rel))
@@ -123,7 +123,7 @@ impl Staged {
     ///
     /// # Errors
     /// `work`'s error.
-    pub fn explained<T>(&self, work: Result<T>) -> Result<T> {
+    pub(crate) fn explained<T>(&self, work: Result<T>) -> Result<T> {
         work.map_err(|e| match e {
             EvalError::Io { path, source } => EvalError::Io {
                 path: self.final_path(&path),
@@ -147,7 +147,7 @@ impl Staged {
         clippy::disallowed_methods,
         reason = "this is the one place a finished folder is moved into place"
     )]
-    pub fn commit(self) -> Result<PathBuf> {
+    pub(crate) fn commit(self) -> Result<PathBuf> {
         if self.in_place {
             return self.commit_in_place();
         }

@@ -3,7 +3,7 @@
 //! `comparison.csv` (and the same table as `comparison.md`) and `decisions_comparison.png`; and the page that
 //! shows them all, `report.html` ([`page`]).
 
-pub mod page;
+pub(crate) mod page;
 
 use std::path::{Path, PathBuf};
 
@@ -24,7 +24,7 @@ use crate::output::{write_bytes, write_json, write_markdown_rows, write_table};
 ///
 /// # Errors
 /// A failed write.
-pub fn write_report(
+pub(crate) fn write_report(
     out_dir: &Path,
     s: &scenario::Scenario,
     map: &Map,
@@ -61,7 +61,11 @@ pub fn write_report(
 ///
 /// # Errors
 /// A failed write.
-pub fn write_tables(out_dir: &Path, truth: &TruthRaster, evaluation: &Evaluation) -> Result<Vec<PathBuf>> {
+pub(crate) fn write_tables(
+    out_dir: &Path,
+    truth: &TruthRaster,
+    evaluation: &Evaluation,
+) -> Result<Vec<PathBuf>> {
     let geometry = *evaluation.estimate.window.geometry();
     let plan = out_dir.join("plan.csv");
     write_table(
@@ -94,7 +98,7 @@ impl crate::output::CsvRow for ComparisonRow {
 
 /// One row of `comparison.csv`: one model's decisions on the same sensor log.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ComparisonRow {
+pub(crate) struct ComparisonRow {
     /// The model: the preset, with the scenario's own `[map.model]` keys over it.
     pub model: String,
     /// Unsafe cells (step and clearance).
@@ -116,7 +120,7 @@ pub struct ComparisonRow {
 }
 
 /// `comparison.csv` and `decisions_comparison.png`: the two models' decisions side by side.
-pub fn write_comparison(
+pub(crate) fn write_comparison(
     out_dir: &Path,
     runs: [(&scenario::Scenario, &Evaluation); 2],
     geometry: &GridGeometry,
@@ -162,11 +166,11 @@ pub fn write_comparison(
 }
 
 /// The most planned paths drawn on a closed-loop run's decisions image (evenly spread over the run).
-pub const MAX_DRAWN_PLANS: usize = 5;
+pub(crate) const MAX_DRAWN_PLANS: usize = 5;
 
 /// What a closed-loop run draws on its decisions image: the true trajectory and up to [`MAX_DRAWN_PLANS`]
 /// of its plans, the first and the last among them.
-pub fn overlay_of(log: &NavigationLog) -> comparison::Overlay {
+pub(crate) fn overlay_of(log: &NavigationLog) -> comparison::Overlay {
     let n = log.plans.len();
     let picks: Vec<usize> = if n <= MAX_DRAWN_PLANS {
         (0..n).collect()
@@ -187,7 +191,7 @@ pub fn overlay_of(log: &NavigationLog) -> comparison::Overlay {
 ///
 /// # Errors
 /// A failed write.
-pub fn write_navigation(
+pub(crate) fn write_navigation(
     out_dir: &Path,
     s: &scenario::Scenario,
     truth: &TruthRaster,
@@ -267,7 +271,7 @@ fn event_at(log: &NavigationLog, event: &Event) -> (Vec<(f64, f64)>, (f64, f64))
 ///
 /// # Errors
 /// A failed write.
-pub fn write_observability(
+pub(crate) fn write_observability(
     out_dir: &Path,
     s: &scenario::Scenario,
     observability: &sim::observability::Observability,

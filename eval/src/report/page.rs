@@ -20,7 +20,7 @@ use crate::output::{unit_of, write_bytes};
 const METRICS_DOC: &str = include_str!("../../../docs/metrics.md");
 
 /// The definition of each metric key, from the table of `docs/metrics.md` (a row `| `key`, `key` | unit | definition |`).
-pub fn metric_definitions() -> std::collections::BTreeMap<String, String> {
+pub(crate) fn metric_definitions() -> std::collections::BTreeMap<String, String> {
     let mut out = std::collections::BTreeMap::new();
     for line in METRICS_DOC.lines() {
         let cells: Vec<&str> = line.trim().trim_matches('|').split('|').map(str::trim).collect();
@@ -45,7 +45,7 @@ pub fn metric_definitions() -> std::collections::BTreeMap<String, String> {
 /// One model of the run: its scenario (with its map settings), its evaluation and its folder inside the run's
 /// (empty for the run's own model).
 #[derive(Debug, Clone, Copy)]
-pub struct ModelRun<'a> {
+pub(crate) struct ModelRun<'a> {
     /// The scenario as this model ran it.
     pub scenario: &'a Scenario,
     /// The judge's evaluation of its map.
@@ -60,7 +60,7 @@ impl ModelRun<'_> {
     }
 
     /// What this model's map made the robot do, and its regression bounds.
-    pub fn outcome(&self) -> Outcome {
+    pub(crate) fn outcome(&self) -> Outcome {
         Outcome::new(self.name(), &self.evaluation.metrics, &self.scenario.expectations)
     }
 
@@ -75,7 +75,7 @@ impl ModelRun<'_> {
 
 /// Everything the page shows.
 #[derive(Debug, Clone)]
-pub struct RunPage<'a> {
+pub(crate) struct RunPage<'a> {
     /// The scenario file as given.
     pub scenario_file: &'a Path,
     /// The models, the run's own first.
@@ -94,7 +94,7 @@ pub struct RunPage<'a> {
 ///
 /// # Errors
 /// A table that cannot be written, or a failed write.
-pub fn write_run_page(out_dir: &Path, run: &RunPage) -> Result<PathBuf> {
+pub(crate) fn write_run_page(out_dir: &Path, run: &RunPage) -> Result<PathBuf> {
     let path = out_dir.join("report.html");
     let html = run_page(run).map_err(|message| EvalError::Input {
         path: path.clone(),

@@ -76,7 +76,7 @@ impl Override {
 ///
 /// # Errors
 /// What is wrong with it.
-pub fn check_key(key: &str) -> Result<(), SettingError> {
+pub(crate) fn check_key(key: &str) -> Result<(), SettingError> {
     if key.is_empty() || key.split('.').any(str::is_empty) {
         return Err(SettingError::Invalid {
             message: "expected a dotted key such as map.resolution_m".into(),
@@ -87,18 +87,18 @@ pub fn check_key(key: &str) -> Result<(), SettingError> {
 
 /// Whether setting `key` (with `*` segments) can set the value at the dotted `target`: it names it, a table
 /// above it, or matches it through `*`.
-pub fn key_covers(key: &str, target: &str) -> bool {
+pub(crate) fn key_covers(key: &str, target: &str) -> bool {
     let (k, t): (Vec<&str>, Vec<&str>) = (key.split('.').collect(), target.split('.').collect());
     k.len() <= t.len() && k.iter().zip(&t).all(|(a, b)| a == b || *a == "*")
 }
 
 /// A TOML value on one line (`0.1`, `"static"`, `{ kind = "kalman" }`).
-pub fn inline_value(v: &Value) -> String {
+pub(crate) fn inline_value(v: &Value) -> String {
     v.to_string()
 }
 
 /// Removes the value at a dotted key, if there is one (the key falls back to its default).
-pub fn remove(doc: &mut Table, key: &str) {
+pub(crate) fn remove(doc: &mut Table, key: &str) {
     let segments: Vec<&str> = key.split('.').collect();
     let Some((last, parents)) = segments.split_last() else {
         return;

@@ -7,13 +7,13 @@
 //! Every reader checks sizes against the file before allocating, rejects non-finite numbers, and names the
 //! file and the byte or line of the problem.
 
-pub mod graph;
+pub(crate) mod graph;
 mod lzf;
-pub mod mapfile;
-pub mod nav2;
-pub mod npy;
-pub mod pcd;
-pub mod planner_files;
+pub(crate) mod mapfile;
+pub(crate) mod nav2;
+pub(crate) mod npy;
+pub(crate) mod pcd;
+pub(crate) mod planner_files;
 
 use std::path::Path;
 

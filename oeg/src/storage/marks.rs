@@ -8,7 +8,7 @@ use super::{TILE_CELLS, TILE_SHIFT, TILE_SIZE};
 
 /// Calls `f` with the index of every row whose bit is set in `rows`, in increasing order.
 #[inline]
-pub fn for_each_row(mut rows: u64, mut f: impl FnMut(usize)) {
+pub(crate) fn for_each_row(mut rows: u64, mut f: impl FnMut(usize)) {
     while rows != 0 {
         f(rows.trailing_zeros() as usize);
         rows &= rows - 1;
@@ -19,7 +19,7 @@ pub fn for_each_row(mut rows: u64, mut f: impl FnMut(usize)) {
 /// written: what a grid written a few cells at a time (the scan scratch) visits and clears. Marking is
 /// branch-free, for the hottest loop: every call writes, and only a first write counts.
 #[derive(Debug, Clone)]
-pub struct CellMarks {
+pub(crate) struct CellMarks {
     len: usize,
     /// One more than a tile's cells: the slot past the last mark takes the writes that do not count.
     offsets: [u16; TILE_CELLS + 1],
@@ -28,26 +28,26 @@ pub struct CellMarks {
 /// What was marked written in a tile: rows ([`TileGrid::mark_rows`]) and cells
 /// ([`TileGrid::slot_tile_and_marks_mut`]).
 #[derive(Debug, Clone, Copy)]
-pub struct Marked<'a> {
+pub(crate) struct Marked<'a> {
     pub(super) rows: u64,
     pub(super) cells: &'a [u16],
 }
 
 impl Marked<'_> {
     /// Whether nothing was marked.
-    pub fn is_empty(self) -> bool {
+    pub(crate) fn is_empty(self) -> bool {
         self.rows == 0 && self.cells.is_empty()
     }
 
     /// The cells to visit: every cell of a marked row, and each marked cell outside them.
-    pub fn num_cells(self) -> usize {
+    pub(crate) fn num_cells(self) -> usize {
         self.rows.count_ones() as usize * TILE_SIZE + self.cells.len()
     }
 
     /// Calls `f` with the offset of every cell that may have been written, once each: every cell of the marked
     /// rows, then the marked cells outside them. Cells of a marked row may be unwritten (still `fill`).
     #[inline]
-    pub fn for_each(self, mut f: impl FnMut(usize)) {
+    pub(crate) fn for_each(self, mut f: impl FnMut(usize)) {
         for_each_row(self.rows, |r| {
             (r * TILE_SIZE..(r + 1) * TILE_SIZE).for_each(&mut f)
         });
@@ -68,7 +68,7 @@ impl CellMarks {
 
     /// Marks the cell at `offset` if `first` (its first write since the tile was placed).
     #[inline(always)]
-    pub fn mark_if(&mut self, offset: usize, first: bool) {
+    pub(crate) fn mark_if(&mut self, offset: usize, first: bool) {
         self.len = self.mark_after(self.len, offset, first);
     }
 
@@ -76,7 +76,7 @@ impl CellMarks {
     /// the cell at `offset` after the first `len` marks if `first`, and returns the new count, to be stored
     /// with [`CellMarks::set_len`] when the loop ends.
     #[inline(always)]
-    pub fn mark_after(&mut self, len: usize, offset: usize, first: bool) -> usize {
+    pub(crate) fn mark_after(&mut self, len: usize, offset: usize, first: bool) -> usize {
         let n = len.min(TILE_CELLS);
         self.offsets[n] = offset as u16;
         n + usize::from(first)
@@ -84,18 +84,18 @@ impl CellMarks {
 
     /// The number of marks.
     #[inline(always)]
-    pub fn count(&self) -> usize {
+    pub(crate) fn count(&self) -> usize {
         self.len
     }
 
     /// Stores the count of a caller of [`CellMarks::mark_after`].
     #[inline(always)]
-    pub fn set_len(&mut self, len: usize) {
+    pub(crate) fn set_len(&mut self, len: usize) {
         self.len = len.min(TILE_CELLS);
     }
 
     /// The marked cells' offsets.
-    pub fn as_slice(&self) -> &[u16] {
+    pub(crate) fn as_slice(&self) -> &[u16] {
         &self.offsets[..self.len.min(TILE_CELLS)]
     }
 

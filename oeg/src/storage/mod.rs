@@ -7,23 +7,23 @@
 
 mod marks;
 
-pub use marks::{CellMarks, Marked, for_each_row};
+pub(crate) use marks::{CellMarks, Marked, for_each_row};
 
 use crate::geometry::CellIndex;
 #[cfg(test)]
 use crate::geometry::CellRegion;
 
 /// log2 of the tile edge in cells.
-pub const TILE_SHIFT: u32 = 6;
+pub(crate) const TILE_SHIFT: u32 = 6;
 /// Tile edge, cells.
-pub const TILE_SIZE: usize = 1 << TILE_SHIFT;
+pub(crate) const TILE_SIZE: usize = 1 << TILE_SHIFT;
 /// Cells per tile.
-pub const TILE_CELLS: usize = TILE_SIZE * TILE_SIZE;
+pub(crate) const TILE_CELLS: usize = TILE_SIZE * TILE_SIZE;
 const TILE_MASK: i32 = (TILE_SIZE as i32) - 1;
 
 /// A tile's coordinates: cell `(i, j)` is in tile `(i >> TILE_SHIFT, j >> TILE_SHIFT)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub struct TileIndex {
+pub(crate) struct TileIndex {
     /// Tile column.
     pub ti: i32,
     /// Tile row.
@@ -33,7 +33,7 @@ pub struct TileIndex {
 impl TileIndex {
     /// The tile holding `cell`.
     #[inline]
-    pub fn of(cell: CellIndex) -> Self {
+    pub(crate) fn of(cell: CellIndex) -> Self {
         Self {
             ti: cell.i >> TILE_SHIFT,
             tj: cell.j >> TILE_SHIFT,
@@ -42,29 +42,29 @@ impl TileIndex {
 
     /// Whether the tile's cells are representable ([`CellIndex`] is `i32`): tiles from `i32::MIN >> 6` to
     /// `i32::MAX >> 6` on each axis. Every [`TileIndex::of`] a cell is.
-    pub fn is_representable(self) -> bool {
+    pub(crate) fn is_representable(self) -> bool {
         let range = (i32::MIN >> TILE_SHIFT)..=(i32::MAX >> TILE_SHIFT);
         range.contains(&self.ti) && range.contains(&self.tj)
     }
 
     /// The tile's first cell (min-x, min-y).
-    pub fn first_cell(self) -> CellIndex {
+    pub(crate) fn first_cell(self) -> CellIndex {
         CellIndex::new(self.ti << TILE_SHIFT, self.tj << TILE_SHIFT)
     }
 }
 
 /// Offset of a cell inside its tile, row-major.
 #[inline]
-pub fn offset_in_tile(cell: CellIndex) -> usize {
+pub(crate) fn offset_in_tile(cell: CellIndex) -> usize {
     (((cell.j & TILE_MASK) as usize) << TILE_SHIFT) | (cell.i & TILE_MASK) as usize
 }
 
 /// One tile's cells.
-pub type Tile<T> = Box<[T; TILE_CELLS]>;
+pub(crate) type Tile<T> = Box<[T; TILE_CELLS]>;
 
 /// A sparse grid of `T`, allocated tile by tile. Cells never written read as the `fill` value.
 #[derive(Debug, Clone)]
-pub struct TileGrid<T> {
+pub(crate) struct TileGrid<T> {
     fill: T,
     /// Tile rectangle covered by `slots`.
     tile_min: TileIndex,
@@ -85,7 +85,7 @@ pub struct TileGrid<T> {
 
 /// Why a tile could not be allocated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CapacityExceeded {
+pub(crate) struct CapacityExceeded {
     /// Bytes the grid would have held; `u64::MAX` for a tile that is not representable
     /// ([`TileIndex::is_representable`]), which no amount of memory could hold.
     pub requested_bytes: u64,
@@ -93,7 +93,7 @@ pub struct CapacityExceeded {
 
 impl<T: Copy> TileGrid<T> {
     /// An empty grid whose unwritten cells read as `fill`.
-    pub fn new(fill: T) -> Self {
+    pub(crate) fn new(fill: T) -> Self {
         Self {
             fill,
             tile_min: TileIndex { ti: 0, tj: 0 },
@@ -109,27 +109,27 @@ impl<T: Copy> TileGrid<T> {
     }
 
     /// Bytes held by one tile.
-    pub const fn tile_bytes() -> usize {
+    pub(crate) const fn tile_bytes() -> usize {
         size_of::<[T; TILE_CELLS]>()
     }
 
     /// Number of allocated tiles.
-    pub fn num_tiles(&self) -> usize {
+    pub(crate) fn num_tiles(&self) -> usize {
         self.num_tiles
     }
 
     /// Number of tiles kept for reuse: that many tiles can be placed without new memory.
-    pub fn num_pooled(&self) -> usize {
+    pub(crate) fn num_pooled(&self) -> usize {
         self.pool.len()
     }
 
     /// Whether `tile` is allocated.
-    pub fn has_tile(&self, tile: TileIndex) -> bool {
+    pub(crate) fn has_tile(&self, tile: TileIndex) -> bool {
         self.slot(tile).is_some_and(|slot| self.slots[slot].is_some())
     }
 
     /// Bytes allocated: tiles (in use and pooled), the tile index, the marks, and the grid itself.
-    pub fn memory_bytes(&self) -> u64 {
+    pub(crate) fn memory_bytes(&self) -> u64 {
         ((self.num_tiles + self.pool.len()) * Self::tile_bytes()
             + self.slots.capacity() * size_of::<Option<Tile<T>>>()
             + self.rows.capacity() * size_of::<u64>()
@@ -147,7 +147,7 @@ impl<T: Copy> TileGrid<T> {
 
     /// The cell's value, or `None` if its tile was never allocated.
     #[inline]
-    pub fn get(&self, cell: CellIndex) -> Option<&T> {
+    pub(crate) fn get(&self, cell: CellIndex) -> Option<&T> {
         let slot = self.slot(TileIndex::of(cell))?;
         self.slots[slot].as_ref().map(|t| &t[offset_in_tile(cell)])
     }
@@ -156,7 +156,11 @@ impl<T: Copy> TileGrid<T> {
     /// more than `limit_bytes`.
     #[inline]
     #[cfg(test)]
-    pub fn get_or_insert(&mut self, cell: CellIndex, limit_bytes: u64) -> Result<&mut T, CapacityExceeded> {
+    pub(crate) fn get_or_insert(
+        &mut self,
+        cell: CellIndex,
+        limit_bytes: u64,
+    ) -> Result<&mut T, CapacityExceeded> {
         let tile = TileIndex::of(cell);
         let slot = match self.slot(tile) {
             Some(slot) if self.slots[slot].is_some() => slot,
@@ -171,7 +175,11 @@ impl<T: Copy> TileGrid<T> {
     /// The index slot of `tile`, allocating the tile (filled with `fill`) if needed, for repeated access with
     /// [`TileGrid::slot_tile_mut`] while a walk stays inside one tile. Fails past `limit_bytes`.
     #[inline]
-    pub fn slot_or_insert(&mut self, tile: TileIndex, limit_bytes: u64) -> Result<usize, CapacityExceeded> {
+    pub(crate) fn slot_or_insert(
+        &mut self,
+        tile: TileIndex,
+        limit_bytes: u64,
+    ) -> Result<usize, CapacityExceeded> {
         match self.slot(tile) {
             Some(slot) if self.slots[slot].is_some() => Ok(slot),
             _ => self.allocate(tile, limit_bytes, None),
@@ -180,7 +188,7 @@ impl<T: Copy> TileGrid<T> {
 
     /// The tile in `slot`, from [`TileGrid::slot_or_insert`] with no allocation or re-indexing in between.
     #[inline]
-    pub fn slot_tile_mut(&mut self, slot: usize) -> &mut [T; TILE_CELLS] {
+    pub(crate) fn slot_tile_mut(&mut self, slot: usize) -> &mut [T; TILE_CELLS] {
         match self.slots[slot].as_deref_mut() {
             Some(t) => t,
             None => unreachable!("slots come from slot_or_insert"),
@@ -188,7 +196,7 @@ impl<T: Copy> TileGrid<T> {
     }
 
     /// The whole tile at `tile`, allocating it (filled with `fill`) if needed. Fails past `limit_bytes`.
-    pub fn tile_or_insert(
+    pub(crate) fn tile_or_insert(
         &mut self,
         tile: TileIndex,
         limit_bytes: u64,
@@ -317,7 +325,7 @@ impl<T: Copy> TileGrid<T> {
     }
 
     /// Allocated tiles in a deterministic order (row by row over the tile index), with their coordinates.
-    pub fn tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS])> + '_ {
+    pub(crate) fn tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS])> + '_ {
         self.slots.iter().enumerate().filter_map(move |(slot, t)| {
             let tile = TileIndex {
                 ti: self.tile_min.ti + (slot % self.tiles_x.max(1)) as i32,
@@ -330,7 +338,7 @@ impl<T: Copy> TileGrid<T> {
     /// The allocated tiles among `tiles`, mutable, for tiles given in the order of [`TileGrid::tiles`] (row by
     /// row over the tile index, as another grid's [`TileGrid::marked_tiles`] yields them): the cost is that of
     /// the tiles asked for, not of the grid. A tile out of that order, or not allocated, is left out.
-    pub fn tiles_mut_in_order(
+    pub(crate) fn tiles_mut_in_order(
         &mut self,
         tiles: impl IntoIterator<Item = TileIndex>,
     ) -> Vec<(TileIndex, &mut [T; TILE_CELLS])> {
@@ -359,13 +367,13 @@ impl<T: Copy> TileGrid<T> {
     }
 
     /// The tile at `tile`, if allocated.
-    pub fn tile_mut(&mut self, tile: TileIndex) -> Option<&mut [T; TILE_CELLS]> {
+    pub(crate) fn tile_mut(&mut self, tile: TileIndex) -> Option<&mut [T; TILE_CELLS]> {
         let slot = self.slot(tile)?;
         self.slots[slot].as_deref_mut()
     }
 
     /// Inserts a whole tile (used by the map reader). Fails past `limit_bytes`.
-    pub fn insert_tile(
+    pub(crate) fn insert_tile(
         &mut self,
         tile: TileIndex,
         cells: Tile<T>,
@@ -389,7 +397,7 @@ impl<T: Copy> TileGrid<T> {
     /// ([`offset_in_tile`]) of each cell it writes for the first time: [`TileGrid::marked_tiles`] and
     /// [`TileGrid::recycle_marked`] then visit those cells alone. The list has room for the whole tile.
     #[inline]
-    pub fn slot_tile_and_marks_mut(&mut self, slot: usize) -> (&mut [T; TILE_CELLS], &mut CellMarks) {
+    pub(crate) fn slot_tile_and_marks_mut(&mut self, slot: usize) -> (&mut [T; TILE_CELLS], &mut CellMarks) {
         if self.marks.len() != self.slots.len() {
             self.marks.resize_with(self.slots.len(), || None);
         }
@@ -407,7 +415,7 @@ impl<T: Copy> TileGrid<T> {
     /// were written, for [`TileGrid::marked_tiles`] and [`TileGrid::recycle_marked`]: a walk marks the rows
     /// it crossed once per tile, at no cost per cell, where its cells are many.
     #[inline]
-    pub fn mark_rows(&mut self, slot: usize, rows: u64) {
+    pub(crate) fn mark_rows(&mut self, slot: usize, rows: u64) {
         if self.rows.len() != self.slots.len() {
             self.rows.resize(self.slots.len(), 0);
         }
@@ -428,7 +436,9 @@ impl<T: Copy> TileGrid<T> {
 
     /// Allocated tiles with something marked written ([`TileGrid::mark_rows`],
     /// [`TileGrid::slot_tile_and_marks_mut`]), in the order of [`TileGrid::tiles`], with what was marked.
-    pub fn marked_tiles(&self) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], Marked<'_>)> + '_ {
+    pub(crate) fn marked_tiles(
+        &self,
+    ) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], Marked<'_>)> + '_ {
         self.tiles().filter_map(move |(tile, t)| {
             let marked = self.slot(tile).map(|s| self.marked_in(s))?;
             (!marked.is_empty()).then_some((tile, t, marked))
@@ -437,13 +447,13 @@ impl<T: Copy> TileGrid<T> {
 
     /// The tile at `tile`, if allocated.
     #[inline]
-    pub fn tile(&self, tile: TileIndex) -> Option<&[T; TILE_CELLS]> {
+    pub(crate) fn tile(&self, tile: TileIndex) -> Option<&[T; TILE_CELLS]> {
         let slot = self.slot(tile)?;
         self.slots[slot].as_deref()
     }
 
     /// The tile at `tile` with what was marked written in it, if allocated.
-    pub fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], Marked<'_>)> {
+    pub(crate) fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], Marked<'_>)> {
         let slot = self.slot(tile)?;
         let t = self.slots[slot].as_deref()?;
         Some((t, self.marked_in(slot)))
@@ -453,7 +463,7 @@ impl<T: Copy> TileGrid<T> {
     /// empty again but keeps its memory for the next use (the per-scan scratch of [`crate::Map::integrate`]).
     /// For a grid written only where it marked ([`TileGrid::mark_rows`], [`TileGrid::slot_tile_and_marks_mut`]),
     /// so the cost is that of what was written, not of the tiles' size.
-    pub fn recycle_marked(&mut self) {
+    pub(crate) fn recycle_marked(&mut self) {
         let fill = self.fill;
         for (slot, t) in self.slots.iter_mut().enumerate() {
             let Some(mut t) = t.take() else {
@@ -476,7 +486,7 @@ impl<T: Copy> TileGrid<T> {
 
     /// The cell region spanned by the allocated tiles, or `None` if there are none.
     #[cfg(test)]
-    pub fn tile_region(&self) -> Option<CellRegion> {
+    pub(crate) fn tile_region(&self) -> Option<CellRegion> {
         let mut it = self.tiles().map(|(t, _)| t);
         let first = it.next()?;
         let (mut lo, mut hi) = (first, first);
@@ -499,202 +509,4 @@ impl<T: Copy> TileGrid<T> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_tile_outside_the_grid_is_refused_not_a_panic() {
-        let mut g = TileGrid::new(0u32);
-        for tile in [
-            TileIndex { ti: 1 << 25, tj: 0 },
-            TileIndex { ti: 0, tj: i32::MIN },
-        ] {
-            assert!(!tile.is_representable());
-            let boxed = Box::new([0u32; TILE_CELLS]);
-            assert_eq!(
-                g.insert_tile(tile, boxed, u64::MAX),
-                Err(CapacityExceeded {
-                    requested_bytes: u64::MAX
-                })
-            );
-            assert!(g.tile_or_insert(tile, u64::MAX).is_err());
-        }
-        assert_eq!(g.num_tiles(), 0);
-    }
-
-    #[test]
-    fn cells_read_back_and_unwritten_cells_are_absent() {
-        let mut g = TileGrid::new(0u32);
-        *g.get_or_insert(CellIndex::new(3, 4), u64::MAX).expect("room") = 7;
-        *g.get_or_insert(CellIndex::new(-300, 900), u64::MAX)
-            .expect("room") = 9;
-        *g.get_or_insert(CellIndex::new(5000, -5000), u64::MAX)
-            .expect("room") = 11;
-        assert_eq!(g.get(CellIndex::new(3, 4)), Some(&7));
-        assert_eq!(g.get(CellIndex::new(-300, 900)), Some(&9));
-        assert_eq!(g.get(CellIndex::new(5000, -5000)), Some(&11));
-        assert_eq!(g.get(CellIndex::new(4, 4)), Some(&0));
-        assert_eq!(g.get(CellIndex::new(100_000, 4)), None);
-        assert_eq!(g.num_tiles(), 3);
-    }
-
-    #[test]
-    fn memory_is_proportional_to_tiles_and_capped() {
-        let mut g = TileGrid::new(0.0f32);
-        let before = g.memory_bytes();
-        *g.get_or_insert(CellIndex::new(0, 0), u64::MAX).expect("room") = 1.0;
-        assert!(g.memory_bytes() >= before + TileGrid::<f32>::tile_bytes() as u64);
-        let limit = g.memory_bytes() + 10;
-        let err = g
-            .get_or_insert(CellIndex::new(1000, 0), limit)
-            .expect_err("over the limit");
-        assert!(err.requested_bytes > limit);
-        // A far-away cell would need a huge tile index: refused, not allocated.
-        let err = g
-            .get_or_insert(CellIndex::new(i32::MAX, i32::MIN), 1 << 30)
-            .expect_err("index too large");
-        assert!(err.requested_bytes > 1 << 30);
-    }
-
-    #[test]
-    fn recycled_tiles_read_as_new_and_keep_their_memory() {
-        let mut g = TileGrid::new(0u16);
-        let slot = g
-            .slot_or_insert(TileIndex::of(CellIndex::new(1, 1)), u64::MAX)
-            .expect("room");
-        let (t, marks) = g.slot_tile_and_marks_mut(slot);
-        t[offset_in_tile(CellIndex::new(1, 1))] = 5;
-        marks.mark_if(offset_in_tile(CellIndex::new(1, 1)), true);
-        let bytes = g.memory_bytes();
-        g.recycle_marked();
-        assert_eq!(g.num_tiles(), 0);
-        assert_eq!(g.get(CellIndex::new(1, 1)), None);
-        assert_eq!(g.memory_bytes(), bytes);
-        // Reuse from the pool needs no room beyond what is held.
-        assert_eq!(*g.get_or_insert(CellIndex::new(1, 1), bytes).expect("pooled"), 0);
-    }
-
-    #[test]
-    fn marked_cells_are_the_cells_recycled_and_survive_growth() {
-        let mut g = TileGrid::new(0u8);
-        let tile = TileIndex::of(CellIndex::new(3, 5));
-        let at = offset_in_tile(CellIndex::new(3, 5));
-        let slot = g.slot_or_insert(tile, u64::MAX).expect("room");
-        let (t, marks) = g.slot_tile_and_marks_mut(slot);
-        t[at] = 1;
-        marks.mark_if(at, true);
-        // A write that is not the cell's first is not marked again.
-        marks.mark_if(at, false);
-        let room = g.memory_bytes();
-        // Growing the index far away moves the tile and its marks together.
-        let far = g
-            .slot_or_insert(TileIndex { ti: -40, tj: 30 }, u64::MAX)
-            .expect("room");
-        let (t, marks) = g.slot_tile_and_marks_mut(far);
-        t[0] = 2;
-        marks.mark_if(0, true);
-        assert!(
-            g.memory_bytes() >= room + (TILE_CELLS * size_of::<u16>()) as u64,
-            "marks are counted"
-        );
-        let marked: Vec<_> = g.marked_tiles().map(|(t, _, m)| (t, visited(m))).collect();
-        assert_eq!(
-            marked,
-            vec![(tile, vec![at]), (TileIndex { ti: -40, tj: 30 }, vec![0])]
-        );
-        g.recycle_marked();
-        assert_eq!(g.marked_tiles().count(), 0);
-        // The pooled tiles read as new.
-        let slot = g.slot_or_insert(tile, u64::MAX).expect("pooled");
-        assert_eq!(g.slot_tile_mut(slot)[offset_in_tile(CellIndex::new(3, 5))], 0);
-        let other = g
-            .slot_or_insert(TileIndex { ti: 9, tj: 9 }, u64::MAX)
-            .expect("pooled");
-        assert!(g.slot_tile_mut(other).iter().all(|&v| v == 0));
-    }
-
-    fn visited(marked: Marked<'_>) -> Vec<usize> {
-        let mut cells = Vec::new();
-        marked.for_each(|k| cells.push(k));
-        cells
-    }
-
-    #[test]
-    fn marked_rows_and_cells_are_visited_once_and_recycled() {
-        let mut g = TileGrid::new(0u8);
-        let tile = TileIndex { ti: 0, tj: 0 };
-        let slot = g.slot_or_insert(tile, u64::MAX).expect("room");
-        let (t, marks) = g.slot_tile_and_marks_mut(slot);
-        // A cell in row 1 (also marked as a row below) and one in row 3.
-        for k in [TILE_SIZE + 5, 3 * TILE_SIZE + 2] {
-            t[k] = 1;
-            marks.mark_if(k, true);
-        }
-        g.slot_tile_mut(slot)[TILE_SIZE + 9] = 2;
-        g.mark_rows(slot, 1 << 1);
-        let (_, _, marked) = g.marked_tiles().next().expect("marked");
-        assert_eq!(marked.num_cells(), TILE_SIZE + 2);
-        let cells = visited(marked);
-        let expected: Vec<usize> = (TILE_SIZE..2 * TILE_SIZE).chain([3 * TILE_SIZE + 2]).collect();
-        assert_eq!(
-            cells, expected,
-            "the row's cells, then the marked cell outside it"
-        );
-        g.recycle_marked();
-        let slot = g.slot_or_insert(tile, u64::MAX).expect("pooled");
-        assert!(g.slot_tile_mut(slot).iter().all(|&v| v == 0));
-    }
-
-    #[test]
-    fn rows_are_listed_in_order() {
-        let mut seen = Vec::new();
-        for_each_row((1 << 63) | (1 << 7) | 1, |r| seen.push(r));
-        assert_eq!(seen, vec![0, 7, 63]);
-    }
-
-    #[test]
-    fn tiles_asked_for_in_order_are_lent_together_and_others_left_out() {
-        let mut g = TileGrid::new(0u8);
-        let at = |ti, tj| TileIndex { ti, tj };
-        for t in [at(0, 0), at(3, 0), at(1, 2), at(-2, 5)] {
-            g.tile_or_insert(t, u64::MAX).expect("room")[0] = 1;
-        }
-        let asked = [at(3, 0), at(2, 1), at(1, 2), at(0, 0), at(-2, 5), at(99, 99)];
-        // (0, 0) comes after (1, 2) in the grid's order: out of order, so left out, as are the unallocated.
-        let lent = g.tiles_mut_in_order(asked);
-        let got: Vec<TileIndex> = lent.iter().map(|(t, _)| *t).collect();
-        assert_eq!(got, vec![at(3, 0), at(1, 2), at(-2, 5)]);
-        for (_, t) in lent {
-            t[1] = 7;
-        }
-        assert_eq!(g.get(CellIndex::new(3 * 64 + 1, 0)), Some(&7));
-        assert_eq!(g.get(CellIndex::new(1, 0)), Some(&0));
-    }
-
-    #[test]
-    fn tiles_iterate_in_a_fixed_order() {
-        let mut g = TileGrid::new(0u8);
-        for c in [
-            CellIndex::new(200, 0),
-            CellIndex::new(0, 0),
-            CellIndex::new(0, 200),
-        ] {
-            *g.get_or_insert(c, u64::MAX).expect("room") = 1;
-        }
-        let order: Vec<_> = g.tiles().map(|(t, _)| (t.tj, t.ti)).collect();
-        let mut sorted = order.clone();
-        sorted.sort();
-        assert_eq!(order, sorted);
-        let region = g.tile_region().expect("tiles");
-        assert_eq!(region.min, CellIndex::new(0, 0));
-        assert_eq!(region.max(), CellIndex::new(255, 255));
-    }
-
-    #[test]
-    fn offsets_inside_a_tile_are_row_major() {
-        assert_eq!(offset_in_tile(CellIndex::new(0, 0)), 0);
-        assert_eq!(offset_in_tile(CellIndex::new(1, 0)), 1);
-        assert_eq!(offset_in_tile(CellIndex::new(0, 1)), TILE_SIZE);
-        assert_eq!(offset_in_tile(CellIndex::new(-1, -1)), TILE_CELLS - 1);
-    }
-}
+mod tests;

@@ -214,7 +214,7 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
 }
 
 /// The byte offset of the value at `path` in a parsed TOML document, or of its nearest existing parent.
-pub fn value_offset(doc: &DeTable<'_>, path: &[KeySeg<'_>]) -> Option<usize> {
+pub(super) fn value_offset(doc: &DeTable<'_>, path: &[KeySeg<'_>]) -> Option<usize> {
     let mut best = None;
     let mut table = Some(doc);
     let mut array: Option<&[toml::Spanned<DeValue<'_>>]> = None;

@@ -17,7 +17,7 @@ use crate::error::{EvalError, Result};
 use crate::lock::LockFile;
 
 /// The name of the file that marks a folder as a sweep's.
-pub const SWEEP_MARKER: &str = ".oeg-sweep";
+pub(crate) const SWEEP_MARKER: &str = ".oeg-sweep";
 
 /// Every entry a sweep folder of an earlier version (before [`SWEEP_MARKER`]) may hold: what `oeg sweep run`,
 /// `merge` and `report` write.

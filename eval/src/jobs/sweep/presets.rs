@@ -14,7 +14,7 @@ use oeg::{MapPreset, ModelOptions};
 use toml::Value;
 
 /// The axis key that selects presets.
-pub const PRESET_KEY: &str = "preset";
+pub(crate) const PRESET_KEY: &str = "preset";
 
 /// Every model option that is an update rule, by its `--set` key, with `map.preset`: the keys a preset sets.
 fn rule_keys() -> Vec<String> {
@@ -51,7 +51,7 @@ fn as_written(value: Value) -> Value {
 
 /// A built-in preset's overrides in order: `(key, Some(value))` sets, `(key, None)` removes (the default).
 /// `None` for a name that is no preset.
-pub fn built_in(name: &str) -> Option<Vec<(String, Option<Value>)>> {
+pub(crate) fn built_in(name: &str) -> Option<Vec<(String, Option<Value>)>> {
     let preset: MapPreset = name.parse().ok()?;
     let mut o: Vec<(String, Option<Value>)> = rule_keys().into_iter().map(|k| (k, None)).collect();
     match preset {

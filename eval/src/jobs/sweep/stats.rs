@@ -3,7 +3,7 @@
 
 /// A summary of a sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Summary {
+pub(crate) struct Summary {
     /// Sample size.
     pub n: usize,
     /// Mean (or rate).
@@ -32,7 +32,7 @@ impl Summary {
 /// The 97.5 % quantile of Student's t with `df` degrees of freedom: the half-width factor of a two-sided
 /// 95 % interval. Exact table values to 6 digits up to 30 degrees of freedom, the Cornish-Fisher expansion
 /// beyond (error below 1e-5 there).
-pub fn t_975(df: usize) -> f64 {
+pub(crate) fn t_975(df: usize) -> f64 {
     const TABLE: [f64; 30] = [
         12.706205, 4.302653, 3.182446, 2.776445, 2.570582, 2.446912, 2.364624, 2.306004, 2.262157, 2.228139,
         2.200985, 2.178813, 2.160369, 2.144787, 2.131450, 2.119905, 2.109816, 2.100922, 2.093024, 2.085963,
@@ -53,7 +53,7 @@ pub fn t_975(df: usize) -> f64 {
 }
 
 /// Mean and Student's t 95 % interval of the finite values of `xs` (non-finite ones are left out).
-pub fn mean_interval(xs: &[f64]) -> Summary {
+pub(crate) fn mean_interval(xs: &[f64]) -> Summary {
     let v: Vec<f64> = xs.iter().copied().filter(|x| x.is_finite()).collect();
     let n = v.len();
     if n == 0 {
@@ -76,7 +76,7 @@ pub fn mean_interval(xs: &[f64]) -> Summary {
 }
 
 /// A rate `k / n` with Wilson's 95 % score interval (sensible at 0 and 1, unlike the normal interval).
-pub fn rate_interval(k: usize, n: usize) -> Summary {
+pub(crate) fn rate_interval(k: usize, n: usize) -> Summary {
     if n == 0 {
         return Summary::without_interval(0, f64::NAN);
     }

@@ -40,7 +40,7 @@ fn check_count(c: Count, at: &[KeySeg<'_>], fail: Fail<'_>) -> Result<(), EvalEr
 }
 
 /// The most obstacles or people of one kind.
-pub const MAX_PER_KIND: u32 = 100;
+pub(super) const MAX_PER_KIND: u32 = 100;
 
 impl GenerateSpec {
     /// Checks every value; `fail` builds an error at a key path inside `[generate]`.

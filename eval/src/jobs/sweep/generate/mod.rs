@@ -16,4 +16,4 @@ mod spec;
 #[cfg(test)]
 mod tests;
 
-pub use spec::*;
+pub(crate) use spec::*;

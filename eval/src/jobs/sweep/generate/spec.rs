@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use serde::Deserialize;
 
 /// Uniform `[min, max]`.
-pub type Range = [f64; 2];
+pub(crate) type Range = [f64; 2];
 /// Uniform integer `[min, max]`.
-pub type Count = [u32; 2];
+pub(crate) type Count = [u32; 2];
 
 /// The `[generate]` table.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
