@@ -197,3 +197,33 @@ fn every_doubt_has_its_own_name() {
         );
     }
 }
+
+/// The layers of classes and doubts, made in one pass, say of every cell what `traversability` and `doubt`
+/// say of it one at a time: drivable, imprecise, frontier and never observed cells alike.
+#[test]
+fn the_one_pass_layers_agree_with_each_cell_s_decision() {
+    let mut map = robust_map();
+    level_ground(&mut map, patch(12), 0.005, 3);
+    level_ground(&mut map, (14..20).map(|i| (i, 5)), 0.03, 3);
+    let region = oeg::CellRegion {
+        min: CellIndex::new(-3, -3),
+        num_x: 27,
+        num_y: 19,
+    };
+    let (classes, doubts) = map
+        .traversability_and_doubt_layers(region, &RobotProfile::default(), rule())
+        .expect("small layers");
+    let cells: Vec<_> = region.cells().collect();
+    assert_eq!(
+        (classes.values.len(), doubts.values.len()),
+        (cells.len(), cells.len())
+    );
+    let mut seen = std::collections::BTreeSet::new();
+    for (k, cell) in cells.into_iter().enumerate() {
+        let expected = decide(&map, cell.i, cell.j);
+        assert_eq!((classes.values[k], doubts.values[k]), expected, "cell {cell:?}");
+        seen.insert(format!("{expected:?}"));
+    }
+    // The region holds decided, undecided and never observed cells.
+    assert!(seen.len() >= 3, "{seen:?}");
+}

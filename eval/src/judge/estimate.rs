@@ -214,16 +214,16 @@ impl Estimate {
         };
         // The occupancy is NaN exactly where no ray reached the cell.
         let occupancy = layer(LayerKind::OccupancyProbability)?;
-        let decisions = map.traversability_layer(region, &truth.profile, rule)?.values;
+        let (decisions, doubts) = map.traversability_and_doubt_layers(region, &truth.profile, rule)?;
+        let decisions = decisions.values;
         // Only the contact rule leaves cells undecided for a reason; the others' doubts are all `None`.
         let says_why = matches!(rule, TraversabilityRule::Contact { .. });
-        let doubts = region
-            .cells()
+        let doubts = doubts
+            .values
+            .into_iter()
             .zip(&decisions)
-            .map(|(cell, d)| {
-                (says_why && matches!(d, Traversability::Uncertain | Traversability::Unknown))
-                    .then(|| map.doubt(cell, &truth.profile, rule))
-                    .flatten()
+            .map(|(doubt, d)| {
+                doubt.filter(|_| says_why && matches!(d, Traversability::Uncertain | Traversability::Unknown))
             })
             .collect();
         Ok(Self {

@@ -424,6 +424,38 @@ impl Map {
         })
     }
 
+    /// [`Map::traversability_layer`] and, from the same decision of each cell, why it is undecided
+    /// ([`Map::doubt`]): one pass where asking [`Map::doubt`] of each undecided cell after the layer would
+    /// decide it twice.
+    ///
+    /// # Errors
+    /// [`crate::Error::MemoryLimit`] if the two rasters would take the map past its memory limit.
+    pub fn traversability_and_doubt_layers(
+        &self,
+        region: CellRegion,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> Result<(Raster<Traversability>, Raster<Option<Doubt>>)> {
+        let n = self.check_raster_size(&region, 1 + size_of::<Option<Doubt>>() as u64)?;
+        let (mut classes, mut doubts) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for cell in region.cells() {
+            let d = self.decision(cell, profile, rule);
+            classes.push(d.class);
+            doubts.push(d.doubt);
+        }
+        let window = crate::GridWindow::new(*self.geometry(), region);
+        Ok((
+            Raster {
+                window,
+                values: classes,
+            },
+            Raster {
+                window,
+                values: doubts,
+            },
+        ))
+    }
+
     /// Counts of each traversability class over the observed cells.
     pub fn traversability_counts(
         &self,
