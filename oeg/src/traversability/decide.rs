@@ -1,15 +1,12 @@
 //! The part of the traversability decision that reads the map: a cell's surface, the grounds around it and
 //! the structure over it, judged by the pure rules of [`super::rules`].
 
-use serde::{Deserialize, Serialize};
-
 use super::rules::{
     Doubt, RobotProfile, Traversability, TraversabilityRule, ceiling_decision, contact_decision,
     footprint_decision, more_restrictive, step_decision,
 };
-use crate::error::Result;
-use crate::geometry::{CellIndex, CellRegion};
-use crate::map::{Map, Raster};
+use crate::geometry::CellIndex;
+use crate::map::Map;
 use crate::model::{Elevation, Level, ceiling_confirmed, surface_level};
 use crate::storage::{TileIndex, offset_in_tile};
 
@@ -38,7 +35,12 @@ impl Map {
     }
 
     /// [`Map::traversability`] with the reason when the class leaves the cell undecided ([`Map::doubt`]).
-    fn decision(&self, cell: CellIndex, profile: &RobotProfile, rule: TraversabilityRule) -> Decision {
+    pub(super) fn decision(
+        &self,
+        cell: CellIndex,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> Decision {
         let d = self.cell_decision(cell, profile, rule);
         // The frontier: a wheel on a drivable cell may come from any cell within the contact distance, and one
         // the map never observed may hold a step. The cell is not known to be drivable until its whole contact
@@ -404,76 +406,6 @@ impl Map {
         }
         out
     }
-
-    /// A dense raster of [`Map::traversability`] over `region`.
-    ///
-    /// # Errors
-    /// [`crate::Error::MemoryLimit`] if the raster would exceed the map's memory limit.
-    pub fn traversability_layer(
-        &self,
-        region: CellRegion,
-        profile: &RobotProfile,
-        rule: TraversabilityRule,
-    ) -> Result<Raster<Traversability>> {
-        let n = self.check_raster_size(&region, 1)?;
-        let mut values = Vec::with_capacity(n);
-        values.extend(region.cells().map(|c| self.traversability(c, profile, rule)));
-        Ok(Raster {
-            window: crate::GridWindow::new(*self.geometry(), region),
-            values,
-        })
-    }
-
-    /// [`Map::traversability_layer`] and, from the same decision of each cell, why it is undecided
-    /// ([`Map::doubt`]): one pass where asking [`Map::doubt`] of each undecided cell after the layer would
-    /// decide it twice.
-    ///
-    /// # Errors
-    /// [`crate::Error::MemoryLimit`] if the two rasters would take the map past its memory limit.
-    pub fn traversability_and_doubt_layers(
-        &self,
-        region: CellRegion,
-        profile: &RobotProfile,
-        rule: TraversabilityRule,
-    ) -> Result<(Raster<Traversability>, Raster<Option<Doubt>>)> {
-        let n = self.check_raster_size(&region, 1 + size_of::<Option<Doubt>>() as u64)?;
-        let (mut classes, mut doubts) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        for cell in region.cells() {
-            let d = self.decision(cell, profile, rule);
-            classes.push(d.class);
-            doubts.push(d.doubt);
-        }
-        let window = crate::GridWindow::new(*self.geometry(), region);
-        Ok((
-            Raster {
-                window,
-                values: classes,
-            },
-            Raster {
-                window,
-                values: doubts,
-            },
-        ))
-    }
-
-    /// Counts of each traversability class over the observed cells.
-    pub fn traversability_counts(
-        &self,
-        profile: &RobotProfile,
-        rule: TraversabilityRule,
-    ) -> TraversabilityCounts {
-        let mut counts = TraversabilityCounts::default();
-        for (c, _) in self.observed_cells() {
-            match self.traversability(c, profile, rule) {
-                Traversability::Unknown => {}
-                Traversability::Free => counts.num_free += 1,
-                Traversability::Traversable => counts.num_traversable += 1,
-                Traversability::Blocked => counts.num_blocked += 1,
-                Traversability::Uncertain => counts.num_uncertain += 1,
-            }
-        }
-        counts
-    }
 }
 
 /// The inverse-variance weighted mean of elevation estimates: a level (the ground's, the top's) and its variance.
@@ -501,9 +433,9 @@ impl WeightedMean {
 
 /// A cell's class and, when it is left undecided, why.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Decision {
-    class: Traversability,
-    doubt: Option<Doubt>,
+pub(super) struct Decision {
+    pub(super) class: Traversability,
+    pub(super) doubt: Option<Doubt>,
 }
 
 impl Decision {
@@ -549,25 +481,5 @@ fn ceiling_doubt(clearance_m: f32, band_m: f32, profile: &RobotProfile, confirme
         Doubt::StructureUnconfirmed
     } else {
         Doubt::StructureBand
-    }
-}
-
-/// Number of observed cells in each traversability class.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct TraversabilityCounts {
-    /// Observed, not occupied.
-    pub num_free: u64,
-    /// Occupied, low enough.
-    pub num_traversable: u64,
-    /// Occupied, too high.
-    pub num_blocked: u64,
-    /// Occupied, too close to a threshold to tell.
-    pub num_uncertain: u64,
-}
-
-impl TraversabilityCounts {
-    /// Occupied cells: traversable, blocked and uncertain.
-    pub fn num_occupied(&self) -> u64 {
-        self.num_traversable + self.num_blocked + self.num_uncertain
     }
 }

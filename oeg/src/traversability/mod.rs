@@ -1,9 +1,11 @@
 //! The traversability decision, in one place: the robot ([`RobotProfile`]), the classes ([`Traversability`]),
 //! the step rules ([`TraversabilityRule`]) and the pure decision functions in `rules`, and the part that reads
-//! the map ([`crate::Map::traversability`], [`crate::Map::traversability_layer`]) in `decide`.
+//! the map ([`crate::Map::traversability`]) in `decide`, and its layers over a region
+//! ([`crate::Map::traversability_layer`]) in `layers`.
 
 mod decide;
+mod layers;
 mod rules;
 
-pub use decide::TraversabilityCounts;
+pub use layers::TraversabilityCounts;
 pub use rules::*;
