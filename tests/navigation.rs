@@ -113,9 +113,9 @@ fn a_curb_the_sensors_cannot_see_is_a_contact_with_its_time_and_place() {
     assert!(nav["contacts"].as_u64() >= Some(1));
     assert_eq!(nav["closest_approach_m"], 0.0);
     let csv = std::fs::read_to_string(out.join("events.csv")).expect("events");
-    assert!(
-        csv.starts_with("time_s,kind,x_m,y_m,yaw_deg,obstacle,distance_m,observable,closed_by,message\n")
-    );
+    assert!(csv.starts_with(
+        "time_s,kind,x_m,y_m,yaw_deg,obstacle,distance_m,observable,mapped_as,closed_by,message\n"
+    ));
     assert!(csv.contains(",contact,") && csv.contains("curb 6 cm"), "{csv}");
     // The curb is below every beam the tilted lasers cast before the robot reached it: a blind contact.
     assert_eq!(contact["observable"], false, "{contact:#}");
@@ -124,6 +124,15 @@ fn a_curb_the_sensors_cannot_see_is_a_contact_with_its_time_and_place() {
     let metrics = json(&out.join("metrics.json"));
     assert_eq!(metrics["nav_contacts_blind"], nav["contacts"]);
     assert_eq!(metrics["nav_contacts_observable"], 0);
+    // What the map called the curb when the robot entered it: never blocked, since no beam saw it. Every
+    // contact has one cause, and the metrics say the same as the summary.
+    assert_ne!(contact["mapped_as"], "blocked", "{contact:#}");
+    let by_cause = ["blocked", "undecided", "drivable"].map(|c| {
+        let n = &nav[format!("contacts_mapped_{c}")];
+        assert_eq!(metrics[format!("nav_contacts_mapped_{c}")], *n, "{c}");
+        n.as_u64().expect("a count")
+    });
+    assert_eq!(Some(by_cause.iter().sum::<u64>()), nav["contacts"].as_u64());
     let images: Vec<_> = std::fs::read_dir(out.join("events"))
         .expect("event images")
         .flatten()

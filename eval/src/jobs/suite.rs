@@ -365,9 +365,9 @@ fn run_one(
             plan_unsafe_cells: Some(r.metrics.plan_unsafe_cells),
             unsafe_observable_cells: Some(r.metrics.unsafe_observable_cells),
             blind_cells: Some(r.metrics.blind_cells),
-            nav_reached: r.metrics.nav_reached,
-            nav_contacts: r.metrics.nav_contacts,
-            nav_contacts_observable: r.metrics.nav_contacts_observable,
+            nav_reached: r.metrics.nav.reached,
+            nav_contacts: r.metrics.nav.contacts,
+            nav_contacts_observable: r.metrics.nav.contacts_observable,
             wall_time_s: start.elapsed().as_secs_f64(),
             problems: r
                 .failed

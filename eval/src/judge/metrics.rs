@@ -7,6 +7,7 @@ use serde::Serialize;
 use sim::truth::TruthRaster;
 
 use crate::judge::estimate::Estimate;
+pub use crate::judge::navigation_metrics::NavMetrics;
 use crate::judge::verdict::{TruthClass, Verdict, Verdicts};
 
 /// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
@@ -111,29 +112,9 @@ pub struct Metrics {
     /// `plan_length_m / truth_plan_length_m`: the detour the map's decisions cost (1 = none; null when either
     /// path is missing).
     pub plan_length_ratio: f64,
-    /// Closed-loop runs (`[navigation]`; null otherwise): whether the robot reached the goal.
-    pub nav_reached: Option<bool>,
-    /// Seconds the robot navigated.
-    pub nav_time_s: Option<f64>,
-    /// Length truly driven over the truth's shortest path (null unless reached).
-    pub nav_length_ratio: Option<f64>,
-    /// Plans asked for.
-    pub nav_replans: Option<u64>,
-    /// Replanning times with no path on the map.
-    pub nav_no_path_replans: Option<u64>,
-    /// Planner calls that failed (an external planner's crash, time-out or bad path).
-    pub nav_planner_failures: Option<u64>,
-    /// Times the robot's footprint entered truly blocked cells. The number that must be zero.
-    pub nav_contacts: Option<u64>,
-    /// Of `nav_contacts`, those with a cell a ray could have told about before the contact: the map's or the
-    /// navigator's to avoid.
-    pub nav_contacts_observable: Option<u64>,
-    /// Of `nav_contacts`, the blind ones: no ray could have told about any cell the footprint entered.
-    pub nav_contacts_blind: Option<u64>,
-    /// The smallest distance from the footprint to a truly blocked cell, metres.
-    pub nav_closest_approach_m: Option<f64>,
-    /// Whether the robot ended stuck.
-    pub nav_stuck: Option<bool>,
+    /// The closed loop's figures (`nav_*`; null for a run without `[navigation]`).
+    #[serde(flatten)]
+    pub nav: NavMetrics,
     /// Whether every expectation of the scenario holds.
     pub expectations_passed: bool,
     /// Number of expectations that failed.
@@ -267,17 +248,7 @@ pub fn compute(
         truth_plan_found: false,
         truth_plan_length_m: f64::NAN,
         plan_length_ratio: f64::NAN,
-        nav_reached: None,
-        nav_time_s: None,
-        nav_length_ratio: None,
-        nav_replans: None,
-        nav_no_path_replans: None,
-        nav_planner_failures: None,
-        nav_contacts: None,
-        nav_contacts_observable: None,
-        nav_contacts_blind: None,
-        nav_closest_approach_m: None,
-        nav_stuck: None,
+        nav: NavMetrics::default(),
         expectations_passed: true,
         num_expectations_failed: 0,
     }
@@ -392,12 +363,7 @@ pub(crate) fn test_metrics() -> Metrics {
         plan_length_m: 10.0,
         truth_plan_length_m: 10.0,
         plan_length_ratio: 1.0,
-        nav_reached: None,
-        nav_time_s: None,
-        nav_contacts: None,
-        nav_contacts_observable: None,
-        nav_contacts_blind: None,
-        nav_stuck: None,
+        nav: NavMetrics::default(),
         ..compute_empty()
     }
 }
@@ -447,17 +413,7 @@ fn compute_empty() -> Metrics {
         truth_plan_found: false,
         truth_plan_length_m: 0.0,
         plan_length_ratio: 0.0,
-        nav_reached: Some(false),
-        nav_time_s: Some(0.0),
-        nav_length_ratio: Some(0.0),
-        nav_replans: Some(0),
-        nav_no_path_replans: Some(0),
-        nav_planner_failures: Some(0),
-        nav_contacts: Some(0),
-        nav_contacts_observable: Some(0),
-        nav_contacts_blind: Some(0),
-        nav_closest_approach_m: Some(0.0),
-        nav_stuck: Some(false),
+        nav: NavMetrics::ZERO,
         expectations_passed: true,
         num_expectations_failed: 0,
     }

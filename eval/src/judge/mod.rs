@@ -11,6 +11,7 @@
 pub mod estimate;
 pub(crate) mod ghosts;
 pub mod metrics;
+pub mod navigation_metrics;
 pub(crate) mod obstacles;
 pub(crate) mod outcome;
 pub mod plan_check;
@@ -26,6 +27,7 @@ use crate::error::Result;
 use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
 use metrics::{FailedExpectation, Metrics};
+use navigation_metrics::NavMetrics;
 
 /// A map judged against the truth: metrics (with the planner check and the expectations), per-obstacle
 /// decisions.
@@ -139,6 +141,8 @@ pub struct NavigationFigures {
     pub contacts: u64,
     /// Of them, contacts with a cell a ray could have told about before.
     pub contacts_observable: u64,
+    /// Of them, by what the robot's map called the cells entered: blocked, undecided, drivable.
+    pub contacts_mapped: [u64; 3],
     /// Closest approach to a truly blocked cell, metres.
     pub closest_approach_m: Option<f64>,
     /// Whether the robot ended stuck.
@@ -147,17 +151,7 @@ pub struct NavigationFigures {
 
 /// Records a closed-loop run's figures in the metrics (the `nav_*` keys).
 pub fn record_navigation(metrics: &mut Metrics, n: &NavigationFigures) {
-    metrics.nav_reached = Some(n.reached);
-    metrics.nav_time_s = Some(n.time_s);
-    metrics.nav_length_ratio = n.length_ratio;
-    metrics.nav_replans = Some(n.replans);
-    metrics.nav_no_path_replans = Some(n.no_path_replans);
-    metrics.nav_planner_failures = Some(n.planner_failures);
-    metrics.nav_contacts = Some(n.contacts);
-    metrics.nav_contacts_observable = Some(n.contacts_observable);
-    metrics.nav_contacts_blind = Some(n.contacts - n.contacts_observable);
-    metrics.nav_closest_approach_m = n.closest_approach_m;
-    metrics.nav_stuck = Some(n.stuck);
+    metrics.nav = NavMetrics::of(n);
 }
 
 /// Fills SA, DA and AA from their counts (NaN, written as null, where undefined).

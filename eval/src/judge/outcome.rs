@@ -36,10 +36,10 @@ impl Safety {
 
     /// Of one run's metrics.
     pub fn of(m: &Metrics) -> Self {
-        let contacts = m.nav_contacts.unwrap_or(0);
+        let contacts = m.nav.contacts.unwrap_or(0);
         if m.plan_unsafe_cells > 0 || contacts > 0 {
             Self::Unsafe
-        } else if !m.plan_found || m.nav_reached == Some(false) {
+        } else if !m.plan_found || m.nav.reached == Some(false) {
             Self::NoPath
         } else {
             Self::Safe
@@ -108,11 +108,11 @@ impl Outcome {
     /// The closed-loop drive, in words, when the run had one: `reached the goal in 41.2 s, no contact`.
     pub fn drive_text(&self) -> Option<String> {
         let m = &self.metrics;
-        let reached = m.nav_reached?;
-        let contacts = m.nav_contacts.unwrap_or(0);
+        let reached = m.nav.reached?;
+        let contacts = m.nav.contacts.unwrap_or(0);
         let end = if reached {
             "reached the goal"
-        } else if m.nav_stuck == Some(true) {
+        } else if m.nav.stuck == Some(true) {
             "did NOT reach the goal (stuck)"
         } else {
             "did NOT reach the goal"
@@ -124,7 +124,7 @@ impl Outcome {
         };
         Some(format!(
             "{end} in {:.1} s, {touch}",
-            m.nav_time_s.unwrap_or(f64::NAN)
+            m.nav.time_s.unwrap_or(f64::NAN)
         ))
     }
 
@@ -212,8 +212,8 @@ mod tests {
     #[test]
     fn a_contact_makes_a_closed_loop_unsafe_and_a_failed_bound_is_named() {
         let mut m = test_metrics();
-        m.nav_reached = Some(true);
-        m.nav_contacts = Some(1);
+        m.nav.reached = Some(true);
+        m.nav.contacts = Some(1);
         m.plan_length_ratio = 1.032;
         let o = Outcome::new("robust", &m, &bound(1.02));
         assert_eq!(o.safety, Safety::Unsafe);
@@ -230,8 +230,8 @@ mod tests {
         m.plan_found = false;
         assert_eq!(Safety::of(&m), Safety::NoPath);
         let mut m = test_metrics();
-        m.nav_reached = Some(false);
-        m.nav_contacts = Some(0);
+        m.nav.reached = Some(false);
+        m.nav.contacts = Some(0);
         assert_eq!(Safety::of(&m), Safety::NoPath);
         assert_eq!(Safety::of(&test_metrics()), Safety::Safe);
     }

@@ -340,6 +340,7 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
                 obstacle: watch.obstacle_of(cell),
                 distance_m: Some(round(d)),
                 observable: None,
+                mapped_as: String::new(),
                 closed_by: String::new(),
                 message: "the closest the footprint came to a truly blocked cell".into(),
             });
@@ -359,6 +360,12 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
                 .count() as u64
         };
         let (contacts, contacts_observable) = (count_contacts(None), count_contacts(Some(true)));
+        let count_mapped = |classes: &[&str]| {
+            log.summary_events
+                .iter()
+                .filter(|e| e.kind == EventKind::Contact && classes.contains(&e.mapped_as.as_str()))
+                .count() as u64
+        };
         let summary = NavigationSummary {
             scenario: s.name.clone(),
             seed: s.seed,
@@ -385,6 +392,9 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             contacts,
             contacts_observable,
             contacts_blind: contacts - contacts_observable,
+            contacts_mapped_blocked: count_mapped(&["blocked"]),
+            contacts_mapped_undecided: count_mapped(&["uncertain", "unknown"]),
+            contacts_mapped_drivable: count_mapped(&["traversable", "free"]),
             closest_approach_m: watch.closest.map(|c| round(c.0)),
             footprint_m: [
                 round(inputs.footprint.min_x_m),

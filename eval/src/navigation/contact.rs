@@ -68,6 +68,11 @@ impl<'a> ContactWatch<'a> {
         }
     }
 
+    /// The step rule of the map the robot navigates by (the scenario's).
+    pub(crate) fn rule(&self) -> oeg::TraversabilityRule {
+        self.scenario.map.traversability
+    }
+
     /// The truth the watch judges by.
     pub(crate) fn truth(&self) -> &TruthRaster {
         self.truth

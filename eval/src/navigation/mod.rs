@@ -11,10 +11,11 @@
 mod closed_loop;
 pub(crate) mod contact;
 pub(crate) mod controller;
+mod diagnosis;
 pub mod external;
 pub(crate) mod record;
 
-use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability, UncertainCells, UnknownCells};
+use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability};
 
 use crate::judge::verdict::TruthClass;
 use sim::scenario::{Navigation, Scenario};
@@ -302,7 +303,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
     Ok(match result {
         Some(points) => Replan::Path(points),
         None => Replan::NoPath {
-            closed_by: closed_by(&decisions, inputs, &window, from, goal)?,
+            closed_by: diagnosis::closed_by(&decisions, inputs, &window, from, goal)?,
         },
     })
 }
@@ -416,101 +417,6 @@ fn path_points(plan: &Plan, geometry: &oeg::GridGeometry, goal: (f64, f64)) -> V
     points
 }
 
-/// Which cells closed the way: on the path that taking every uncertain and never-observed cell as drivable
-/// gives, the uncertain and never-observed cells the planner's rules forbid (on the path, or within the
-/// inflation radius of it when those cells are inflated), by class; `blocked` when even that path does not
-/// exist.
-fn closed_by(
-    decisions: &[Traversability],
-    inputs: &NavigationInputs<'_>,
-    window: &oeg::GridWindow,
-    from: Pose2,
-    goal: (f64, f64),
-) -> Result<String> {
-    let (Some(a), Some(b)) = (
-        clamped_cell(window, (from.x_m, from.y_m)),
-        clamped_cell(window, goal),
-    ) else {
-        return Ok("outside the map region".into());
-    };
-    let strict = planner_options(inputs);
-    let relaxed = oeg::PlannerOptions {
-        unknown: UnknownCells::Drivable,
-        uncertain: UncertainCells::Drivable,
-        ..strict
-    };
-    let (region, res) = (*window.region(), window.resolution_m());
-    let plan = oeg::plan(window, decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
-        path: inputs.scenario.name.clone().into(),
-        message: format!("planner: {e}"),
-    })?;
-    let Some(plan) = plan else {
-        // Closed by the map's blocked cells: which of them lie on the truth's own path from here.
-        return Ok(match truth_plan(inputs, (from.x_m, from.y_m))? {
-            None => "blocked; the truth has no path either".into(),
-            Some(truth_path) => {
-                let on_truth_path = truth_path
-                    .cells
-                    .iter()
-                    .filter(|c| {
-                        region
-                            .offset(**c)
-                            .is_some_and(|k| decisions[k] == Traversability::Blocked)
-                    })
-                    .count();
-                format!(
-                    "blocked; the truth has a path, with {on_truth_path} cells the map calls blocked on it \
-                     (the rest closed by the inflation around blocked cells)"
-                )
-            }
-        });
-    };
-    let reach = (strict.inflation_radius_m / res).ceil() as i32;
-    let r2 = (strict.inflation_radius_m / res).powi(2) + 1e-9;
-    let mut closing: Vec<usize> = Vec::new();
-    for c in &plan.cells {
-        for dj in -reach..=reach {
-            for di in -reach..=reach {
-                let Some(k) = region.offset(CellIndex::new(c.i + di, c.j + dj)) else {
-                    continue;
-                };
-                let on_path = di == 0 && dj == 0;
-                let within = f64::from(di * di + dj * dj) <= r2;
-                let forbids = match decisions[k] {
-                    Traversability::Uncertain => strict.uncertain == UncertainCells::Blocked && within,
-                    Traversability::Unknown => match strict.unknown {
-                        UnknownCells::Avoid => on_path,
-                        UnknownCells::Inflate => within,
-                        UnknownCells::Drivable => false,
-                    },
-                    _ => false,
-                };
-                if forbids {
-                    closing.push(k);
-                }
-            }
-        }
-    }
-    closing.sort_unstable();
-    closing.dedup();
-    let count = |class: Traversability| closing.iter().filter(|k| decisions[**k] == class).count();
-    let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
-    let truly_blocked = closing
-        .iter()
-        .filter(|k| TruthClass::of(inputs.truth, **k).is_blocked())
-        .count();
-    let truth = format!(
-        "; the truth: {} drivable, {truly_blocked} blocked",
-        closing.len() - truly_blocked
-    );
-    Ok(match (uncertain, unknown) {
-        (0, 0) => "blocked (the inflation around blocked cells)".into(),
-        (u, 0) => format!("{u} uncertain cells{truth}"),
-        (0, n) => format!("{n} never-observed cells{truth}"),
-        (u, n) => format!("{u} uncertain and {n} never-observed cells{truth}"),
-    })
-}
-
 /// The length of the built-in planner's path on the truth from `from` to the goal, metres.
 fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<f64>> {
     Ok(truth_plan(inputs, from)?.map(|p| p.length_m))
@@ -579,6 +485,7 @@ impl Recorder {
             obstacle: String::new(),
             distance_m: None,
             observable: None,
+            mapped_as: String::new(),
             closed_by: String::new(),
             message: message.to_string(),
         });
@@ -606,6 +513,12 @@ impl Recorder {
                 .is_some_and(|k| TruthClass::of(watch.truth(), k).could_be_told(o, k))
         });
         self.summary_events[e].observable = Some(observable);
+        self.summary_events[e].mapped_as = diagnosis::mapped_as(
+            &mapping.maps[0],
+            &contact.cells,
+            &watch.truth().profile,
+            watch.rule(),
+        );
         Some(e)
     }
 

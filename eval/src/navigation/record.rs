@@ -107,6 +107,11 @@ pub struct Event {
     /// (the observability truth of the scans so far: a step a ray ended on, a structure lower than the robot a
     /// ray ended in the band of). `false`: blind, no sensor could have warned. Empty for other events.
     pub observable: Option<bool>,
+    /// A contact: what the map the robot navigated by called the truly blocked cells it entered, at that
+    /// moment, the most restrictive of their classes: `blocked` (the map knew; the navigator drove in),
+    /// `uncertain` or `unknown` (the map could not decide), `traversable` or `free` (the map called them
+    /// drivable: a false clearance). Empty for other events.
+    pub mapped_as: String,
     /// Cells that closed the way (a `no_path`): blocked, uncertain, never observed.
     pub closed_by: String,
     /// What the event means, in words (a planner failure's message names the file and line).
@@ -123,6 +128,7 @@ impl crate::output::CsvRow for Event {
         "obstacle",
         "distance_m",
         "observable",
+        "mapped_as",
         "closed_by",
         "message",
     ];
@@ -221,6 +227,14 @@ pub struct NavigationSummary {
     pub contacts_observable: u64,
     /// Of the contacts, the blind ones: no ray could have told about any cell the footprint entered.
     pub contacts_blind: u64,
+    /// Of the contacts, those with a cell the robot's map called blocked at that moment
+    /// ([`Event::mapped_as`]): the navigator drove into what its map forbade.
+    pub contacts_mapped_blocked: u64,
+    /// Of the contacts, those with no cell called blocked and one the map could not decide (uncertain or
+    /// never observed).
+    pub contacts_mapped_undecided: u64,
+    /// Of the contacts, those whose cells the map called drivable: a false clearance of the map.
+    pub contacts_mapped_drivable: u64,
     /// The smallest distance from the footprint to a truly blocked cell, metres (null: none within
     /// [`crate::navigation::APPROACH_WINDOW_M`]).
     pub closest_approach_m: Option<f64>,
@@ -248,6 +262,11 @@ impl NavigationSummary {
             planner_failures: self.planner_failures,
             contacts: self.contacts,
             contacts_observable: self.contacts_observable,
+            contacts_mapped: [
+                self.contacts_mapped_blocked,
+                self.contacts_mapped_undecided,
+                self.contacts_mapped_drivable,
+            ],
             closest_approach_m: self.closest_approach_m,
             stuck: self.outcome == Outcome::Stuck,
         }

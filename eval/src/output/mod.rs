@@ -180,7 +180,7 @@ mod tests {
     }
 
     #[test]
-    fn every_tables_columns_are_its_fields_in_order_and_an_empty_table_keeps_its_header() {
+    fn every_report_tables_columns_are_its_fields_in_order_and_an_empty_table_keeps_its_header() {
         check(&crate::jobs::suite::SuiteRow {
             scenario: "s".into(),
             file: "f".into(),
@@ -246,6 +246,10 @@ mod tests {
             ci95_low: None,
             ci95_high: None,
         });
+    }
+
+    #[test]
+    fn every_run_tables_columns_are_its_fields_in_order_and_an_empty_table_keeps_its_header() {
         check(&crate::judge::plan_check::PlanRow {
             path: "map",
             step: 0,
@@ -270,6 +274,7 @@ mod tests {
             obstacle: "wall".into(),
             distance_m: Some(0.0),
             observable: None,
+            mapped_as: String::new(),
             closed_by: String::new(),
             message: "m".into(),
         });

@@ -22,6 +22,7 @@ pub mod report;
 pub mod rows;
 pub mod spec;
 pub(crate) mod stats;
+pub(crate) mod summarized;
 
 pub use plan::SweepPlan;
 pub use spec::Sweep;

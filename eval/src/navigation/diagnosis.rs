@@ -1,0 +1,129 @@
+//! Why a closed loop stopped or touched: the cells that closed the map's paths at a stop, and what the map
+//! called the cells a contact entered.
+
+use oeg::{
+    CellIndex, Map, Pose2, RobotProfile, Traversability, TraversabilityRule, UncertainCells, UnknownCells,
+};
+
+use super::{NavigationInputs, clamped_cell, planner_options, truth_plan};
+use crate::error::{EvalError, Result};
+use crate::judge::verdict::TruthClass;
+
+/// Which cells closed the way: on the path that taking every uncertain and never-observed cell as drivable
+/// gives, the uncertain and never-observed cells the planner's rules forbid (on the path, or within the
+/// inflation radius of it when those cells are inflated), by class; `blocked` when even that path does not
+/// exist.
+pub(super) fn closed_by(
+    decisions: &[Traversability],
+    inputs: &NavigationInputs<'_>,
+    window: &oeg::GridWindow,
+    from: Pose2,
+    goal: (f64, f64),
+) -> Result<String> {
+    let (Some(a), Some(b)) = (
+        clamped_cell(window, (from.x_m, from.y_m)),
+        clamped_cell(window, goal),
+    ) else {
+        return Ok("outside the map region".into());
+    };
+    let strict = planner_options(inputs);
+    let relaxed = oeg::PlannerOptions {
+        unknown: UnknownCells::Drivable,
+        uncertain: UncertainCells::Drivable,
+        ..strict
+    };
+    let (region, res) = (*window.region(), window.resolution_m());
+    let plan = oeg::plan(window, decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
+        path: inputs.scenario.name.clone().into(),
+        message: format!("planner: {e}"),
+    })?;
+    let Some(plan) = plan else {
+        // Closed by the map's blocked cells: which of them lie on the truth's own path from here.
+        return Ok(match truth_plan(inputs, (from.x_m, from.y_m))? {
+            None => "blocked; the truth has no path either".into(),
+            Some(truth_path) => {
+                let on_truth_path = truth_path
+                    .cells
+                    .iter()
+                    .filter(|c| {
+                        region
+                            .offset(**c)
+                            .is_some_and(|k| decisions[k] == Traversability::Blocked)
+                    })
+                    .count();
+                format!(
+                    "blocked; the truth has a path, with {on_truth_path} cells the map calls blocked on it \
+                     (the rest closed by the inflation around blocked cells)"
+                )
+            }
+        });
+    };
+    let reach = (strict.inflation_radius_m / res).ceil() as i32;
+    let r2 = (strict.inflation_radius_m / res).powi(2) + 1e-9;
+    let mut closing: Vec<usize> = Vec::new();
+    for c in &plan.cells {
+        for dj in -reach..=reach {
+            for di in -reach..=reach {
+                let Some(k) = region.offset(CellIndex::new(c.i + di, c.j + dj)) else {
+                    continue;
+                };
+                let on_path = di == 0 && dj == 0;
+                let within = f64::from(di * di + dj * dj) <= r2;
+                let forbids = match decisions[k] {
+                    Traversability::Uncertain => strict.uncertain == UncertainCells::Blocked && within,
+                    Traversability::Unknown => match strict.unknown {
+                        UnknownCells::Avoid => on_path,
+                        UnknownCells::Inflate => within,
+                        UnknownCells::Drivable => false,
+                    },
+                    _ => false,
+                };
+                if forbids {
+                    closing.push(k);
+                }
+            }
+        }
+    }
+    closing.sort_unstable();
+    closing.dedup();
+    let count = |class: Traversability| closing.iter().filter(|k| decisions[**k] == class).count();
+    let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
+    let truly_blocked = closing
+        .iter()
+        .filter(|k| TruthClass::of(inputs.truth, **k).is_blocked())
+        .count();
+    let truth = format!(
+        "; the truth: {} drivable, {truly_blocked} blocked",
+        closing.len() - truly_blocked
+    );
+    Ok(match (uncertain, unknown) {
+        (0, 0) => "blocked (the inflation around blocked cells)".into(),
+        (u, 0) => format!("{u} uncertain cells{truth}"),
+        (0, n) => format!("{n} never-observed cells{truth}"),
+        (u, n) => format!("{u} uncertain and {n} never-observed cells{truth}"),
+    })
+}
+
+/// What `map` calls the truly blocked `cells` a contact entered, now: the most telling of their classes,
+/// blocked over uncertain over unknown over traversable over free ([`super::record::Event::mapped_as`]).
+/// Blocked: the navigator drove into what its map forbade; uncertain or unknown: the map could not decide;
+/// traversable or free: the map called them drivable, a false clearance.
+pub(super) fn mapped_as(
+    map: &Map,
+    cells: &[CellIndex],
+    profile: &RobotProfile,
+    rule: TraversabilityRule,
+) -> String {
+    let rank = |t: Traversability| match t {
+        Traversability::Blocked => 4,
+        Traversability::Uncertain => 3,
+        Traversability::Unknown => 2,
+        Traversability::Traversable => 1,
+        Traversability::Free => 0,
+    };
+    cells
+        .iter()
+        .map(|c| map.traversability(*c, profile, rule))
+        .max_by_key(|t| rank(*t))
+        .map_or_else(String::new, |t| t.name().to_string())
+}
