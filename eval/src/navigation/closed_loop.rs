@@ -6,12 +6,11 @@ use oeg::Pose2;
 
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
-use super::diagnosis::truth_shortest_path;
 use super::record::{Event, EventKind, NavigationSummary, Outcome, PlannedPath};
-use super::validity;
 use super::{
     MAX_KEPT_PLAN_POINTS, NavigationInputs, NavigationLog, PlanBudget, PlannerSource, Recorder, Recovery,
     Replan, describe_sequence, estimated_pose, recovery_sequence, replan, round, step_to,
+    truth_shortest_path,
 };
 use crate::error::Result;
 use crate::mapping::Mapping;
@@ -164,19 +163,8 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             if let Some(outcome) = self.check(mapping, log, t, estimated)? {
                 return Ok(outcome);
             }
-            if self.recovering.is_none() {
-                if t >= self.next_replan - 1e-9 {
-                    self.replan(mapping, log, t, estimated)?;
-                } else if validity::path_blocked_ahead(
-                    mapping,
-                    self.inputs,
-                    &self.path[self.progress_index.min(self.path.len())..],
-                    estimated,
-                )? {
-                    // The map closed the path ahead since the plan: plan again now (nav2's `IsPathValid`).
-                    self.next_replan = t;
-                    self.replan(mapping, log, t, estimated)?;
-                }
+            if self.recovering.is_none() && t >= self.next_replan - 1e-9 {
+                self.replan(mapping, log, t, estimated)?;
             }
             k += 1;
             self.tick(

@@ -1,12 +1,11 @@
-//! Why a closed loop stopped or touched: the cells that closed the map's paths at a stop (against the truth's
-//! own path, which this module plans), and what the map called the cells a contact entered.
+//! Why a closed loop stopped or touched: the cells that closed the map's paths at a stop, and what the map
+//! called the cells a contact entered.
 
 use oeg::{
-    CellIndex, Map, Plan, Pose2, RobotProfile, Traversability, TraversabilityRule, UncertainCells,
-    UnknownCells,
+    CellIndex, Map, Pose2, RobotProfile, Traversability, TraversabilityRule, UncertainCells, UnknownCells,
 };
 
-use super::{NavigationInputs, clamped_cell, planner_options};
+use super::{NavigationInputs, clamped_cell, planner_options, truth_plan};
 use crate::error::{EvalError, Result};
 use crate::judge::verdict::TruthClass;
 
@@ -127,31 +126,4 @@ pub(super) fn mapped_as(
         .map(|c| map.traversability(*c, profile, rule))
         .max_by_key(|t| rank(*t))
         .map_or_else(String::new, |t| t.name().to_string())
-}
-
-/// The length of the built-in planner's path on the truth from `from` to the goal, metres.
-pub(super) fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<f64>> {
-    Ok(truth_plan(inputs, from)?.map(|p| p.length_m))
-}
-
-/// The built-in planner's path on the truth from `from` to the goal.
-pub(super) fn truth_plan(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<Plan>> {
-    let truth = inputs.truth;
-    let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
-    let (Some(a), Some(b)) = (
-        clamped_cell(&truth.window, from),
-        clamped_cell(&truth.window, goal),
-    ) else {
-        return Ok(None);
-    };
-    let decisions = crate::judge::verdict::Verdicts::from_classes(
-        truth,
-        vec![Traversability::Unknown; truth.cells.len()],
-    )
-    .truth_decisions();
-    let options = planner_options(inputs);
-    oeg::plan(&truth.window, &decisions, a, b, &options).map_err(|e| EvalError::Input {
-        path: inputs.scenario.name.clone().into(),
-        message: format!("planner: {e}"),
-    })
 }

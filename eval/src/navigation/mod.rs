@@ -14,7 +14,6 @@ pub(crate) mod controller;
 mod diagnosis;
 pub mod external;
 pub(crate) mod record;
-mod validity;
 
 use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability};
 
@@ -416,6 +415,33 @@ fn path_points(plan: &Plan, geometry: &oeg::GridGeometry, goal: (f64, f64)) -> V
         *last = goal;
     }
     points
+}
+
+/// The length of the built-in planner's path on the truth from `from` to the goal, metres.
+fn truth_shortest_path(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<f64>> {
+    Ok(truth_plan(inputs, from)?.map(|p| p.length_m))
+}
+
+/// The built-in planner's path on the truth from `from` to the goal.
+fn truth_plan(inputs: &NavigationInputs<'_>, from: (f64, f64)) -> Result<Option<Plan>> {
+    let truth = inputs.truth;
+    let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
+    let (Some(a), Some(b)) = (
+        clamped_cell(&truth.window, from),
+        clamped_cell(&truth.window, goal),
+    ) else {
+        return Ok(None);
+    };
+    let decisions = crate::judge::verdict::Verdicts::from_classes(
+        truth,
+        vec![Traversability::Unknown; truth.cells.len()],
+    )
+    .truth_decisions();
+    let options = planner_options(inputs);
+    oeg::plan(&truth.window, &decisions, a, b, &options).map_err(|e| EvalError::Input {
+        path: inputs.scenario.name.clone().into(),
+        message: format!("planner: {e}"),
+    })
 }
 
 /// The records as the loop writes them.
