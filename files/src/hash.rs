@@ -2,6 +2,7 @@
 
 /// FNV-1a, 64 bit, of `bytes`: the checksum of the map file and the sensor log, and the project's one hash of
 /// bytes. Not cryptographic; it catches truncation and bit rot.
+#[inline]
 pub fn fnv1a64(bytes: &[u8]) -> u64 {
     let mut h = Fnv1a64::new();
     h.update(bytes);
@@ -14,11 +15,13 @@ pub struct Fnv1a64(u64);
 
 impl Fnv1a64 {
     /// The hash of no bytes.
+    #[inline]
     pub const fn new() -> Self {
         Self(0xcbf2_9ce4_8422_2325)
     }
 
     /// Adds `bytes`.
+    #[inline]
     pub fn update(&mut self, bytes: &[u8]) {
         for &b in bytes {
             self.0 ^= u64::from(b);
@@ -27,6 +30,7 @@ impl Fnv1a64 {
     }
 
     /// The hash of every byte added so far.
+    #[inline]
     pub const fn value(self) -> u64 {
         self.0
     }

@@ -24,6 +24,7 @@ pub use read::{ByteReader, MAX_TEXT_INPUT_BYTES, read_bounded, read_text};
 /// The components are scaled by the largest of them before normalising, so a finite quaternion of any
 /// magnitude (1e200 as well as 1e-200) keeps its rotation: a plain norm overflows to infinity there and the
 /// rotation is silently lost.
+#[inline]
 pub fn unit_quaternion(w: f64, x: f64, y: f64, z: f64) -> Option<nalgebra::UnitQuaternion<f64>> {
     if ![w, x, y, z].iter().all(|v| v.is_finite()) {
         return None;

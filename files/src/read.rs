@@ -72,16 +72,19 @@ pub struct ByteReader<'a> {
 
 impl<'a> ByteReader<'a> {
     /// A reader of `data`, the bytes of the file at `path`, from its first byte.
+    #[inline]
     pub fn new(path: &'a Path, data: &'a [u8]) -> Self {
         Self { path, data, pos: 0 }
     }
 
     /// The offset of the next byte.
+    #[inline]
     pub fn pos(&self) -> usize {
         self.pos
     }
 
     /// The bytes left.
+    #[inline]
     pub fn remaining(&self) -> usize {
         self.data.len() - self.pos
     }
