@@ -249,8 +249,12 @@ def test_long_calls_release_the_gil() -> None:
 
 def test_ctrl_c_interrupts_a_run_with_keyboard_interrupt_and_leaves_nothing(tmp_path: Path) -> None:
     out = tmp_path / "out"
+    # Python turns Ctrl-C into KeyboardInterrupt only where SIGINT was not ignored when it started (a job put
+    # in the background by a non-interactive shell ignores it): the child installs the handler an interactive
+    # session has.
     code = (
-        "import sys, oeg\n"
+        "import signal, sys, oeg\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "print('started', flush=True)\n"
         "try:\n"
         "    oeg.run_scenario(sys.argv[1], out=sys.argv[2])\n"
@@ -428,8 +432,10 @@ def test_a_scan_too_large_for_memory_raises_memory_error() -> None:
 
 
 def test_ctrl_c_stops_a_long_scan_with_keyboard_interrupt_and_leaves_the_map_as_it_was() -> None:
+    # As above: the handler an interactive session has, whatever SIGINT's disposition in this process.
     code = (
-        "import sys, numpy as np, oeg\n"
+        "import signal, sys, numpy as np, oeg\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "m = oeg.Map(resolution_m=0.05)\n"
         "angles = np.linspace(0, 2 * np.pi, 8_000_000, dtype=np.float64)\n"
         "points = np.stack([20 * np.cos(angles), 20 * np.sin(angles), np.zeros_like(angles)], axis=1)\n"
