@@ -133,6 +133,8 @@ pub struct NavigationFigures {
     pub length_ratio: Option<f64>,
     /// Plans asked for.
     pub replans: u64,
+    /// Stops of the collision guard.
+    pub guard_stops: u64,
     /// Replanning times without a path.
     pub no_path_replans: u64,
     /// Failed planner calls.

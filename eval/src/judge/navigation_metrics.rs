@@ -20,6 +20,9 @@ pub struct NavMetrics {
     /// Plans asked for.
     #[serde(rename = "nav_replans")]
     pub replans: Option<u64>,
+    /// Times the collision guard stopped the robot short of a cell its map forbids.
+    #[serde(rename = "nav_guard_stops")]
+    pub guard_stops: Option<u64>,
     /// Replanning times with no path on the map.
     #[serde(rename = "nav_no_path_replans")]
     pub no_path_replans: Option<u64>,
@@ -61,6 +64,7 @@ impl NavMetrics {
         time_s: Some(0.0),
         length_ratio: Some(0.0),
         replans: Some(0),
+        guard_stops: Some(0),
         no_path_replans: Some(0),
         planner_failures: Some(0),
         contacts: Some(0),
@@ -81,6 +85,7 @@ impl NavMetrics {
             time_s: Some(n.time_s),
             length_ratio: n.length_ratio,
             replans: Some(n.replans),
+            guard_stops: Some(n.guard_stops),
             no_path_replans: Some(n.no_path_replans),
             planner_failures: Some(n.planner_failures),
             contacts: Some(n.contacts),

@@ -6,6 +6,7 @@ use oeg::Pose2;
 
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
+use super::guard::{Guard, guard_command};
 use super::record::{Event, EventKind, NavigationSummary, Outcome, PlannedPath};
 use super::{
     MAX_KEPT_PLAN_POINTS, NavigationInputs, NavigationLog, PlanBudget, PlannerSource, Recorder, Recovery,
@@ -76,6 +77,10 @@ fn drive_scripted(
 struct ClosedLoop<'i, 'a> {
     inputs: &'i NavigationInputs<'a>,
     controller: PurePursuit,
+    guard: Guard,
+    /// Whether the guard held the robot still at the last tick (a stop is an event when it begins).
+    guard_stopped: bool,
+    guard_stops: u64,
     /// Where and when the loop started.
     start: sim::drive::PlanarPose,
     t0: f64,
@@ -124,6 +129,13 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
                 speed_m_s: n.speed_m_s,
                 max_turn_rate_rad_s: s.robot.max_turn_rate_deg_s.to_radians(),
             },
+            guard: Guard {
+                time_s: n.guard_time_s,
+                footprint: inputs.footprint,
+                uncertain: super::planner_options(inputs).uncertain,
+            },
+            guard_stopped: false,
+            guard_stops: 0,
             start,
             t0,
             end,
@@ -301,6 +313,33 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
                 .controller
                 .command(estimated, &self.path, &mut self.progress_index),
         };
+        let guarded = guard_command(
+            &self.guard,
+            &mapping.maps[0],
+            self.inputs.truth.window.region(),
+            &self.inputs.truth.profile,
+            s.map.traversability,
+            estimated,
+            command,
+        )?;
+        let command = guarded.command;
+        if guarded.stopped() && !self.guard_stopped {
+            self.guard_stops += 1;
+            if let Some((cell, class)) = guarded.limited_by {
+                let (x, y) = mapping.maps[0].geometry().cell_center(cell);
+                let e = log.event(
+                    mapping,
+                    EventKind::GuardStop,
+                    &format!(
+                        "the collision guard stopped the robot short of a cell its map calls {} at ({x:.3}, \
+                         {y:.3}) m",
+                        class.name()
+                    ),
+                );
+                log.summary_events[e].mapped_as = class.name().to_string();
+            }
+        }
+        self.guard_stopped = guarded.stopped();
         mapping
             .simulation
             .world_mut()
@@ -387,6 +426,7 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
                 (end_pose.x_m - n.goal_xy_m[0]).hypot(end_pose.y_m - n.goal_xy_m[1]),
             ),
             replans: self.replans,
+            guard_stops: self.guard_stops,
             no_path_replans: self.no_path_replans,
             planner_failures: self.failures,
             contacts,

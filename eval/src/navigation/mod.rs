@@ -13,6 +13,7 @@ pub(crate) mod contact;
 pub(crate) mod controller;
 mod diagnosis;
 pub mod external;
+mod guard;
 pub(crate) mod record;
 
 use oeg::{CellIndex, Footprint, Plan, Pose2, Traversability};

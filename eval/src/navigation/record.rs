@@ -57,6 +57,8 @@ pub enum EventKind {
     ClosestApproach,
     /// No path on the map at a replanning time (after one was found, or the first time).
     NoPath,
+    /// The collision guard stopped the robot short of a cell its map forbids (the start of a stop).
+    GuardStop,
     /// The external planner failed: it could not start, exited non-zero, timed out or wrote a bad path.
     PlannerFailed,
     /// The robot did not move `stuck_radius_m` in `stuck_time_s`, and began the next behaviour of the
@@ -77,6 +79,7 @@ impl EventKind {
             Self::Contact => "contact",
             Self::ClosestApproach => "closest_approach",
             Self::NoPath => "no_path",
+            Self::GuardStop => "guard_stop",
             Self::PlannerFailed => "planner_failed",
             Self::Recovery => "recovery",
             Self::Stuck => "stuck",
@@ -217,6 +220,8 @@ pub struct NavigationSummary {
     pub final_distance_to_goal_m: f64,
     /// Plans asked for.
     pub replans: u64,
+    /// Times the collision guard stopped the robot short of a cell its map forbids ([`EventKind::GuardStop`]).
+    pub guard_stops: u64,
     /// Replanning times with no path on the map.
     pub no_path_replans: u64,
     /// Planner calls that failed.
@@ -258,6 +263,7 @@ impl NavigationSummary {
             time_s: self.time_s,
             length_ratio: self.length_ratio,
             replans: self.replans,
+            guard_stops: self.guard_stops,
             no_path_replans: self.no_path_replans,
             planner_failures: self.planner_failures,
             contacts: self.contacts,
@@ -288,6 +294,7 @@ mod tests {
             EventKind::Contact,
             EventKind::ClosestApproach,
             EventKind::NoPath,
+            EventKind::GuardStop,
             EventKind::PlannerFailed,
             EventKind::Stuck,
             EventKind::Reached,

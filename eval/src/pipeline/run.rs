@@ -85,6 +85,7 @@ fn finish_recording(
                 let level = match e.kind {
                     EventKind::Contact | EventKind::Stuck | EventKind::PlannerFailed => LogLevel::Error,
                     EventKind::NoPath
+                    | EventKind::GuardStop
                     | EventKind::Recovery
                     | EventKind::ClosestApproach
                     | EventKind::TimeLimit => LogLevel::Warning,

@@ -24,6 +24,9 @@ pub const DEFAULT_BACKUP_DISTANCE_M: f64 = 0.3;
 /// Default back-up speed of the recovery sequence, m/s (nav2's default tree backs up at 0.05 m/s; a tenth of
 /// the robot's cruise speed).
 pub const DEFAULT_BACKUP_SPEED_M_S: f64 = 0.05;
+/// Default look-ahead of the collision guard, seconds: nav2's Collision Monitor `time_before_collision` (its
+/// `approach` action's default).
+pub const DEFAULT_GUARD_TIME_S: f64 = 2.0;
 /// Default wall-time limit of one call of an external planner, seconds.
 pub const DEFAULT_PLANNER_TIMEOUT_S: f64 = 10.0;
 
@@ -90,6 +93,13 @@ pub struct Navigation {
     /// Speed of the back-up, m/s, default [`DEFAULT_BACKUP_SPEED_M_S`].
     #[serde(default = "default_backup_speed")]
     pub backup_speed_m_s: f64,
+    /// The collision guard's look-ahead, seconds (nav2's Collision Monitor, `approach` action): every command,
+    /// the controller's or a recovery's, is carried forward this long with the footprint, and slowed so that
+    /// the footprint enters no cell the map forbids (blocked, or uncertain where `[planner] uncertain` makes
+    /// those obstacles) sooner than this; the robot stops short of one. Default [`DEFAULT_GUARD_TIME_S`]; 0:
+    /// no guard.
+    #[serde(default = "default_guard_time")]
+    pub guard_time_s: f64,
     /// `astar` (default) or `external`.
     #[serde(default)]
     pub planner: PlannerKind,
@@ -118,6 +128,9 @@ fn default_backup_distance() -> f64 {
 }
 fn default_backup_speed() -> f64 {
     DEFAULT_BACKUP_SPEED_M_S
+}
+fn default_guard_time() -> f64 {
+    DEFAULT_GUARD_TIME_S
 }
 fn default_unknown() -> oeg::UnknownCells {
     oeg::UnknownCells::Drivable

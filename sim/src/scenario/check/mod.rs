@@ -280,6 +280,11 @@ impl Checker<'_> {
             },
         )?;
         self.check(
+            n.guard_time_s.is_finite() && (0.0..=60.0).contains(&n.guard_time_s),
+            &at("guard_time_s"),
+            || format!("expected a look-ahead in [0, 60] s, got {}", n.guard_time_s),
+        )?;
+        self.check(
             n.planner_timeout_s.is_finite() && n.planner_timeout_s > 0.0 && n.planner_timeout_s <= 3600.0,
             &at("planner_timeout_s"),
             || format!("expected a time-out in (0, 3600] s, got {}", n.planner_timeout_s),
