@@ -216,8 +216,12 @@ mod tests {
     /// A 4 x 4 m window of 0.05 m cells from (-2, -2), every cell `Free` but for a band `x` in `[x0, x0 + 0.1)`
     /// of `class`.
     fn wall_at(x0: f64, class: Traversability) -> (GridWindow, Vec<Traversability>) {
-        let window =
-            GridWindow::covering(GridGeometry::new(0.05).unwrap(), (-2.0, -2.0), (1.999, 1.999)).unwrap();
+        let window = GridWindow::covering(
+            GridGeometry::new(0.05).expect("a resolution"),
+            (-2.0, -2.0),
+            (1.999, 1.999),
+        )
+        .expect("a window");
         let decisions = window
             .region()
             .cells()
@@ -262,7 +266,7 @@ mod tests {
         // The front reaches the wall at 0.7 m after 1 s: the speed is about halved.
         let (window, decisions) = wall_at(0.7, Traversability::Blocked);
         let g = guard().limit(&window, &decisions, AT_ORIGIN, AHEAD);
-        let (cell, class) = g.limited_by.unwrap();
+        let (cell, class) = g.limited_by.expect("the wall limits the command");
         assert_eq!(class, Traversability::Blocked);
         assert!(window.geometry().cell_center(cell).0 > 0.7, "{cell:?}");
         assert!(

@@ -396,14 +396,19 @@ fn describe_sequence(sequence: &[Recovery]) -> String {
 
 /// The planner's options while navigating: the scenario's `[planner]` options, with `[navigation]`'s
 /// `unknown`, and by default an inflation of the footprint's circumscribed radius (nav2's rule: less lets a
-/// turning robot's corners reach what the planner kept its centre away from).
+/// turning robot's corners reach what the planner kept its centre away from) and half a cell's diagonal.
+/// The inflation is measured between cell centres, but the footprint meets a cell's square, which reaches
+/// half a diagonal beyond its centre: without that half diagonal, a path whose centre keeps out of every
+/// inflation still runs the footprint's corners into the squares of the cells it inflates, and the
+/// collision guard, which watches the footprint against the squares, stops the robot on its own plan.
 pub fn planner_options(inputs: &NavigationInputs<'_>) -> oeg::PlannerOptions {
     let planner = &inputs.scenario.planner;
+    let half_diagonal = inputs.truth.window.resolution_m() * std::f64::consts::FRAC_1_SQRT_2;
     oeg::PlannerOptions {
         unknown: inputs.settings.unknown,
         optimistic_beyond_m: Some(inputs.settings.decide_within()),
         inflation_radius_m: planner.inflation_radius_m.unwrap_or_else(|| {
-            oeg::DEFAULT_INFLATION_RADIUS_M.max(inputs.footprint.circumscribed_radius_m())
+            oeg::DEFAULT_INFLATION_RADIUS_M.max(inputs.footprint.circumscribed_radius_m()) + half_diagonal
         }),
         ..planner.options()
     }
