@@ -55,7 +55,9 @@ print("`sweeps/safe_and_live.toml`: 100 scenes of the decisions generator (curbs
 print("and table tops 0.30 to 0.60 m up, walls, people who stand 1 to 6 s in the way), each driven in closed loop")
 print("to a goal beyond the field under both presets. Per preset: runs; runs where the truth has a path; of those,")
 print("runs that reached the goal; contacts of the footprint with truly blocked cells a ray could have told about")
-print("(observable) and not (blind), summed; runs that ended stuck; mean uncertain cells, of them mean `imprecise`")
+print("(observable) and not (blind), summed, and all contacts by what the robot's map called the cells entered")
+print("(blocked: the navigator drove into what its map forbade; undecided; drivable: the map's false clearance);")
+print("the collision guard's stops, summed; runs that ended stuck; mean uncertain cells, of them mean `imprecise`")
 print("(the sensors' resolution), mean over-cautious cells; mean AA over the runs with people (DynamicMap's")
 print("associated accuracy, in percent); mean `elevation_within_2sigma` and the share of runs with it in [0.90,")
 print("0.98]. A column the build did not measure is `-`.")
@@ -84,8 +86,8 @@ for table in tables:
     print()
     print(f"## The build at {name}")
     print()
-    print("| preset | runs | truth has a path | reached | contacts observable | contacts blind | stuck | uncertain | of them imprecise | over-cautious | AA (runs with people) | within 2 sigma | runs with it in [0.90, 0.98] |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| preset | runs | truth has a path | reached | contacts observable | contacts blind | map said blocked / undecided / drivable | guard stops | stuck | uncertain | of them imprecise | over-cautious | AA (runs with people) | within 2 sigma | runs with it in [0.90, 0.98] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for preset in ["paper", "robust"]:
         runs = [r for r in rows if r.get("preset") == preset]
         has_path = [r for r in runs if r.get("truth_plan_found") in ("true", "True", "1")]
@@ -93,12 +95,16 @@ for table in tables:
         stuck = [r for r in runs if r.get("nav_stuck") in ("true", "True", "1")]
         observable = sum(num(r, "nav_contacts_observable") or 0 for r in runs) if runs and "nav_contacts_observable" in runs[0] else None
         blind = sum(num(r, "nav_contacts_blind") or 0 for r in runs) if runs and "nav_contacts_blind" in runs[0] else None
+        def total(key):
+            return sum(num(r, key) or 0 for r in runs) if runs and key in runs[0] else None
+        mapped = "-" if total("nav_contacts_mapped_blocked") is None else " / ".join(
+            fmt(total(f"nav_contacts_mapped_{k}"), 0) for k in ("blocked", "undecided", "drivable"))
         aa = mean([num(r, "associated_accuracy") for r in runs])
         w2s = [num(r, "elevation_within_2sigma") for r in runs]
         inside = sum(1 for v in w2s if v is not None and 0.90 <= v <= 0.98)
         print(
             f"| {preset} | {len(runs)} | {len(has_path)} | {len(reached)} ({100 * len(reached) / max(len(has_path), 1):.0f} %) | "
-            f"{fmt(observable, 0)} | {fmt(blind, 0)} | {len(stuck)} | "
+            f"{fmt(observable, 0)} | {fmt(blind, 0)} | {mapped} | {fmt(total('nav_guard_stops'), 0)} | {len(stuck)} | "
             f"{fmt(mean([num(r, 'uncertain_cells') for r in runs]))} | "
             f"{fmt(mean([num(r, 'doubt_imprecise_cells') for r in runs]))} | "
             f"{fmt(mean([num(r, 'overcautious_cells') for r in runs]))} | "

@@ -20,7 +20,7 @@ pub struct NavMetrics {
     /// Plans asked for.
     #[serde(rename = "nav_replans")]
     pub replans: Option<u64>,
-    /// Times the collision guard stopped the robot short of a cell its map forbids.
+    /// Times the collision guard stopped the robot short of a cell its map calls blocked.
     #[serde(rename = "nav_guard_stops")]
     pub guard_stops: Option<u64>,
     /// Replanning times with no path on the map.

@@ -2,7 +2,7 @@
 //! sequence, the planner at its replanning rate and the controller at every tick, as nav2's behaviour tree
 //! runs them; and the summary of the run when the loop ends.
 
-use oeg::Pose2;
+use oeg::{Pose2, Traversability};
 
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
@@ -132,7 +132,6 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             guard: Guard {
                 time_s: n.guard_time_s,
                 footprint: inputs.footprint,
-                uncertain: super::planner_options(inputs).uncertain,
             },
             guard_stopped: false,
             guard_stops: 0,
@@ -325,18 +324,17 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
         let command = guarded.command;
         if guarded.stopped() && !self.guard_stopped {
             self.guard_stops += 1;
-            if let Some((cell, class)) = guarded.limited_by {
+            if let Some(cell) = guarded.limited_by {
                 let (x, y) = mapping.maps[0].geometry().cell_center(cell);
                 let e = log.event(
                     mapping,
                     EventKind::GuardStop,
                     &format!(
-                        "the collision guard stopped the robot short of a cell its map calls {} at ({x:.3}, \
-                         {y:.3}) m",
-                        class.name()
+                        "the collision guard stopped the robot short of a cell its map calls blocked at \
+                         ({x:.3}, {y:.3}) m"
                     ),
                 );
-                log.summary_events[e].mapped_as = class.name().to_string();
+                log.summary_events[e].mapped_as = Traversability::Blocked.name().to_string();
             }
         }
         self.guard_stopped = guarded.stopped();

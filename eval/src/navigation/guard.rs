@@ -1,14 +1,20 @@
 //! The collision guard: nav2's Collision Monitor with its `approach` action, on the robot's own map. Every
 //! command, the controller's or a recovery's, is carried forward for `[navigation] guard_time_s` with the
-//! robot's footprint; when the footprint would enter a cell the map forbids, the command is scaled down so
-//! that the entry would come no sooner than that, and the robot stops short of the cell.
+//! robot's footprint; when the footprint would enter a cell the map calls blocked, the command is scaled down
+//! so that the entry would come no sooner than that, and the robot stops short of the cell.
 //!
 //! The planner keeps the robot's centre away from what the map forbade when it planned; the guard covers what
 //! the plan cannot: cells the map learnt of since (the controller follows a plan up to a period old), and the
 //! footprint's corners where the path runs close (a plan out of an inflated start, pure pursuit cutting a
 //! corner). It reads the map only, never the truth: a guard that stops the robot reports what the map said.
+//!
+//! It keeps the robot out of what the sensors saw, blocked cells, and of nothing else. A cell the map cannot
+//! decide (uncertain) is the planner's to keep away from, with its inflation and its near rule, and the
+//! robot's to look at again: a guard that also stopped for uncertain cells pinned the robot beside them, a
+//! corner that may not turn past a doubt and a back that may not leave it, and ended runs stuck on cells the
+//! truth calls drivable.
 
-use oeg::{CellIndex, Footprint, GridWindow, Pose2, Traversability, UncertainCells};
+use oeg::{CellIndex, Footprint, GridWindow, Pose2, Traversability};
 
 use super::controller::Command;
 use crate::error::Result;
@@ -26,8 +32,6 @@ pub(super) struct Guard {
     pub time_s: f64,
     /// The robot's footprint.
     pub footprint: Footprint,
-    /// Whether uncertain cells are obstacles ([`UncertainCells::Blocked`], the planner's near rule).
-    pub uncertain: UncertainCells,
 }
 
 /// What the guard made of a command.
@@ -35,9 +39,8 @@ pub(super) struct Guard {
 pub(super) struct Guarded {
     /// The command to send: the one given, or it scaled down.
     pub command: Command,
-    /// The cell the footprint would have entered first, and the map's class of it, when the command was
-    /// scaled down.
-    pub limited_by: Option<(CellIndex, Traversability)>,
+    /// The blocked cell the footprint would have entered first, when the command was scaled down.
+    pub limited_by: Option<CellIndex>,
 }
 
 impl Guarded {
@@ -48,15 +51,9 @@ impl Guarded {
 }
 
 impl Guard {
-    /// Whether the map's class of a cell forbids the footprint to enter it. Never-observed cells do not: the
-    /// guard keeps the robot out of what the sensors saw, and the planner decides how near unknown space
-    /// the robot goes.
-    fn forbids(&self, class: Traversability) -> bool {
-        match class {
-            Traversability::Blocked => true,
-            Traversability::Uncertain => self.uncertain == UncertainCells::Blocked,
-            Traversability::Unknown | Traversability::Free | Traversability::Traversable => false,
-        }
+    /// Whether the map's class of a cell forbids the footprint to enter it: blocked only (see the module).
+    fn forbids(class: Traversability) -> bool {
+        class == Traversability::Blocked
     }
 
     /// `command` at the estimated `pose`, guarded on `decisions` (the map's classes over `window`, which
@@ -85,21 +82,18 @@ impl Guard {
                 under_now
                     .binary_search_by_key(&(c.j, c.i), |u| (u.j, u.i))
                     .is_err()
-                    && region.offset(*c).is_some_and(|o| self.forbids(decisions[o]))
+                    && region.offset(*c).is_some_and(|o| Self::forbids(decisions[o]))
             });
             if let Some(cell) = entered {
                 // The last free pose is `k - 1` steps ahead: drive so as to reach it no sooner than the guard
                 // time (nav2's approach: the velocity times the collision time over `time_before_collision`).
                 let ratio = (k - 1) as f64 * dt / self.time_s;
-                let class = region
-                    .offset(cell)
-                    .map_or(Traversability::Unknown, |o| decisions[o]);
                 return Guarded {
                     command: Command {
                         speed_m_s: command.speed_m_s * ratio,
                         turn_rate_rad_s: command.turn_rate_rad_s * ratio,
                     },
-                    limited_by: Some((cell, class)),
+                    limited_by: Some(cell),
                 };
             }
         }
@@ -209,7 +203,6 @@ mod tests {
         Guard {
             time_s: 2.0,
             footprint: FOOTPRINT,
-            uncertain: UncertainCells::Blocked,
         }
     }
 
@@ -266,8 +259,7 @@ mod tests {
         // The front reaches the wall at 0.7 m after 1 s: the speed is about halved.
         let (window, decisions) = wall_at(0.7, Traversability::Blocked);
         let g = guard().limit(&window, &decisions, AT_ORIGIN, AHEAD);
-        let (cell, class) = g.limited_by.expect("the wall limits the command");
-        assert_eq!(class, Traversability::Blocked);
+        let cell = g.limited_by.expect("the wall limits the command");
         assert!(window.geometry().cell_center(cell).0 > 0.7, "{cell:?}");
         assert!(
             (0.4..=0.5).contains(&(g.command.speed_m_s / AHEAD.speed_m_s)),
@@ -288,20 +280,18 @@ mod tests {
     }
 
     #[test]
-    fn uncertain_cells_stop_it_only_where_the_planner_treats_them_as_obstacles() {
-        let (window, decisions) = wall_at(0.31, Traversability::Uncertain);
+    fn only_blocked_cells_stop_it() {
+        for class in [
+            Traversability::Uncertain,
+            Traversability::Unknown,
+            Traversability::Traversable,
+        ] {
+            let (window, decisions) = wall_at(0.31, class);
+            let g = guard().limit(&window, &decisions, AT_ORIGIN, AHEAD);
+            assert_eq!(g.limited_by, None, "{class:?}");
+        }
+        let (window, decisions) = wall_at(0.31, Traversability::Blocked);
         assert!(guard().limit(&window, &decisions, AT_ORIGIN, AHEAD).stopped());
-        let bold = Guard {
-            uncertain: UncertainCells::Drivable,
-            ..guard()
-        };
-        assert_eq!(bold.limit(&window, &decisions, AT_ORIGIN, AHEAD).limited_by, None);
-        // Cells never observed never stop it.
-        let (window, decisions) = wall_at(0.31, Traversability::Unknown);
-        assert_eq!(
-            guard().limit(&window, &decisions, AT_ORIGIN, AHEAD).limited_by,
-            None
-        );
     }
 
     #[test]

@@ -57,7 +57,7 @@ pub enum EventKind {
     ClosestApproach,
     /// No path on the map at a replanning time (after one was found, or the first time).
     NoPath,
-    /// The collision guard stopped the robot short of a cell its map forbids (the start of a stop).
+    /// The collision guard stopped the robot short of a cell its map calls blocked (the start of a stop).
     GuardStop,
     /// The external planner failed: it could not start, exited non-zero, timed out or wrote a bad path.
     PlannerFailed,
@@ -220,7 +220,7 @@ pub struct NavigationSummary {
     pub final_distance_to_goal_m: f64,
     /// Plans asked for.
     pub replans: u64,
-    /// Times the collision guard stopped the robot short of a cell its map forbids ([`EventKind::GuardStop`]).
+    /// Times the collision guard stopped the robot short of a cell its map calls blocked ([`EventKind::GuardStop`]).
     pub guard_stops: u64,
     /// Replanning times with no path on the map.
     pub no_path_replans: u64,

@@ -95,9 +95,8 @@ pub struct Navigation {
     pub backup_speed_m_s: f64,
     /// The collision guard's look-ahead, seconds (nav2's Collision Monitor, `approach` action): every command,
     /// the controller's or a recovery's, is carried forward this long with the footprint, and slowed so that
-    /// the footprint enters no cell the map forbids (blocked, or uncertain where `[planner] uncertain` makes
-    /// those obstacles) sooner than this; the robot stops short of one. Default [`DEFAULT_GUARD_TIME_S`]; 0:
-    /// no guard.
+    /// the footprint enters no cell the map calls blocked sooner than this; the robot stops short of one.
+    /// Default [`DEFAULT_GUARD_TIME_S`]; 0: no guard.
     #[serde(default = "default_guard_time")]
     pub guard_time_s: f64,
     /// `astar` (default) or `external`.
