@@ -18,7 +18,9 @@ import struct
 import sys
 from pathlib import Path
 
-INFLATION_M = 0.35
+# The Pioneer 3-AT's circumscribed radius (0.346 m) and half a 0.05 m cell's diagonal: the built-in planner's
+# default while navigating (the footprint meets cells' squares, the inflation is measured between centres).
+INFLATION_M = 0.381
 UNKNOWN, FREE, TRAVERSABLE = 0, 1, 2
 
 

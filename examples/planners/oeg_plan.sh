@@ -15,9 +15,10 @@ start_x=$1 start_y=$2 goal_x=$3 goal_y=$4 map_yaml=$5 path_csv=$7
 dir=$(dirname "$map_yaml")
 out="$dir/oeg_plan"
 # Never-observed cells are drivable while navigating; the inflation is the Pioneer 3-AT's circumscribed
-# radius (0.346 m), as the built-in planner uses by default.
+# radius (0.346 m) and half a 0.05 m cell's diagonal, 0.381 m, as the built-in planner uses by default (the
+# footprint meets cells' squares, the inflation is measured between their centres).
 "${OEG:-oeg}" plan "$dir/map.oeg" --from "$start_x,$start_y" --to "$goal_x,$goal_y" --out "$out" \
-    --set planner.unknown=drivable --set planner.inflation_radius_m=0.346 >/dev/null
+    --set planner.unknown=drivable --set planner.inflation_radius_m=0.381 >/dev/null
 if grep -q '"plan_found": false' "$out/plan.json"; then
     exit 3
 fi
