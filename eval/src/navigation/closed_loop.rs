@@ -8,10 +8,10 @@ use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
 use super::guard::{Guard, guard_command};
 use super::record::{Event, EventKind, NavigationSummary, Outcome, PlannedPath};
+use super::recovery::{Recovery, describe_sequence, recovery_sequence};
 use super::{
-    MAX_KEPT_PLAN_POINTS, NavigationInputs, NavigationLog, PlanBudget, PlannerSource, Recorder, Recovery,
-    Replan, describe_sequence, estimated_pose, recovery_sequence, replan, round, step_to,
-    truth_shortest_path,
+    MAX_KEPT_PLAN_POINTS, NavigationInputs, NavigationLog, PlanBudget, PlannerSource, Recorder, Replan,
+    estimated_pose, replan, round, step_to, truth_shortest_path,
 };
 use crate::error::Result;
 use crate::mapping::Mapping;
