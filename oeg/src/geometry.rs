@@ -196,6 +196,15 @@ impl CellRegion {
         Self::from_corners(lo, hi).unwrap_or(*self)
     }
 
+    /// The cells `self` and `other` share, or `None` when they share none.
+    pub fn intersection(&self, other: &CellRegion) -> Option<CellRegion> {
+        let (a, b) = (self.max(), other.max());
+        Self::from_corners(
+            CellIndex::new(self.min.i.max(other.min.i), self.min.j.max(other.min.j)),
+            CellIndex::new(a.i.min(b.i), a.j.min(b.j)),
+        )
+    }
+
     /// Every cell of the region, row by row (the raster order).
     pub fn cells(&self) -> impl Iterator<Item = CellIndex> + '_ {
         (0..self.num_y).flat_map(move |v| (0..self.num_x).map(move |u| self.cell_at(u, v)))
@@ -308,6 +317,26 @@ mod tests {
             let err = GridGeometry::new(r).expect_err("must be rejected");
             assert!(err.to_string().contains("resolution_m"), "{err}");
         }
+    }
+
+    #[test]
+    fn regions_intersect_in_the_cells_they_share_and_in_none_apart() {
+        let region = |lo: (i32, i32), hi: (i32, i32)| {
+            CellRegion::from_corners(CellIndex::new(lo.0, lo.1), CellIndex::new(hi.0, hi.1)).expect("valid")
+        };
+        let a = region((-2, 5), (1, 7));
+        assert_eq!(
+            a.intersection(&region((0, 6), (9, 9))),
+            Some(region((0, 6), (1, 7)))
+        );
+        assert_eq!(a.intersection(&a), Some(a));
+        // Touching corners share one cell; apart on one axis, none.
+        assert_eq!(
+            a.intersection(&region((1, 7), (3, 8))),
+            Some(region((1, 7), (1, 7)))
+        );
+        assert_eq!(a.intersection(&region((2, 5), (3, 7))), None);
+        assert_eq!(a.intersection(&region((-2, 8), (1, 9))), None);
     }
 
     #[test]

@@ -94,10 +94,8 @@ impl<'a> ContactWatch<'a> {
             (pose.x_m + reach, pose.y_m + reach),
         );
         let mut nearest: Option<(f64, CellIndex)> = None;
-        if let Ok(window) = window {
-            let (wlo, whi, rlo, rhi) = (window.min, window.max(), region.min, region.max());
-            let lo = CellIndex::new(wlo.i.max(rlo.i), wlo.j.max(rlo.j));
-            let hi = CellIndex::new(whi.i.min(rhi.i), whi.j.min(rhi.j));
+        if let Some(shared) = window.ok().and_then(|w| w.intersection(&region)) {
+            let (lo, hi, rlo) = (shared.min, shared.max(), region.min);
             // The footprint lies within `radius` of the pose, so a cell's distance from the pose less `radius`
             // is a lower bound of the footprint's: a cell whose bound exceeds the nearest so far is skipped
             // without the exact distance (the result is the same).

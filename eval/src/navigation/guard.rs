@@ -113,9 +113,9 @@ impl Guard {
         Some((steps, self.time_s / steps as f64))
     }
 
-    /// The world half-extents `(lo, hi)` of everything the footprint can cover within the guard time from
-    /// `pose` under `command`, with a cell of margin: the window [`Guard::limit`] needs.
-    pub(super) fn reach(&self, pose: Pose2, command: Command, resolution_m: f64) -> ((f64, f64), (f64, f64)) {
+    /// The lower and upper world corners of a box that holds everything the footprint can cover within the
+    /// guard time from `pose` under `command`, with a cell of margin: the window [`Guard::limit`] needs.
+    fn reach(&self, pose: Pose2, command: Command, resolution_m: f64) -> ((f64, f64), (f64, f64)) {
         let travel = command.speed_m_s.abs() * self.time_s;
         let r = self.footprint.circumscribed_radius_m() + travel + resolution_m;
         ((pose.x_m - r, pose.y_m - r), (pose.x_m + r, pose.y_m + r))
@@ -166,7 +166,7 @@ pub(super) fn guard_command(
     let Some(region) = geometry
         .region_covering(lo, hi)
         .ok()
-        .and_then(|r| intersection(&r, bounds))
+        .and_then(|r| r.intersection(bounds))
     else {
         return Ok(Guarded {
             command,
@@ -175,15 +175,6 @@ pub(super) fn guard_command(
     };
     let decisions = map.traversability_layer(region, profile, rule)?.values;
     Ok(guard.limit(&GridWindow::new(geometry, region), &decisions, pose, command))
-}
-
-/// The cells two regions share, or `None`.
-fn intersection(a: &oeg::CellRegion, b: &oeg::CellRegion) -> Option<oeg::CellRegion> {
-    let (amax, bmax) = (a.max(), b.max());
-    oeg::CellRegion::from_corners(
-        CellIndex::new(a.min.i.max(b.min.i), a.min.j.max(b.min.j)),
-        CellIndex::new(amax.i.min(bmax.i), amax.j.min(bmax.j)),
-    )
 }
 
 #[cfg(test)]
