@@ -93,10 +93,9 @@ for table in tables:
         has_path = [r for r in runs if r.get("truth_plan_found") in ("true", "True", "1")]
         reached = [r for r in has_path if r.get("nav_reached") in ("true", "True", "1")]
         stuck = [r for r in runs if r.get("nav_stuck") in ("true", "True", "1")]
-        observable = sum(num(r, "nav_contacts_observable") or 0 for r in runs) if runs and "nav_contacts_observable" in runs[0] else None
-        blind = sum(num(r, "nav_contacts_blind") or 0 for r in runs) if runs and "nav_contacts_blind" in runs[0] else None
         def total(key):
             return sum(num(r, key) or 0 for r in runs) if runs and key in runs[0] else None
+        observable, blind = total("nav_contacts_observable"), total("nav_contacts_blind")
         mapped = "-" if total("nav_contacts_mapped_blocked") is None else " / ".join(
             fmt(total(f"nav_contacts_mapped_{k}"), 0) for k in ("blocked", "undecided", "drivable"))
         aa = mean([num(r, "associated_accuracy") for r in runs])
