@@ -204,6 +204,7 @@ mod tests {
             waypoints_xy_m: vec![[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]],
             speed_m_s: 1.0,
             start_yaw_deg: None,
+            mode: crate::scenario::DriveMode::Kinematic,
         }
     }
 

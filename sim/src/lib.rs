@@ -10,6 +10,7 @@ pub mod drive;
 pub mod error;
 pub mod log;
 pub mod observability;
+pub mod physics;
 pub mod robot;
 pub mod scenario;
 pub mod seed;

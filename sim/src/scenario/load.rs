@@ -7,8 +7,10 @@ use serde::Deserialize;
 use toml::de::{DeTable, DeValue};
 
 use super::check::Checker;
+use super::physics::DriveMode;
 use super::schema::{Scenario, ScenarioSource};
 use crate::error::{Result, SimError, TextPosition};
+use crate::physics::WheeledModel;
 use crate::robot::RobotModel;
 
 /// The largest map region a scenario may ask for, in cells: the truth raster and images are dense over it
@@ -61,6 +63,8 @@ pub struct LoadedScenario {
     pub source: ScenarioSource,
     /// The robot, from its URDF.
     pub robot: RobotModel,
+    /// The robot as bodies and joints, for a drive on its wheels (`[robot.drive] mode = "physics"` only).
+    pub wheeled: Option<WheeledModel>,
     /// The map's window onto the grid: `[map]`'s resolution and region, built once when the scenario is
     /// checked ([`super::MapSettings::window_on`]). The truth, what the sensors could see, the recording, the
     /// figures and the planner's files are laid out on it.
@@ -144,20 +148,29 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
     };
     scenario.map.resolve(&scenario.robot.profile());
     let window = checker.validate(&scenario)?;
-    let robot = load_robot(&checker, &scenario)?;
+    let (robot, wheeled) = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
         scenario,
         source,
         robot,
+        wheeled,
         window,
     })
 }
 
-/// The scenario's robot from its URDF, with every sensor's mount link checked against it.
-fn load_robot(checker: &Checker<'_>, scenario: &Scenario) -> Result<RobotModel> {
+/// The scenario's robot from its URDF, with every sensor's mount link checked against it, and for a drive on
+/// its wheels the robot as bodies and joints.
+fn load_robot(checker: &Checker<'_>, scenario: &Scenario) -> Result<(RobotModel, Option<WheeledModel>)> {
     let urdf_path = checker.source.resolve(&scenario.robot.urdf);
-    let robot = RobotModel::load(&urdf_path, &scenario.robot.base_link)
-        .map_err(|e| checker.error(&[KeySeg::Key("robot"), KeySeg::Key("urdf")], e.to_string()))?;
+    let at_urdf = |e: SimError| checker.error(&[KeySeg::Key("robot"), KeySeg::Key("urdf")], e.to_string());
+    let text = crate::error::read_text(&urdf_path).map_err(at_urdf)?;
+    let robot = RobotModel::from_urdf_text(&urdf_path, &text, &scenario.robot.base_link).map_err(at_urdf)?;
+    let wheeled = match scenario.robot.drive.mode {
+        DriveMode::Kinematic => None,
+        DriveMode::Physics => {
+            Some(WheeledModel::from_urdf(&urdf_path, &text, &scenario.robot, &robot).map_err(at_urdf)?)
+        }
+    };
     for (k, s) in scenario.sensors.iter().enumerate() {
         if robot.link(&s.mount_link).is_none() {
             return Err(checker.error(
@@ -176,7 +189,7 @@ fn load_robot(checker: &Checker<'_>, scenario: &Scenario) -> Result<RobotModel> 
             ));
         }
     }
-    Ok(robot)
+    Ok((robot, wheeled))
 }
 
 /// As [`load_str`], for a document already read and changed (a scenario file with `--set` overrides applied):
@@ -204,11 +217,12 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
     };
     scenario.map.resolve(&scenario.robot.profile());
     let window = checker.validate(&scenario)?;
-    let robot = load_robot(&checker, &scenario)?;
+    let (robot, wheeled) = load_robot(&checker, &scenario)?;
     Ok(LoadedScenario {
         scenario,
         source,
         robot,
+        wheeled,
         window,
     })
 }

@@ -5,6 +5,7 @@ pub mod exact;
 pub mod heightmap;
 mod load;
 mod navigation;
+mod physics;
 mod scene;
 mod schema;
 pub mod sensors;
@@ -15,6 +16,7 @@ pub use load::{
     load, load_doc, load_str, position_of,
 };
 pub use navigation::*;
+pub use physics::*;
 pub use scene::*;
 pub use schema::*;
 pub use sensors::{NoiseSettings, SensorKind, SensorMount};

@@ -207,6 +207,9 @@ pub struct RobotSettings {
     /// Odometry drift of the estimated pose.
     #[serde(default)]
     pub odometry: Odometry,
+    /// What the URDF does not say, for a drive on the wheels (`[robot.drive] mode = "physics"`).
+    #[serde(default)]
+    pub physics: super::physics::PhysicsSettings,
 }
 
 fn default_base_link() -> String {
@@ -263,6 +266,9 @@ pub struct Drive {
     /// Heading at the start, degrees from +x; default: towards the second waypoint.
     #[serde(default)]
     pub start_yaw_deg: Option<f64>,
+    /// Placed on the path (the default) or driven on its wheels.
+    #[serde(default)]
+    pub mode: super::physics::DriveMode,
 }
 
 /// Odometry drift: the estimated pose is the true pose plus a random walk whose standard deviation grows with

@@ -4,6 +4,7 @@
 use crate::convert::to_pose;
 use crate::drive::{DrivePath, OdometryDrift};
 use crate::error::{Result, SimError};
+use crate::physics::PhysicsDrive;
 use crate::robot::Shape;
 use crate::scenario::{Actor, LoadedScenario, Obstacle, Scenario};
 use crate::seed;
@@ -43,6 +44,7 @@ impl World {
         let mut world = Self {
             physics,
             robot_body: RigidBodyHandle::invalid(),
+            wheels: None,
             actors: Vec::new(),
             robot: loaded.robot.clone(),
             path: DrivePath::new(&s.robot.drive),
@@ -90,7 +92,29 @@ impl World {
                 half_height_m: height_m / 2.0,
             });
         }
-        world.robot_body = world
+        match &loaded.wheeled {
+            Some(model) => {
+                let start = world.path.pose_at(0.0);
+                let at = world.drape(start.x_m, start.y_m, start.yaw_rad);
+                let d = &s.robot.drive;
+                world.wheels = Some(PhysicsDrive::insert(
+                    &mut world.physics,
+                    model,
+                    &at,
+                    tag(KIND_ROBOT, 0),
+                    &d.waypoints_xy_m,
+                    d.speed_m_s,
+                ));
+            }
+            None => world.insert_kinematic_robot(loaded),
+        }
+        world.advance_to(0.0);
+        Ok(world)
+    }
+
+    /// The robot as one kinematic body carrying every collision shape of its URDF, placed at each tick.
+    fn insert_kinematic_robot(&mut self, loaded: &LoadedScenario) {
+        self.robot_body = self
             .physics
             .insert_body(RigidBodyBuilder::kinematic_position_based());
         for link in loaded.robot.links() {
@@ -115,12 +139,10 @@ impl World {
                         (pose.rotation * Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2)).normalize();
                 }
                 let collider = builder.position(pose).user_data(tag(KIND_ROBOT, 0));
-                let body = world.robot_body;
-                world.physics.insert_collider(collider, Some(body));
+                let body = self.robot_body;
+                self.physics.insert_collider(collider, Some(body));
             }
         }
-        world.advance_to(0.0);
-        Ok(world)
     }
 
     fn insert_obstacle(

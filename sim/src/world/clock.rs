@@ -25,17 +25,35 @@ impl World {
     pub fn advance_to(&mut self, t_s: f64) {
         let t_s = t_s.max(self.time_s);
         self.time_s = t_s;
-        let planar = match &self.command {
-            Some(c) => c.pose_at(t_s),
-            None => self.path.pose_at(t_s),
+        self.move_actors(t_s);
+        let planar = if let Some(wheels) = self.wheels.as_mut() {
+            let labels = &self.labels;
+            wheels.advance_to(&mut self.physics, t_s, &|u| Self::name_of(labels, u));
+            let pose = wheels.world_from_base(&self.physics);
+            let mut now = crate::physics::planar(&pose);
+            now.distance_m =
+                self.planar.distance_m + (now.x_m - self.planar.x_m).hypot(now.y_m - self.planar.y_m);
+            self.world_from_base = pose;
+            now
+        } else {
+            let planar = match &self.command {
+                Some(c) => c.pose_at(t_s),
+                None => self.path.pose_at(t_s),
+            };
+            self.world_from_base = self.drape(planar.x_m, planar.y_m, planar.yaw_rad);
+            planar
         };
         self.planar = planar;
-        self.world_from_base = self.drape(planar.x_m, planar.y_m, planar.yaw_rad);
         self.drift.advance(planar.distance_m);
         self.estimated_world_from_base = self.drift.apply(&self.world_from_base);
         if let Some(body) = self.physics.bodies.get_mut(self.robot_body) {
             body.set_position(to_pose(&self.world_from_base), true);
         }
+        self.physics.detect_collisions(&(), &());
+    }
+
+    /// Puts each actor where it is at `t_s`, and takes out of the scene those not in it.
+    fn move_actors(&mut self, t_s: f64) {
         for k in 0..self.actors.len() {
             let track = &self.actors[k];
             let present = track.position_at(t_s);
@@ -50,12 +68,11 @@ impl World {
                 c.set_enabled(present.is_some());
             }
         }
-        self.physics.detect_collisions(&(), &());
     }
 
     /// The base pose at `(x, y, yaw)` resting on the terrain: height from the wheel contacts, pitch from the
     /// front and rear pairs, roll from the left and right pairs.
-    fn drape(&self, x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
+    pub(super) fn drape(&self, x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
         let planar = Isometry3::from_parts(
             Translation3::new(x, y, 0.0),
             UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
@@ -90,6 +107,10 @@ impl World {
     /// a `cmd_vel`. The robot is kinematic: it goes where it is sent, through obstacles too (contacts are
     /// the judge's to find).
     pub fn command(&mut self, speed_m_s: f64, turn_rate_rad_s: f64) {
+        if let Some(wheels) = self.wheels.as_mut() {
+            wheels.command(speed_m_s, turn_rate_rad_s);
+            return;
+        }
         self.command = Some(VelocityCommand {
             since_s: self.time_s,
             from: self.planar,

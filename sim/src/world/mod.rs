@@ -13,6 +13,7 @@ use nalgebra::{Isometry3, Point3};
 use rapier3d::prelude::{Collider, ColliderHandle, PhysicsWorld, RigidBodyHandle};
 
 use crate::drive::{DrivePath, OdometryDrift, PlanarPose, VelocityCommand};
+use crate::physics::{PhysicsDrive, PhysicsEvent, PhysicsSample};
 use crate::robot::RobotModel;
 use crate::terrain::HeightGrid;
 
@@ -92,7 +93,10 @@ struct ActorTrack {
 /// The simulated world of one scenario.
 pub struct World {
     physics: PhysicsWorld,
+    /// The kinematic robot's one body (invalid when the robot drives on its wheels).
     robot_body: RigidBodyHandle,
+    /// The robot on its wheels (`[robot.drive] mode = "physics"`), or `None`: placed on its path.
+    wheels: Option<PhysicsDrive>,
     actors: Vec<ActorTrack>,
     robot: RobotModel,
     path: DrivePath,
@@ -152,5 +156,30 @@ impl World {
     /// Number of colliders in the Rapier world.
     pub fn num_colliders(&self) -> usize {
         self.physics.colliders.len()
+    }
+
+    /// What happened to the robot on its wheels so far, by name (`None`: the robot is kinematic).
+    pub fn physics_events(&self) -> Option<&[PhysicsEvent]> {
+        self.wheels.as_ref().map(PhysicsDrive::events)
+    }
+
+    /// The robot's state on its wheels, sampled every [`crate::physics::SAMPLE_PERIOD_S`] (`None`: the robot
+    /// is kinematic).
+    pub fn physics_samples(&self) -> Option<&[PhysicsSample]> {
+        self.wheels.as_ref().map(PhysicsDrive::samples)
+    }
+
+    /// The name of what a collider's `user_data` tags: an obstacle's label, `person <k>`, `ground` or `robot`.
+    fn name_of(labels: &[String], user_data: u128) -> String {
+        let index = (user_data & 0xffff_ffff) as usize;
+        match (user_data >> 32) as u32 {
+            KIND_TERRAIN => "ground".to_string(),
+            KIND_OBSTACLE => labels
+                .get(index)
+                .cloned()
+                .unwrap_or_else(|| format!("obstacle {index}")),
+            KIND_ACTOR => format!("person {index}"),
+            _ => "robot".to_string(),
+        }
     }
 }

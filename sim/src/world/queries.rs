@@ -27,8 +27,15 @@ impl World {
         let dir = direction / norm;
         let ray = Ray::new(point_to_vector(origin), to_vector(&dir));
         let skip_actors = |_: ColliderHandle, c: &Collider| kind_of(c) != KIND_ACTOR;
+        // The robot on its wheels is many bodies: its colliders are skipped by their tag.
+        let skip_robot = |_: ColliderHandle, c: &Collider| {
+            let kind = kind_of(c);
+            kind != KIND_ROBOT && (actors == Actors::Included || kind != KIND_ACTOR)
+        };
         let mut filter = QueryFilter::default().exclude_rigid_body(self.robot_body);
-        if actors == Actors::Excluded {
+        if self.wheels.is_some() {
+            filter = filter.predicate(&skip_robot);
+        } else if actors == Actors::Excluded {
             filter = filter.predicate(&skip_actors);
         }
         let (handle, toi) =

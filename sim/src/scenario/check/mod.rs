@@ -1,6 +1,7 @@
 //! The check of a scenario's values for sense, after the schema has read them: every error names the file, the
 //! line and the column of the value, and what was expected.
 
+mod physics;
 mod world;
 
 use toml::de::DeTable;
@@ -401,7 +402,7 @@ impl Checker<'_> {
             &[K("robot"), K("odometry"), K("yaw_sigma_deg_per_sqrt_m")],
             "noise",
         )?;
-        Ok(())
+        self.validate_physics(&r.physics)
     }
 
     /// `[[sensors]]`: each entry resolved against its preset, unique names, and the run's total work.
