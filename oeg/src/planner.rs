@@ -320,11 +320,9 @@ fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 /// blocked cells near the goal still count.
 ///
 /// A robot whose centre stands inside the inflation (it turned close to an obstacle, or saw it late) keeps
-/// the clearance it has, never less, on its way out: within the inflation radius of the start, the path keeps
-/// its centre as far from every obstacle as the start is, less half a cell, instead of there being no path
-/// out (costmap_2d's inflation is a cost the planner may cross on its way out of it). Beyond that radius the
-/// full inflation holds, so the way out leads out: a robot that replans as it drives cannot follow an
-/// obstacle half a cell closer with each plan.
+/// the clearance it has, never less: the path then keeps its centre as far from every obstacle as the start
+/// is, less half a cell, instead of there being no path out (costmap_2d's inflation is a cost the planner may
+/// cross on its way out of it).
 ///
 /// # Errors
 /// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the window.
@@ -409,7 +407,7 @@ pub fn plan_or_why(
     if forbidden[s]
         && let Some(clearance) = start_clearance(region, resolution_m, &decisions, start, options)
     {
-        let relaxed = forbidden_mask(
+        forbidden = forbidden_mask(
             window,
             &decisions,
             &PlannerOptions {
@@ -417,19 +415,6 @@ pub fn plan_or_why(
                 ..*options
             },
         )?;
-        // The relaxed clearance is a way out of the inflation, so it holds only where the way out lies:
-        // within the inflation radius of the start. Beyond, the path keeps the full inflation, so a robot
-        // that replans every tick cannot creep half a cell closer to the obstacle with each plan.
-        let reach = options.inflation_radius_m / resolution_m + 1e-9;
-        for (k, (f, relaxed)) in forbidden.iter_mut().zip(relaxed).enumerate() {
-            let (di, dj) = (
-                (k % region.num_x as usize) as f64 - f64::from(start.i - region.min.i),
-                (k / region.num_x as usize) as f64 - f64::from(start.j - region.min.j),
-            );
-            if di * di + dj * dj <= reach * reach {
-                *f = relaxed;
-            }
-        }
     }
     if forbidden[s] {
         return Ok(Err(NoPath::Start(original[s])));
