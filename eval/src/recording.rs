@@ -22,6 +22,9 @@ pub(crate) const DEFAULT_GRID_PERIOD_S: f64 = 1.0;
 
 pub(crate) use crate::error::RecordingError;
 
+/// The schema of the robot's state on its wheels (`/physics`): the columns of `physics.csv`.
+const PHYSICS_SCHEMA: &str = "oeg.PhysicsState";
+
 /// The Foxglove schemas used, as JSON schemas (the fields this recording writes, with their types), by name.
 pub(crate) fn schemas() -> BTreeMap<&'static str, Value> {
     let time = json!({"type": "object", "properties": {
@@ -43,6 +46,21 @@ pub(crate) fn schemas() -> BTreeMap<&'static str, Value> {
         "required": ["name", "offset", "type"]}});
     let data = json!({"type": "string", "contentEncoding": "base64"});
     let mut out = BTreeMap::new();
+    let number = json!({"type": "number"});
+    let mut physics = serde_json::Map::new();
+    physics.insert("timestamp".into(), time.clone());
+    for name in <sim::physics::PhysicsSample as crate::output::CsvRow>::COLUMNS {
+        let field = if *name == "path_error_m" {
+            json!({"type": ["number", "null"]})
+        } else {
+            number.clone()
+        };
+        physics.insert((*name).into(), field);
+    }
+    out.insert(
+        PHYSICS_SCHEMA,
+        json!({"title": PHYSICS_SCHEMA, "type": "object", "properties": physics, "required": ["timestamp"]}),
+    );
     out.insert(
         "foxglove.FrameTransform",
         json!({"title": "foxglove.FrameTransform", "type": "object", "properties": {
@@ -362,6 +380,18 @@ impl Recording {
         let message = json!({"timestamp": stamp(t_s), "level": level as u8, "message": message,
             "name": "oeg", "file": "", "line": 0});
         self.write("/events", "foxglove.Log", t_s, &message)
+    }
+
+    /// The robot's state on its wheels at one time (`/physics`): the fields of `physics.csv`, to plot.
+    ///
+    /// # Errors
+    /// A failed write.
+    pub fn physics_state(&mut self, sample: &sim::physics::PhysicsSample) -> Result<(), RecordingError> {
+        let mut message = serde_json::to_value(sample).map_err(|e| RecordingError(e.to_string()))?;
+        if let Some(object) = message.as_object_mut() {
+            object.insert("timestamp".into(), stamp(sample.time_s));
+        }
+        self.write("/physics", PHYSICS_SCHEMA, sample.time_s, &message)
     }
 
     /// The finished file.

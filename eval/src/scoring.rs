@@ -71,6 +71,7 @@ impl ScoringTruth {
             returns: self.returns.as_ref(),
             observability: self.observability.as_ref(),
             navigation: None,
+            physics: None,
         };
         score(&self.scenario, estimate, &self.raster, &sensed)
     }

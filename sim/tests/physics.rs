@@ -237,3 +237,32 @@ fn absurd_physics_settings_are_refused_at_their_place() {
         );
     }
 }
+
+#[test]
+fn the_default_torque_is_the_larger_of_the_grade_and_the_turn_on_the_spot() {
+    let loaded = common::load_text("torque", &scenario("[[0.0, 0.0], [5.0, 0.0]]", "")).expect("valid");
+    let model = loaded.wheeled.expect("a physics drive");
+    // docs/physics.md: 12.9 kg on four 0.111 m wheels; the turn on the spot against friction 0.8 takes
+    // 3.40 N m a wheel, times 1.5; the 35 % grade, 1.16 N m.
+    assert!((model.mass_kg() - 12.9).abs() < 1e-9);
+    assert!(
+        (model.wheel_torque_nm() - 5.10).abs() < 0.01,
+        "{}",
+        model.wheel_torque_nm()
+    );
+    let (roll, pitch) = model.tip_limits_deg();
+    assert!(
+        roll > 45.0 && roll < 55.0 && pitch > 30.0 && pitch < 45.0,
+        "{roll} {pitch}"
+    );
+    // A URDF `effort` limit, or the scenario's key, replaces the derived torque.
+    let text = scenario(
+        "[[0.0, 0.0], [5.0, 0.0]]",
+        "[robot.physics]\nwheel_torque_nm = 2.5\n",
+    );
+    let model = common::load_text("torque-set", &text)
+        .expect("valid")
+        .wheeled
+        .expect("physics");
+    assert_eq!(model.wheel_torque_nm(), 2.5);
+}

@@ -8,6 +8,7 @@ use sim::truth::TruthRaster;
 
 use crate::judge::estimate::Estimate;
 pub use crate::judge::navigation_metrics::NavMetrics;
+pub use crate::judge::physics_metrics::PhysicsMetrics;
 use crate::judge::verdict::{TruthClass, Verdict, Verdicts};
 
 /// `metrics.json`: one flat object, snake_case keys with units in their names. Deterministic for the same
@@ -115,6 +116,9 @@ pub struct Metrics {
     /// The closed loop's figures (`nav_*`; null for a run without `[navigation]`).
     #[serde(flatten)]
     pub nav: NavMetrics,
+    /// The drive on the wheels' figures (`phys_*`; absent for a kinematic drive).
+    #[serde(flatten)]
+    pub phys: PhysicsMetrics,
     /// Whether every expectation of the scenario holds.
     pub expectations_passed: bool,
     /// Number of expectations that failed.
@@ -249,6 +253,7 @@ pub fn compute(
         truth_plan_length_m: f64::NAN,
         plan_length_ratio: f64::NAN,
         nav: NavMetrics::default(),
+        phys: PhysicsMetrics::default(),
         expectations_passed: true,
         num_expectations_failed: 0,
     }
@@ -364,6 +369,7 @@ pub(crate) fn test_metrics() -> Metrics {
         truth_plan_length_m: 10.0,
         plan_length_ratio: 1.0,
         nav: NavMetrics::default(),
+        phys: PhysicsMetrics::default(),
         ..compute_empty()
     }
 }
@@ -414,6 +420,7 @@ fn compute_empty() -> Metrics {
         truth_plan_length_m: 0.0,
         plan_length_ratio: 0.0,
         nav: NavMetrics::ZERO,
+        phys: PhysicsMetrics::ZERO,
         expectations_passed: true,
         num_expectations_failed: 0,
     }

@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod navigation_metrics;
 pub(crate) mod obstacles;
 pub(crate) mod outcome;
+pub mod physics_metrics;
 pub mod plan_check;
 pub mod verdict;
 pub(crate) mod wrong_cells;
@@ -28,6 +29,7 @@ use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
 use metrics::{FailedExpectation, Metrics};
 use navigation_metrics::NavMetrics;
+pub use physics_metrics::{PhysicsMetrics, PhysicsRecord};
 
 /// A map judged against the truth: metrics (with the planner check and the expectations), per-obstacle
 /// decisions.
@@ -56,6 +58,8 @@ pub struct Sensed<'a> {
     pub observability: Option<&'a sim::observability::Observability>,
     /// A closed-loop run's figures (the `nav_*` metrics, which the expectations may name).
     pub navigation: Option<&'a NavigationFigures>,
+    /// A drive on the wheels' events and samples (the `phys_*` metrics; `None`: a kinematic drive).
+    pub physics: Option<PhysicsRecord<'a>>,
 }
 
 /// Judges `map` against `truth` under the scenario's decisions, with what the run `sensed`.
@@ -91,6 +95,9 @@ pub fn score(
     record_ghosts(&mut metrics, &ghosts::count(s, &verdicts, &estimate.doubts));
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
+    }
+    if let Some(p) = &sensed.physics {
+        metrics.phys = PhysicsMetrics::of(p);
     }
     let failed = metrics::check_expectations(&mut metrics, &applicable(&s.expectations, &estimate));
     let obstacles = obstacles::decisions(s, &estimate, truth, &verdicts, sensed.returns);

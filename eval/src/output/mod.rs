@@ -181,6 +181,22 @@ mod tests {
 
     #[test]
     fn every_report_tables_columns_are_its_fields_in_order_and_an_empty_table_keeps_its_header() {
+        check(&sim::physics::PhysicsSample {
+            time_s: 0.0,
+            x_m: 0.0,
+            y_m: 0.0,
+            z_m: 0.0,
+            yaw_deg: 0.0,
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+            commanded_speed_m_s: 0.0,
+            commanded_turn_rate_deg_s: 0.0,
+            speed_m_s: 0.0,
+            turn_rate_deg_s: 0.0,
+            slip_left: 0.0,
+            slip_right: 0.0,
+            path_error_m: None,
+        });
         check(&crate::jobs::suite::SuiteRow {
             scenario: "s".into(),
             file: "f".into(),

@@ -71,10 +71,33 @@ fn finish_recording(
     truth: &TruthRaster,
     evaluation: &Evaluation,
     navigation: Option<&NavigationLog>,
+    physics: Option<&crate::judge::PhysicsRecord<'_>>,
     geometry: &GridGeometry,
     end_s: f64,
 ) -> Result<Vec<u8>> {
     recording.truth(truth)?;
+    if let Some(record) = physics {
+        for sample in record.samples {
+            recording.physics_state(sample)?;
+        }
+        for e in record.events {
+            use sim::physics::PhysicsEventKind as K;
+            let (level, what) = match &e.kind {
+                K::Contact { with, link } => (LogLevel::Error, format!("contact: {link} touched {with}")),
+                K::TipOver { roll_deg, pitch_deg } => (
+                    LogLevel::Error,
+                    format!("tip-over: roll {roll_deg:.1} deg, pitch {pitch_deg:.1} deg"),
+                ),
+                K::Stall { wheel_slip } => (
+                    LogLevel::Warning,
+                    format!("stall: no progress, wheel slip {wheel_slip:.2}"),
+                ),
+                K::GoalReached => (LogLevel::Info, "goal reached".to_string()),
+            };
+            let text = format!("{what} at ({:.2}, {:.2}) m", e.x_m, e.y_m);
+            recording.event(e.time_s, level, &text)?;
+        }
+    }
     match navigation {
         Some(log) => {
             for p in &log.plans {
@@ -229,6 +252,7 @@ fn judge_run(
         returns: Some(sim.simulation.obstacle_returns()),
         observability: Some(&sim.observability),
         navigation: figures.as_ref(),
+        physics: crate::judge::PhysicsRecord::of(sim.simulation.world()),
     };
     let evaluation = evaluate(s, &map, &truth, &sensed)?;
     let compared = match (run.compared.take(), maps.next()) {
@@ -269,7 +293,7 @@ fn write_run(
     } = judged;
     let RunSimulated {
         planner_dir,
-        simulated: sim,
+        simulated: mut sim,
         ..
     } = run;
     let navigation = sim.navigation.as_ref();
@@ -278,6 +302,12 @@ fn write_run(
     let mut files = write_report(stage, s, &map, &truth, &evaluation, overlay.as_ref(), formats)?;
     if let Some(log) = navigation {
         files.extend(crate::report::write_navigation(stage, s, &truth, log, formats)?);
+    }
+    if let (Some(model), Some(record)) = (
+        &loaded.wheeled,
+        crate::judge::PhysicsRecord::of(sim.simulation.world()),
+    ) {
+        files.extend(crate::report::write_physics(stage, model, &record)?);
     }
     files.extend(crate::report::write_observability(
         stage,
@@ -291,10 +321,19 @@ fn write_run(
         files.push(planner_dir);
     }
     let geometry = *map.geometry();
-    if let Some(recording) = sim.recording {
+    if let Some(recording) = sim.recording.take() {
         let path = stage.join("recording.mcap");
         let end_s = sim.simulation.world().time_s();
-        let bytes = finish_recording(recording, &truth, &evaluation, navigation, &geometry, end_s)?;
+        let physics = crate::judge::PhysicsRecord::of(sim.simulation.world());
+        let bytes = finish_recording(
+            recording,
+            &truth,
+            &evaluation,
+            navigation,
+            physics.as_ref(),
+            &geometry,
+            end_s,
+        )?;
         crate::output::write_bytes(&path, &bytes)?;
         files.push(path);
     }
@@ -323,7 +362,7 @@ fn write_run(
     files.push(timing_path);
     // The page that shows the run, last: it links every file above.
     let compared_run = compared.as_ref().map(|(preset, c, _, e)| (*preset, c, e));
-    let (page, outcomes) = write_page(stage, options, s, &evaluation, compared_run, navigation, &files)?;
+    let (page, outcomes) = write_page(stage, options, s, &evaluation, compared_run, &sim, &files)?;
     files.push(page);
     let Evaluation {
         metrics,
@@ -351,7 +390,7 @@ fn write_page(
     s: &scenario::Scenario,
     evaluation: &Evaluation,
     compared: Option<(oeg::MapPreset, &scenario::Scenario, &Evaluation)>,
-    navigation: Option<&NavigationLog>,
+    sim: &Simulated,
     files: &[PathBuf],
 ) -> Result<(PathBuf, Vec<crate::judge::outcome::Outcome>)> {
     let mut models = vec![ModelRun {
@@ -371,7 +410,8 @@ fn write_page(
         models,
         overrides: &options.overrides,
         planner_command: options.planner_command.as_deref(),
-        navigation,
+        navigation: sim.navigation.as_ref(),
+        physics: crate::judge::PhysicsRecord::of(sim.simulation.world()),
         files: files
             .iter()
             .filter_map(|f| f.strip_prefix(stage).ok().map(Path::to_path_buf))

@@ -4,6 +4,9 @@
 //! shows them all, `report.html` ([`page`]).
 
 pub(crate) mod page;
+mod physics;
+
+pub(crate) use physics::write_physics;
 
 use std::path::{Path, PathBuf};
 

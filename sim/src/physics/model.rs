@@ -179,6 +179,11 @@ impl WheeledModel {
         })
     }
 
+    /// The `[robot.physics]` settings it was built with.
+    pub fn settings(&self) -> &PhysicsSettings {
+        &self.settings
+    }
+
     /// Each wheel motor's torque limit, N m.
     pub fn wheel_torque_nm(&self) -> f64 {
         self.torque_nm

@@ -336,6 +336,7 @@ fn simulate_group(
                     returns: Some(simulation.obstacle_returns()),
                     observability: Some(&simulated.observability),
                     navigation: figures.as_ref(),
+                    physics: crate::judge::PhysicsRecord::of(simulation.world()),
                 },
             )
             .map_err(|e| e.to_string())?;

@@ -28,7 +28,7 @@ pub const METRICS: [(&str, &str, bool); 10] = [
 
 /// The metrics summarized when some run has them: closed-loop runs' (`[navigation]`) and what no ray could tell
 /// (absent from rows of earlier versions).
-pub const OPTIONAL_METRICS: [(&str, &str, bool); 13] = [
+pub const OPTIONAL_METRICS: [(&str, &str, bool); 17] = [
     ("blind_cells", "unsafe cells no ray could tell about", false),
     ("plan_blind_cells", "blind cells on the planned path", false),
     (
@@ -78,4 +78,16 @@ pub const OPTIONAL_METRICS: [(&str, &str, bool); 13] = [
         "closest approach to a truly blocked cell [m]",
         false,
     ),
+    (
+        "phys_goal_reached",
+        "rate of drives on the wheels that reached the goal",
+        true,
+    ),
+    ("phys_stalls", "stalls per drive on the wheels", false),
+    (
+        "phys_contacts",
+        "body contacts with obstacles per drive on the wheels",
+        false,
+    ),
+    ("phys_max_pitch_deg", "largest pitch on the wheels [deg]", false),
 ];
