@@ -1,5 +1,6 @@
 //! The scripted drive on the wheels: a pure-pursuit follower of the drive's waypoints, segment by segment, that
-//! drives to each waypoint and turns on the spot there, as the kinematic drive does.
+//! drives to each waypoint and turns on the spot there, as the kinematic drive does; between waypoints it
+//! only steers.
 
 use crate::drive::PlanarPose;
 
@@ -11,6 +12,9 @@ pub(crate) const ARRIVAL_M: f64 = 0.1;
 /// kinematic drive turns on the spot at each waypoint, and a skid-steer robot that drives off with a larger
 /// error swings wide of its path.
 const TURN_IN_PLACE_RAD: f64 = 15.0 * std::f64::consts::PI / 180.0;
+/// Heading error below which a turn on the spot is done, radians (5 degrees): the hysteresis keeps the robot
+/// from switching between turning and driving at the threshold.
+const TURN_DONE_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
 /// Gain of the turn towards the lookahead point, 1/s.
 const HEADING_GAIN_PER_S: f64 = 2.0;
 /// The deceleration with which the robot comes to each waypoint, m/s²: the Pioneer's controller default
@@ -25,6 +29,12 @@ pub(crate) struct WaypointFollower {
     /// The segment the robot was last nearest to.
     segment: usize,
     arrived: bool,
+    /// Turning on the spot, until the heading error is below [`TURN_DONE_RAD`].
+    turning: bool,
+    /// Whether the robot may still turn on the spot on this segment: at its start only. Mid-segment, an
+    /// obstacle that pushes the robot off its heading (a curb met at an angle) is driven through with pure
+    /// pursuit, as a driver would, not answered with a turn on the spot against it.
+    at_segment_start: bool,
 }
 
 impl WaypointFollower {
@@ -34,6 +44,8 @@ impl WaypointFollower {
             speed_m_s,
             segment: 0,
             arrived: waypoints.len() < 2,
+            turning: false,
+            at_segment_start: true,
         }
     }
 
@@ -64,6 +76,7 @@ impl WaypointFollower {
             let to_end = (pose.x_m - b[0]).hypot(pose.y_m - b[1]);
             if t >= 1.0 || to_end < ARRIVAL_M {
                 self.segment += 1;
+                self.at_segment_start = true;
             } else {
                 break;
             }
@@ -72,8 +85,17 @@ impl WaypointFollower {
         let heading = (target[1] - pose.y_m).atan2(target[0] - pose.x_m);
         let error = wrap(heading - pose.yaw_rad);
         let turn = (HEADING_GAIN_PER_S * error).clamp(-max_turn_rate_rad_s, max_turn_rate_rad_s);
-        if error.abs() > TURN_IN_PLACE_RAD {
-            return (0.0, turn);
+        if self.at_segment_start {
+            self.turning = error.abs()
+                > if self.turning {
+                    TURN_DONE_RAD
+                } else {
+                    TURN_IN_PLACE_RAD
+                };
+            if self.turning {
+                return (0.0, turn);
+            }
+            self.at_segment_start = false;
         }
         // Pure pursuit: the arc through the lookahead point, at the cruise speed, slowed to stop at the
         // segment's end.

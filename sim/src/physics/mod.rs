@@ -40,6 +40,9 @@ const TURN_INTEGRAL_MAX_RAD_S: f64 = 1.0;
 /// The motors' velocity-servo gain (Rapier's motor damping): stiff, so a wheel turns at its target speed
 /// unless its torque limit binds.
 const MOTOR_GAIN: f32 = 1000.0;
+/// A robot that covers less than this fraction of what its commands asked (and no more than `stall_distance_m`)
+/// over `stall_time_s` is stalled: pushing against a step, spinning its wheels, or dithering against an edge.
+const STALL_FRACTION: f64 = 0.25;
 /// Commands below these are standing still, m/s and rad/s.
 const STILL_M_S: f64 = 1e-3;
 const STILL_RAD_S: f64 = 1e-2;
@@ -55,7 +58,8 @@ pub enum PhysicsEventKind {
         /// The robot's link that touched it.
         link: String,
     },
-    /// The robot was commanded to move and made no progress for `stall_time_s`.
+    /// The robot was commanded to drive or turn and made no progress for `stall_time_s`: less than
+    /// `stall_distance_m` or a quarter of what its commands asked.
     Stall {
         /// The wheels' mean slip over the stall, from 0 (rolling) to 1 (spinning in place).
         wheel_slip: f64,
@@ -142,6 +146,9 @@ struct Watch {
     since_s: f64,
     x_m: f64,
     y_m: f64,
+    yaw_rad: f64,
+    /// The distance the commands since `since_s` asked a wheel's contact to cover, metres.
+    commanded_m: f64,
     slip_sum: f64,
     samples: u32,
     reported: bool,
@@ -479,29 +486,30 @@ impl PhysicsDrive {
         }
 
         let (slip_left, slip_right) = self.slips(physics);
-        let moving = self.commanded.0.abs() >= STILL_M_S;
+        // Commanded to move: to drive, or to turn on the spot. Progress is the distance a wheel's contact
+        // covers: the base's displacement and the heading's change times half the track.
+        let moving = self.commanded.0.abs() >= STILL_M_S || self.commanded.1.abs() >= STILL_RAD_S;
+        let fresh = Watch {
+            since_s: t,
+            x_m: p.x_m,
+            y_m: p.y_m,
+            yaw_rad: p.yaw_rad,
+            commanded_m: 0.0,
+            slip_sum: 0.0,
+            samples: 0,
+            reported: false,
+        };
+        let half_track = self.track_m / 2.0;
+        let asked = (self.commanded.0.abs() + self.commanded.1.abs() * half_track) * self.dt_s;
         match (&mut self.watch, moving) {
             (_, false) => self.watch = None,
-            (None, true) => {
-                self.watch = Some(Watch {
-                    since_s: t,
-                    x_m: p.x_m,
-                    y_m: p.y_m,
-                    slip_sum: 0.0,
-                    samples: 0,
-                    reported: false,
-                });
-            }
+            (None, true) => self.watch = Some(fresh),
             (Some(w), true) => {
-                if (p.x_m - w.x_m).hypot(p.y_m - w.y_m) > self.stall_distance_m {
-                    *w = Watch {
-                        since_s: t,
-                        x_m: p.x_m,
-                        y_m: p.y_m,
-                        slip_sum: 0.0,
-                        samples: 0,
-                        reported: false,
-                    };
+                let progress = (p.x_m - w.x_m).hypot(p.y_m - w.y_m)
+                    + follow::wrap(p.yaw_rad - w.yaw_rad).abs() * half_track;
+                w.commanded_m += asked;
+                if progress > self.stall_distance_m.max(STALL_FRACTION * w.commanded_m) {
+                    *w = fresh;
                 } else {
                     w.slip_sum += (slip_left + slip_right) / 2.0;
                     w.samples += 1;

@@ -58,8 +58,10 @@ pub struct PhysicsSettings {
     /// The wheel joints, each `continuous` or `revolute` about the link's y axis: left wheels at positive y
     /// in the base frame, right at negative. Default: every `continuous` joint of the URDF.
     pub wheel_joints: Option<Vec<String>>,
-    /// Seconds without [`PhysicsSettings::stall_distance_m`] of progress, while the wheels are commanded to
-    /// drive, after which the robot is stalled; default [`DEFAULT_STALL_TIME_S`].
+    /// Seconds without progress, while commanded to drive or turn, after which the robot is stalled; default
+    /// [`DEFAULT_STALL_TIME_S`]. Progress is the distance a wheel's contact covers (the base's displacement and
+    /// its heading's change times half the track), and there is none when it stays under the larger of
+    /// [`PhysicsSettings::stall_distance_m`] and a quarter of what the commands asked.
     pub stall_time_s: f64,
     /// See `stall_time_s`, metres; default [`DEFAULT_STALL_DISTANCE_M`].
     pub stall_distance_m: f64,
