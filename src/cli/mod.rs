@@ -33,7 +33,7 @@ impl std::fmt::Display for Status {
 impl std::error::Error for Status {}
 
 /// Prints each failed expectation and fails, so that the command exits non-zero (after its files are written).
-fn fail_on_expectations(failed: &[oeg_eval::judge::metrics::FailedExpectation]) -> anyhow::Result<()> {
+fn fail_on_expectations(failed: &[oeg_eval::judge::expectations::FailedExpectation]) -> anyhow::Result<()> {
     if failed.is_empty() {
         return Ok(());
     }

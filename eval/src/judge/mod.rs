@@ -9,6 +9,7 @@
 //! `obstacles`, `wrong_cells` <- [`Evaluation`] <- the figures and the report.
 
 pub mod estimate;
+pub mod expectations;
 pub(crate) mod ghosts;
 pub mod metrics;
 pub mod navigation_metrics;
@@ -27,7 +28,8 @@ use sim::truth::TruthRaster;
 use crate::error::Result;
 use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
-use metrics::{FailedExpectation, Metrics};
+use expectations::FailedExpectation;
+use metrics::Metrics;
 use navigation_metrics::NavMetrics;
 pub use physics_metrics::{PhysicsMetrics, PhysicsRecord};
 
@@ -99,7 +101,7 @@ pub fn score(
     if let Some(p) = &sensed.physics {
         metrics.phys = PhysicsMetrics::of(p);
     }
-    let failed = metrics::check_expectations(&mut metrics, &applicable(&s.expectations, &estimate));
+    let failed = expectations::check_expectations(&mut metrics, &applicable(&s.expectations, &estimate));
     let obstacles = obstacles::decisions(s, &estimate, truth, &verdicts, sensed.returns);
     Ok(Evaluation {
         metrics,

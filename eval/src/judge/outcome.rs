@@ -9,7 +9,8 @@
 
 use std::collections::BTreeMap;
 
-use crate::judge::metrics::{ExpectationResult, Metrics, expectation_results};
+use crate::judge::expectations::{ExpectationResult, expectation_results};
+use crate::judge::metrics::Metrics;
 use crate::output::html::field;
 
 /// How a drive on the map ends, judged against the truth.

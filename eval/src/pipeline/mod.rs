@@ -14,7 +14,7 @@ use sim::truth::{DEFAULT_SAMPLES_PER_SIDE, TruthRaster};
 use sim::world::Actors;
 
 use crate::error::{EvalError, Result};
-use crate::judge::metrics;
+use crate::judge::expectations::expectation_problem;
 use crate::progress::Progress;
 use crate::settings::SettingError;
 
@@ -96,7 +96,7 @@ pub fn load(options: &RunOptions) -> Result<scenario::LoadedScenario> {
 /// # Errors
 /// [`EvalError::At`] naming the file, line and column.
 pub fn check_expectations(loaded: &scenario::LoadedScenario, text: &str) -> Result<()> {
-    match metrics::expectation_problem(&loaded.scenario.expectations) {
+    match expectation_problem(&loaded.scenario.expectations) {
         None => Ok(()),
         Some((name, message)) => {
             // The place in the file, when the file (not a `--set`) holds the expectation as it was checked.

@@ -11,7 +11,8 @@ use sim::truth::TruthRaster;
 use super::simulate::{Simulated, planner_source, simulate};
 use super::{RunOptions, load, truth_of};
 use crate::error::{EvalError, Result};
-use crate::judge::metrics::{FailedExpectation, Metrics};
+use crate::judge::expectations::FailedExpectation;
+use crate::judge::metrics::Metrics;
 use crate::judge::{Evaluation, Sensed, evaluate};
 use crate::mapping::SimulatedTiming;
 use crate::navigation::{NavigationLog, PlannerSource};
@@ -64,19 +65,20 @@ pub struct RunReport {
     pub files: Vec<PathBuf>,
 }
 
-/// The recording's last parts: the truth once, the planned paths (every replan of a closed loop at its time,
-/// else the plan on the final map at the end) and the events of a closed loop, as log messages.
+/// The recording's last parts: the truth once, a drive on the wheels' states and events, the planned paths
+/// (every replan of a closed loop at its time, else the plan on the final map at the end) and the events of a
+/// closed loop, as log messages.
 fn finish_recording(
     mut recording: Recording,
     truth: &TruthRaster,
     evaluation: &Evaluation,
-    navigation: Option<&NavigationLog>,
-    physics: Option<&crate::judge::PhysicsRecord<'_>>,
+    sim: &Simulated,
     geometry: &GridGeometry,
-    end_s: f64,
 ) -> Result<Vec<u8>> {
+    let (navigation, world) = (sim.navigation.as_ref(), sim.simulation.world());
+    let end_s = world.time_s();
     recording.truth(truth)?;
-    if let Some(record) = physics {
+    if let Some(record) = crate::judge::PhysicsRecord::of(world) {
         for sample in record.samples {
             recording.physics_state(sample)?;
         }
@@ -303,12 +305,11 @@ fn write_run(
     if let Some(log) = navigation {
         files.extend(crate::report::write_navigation(stage, s, &truth, log, formats)?);
     }
-    if let (Some(model), Some(record)) = (
-        &loaded.wheeled,
-        crate::judge::PhysicsRecord::of(sim.simulation.world()),
-    ) {
-        files.extend(crate::report::write_physics(stage, model, &record)?);
-    }
+    files.extend(crate::report::write_physics(
+        stage,
+        loaded,
+        sim.simulation.world(),
+    )?);
     files.extend(crate::report::write_observability(
         stage,
         s,
@@ -323,17 +324,7 @@ fn write_run(
     let geometry = *map.geometry();
     if let Some(recording) = sim.recording.take() {
         let path = stage.join("recording.mcap");
-        let end_s = sim.simulation.world().time_s();
-        let physics = crate::judge::PhysicsRecord::of(sim.simulation.world());
-        let bytes = finish_recording(
-            recording,
-            &truth,
-            &evaluation,
-            navigation,
-            physics.as_ref(),
-            &geometry,
-            end_s,
-        )?;
+        let bytes = finish_recording(recording, &truth, &evaluation, &sim, &geometry)?;
         crate::output::write_bytes(&path, &bytes)?;
         files.push(path);
     }

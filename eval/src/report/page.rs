@@ -120,7 +120,7 @@ fn run_page(run: &RunPage) -> std::result::Result<String, String> {
         closed_loop(&mut page, log, &run.files)?;
     }
     if let Some(record) = &run.physics {
-        on_wheels(&mut page, record)?;
+        super::physics::page_section(&mut page, record);
     }
     if run.files.iter().any(|f| f == Path::new("observability.png")) {
         page.heading("observability", "What the sensors could see");
@@ -327,61 +327,6 @@ fn closed_loop(page: &mut Page, log: &NavigationLog, files: &[PathBuf]) -> std::
     Ok(())
 }
 
-/// What happened to the robot on its wheels: the figures in words and the events by name.
-fn on_wheels(page: &mut Page, record: &crate::judge::PhysicsRecord<'_>) -> std::result::Result<(), String> {
-    let m = crate::judge::PhysicsMetrics::of(record);
-    page.heading("physics", "On its wheels");
-    let count = |v: Option<u64>| v.unwrap_or(0);
-    page.paragraph(&format!(
-        "The robot drove on its wheels in the physics world: {}; {} body contacts with obstacles or people, \
-         {} with the ground, {} stalls{}; largest roll {:.1} deg and pitch {:.1} deg; at most {:.3} m off the \
-         scripted path. The sampled state is in physics.csv, the events and the robot's physical parameters \
-         in physics.json.",
-        match m.goal_time_s {
-            Some(t) => format!("the goal reached at {t:.1} s"),
-            None => "the goal not reached".to_string(),
-        },
-        count(m.contacts),
-        count(m.ground_contacts),
-        count(m.stalls),
-        if m.tipped_over == Some(true) { ", and it tipped over" } else { "" },
-        m.max_roll_deg.unwrap_or(0.0),
-        m.max_pitch_deg.unwrap_or(0.0),
-        m.max_path_error_m.unwrap_or(0.0),
-    ));
-    if !record.events.is_empty() {
-        let rows: Vec<Vec<String>> = record
-            .events
-            .iter()
-            .map(|e| {
-                let kind = serde_json::to_value(&e.kind).unwrap_or(Value::Null);
-                let name = kind.get("kind").and_then(Value::as_str).unwrap_or("").to_string();
-                let detail = kind
-                    .as_object()
-                    .map(|o| {
-                        o.iter()
-                            .filter(|(k, _)| k.as_str() != "kind")
-                            .map(|(k, v)| format!("{k}: {}", value_text(Some(v))))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    })
-                    .unwrap_or_default();
-                vec![
-                    format!("{:.2}", e.time_s),
-                    name,
-                    format!("({:.2}, {:.2})", e.x_m, e.y_m),
-                    detail,
-                ]
-            })
-            .collect();
-        let header: Vec<String> = ["time_s", "event", "where (m)", "detail"]
-            .map(String::from)
-            .to_vec();
-        page.raw(&table_html(&header, &rows));
-    }
-    Ok(())
-}
-
 /// Every metric, one column per model, with its unit.
 fn metrics(page: &mut Page, run: &RunPage) -> std::result::Result<(), String> {
     page.heading("metrics", "Metrics");
@@ -418,7 +363,7 @@ fn metric_objects(run: &RunPage) -> std::result::Result<Vec<serde_json::Map<Stri
 }
 
 /// A JSON value as a table cell.
-fn value_text(v: Option<&Value>) -> String {
+pub(super) fn value_text(v: Option<&Value>) -> String {
     match v {
         None | Some(Value::Null) => "-".into(),
         Some(Value::String(s)) => s.clone(),

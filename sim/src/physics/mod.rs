@@ -1,4 +1,4 @@
-//! The robot on its wheels (`[robot.drive] mode = "physics"`): a Rapier multibody from the URDF ([`model`]),
+//! The robot on its wheels (`[robot.drive] mode = "physics"`): a Rapier multibody from the URDF ([`WheeledModel`]),
 //! its wheels turned by velocity motors with the torque and speed limits of `[robot.physics]`, stepped at a
 //! fixed time step, and watched for what happened: contacts of its body, stalls, tip-overs and arrival.
 //!
@@ -9,26 +9,31 @@
 
 mod follow;
 mod model;
+mod record;
+mod watch;
 
 pub use model::WheeledModel;
+pub use record::{PhysicsEvent, PhysicsEventKind, PhysicsSample};
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 use nalgebra::{Isometry3, Vector3};
 use rapier3d::prelude::{
     CoefficientCombineRule, ColliderHandle, JointAxis, MultibodyJointHandle, PhysicsWorld, RigidBodyHandle,
 };
 use rapier3d_urdf::UrdfMultibodyOptions;
-use serde::Serialize;
 
 use crate::convert::{from_pose, to_point, to_pose};
 use crate::drive::PlanarPose;
-use follow::{WaypointFollower, distance_to_path};
+use follow::WaypointFollower;
+use watch::Watch;
 
 /// How often the drive records a sample of its state, seconds (20 Hz).
 pub const SAMPLE_PERIOD_S: f64 = 0.05;
 /// How long the robot settles on the ground, motors holding, before the run's clock starts, seconds.
 pub const SETTLE_S: f64 = 0.5;
+/// A body part that touches the same thing again within this many seconds continues its contact, seconds.
+pub const CONTACT_GAP_S: f64 = 0.5;
 /// How far above the ground the robot is put before it settles, metres: its wheels start clear of it.
 const DROP_M: f64 = 0.005;
 /// Proportional gain of the turn-rate loop (dimensionless) and its integral gain, 1/s.
@@ -47,82 +52,6 @@ const STALL_FRACTION: f64 = 0.25;
 const STILL_M_S: f64 = 1e-3;
 const STILL_RAD_S: f64 = 1e-2;
 
-/// What happened to the robot, by name.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum PhysicsEventKind {
-    /// A part of the robot's body (not a wheel) touched an obstacle, a person or the ground.
-    Contact {
-        /// What it touched: the obstacle's label, `person <k>`, or `ground`.
-        with: String,
-        /// The robot's link that touched it.
-        link: String,
-    },
-    /// The robot was commanded to drive or turn and made no progress for `stall_time_s`: less than
-    /// `stall_distance_m` or a quarter of what its commands asked.
-    Stall {
-        /// The wheels' mean slip over the stall, from 0 (rolling) to 1 (spinning in place).
-        wheel_slip: f64,
-    },
-    /// Roll or pitch passed its static stability angle.
-    TipOver {
-        /// Roll at the time, degrees.
-        roll_deg: f64,
-        /// Pitch at the time, degrees.
-        pitch_deg: f64,
-    },
-    /// The scripted drive reached its last waypoint.
-    GoalReached,
-}
-
-/// One event with its time and place.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PhysicsEvent {
-    /// Simulated time, seconds.
-    pub time_s: f64,
-    /// Where, world frame, metres: the contact point, or the robot's base.
-    pub x_m: f64,
-    /// See `x_m`.
-    pub y_m: f64,
-    /// What.
-    #[serde(flatten)]
-    pub kind: PhysicsEventKind,
-}
-
-/// The robot's state at one time.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PhysicsSample {
-    /// Simulated time, seconds.
-    pub time_s: f64,
-    /// Base position, world frame, metres.
-    pub x_m: f64,
-    /// See `x_m`.
-    pub y_m: f64,
-    /// See `x_m`.
-    pub z_m: f64,
-    /// Heading, roll and pitch of the base, degrees.
-    pub yaw_deg: f64,
-    /// See `yaw_deg`.
-    pub roll_deg: f64,
-    /// See `yaw_deg`.
-    pub pitch_deg: f64,
-    /// The commanded speed, m/s, and turn rate, degrees per second.
-    pub commanded_speed_m_s: f64,
-    /// See `commanded_speed_m_s`.
-    pub commanded_turn_rate_deg_s: f64,
-    /// The achieved speed along the base's heading, m/s, and turn rate, degrees per second.
-    pub speed_m_s: f64,
-    /// See `speed_m_s`.
-    pub turn_rate_deg_s: f64,
-    /// The left and the right wheels' mean slip: `(w r - v) / max(|w r|, |v|)`, 0 when rolling, 1 when
-    /// spinning in place, negative when dragged.
-    pub slip_left: f64,
-    /// See `slip_left`.
-    pub slip_right: f64,
-    /// Distance from the scripted path, metres (`None` once a command replaced it).
-    pub path_error_m: Option<f64>,
-}
-
 /// What the drive follows.
 #[derive(Debug, Clone, PartialEq)]
 enum Target {
@@ -138,20 +67,6 @@ struct Wheel {
     body: RigidBodyHandle,
     side: f64,
     spin: f64,
-}
-
-/// The progress watch of a stall: where and when the robot last made progress.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Watch {
-    since_s: f64,
-    x_m: f64,
-    y_m: f64,
-    yaw_rad: f64,
-    /// The distance the commands since `since_s` asked a wheel's contact to cover, metres.
-    commanded_m: f64,
-    slip_sum: f64,
-    samples: u32,
-    reported: bool,
 }
 
 /// The robot driven on its wheels, in a physics world it was put into.
@@ -179,7 +94,9 @@ pub(crate) struct PhysicsDrive {
     commanded: (f64, f64),
     turn_integral: f64,
     watch: Option<Watch>,
-    touching: BTreeSet<(usize, u128)>,
+    /// Each (body collider, partner) pair's last step in contact: a touch that resumes within
+    /// [`CONTACT_GAP_S`] is the same contact (a body that bounces on what it leans against).
+    last_touch: BTreeMap<(usize, u128), u64>,
     tipped: bool,
     events: Vec<PhysicsEvent>,
     samples: Vec<PhysicsSample>,
@@ -273,7 +190,7 @@ impl PhysicsDrive {
             commanded: (0.0, 0.0),
             turn_integral: 0.0,
             watch: None,
-            touching: BTreeSet::new(),
+            last_touch: BTreeMap::new(),
             tipped: false,
             events: Vec::new(),
             samples: Vec::new(),
@@ -421,132 +338,6 @@ impl PhysicsDrive {
             n[k] += 1;
         }
         (sum[0] / f64::from(n[0].max(1)), sum[1] / f64::from(n[1].max(1)))
-    }
-
-    /// After a step: contacts of the body, the tip-over and stall watches, and every `sample_every`-th step a
-    /// sample.
-    fn watch(&mut self, physics: &PhysicsWorld, name_of: &dyn Fn(u128) -> String) {
-        let t = self.time_s();
-        let pose = self.world_from_base(physics);
-        let p = planar(&pose);
-        // Contacts: each new touch of a body part with something else is an event.
-        let mut now = BTreeSet::new();
-        for (k, (handle, link)) in self.body_colliders.iter().enumerate() {
-            for pair in physics.contact_pairs_with(*handle) {
-                if !pair.has_any_active_contact() {
-                    continue;
-                }
-                let other = if pair.collider1 == *handle {
-                    pair.collider2
-                } else {
-                    pair.collider1
-                };
-                let Some(other_collider) = physics.colliders.get(other) else {
-                    continue;
-                };
-                let key = (k, other_collider.user_data);
-                now.insert(key);
-                if self.touching.contains(&key) {
-                    continue;
-                }
-                let at = pair
-                    .find_deepest_contact()
-                    .and_then(|(_, c)| {
-                        physics
-                            .colliders
-                            .get(pair.collider1)
-                            .map(|c1| to_point(c1.position().transform_point(c.local_p1)))
-                    })
-                    .unwrap_or_else(|| nalgebra::Point3::new(p.x_m, p.y_m, 0.0));
-                self.events.push(PhysicsEvent {
-                    time_s: t,
-                    x_m: at.x,
-                    y_m: at.y,
-                    kind: PhysicsEventKind::Contact {
-                        with: name_of(other_collider.user_data),
-                        link: link.clone(),
-                    },
-                });
-            }
-        }
-        self.touching = now;
-
-        let (roll, pitch, _) = pose.rotation.euler_angles();
-        if !self.tipped && (roll.abs() > self.roll_limit_rad || pitch.abs() > self.pitch_limit_rad) {
-            self.tipped = true;
-            self.events.push(PhysicsEvent {
-                time_s: t,
-                x_m: p.x_m,
-                y_m: p.y_m,
-                kind: PhysicsEventKind::TipOver {
-                    roll_deg: roll.to_degrees(),
-                    pitch_deg: pitch.to_degrees(),
-                },
-            });
-        }
-
-        let (slip_left, slip_right) = self.slips(physics);
-        // Commanded to move: to drive, or to turn on the spot. Progress is the distance a wheel's contact
-        // covers: the base's displacement and the heading's change times half the track.
-        let moving = self.commanded.0.abs() >= STILL_M_S || self.commanded.1.abs() >= STILL_RAD_S;
-        let fresh = Watch {
-            since_s: t,
-            x_m: p.x_m,
-            y_m: p.y_m,
-            yaw_rad: p.yaw_rad,
-            commanded_m: 0.0,
-            slip_sum: 0.0,
-            samples: 0,
-            reported: false,
-        };
-        let half_track = self.track_m / 2.0;
-        let asked = (self.commanded.0.abs() + self.commanded.1.abs() * half_track) * self.dt_s;
-        match (&mut self.watch, moving) {
-            (_, false) => self.watch = None,
-            (None, true) => self.watch = Some(fresh),
-            (Some(w), true) => {
-                let progress = (p.x_m - w.x_m).hypot(p.y_m - w.y_m)
-                    + follow::wrap(p.yaw_rad - w.yaw_rad).abs() * half_track;
-                w.commanded_m += asked;
-                if progress > self.stall_distance_m.max(STALL_FRACTION * w.commanded_m) {
-                    *w = fresh;
-                } else {
-                    w.slip_sum += (slip_left + slip_right) / 2.0;
-                    w.samples += 1;
-                    if !w.reported && t - w.since_s >= self.stall_time_s {
-                        w.reported = true;
-                        let wheel_slip = w.slip_sum / f64::from(w.samples.max(1));
-                        self.events.push(PhysicsEvent {
-                            time_s: t,
-                            x_m: p.x_m,
-                            y_m: p.y_m,
-                            kind: PhysicsEventKind::Stall { wheel_slip },
-                        });
-                    }
-                }
-            }
-        }
-
-        if self.steps.is_multiple_of(self.sample_every) {
-            let (speed, turn) = self.twist(physics);
-            self.samples.push(PhysicsSample {
-                time_s: t,
-                x_m: p.x_m,
-                y_m: p.y_m,
-                z_m: pose.translation.z,
-                yaw_deg: p.yaw_rad.to_degrees(),
-                roll_deg: roll.to_degrees(),
-                pitch_deg: pitch.to_degrees(),
-                commanded_speed_m_s: self.commanded.0,
-                commanded_turn_rate_deg_s: self.commanded.1.to_degrees(),
-                speed_m_s: speed,
-                turn_rate_deg_s: turn.to_degrees(),
-                slip_left,
-                slip_right,
-                path_error_m: matches!(self.target, Target::Waypoints(_))
-                    .then(|| distance_to_path(&self.scripted, p.x_m, p.y_m)),
-            });
-        }
     }
 }
 

@@ -124,23 +124,7 @@ impl WheeledModel {
         let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
         let track_m = mean(left.collect()) - mean(right.collect());
 
-        // The centre of mass at rest, in the base frame.
-        let mut com = Vector3::zeros();
-        for l in &urdf.links {
-            let Some(base_from_link) = model.base_from_link(&l.name) else {
-                continue;
-            };
-            let o = &l.inertial.origin.xyz;
-            com += (base_from_link * nalgebra::Point3::new(o[0], o[1], o[2])).coords * l.inertial.mass.value;
-        }
-        com /= mass_kg;
-        let height = (com.z).max(1e-3);
-        let (front, rear) = wheels.iter().fold((f64::MIN, f64::MAX), |(f, r), w| {
-            (f.max(w.center_in_base.x), r.min(w.center_in_base.x))
-        });
-        let roll_limit_rad = (track_m / 2.0 - com.y.abs()).max(0.0).atan2(height);
-        let pitch_limit_rad = (front - com.x).min(com.x - rear).max(0.0).atan2(height);
-
+        let (roll_limit_rad, pitch_limit_rad) = tip_limits(&urdf, model, &wheels, mass_kg, track_m);
         let limit = |f: fn(&urdf_rs::JointLimit) -> f64| {
             let v: Vec<f64> = wheels
                 .iter()
@@ -206,6 +190,34 @@ impl WheeledModel {
             self.pitch_limit_rad.to_degrees(),
         )
     }
+}
+
+/// The static stability angles, roll and pitch (radians): the centre of mass at rest, from each link's
+/// `<inertial>`, over the wheels' contact lines.
+fn tip_limits(
+    urdf: &urdf_rs::Robot,
+    model: &RobotModel,
+    wheels: &[WheelSpec],
+    mass_kg: f64,
+    track_m: f64,
+) -> (f64, f64) {
+    // The centre of mass at rest, in the base frame.
+    let mut com = Vector3::zeros();
+    for l in &urdf.links {
+        let Some(base_from_link) = model.base_from_link(&l.name) else {
+            continue;
+        };
+        let o = &l.inertial.origin.xyz;
+        com += (base_from_link * nalgebra::Point3::new(o[0], o[1], o[2])).coords * l.inertial.mass.value;
+    }
+    com /= mass_kg;
+    let height = (com.z).max(1e-3);
+    let (front, rear) = wheels.iter().fold((f64::MIN, f64::MAX), |(f, r), w| {
+        (f.max(w.center_in_base.x), r.min(w.center_in_base.x))
+    });
+    let roll_limit_rad = (track_m / 2.0 - com.y.abs()).max(0.0).atan2(height);
+    let pitch_limit_rad = (front - com.x).min(com.x - rear).max(0.0).atan2(height);
+    (roll_limit_rad, pitch_limit_rad)
 }
 
 /// The wheel torque a URDF without `effort` limits gets, N m: what the data sheet's two ratings ask of the
