@@ -28,10 +28,19 @@ pub(crate) fn temp_dir(name: &str) -> PathBuf {
 
 /// A minimal valid scenario over x in [-2, 10], y in [-4, 4] with `extra` TOML appended.
 pub(crate) fn scenario_text(extra: &str) -> String {
+    scenario_driving(
+        4.0,
+        "waypoints_xy_m = [[0.0, 0.0], [4.0, 0.0]]\nspeed_m_s = 1.0",
+        extra,
+    )
+}
+
+/// As [`scenario_text`], `duration_s` long, with `drive` as the `[robot.drive]` table's keys.
+pub(crate) fn scenario_driving(duration_s: f64, drive: &str, extra: &str) -> String {
     format!(
         r#"name = "test"
 seed = 7
-duration_s = 4.0
+duration_s = {duration_s}
 
 [map]
 min_xy_m = [-2.0, -4.0]
@@ -42,8 +51,7 @@ resolution_m = 0.05
 urdf = "{}"
 
 [robot.drive]
-waypoints_xy_m = [[0.0, 0.0], [4.0, 0.0]]
-speed_m_s = 1.0
+{drive}
 
 {extra}
 "#,

@@ -13,27 +13,10 @@ use sim::world::World;
 
 /// A physics drive over flat ground from (0, 0) through `waypoints` at 0.5 m/s, with `extra` TOML.
 fn scenario(waypoints: &str, extra: &str) -> String {
-    format!(
-        r#"name = "physics"
-seed = 7
-duration_s = 20.0
-
-[map]
-min_xy_m = [-2.0, -4.0]
-max_xy_m = [10.0, 4.0]
-resolution_m = 0.05
-
-[robot]
-urdf = "{}"
-
-[robot.drive]
-mode = "physics"
-waypoints_xy_m = {waypoints}
-speed_m_s = 0.5
-
-{extra}
-"#,
-        common::urdf_path().display()
+    common::scenario_driving(
+        20.0,
+        &format!("mode = \"physics\"\nwaypoints_xy_m = {waypoints}\nspeed_m_s = 0.5"),
+        extra,
     )
 }
 
