@@ -104,8 +104,9 @@ impl World {
 
     /// From now on, the robot drives at `speed_m_s` (negative: backwards) turning at `turn_rate_rad_s`
     /// from where it is, instead of along its scripted path, until the next command: the simulator's side of
-    /// a `cmd_vel`. The robot is kinematic: it goes where it is sent, through obstacles too (contacts are
-    /// the judge's to find).
+    /// a `cmd_vel`. A kinematic robot goes where it is sent, through obstacles too (contacts are the judge's
+    /// to find); a robot on its wheels has its drive try, within its motors' limits, and goes where the
+    /// physics takes it.
     pub fn command(&mut self, speed_m_s: f64, turn_rate_rad_s: f64) {
         if let Some(wheels) = self.wheels.as_mut() {
             wheels.command(speed_m_s, turn_rate_rad_s);
