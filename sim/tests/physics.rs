@@ -178,6 +178,22 @@ fn a_urdf_the_drive_cannot_use_is_an_error_that_names_the_file_and_the_element()
         "{e}"
     );
 
+    // A body of negative mass.
+    let negative = urdf.replace("<mass value=\"10.5\"/>", "<mass value=\"-10.5\"/>");
+    let path = dir.join("negative.urdf");
+    std::fs::write(&path, negative).expect("write");
+    let text = scenario("[[0.0, 0.0], [5.0, 0.0]]", "").replace(
+        &common::urdf_path().display().to_string(),
+        &path.display().to_string(),
+    );
+    let e = common::load_text("negative", &text)
+        .expect_err("negative mass")
+        .to_string();
+    assert!(
+        e.contains("negative.urdf") && e.contains("chassis") && e.contains("-10.5"),
+        "{e}"
+    );
+
     // A wheel joint that does not turn.
     let text = scenario(
         "[[0.0, 0.0], [5.0, 0.0]]",

@@ -108,6 +108,16 @@ impl WheeledModel {
             )
             .map_err(err)?;
         }
+        if let Some(l) = urdf
+            .links
+            .iter()
+            .find(|l| !(l.inertial.mass.value.is_finite() && l.inertial.mass.value >= 0.0))
+        {
+            return Err(err(format!(
+                "link `{}` has a mass of {} kg: a mass is a number of kilograms, 0 or more",
+                l.name, l.inertial.mass.value
+            )));
+        }
         let mass_kg: f64 = urdf.links.iter().map(|l| l.inertial.mass.value).sum();
         if !(mass_kg.is_finite() && mass_kg > 0.0) {
             return Err(err(
