@@ -43,9 +43,9 @@ pub struct PhysicsMetrics {
     /// Whether the scripted drive reached its last waypoint.
     #[serde(rename = "phys_goal_reached", skip_serializing_if = "Option::is_none")]
     pub goal_reached: Option<bool>,
-    /// When it did, seconds (null when it did not).
+    /// When it did, seconds: null when it did not (the inner `None`), absent for a kinematic drive.
     #[serde(rename = "phys_goal_time_s", skip_serializing_if = "Option::is_none")]
-    pub goal_time_s: Option<f64>,
+    pub goal_time_s: Option<Option<f64>>,
     /// The largest distance of the base from the scripted path while the robot followed it, metres.
     #[serde(rename = "phys_max_path_error_m", skip_serializing_if = "Option::is_none")]
     pub max_path_error_m: Option<f64>,
@@ -71,7 +71,7 @@ impl PhysicsMetrics {
         stalls: Some(0),
         tipped_over: Some(false),
         goal_reached: Some(false),
-        goal_time_s: Some(0.0),
+        goal_time_s: Some(Some(0.0)),
         max_path_error_m: Some(0.0),
         max_roll_deg: Some(0.0),
         max_pitch_deg: Some(0.0),
@@ -111,7 +111,7 @@ impl PhysicsMetrics {
             stalls: Some(count(&|k| matches!(k, PhysicsEventKind::Stall { .. }))),
             tipped_over: Some(count(&|k| matches!(k, PhysicsEventKind::TipOver { .. })) > 0),
             goal_reached: Some(goal_time_s.is_some()),
-            goal_time_s,
+            goal_time_s: Some(goal_time_s),
             max_path_error_m: Some(max(&|s| s.path_error_m.unwrap_or(0.0))),
             max_roll_deg: Some(max(&|s| s.roll_deg.abs())),
             max_pitch_deg: Some(max(&|s| s.pitch_deg.abs())),
@@ -176,13 +176,16 @@ mod tests {
         );
         assert_eq!(
             (m.tipped_over, m.goal_reached, m.goal_time_s),
-            (Some(false), Some(false), None)
+            (Some(false), Some(false), Some(None))
         );
         assert_eq!((m.max_roll_deg, m.max_pitch_deg), (Some(3.0), Some(6.0)));
         assert_eq!(m.max_path_error_m, Some(0.01));
         assert!((m.mean_speed_error_m_s.expect("samples") - 0.05).abs() < 1e-12);
         // Slip over the samples commanded to move only.
         assert_eq!(m.mean_wheel_slip, Some(0.2));
+        // A drive on the wheels that did not arrive writes its arrival time as null, for a stable column.
+        let json = serde_json::to_value(m).expect("json");
+        assert!(json["phys_goal_time_s"].is_null() && json.get("phys_goal_time_s").is_some());
     }
 
     #[test]

@@ -106,7 +106,7 @@ pub(super) fn page_section(page: &mut Page, record: &PhysicsRecord<'_>) {
          {} with the ground, {} stalls{}; largest roll {:.1} deg and pitch {:.1} deg; at most {:.3} m off the \
          scripted path. The sampled state is in physics.csv, the events and the robot's physical parameters \
          in physics.json.",
-        match m.goal_time_s {
+        match m.goal_time_s.flatten() {
             Some(t) => format!("the goal reached at {t:.1} s"),
             None => "the goal not reached".to_string(),
         },
