@@ -40,7 +40,7 @@ pub(crate) fn scenario_driving(duration_s: f64, drive: &str, extra: &str) -> Str
     format!(
         r#"name = "test"
 seed = 7
-duration_s = {duration_s}
+duration_s = {duration_s:?}
 
 [map]
 min_xy_m = [-2.0, -4.0]
