@@ -95,37 +95,7 @@ impl WheeledModel {
                 ))
             })?;
 
-        // Every link that moves against its parent carries its own mass and inertia.
-        for j in &parts.joints {
-            let joint = &urdf.joints[j.urdf_joint_index];
-            if joint.joint_type == urdf_rs::JointType::Fixed {
-                continue;
-            }
-            let link = &urdf.links[parts.links[j.link2].urdf_link_index];
-            check_inertial(
-                link,
-                &format!("joined by the {:?} joint `{}`", joint.joint_type, joint.name),
-            )
-            .map_err(err)?;
-        }
-        if let Some(l) = urdf
-            .links
-            .iter()
-            .find(|l| !(l.inertial.mass.value.is_finite() && l.inertial.mass.value >= 0.0))
-        {
-            return Err(err(format!(
-                "link `{}` has a mass of {} kg: a mass is a number of kilograms, 0 or more",
-                l.name, l.inertial.mass.value
-            )));
-        }
-        let mass_kg: f64 = urdf.links.iter().map(|l| l.inertial.mass.value).sum();
-        if !(mass_kg.is_finite() && mass_kg > 0.0) {
-            return Err(err(
-                "has no mass: a physics drive needs `<inertial>` with a positive `<mass>` on its body and \
-                 wheels"
-                    .into(),
-            ));
-        }
+        let mass_kg = check_masses(&parts, &urdf).map_err(err)?;
 
         let wheels = find_wheels(&parts, &urdf, physics, model).map_err(err)?;
         let radius_m = wheel_radius(&wheels, &parts, &urdf, model).map_err(err)?;
@@ -257,6 +227,40 @@ fn default_torque_nm(
 
 /// How far the default wheel torque exceeds the least that turns the robot on the spot.
 pub(crate) const TURN_HEADROOM: f64 = 1.5;
+
+/// The robot's total mass, kg, once every link's mass is a number of kilograms and every link that moves
+/// against its parent carries its own mass and inertia.
+fn check_masses(parts: &UrdfRobot, urdf: &urdf_rs::Robot) -> std::result::Result<f64, String> {
+    if let Some(l) = urdf
+        .links
+        .iter()
+        .find(|l| !(l.inertial.mass.value.is_finite() && l.inertial.mass.value >= 0.0))
+    {
+        return Err(format!(
+            "link `{}` has a mass of {} kg: a mass is a number of kilograms, 0 or more",
+            l.name, l.inertial.mass.value
+        ));
+    }
+    for j in &parts.joints {
+        let joint = &urdf.joints[j.urdf_joint_index];
+        if joint.joint_type == urdf_rs::JointType::Fixed {
+            continue;
+        }
+        let link = &urdf.links[parts.links[j.link2].urdf_link_index];
+        check_inertial(
+            link,
+            &format!("joined by the {:?} joint `{}`", joint.joint_type, joint.name),
+        )?;
+    }
+    let mass_kg: f64 = urdf.links.iter().map(|l| l.inertial.mass.value).sum();
+    if !(mass_kg.is_finite() && mass_kg > 0.0) {
+        return Err(
+            "has no mass: a physics drive needs `<inertial>` with a positive `<mass>` on its body and wheels"
+                .into(),
+        );
+    }
+    Ok(mass_kg)
+}
 
 /// A link's `<inertial>`: a positive, finite mass and positive principal moments.
 fn check_inertial(link: &urdf_rs::Link, role: &str) -> std::result::Result<(), String> {
