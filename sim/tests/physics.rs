@@ -160,35 +160,25 @@ fn a_physics_drive_is_the_same_on_one_and_two_threads_and_over_two_runs() {
 
 #[test]
 fn a_urdf_the_drive_cannot_use_is_an_error_that_names_the_file_and_the_element() {
-    let dir = common::temp_dir("bad-urdf");
     let urdf = std::fs::read_to_string(common::urdf_path()).expect("urdf");
+    // The shipped robot with `from` replaced by `to` in its URDF, written as `name.urdf`: the load's error.
+    let error_with = |name: &str, from: &str, to: &str| {
+        let path = common::temp_dir("bad-urdf").join(format!("{name}.urdf"));
+        std::fs::write(&path, urdf.replace(from, to)).expect("write");
+        let text = scenario("[[0.0, 0.0], [5.0, 0.0]]", "").replace(
+            &common::urdf_path().display().to_string(),
+            &path.display().to_string(),
+        );
+        common::load_text(name, &text).expect_err(name).to_string()
+    };
     // The wheels without their masses.
-    let massless = urdf.replace("<mass value=\"0.6\"/>", "<mass value=\"0\"/>");
-    let path = dir.join("massless.urdf");
-    std::fs::write(&path, massless).expect("write");
-    let text = scenario("[[0.0, 0.0], [5.0, 0.0]]", "").replace(
-        &common::urdf_path().display().to_string(),
-        &path.display().to_string(),
-    );
-    let e = common::load_text("massless", &text)
-        .expect_err("no mass")
-        .to_string();
+    let e = error_with("massless", "<mass value=\"0.6\"/>", "<mass value=\"0\"/>");
     assert!(
         e.contains("massless.urdf") && e.contains("wheel_front_left") && e.contains("mass"),
         "{e}"
     );
-
     // A body of negative mass.
-    let negative = urdf.replace("<mass value=\"10.5\"/>", "<mass value=\"-10.5\"/>");
-    let path = dir.join("negative.urdf");
-    std::fs::write(&path, negative).expect("write");
-    let text = scenario("[[0.0, 0.0], [5.0, 0.0]]", "").replace(
-        &common::urdf_path().display().to_string(),
-        &path.display().to_string(),
-    );
-    let e = common::load_text("negative", &text)
-        .expect_err("negative mass")
-        .to_string();
+    let e = error_with("negative", "<mass value=\"10.5\"/>", "<mass value=\"-10.5\"/>");
     assert!(
         e.contains("negative.urdf") && e.contains("chassis") && e.contains("-10.5"),
         "{e}"
