@@ -33,6 +33,10 @@ use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridWindow};
 use crate::traversability::Traversability;
 
+mod distance;
+
+use distance::squared_distances;
+
 /// Default inflation radius, metres: half the Pioneer 3-AT's 0.50 m width (its inscribed radius).
 pub const DEFAULT_INFLATION_RADIUS_M: f64 = 0.25;
 
@@ -101,6 +105,11 @@ pub struct PlannerOptions {
 /// own and 4 more, so the planner goes round a few such cells but crosses a band of them rather than make a
 /// long detour.
 pub const DEFAULT_DOUBT_COST: f64 = 4.0;
+
+/// The extra cost of entering a cell inside the inflation, in cell lengths, for a robot that stands inside it
+/// (see [`plan`]): costmap_2d marks such a cell 253 and nav2's NavFn adds 0.8 of that to its neutral 50 for a
+/// free cell, about 5 times; so the cell costs 5 cell lengths, its own and 4 more.
+const INFLATED_CELL_COST: f64 = 4.0;
 
 impl Default for PlannerOptions {
     fn default() -> Self {
@@ -245,70 +254,6 @@ fn clear_footprint(
     }
 }
 
-/// Stands for "no obstacle on this line" in the distance transform: far above any squared distance of a grid
-/// the scenario limits allow, yet exact arithmetic keeps it finite.
-const FAR: f64 = 1e30;
-
-/// The squared Euclidean distance, in cells, from every cell of an `nx` x `ny` row-major grid to the nearest
-/// `true` cell (Felzenszwalb and Huttenlocher's separable transform: columns, then rows).
-fn squared_distances(obstacle: &[bool], nx: usize, ny: usize) -> Vec<f64> {
-    let mut d: Vec<f64> = obstacle.iter().map(|o| if *o { 0.0 } else { FAR }).collect();
-    let n = nx.max(ny);
-    let (mut f, mut out) = (vec![0.0; n], vec![0.0; n]);
-    let (mut v, mut z) = (vec![0usize; n], vec![0.0; n + 1]);
-    for x in 0..nx {
-        for y in 0..ny {
-            f[y] = d[y * nx + x];
-        }
-        lower_envelope(&f[..ny], &mut out[..ny], &mut v, &mut z);
-        for y in 0..ny {
-            d[y * nx + x] = out[y];
-        }
-    }
-    for y in 0..ny {
-        let row = &mut d[y * nx..(y + 1) * nx];
-        f[..nx].copy_from_slice(row);
-        lower_envelope(&f[..nx], &mut out[..nx], &mut v, &mut z);
-        row.copy_from_slice(&out[..nx]);
-    }
-    d
-}
-
-/// One line of the transform: `out[q] = min_p (q - p)^2 + f[p]`, by the lower envelope of the parabolas.
-fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
-    let n = f.len();
-    if n == 0 {
-        return;
-    }
-    let meet = |f: &[f64], q: usize, p: usize| {
-        let (qf, pf) = (q as f64, p as f64);
-        ((f[q] + qf * qf) - (f[p] + pf * pf)) / (2.0 * (qf - pf))
-    };
-    let mut k = 0usize;
-    v[0] = 0;
-    z[0] = f64::NEG_INFINITY;
-    z[1] = f64::INFINITY;
-    for q in 1..n {
-        let mut s = meet(f, q, v[k]);
-        while s <= z[k] {
-            k -= 1;
-            s = meet(f, q, v[k]);
-        }
-        k += 1;
-        v[k] = q;
-        z[k] = s;
-        z[k + 1] = f64::INFINITY;
-    }
-    k = 0;
-    for (q, o) in out.iter_mut().enumerate() {
-        while z[k + 1] < q as f64 {
-            k += 1;
-        }
-        let dq = q as f64 - v[k] as f64;
-        *o = dq * dq + f[v[k]];
-    }
-}
-
 /// The shortest path from `start` to `goal` through `window` on `decisions` (one per cell, row-major),
 /// or `None` if there is none.
 ///
@@ -322,7 +267,8 @@ fn lower_envelope(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 /// A robot whose centre stands inside the inflation (it turned close to an obstacle, or saw it late) keeps
 /// the clearance it has, never less: the path then keeps its centre as far from every obstacle as the start
 /// is, less half a cell, instead of there being no path out (costmap_2d's inflation is a cost the planner may
-/// cross on its way out of it).
+/// cross on its way out of it). Each cell inside the full inflation then costs [`INFLATED_CELL_COST`] more
+/// to enter, so the path leaves the inflation the shortest way instead of running along it.
 ///
 /// # Errors
 /// As [`forbidden_mask`], and [`Error::InvalidSetting`] for a start or goal outside the window.
@@ -402,19 +348,31 @@ pub fn plan_or_why(
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
-    let extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options);
+    let mut extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options);
     let mut forbidden = forbidden_mask(window, &decisions, options)?;
     if forbidden[s]
         && let Some(clearance) = start_clearance(region, resolution_m, &decisions, start, options)
     {
-        forbidden = forbidden_mask(
-            window,
-            &decisions,
-            &PlannerOptions {
-                inflation_radius_m: clearance,
-                ..*options
-            },
-        )?;
+        let inflated = std::mem::replace(
+            &mut forbidden,
+            forbidden_mask(
+                window,
+                &decisions,
+                &PlannerOptions {
+                    inflation_radius_m: clearance,
+                    ..*options
+                },
+            )?,
+        );
+        // The way out of the inflation is a cost, as costmap_2d's: a path leaves it the shortest way rather
+        // than run along it at the start's clearance, where the footprint's corners meet what it inflates.
+        let extra = extra.get_or_insert_with(|| vec![0; forbidden.len()]);
+        let cost = (INFLATED_CELL_COST * SIDE_COST as f64).round() as u64;
+        for ((e, inflated), allowed) in extra.iter_mut().zip(&inflated).zip(&forbidden) {
+            if *inflated && !*allowed {
+                *e += cost;
+            }
+        }
     }
     if forbidden[s] {
         return Ok(Err(NoPath::Start(original[s])));

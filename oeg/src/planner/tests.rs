@@ -295,6 +295,33 @@ fn a_robot_inside_the_inflation_keeps_the_clearance_it_has_and_no_less() {
 }
 
 #[test]
+fn a_robot_inside_the_inflation_leaves_it_before_driving_along_it() {
+    // 0.1 m cells; a wall along y = 0 under a 30 x 12 room; the robot 0.2 m above it, inside a 0.5 m
+    // inflation; the goal far along the wall, outside the inflation. Running along the wall at the start's
+    // clearance is the shortest path, but every step of it inside the inflation costs more: the path climbs
+    // out of the inflation within its first few cells and stays out.
+    let r = region(30, 12);
+    let d = marked(&r, Traversability::Blocked, |c| c.j == 0);
+    let options = PlannerOptions {
+        inflation_radius_m: 0.5,
+        footprint_radius_m: 0.1,
+        ..no_inflation(UnknownCells::Avoid)
+    };
+    let (s, g) = (CellIndex::new(1, 2), CellIndex::new(28, 6));
+    let p = plan(&on(&r, 0.1), &d, s, g, &options)
+        .expect("valid")
+        .expect("a way out and along");
+    let inside = p.cells.iter().filter(|c| c.j <= 5).count();
+    assert!(
+        inside <= 5,
+        "{inside} cells of the path lie inside the inflation: {:?}",
+        p.cells
+    );
+    let first_out = p.cells.iter().position(|c| c.j > 5).expect("leaves");
+    assert!(p.cells[first_out..].iter().all(|c| c.j > 5), "{:?}", p.cells);
+}
+
+#[test]
 fn the_robot_stands_on_its_unobserved_footprint() {
     // 0.1 m cells; nothing within 0.2 m of the start was observed (no sensor sees under the robot).
     let r = region(12, 5);
