@@ -119,8 +119,9 @@ if default is not None and at_35 is not None:
     print(f"**Physics and the truth disagree** where these differ: at the default friction (0.8) the measured")
     print(f"limit is {default * 100:.1f} cm, {relation} the paper's 3.5 cm, which is also the truth's `max_step_m`.")
     print(f"The truth calls a 3.5 cm step drivable; the simulated robot climbs it in {at_35[1]:.0%} of the")
-    print("attempts over these speeds and angles. The limits are in `docs/results/physics_limits.json`, to set a")
-    print("scenario's threshold from: `--set robot.max_step_m=<climb_limit_m>`.")
+    print("attempts over these speeds and angles. The limits are in `docs/results/physics_limits.json`; a")
+    print("scenario judges by them with `[robot] limits_from = \"<path to that file>\"`, which sets `max_step_m` to the")
+    print("limit at its wheel friction and `height_m` to the clearance below.")
     print()
 print("![climb rate against curb height, one line per friction](../images/physics/climb_vs_curb_height.png)")
 print()
@@ -177,15 +178,21 @@ print()
 print(f"The lowest underside passed in every run: {'none' if clearance is None else f'{clearance:.2f} m'}, against the")
 print("robot's 0.46 m (the truth's `height_m`); passing runs may still touch the board as the robot pitches.")
 
-import json
+import json, tomllib
+with open("sweeps/physics_climb.toml", "rb") as f:
+    presets = tomllib.load(f)["presets"]
+climb_limits = [
+    {"wheel_friction": presets[name]["robot.physics.wheel_friction"], "limit_m": lim}
+    for name, lim in sorted(limits.items(), key=lambda kv: presets[kv[0]]["robot.physics.wheel_friction"])
+]
 with open("docs/results/physics_limits.json", "w") as f:
     json.dump({
         "generated_by": "bash scripts/physics-limits.sh",
         "commit": commit,
-        "climb_limit_m": {k: v for k, v in sorted(limits.items())},
+        "climb_limit_m": climb_limits,
         "clearance_m": clearance,
         "note": "climb_limit_m: the highest curb at which at least half the runs climbed, pooled over speed and "
-                "approach angle, per wheel friction; clearance_m: the lowest board underside passed in every run",
+                "approach angle, per wheel friction (null: none); clearance_m: the lowest board underside passed in every run",
     }, f, indent=2)
     f.write("\n")
 PY

@@ -99,7 +99,8 @@ impl LoadedScenario {
         })
     }
 
-    /// The files the scenario was read from: the scenario, its robot's URDF and its terrain image, if any.
+    /// The files the scenario was read from: the scenario, its robot's URDF, and its terrain image and measured
+    /// limits, if any.
     pub fn files(&self) -> Vec<std::path::PathBuf> {
         let mut files = vec![
             self.source.path.clone(),
@@ -107,6 +108,9 @@ impl LoadedScenario {
         ];
         if let super::scene::Terrain::Image { path, .. } = &self.scenario.terrain {
             files.push(self.source.resolve(path));
+        }
+        if let Some(limits) = &self.scenario.robot.limits_from {
+            files.push(self.source.resolve(limits));
         }
         files
     }
@@ -146,6 +150,9 @@ pub fn load_str(path: &Path, text: &str) -> Result<LoadedScenario> {
         source: &source,
         document: Some(parsed.get_ref().clone()),
     };
+    super::limits::apply(&checker, &mut scenario, |key| {
+        super::limits::stated_in_parsed(parsed.get_ref(), key)
+    })?;
     scenario.map.resolve(&scenario.robot.profile());
     let window = checker.validate(&scenario)?;
     let (robot, wheeled) = load_robot(&checker, &scenario)?;
@@ -215,6 +222,7 @@ pub fn load_doc(path: &Path, text: &str, doc: &toml::Table) -> Result<LoadedScen
         source: &source,
         document: None,
     };
+    super::limits::apply(&checker, &mut scenario, |key| super::limits::stated_in(doc, key))?;
     scenario.map.resolve(&scenario.robot.profile());
     let window = checker.validate(&scenario)?;
     let (robot, wheeled) = load_robot(&checker, &scenario)?;

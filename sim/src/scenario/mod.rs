@@ -3,6 +3,7 @@
 mod check;
 pub mod exact;
 pub mod heightmap;
+mod limits;
 mod load;
 mod navigation;
 mod physics;

@@ -196,6 +196,11 @@ pub struct RobotSettings {
     /// distance of a step, `max_step_m / max_grade`; `oeg::RobotProfile::max_grade`).
     #[serde(default = "default_max_grade")]
     pub max_grade: f32,
+    /// A physics study's measured limits (the JSON `bash scripts/physics-limits.sh` writes), relative to the
+    /// scenario file: when given, `max_step_m` is the climb limit measured at `[robot.physics] wheel_friction`
+    /// and `height_m` the lowest underside passed, and the scenario may set neither.
+    #[serde(default)]
+    pub limits_from: Option<PathBuf>,
     /// Top speed, m/s: the Pioneer 3-AT's datasheet gives 0.7 (closed-loop runs).
     #[serde(default = "default_max_speed")]
     pub max_speed_m_s: f64,
