@@ -255,3 +255,40 @@ fn the_default_torque_is_the_larger_of_the_grade_and_the_turn_on_the_spot() {
         .expect("physics");
     assert_eq!(model.wheel_torque_nm(), 2.5);
 }
+
+#[test]
+fn a_person_who_walks_into_the_standing_robot_pushes_it_at_a_walking_pace() {
+    // The robot stands at the origin; a person walks across it at 1 m/s from y = -2 to y = 2. Before the
+    // person enters the scene (t = 1 s), nothing stands where the robot settles.
+    let text = scenario(
+        "[[0.0, 0.0]]",
+        "[[actors]]\nkind = \"person\"\nname = \"walker\"\nwaypoints = [[1.0, 0.0, -2.0], [5.0, 0.0, 2.0]]\n",
+    );
+    let w = drive("person", &text, 6.0);
+    let samples = w.physics_samples().expect("a physics drive");
+    let at = |t: f64| {
+        samples
+            .iter()
+            .find(|s| s.time_s >= t)
+            .map(|s| (s.x_m, s.y_m))
+            .expect("sampled")
+    };
+    let (x0, y0) = at(0.9);
+    assert!(x0.hypot(y0) < 0.01, "the robot settled at ({x0}, {y0})");
+    // The person moves to where it is at the end of every physics step, with the velocity that takes it
+    // there: it pushes the robot along its way at its own pace, never throws it.
+    let (_, y_end) = at(5.0);
+    assert!(y_end > 1.0, "pushed to y = {y_end}");
+    let fastest = samples
+        .windows(2)
+        .map(|p| (p[1].x_m - p[0].x_m).hypot(p[1].y_m - p[0].y_m) / (p[1].time_s - p[0].time_s))
+        .fold(0.0, f64::max);
+    assert!(fastest < 1.5, "pushed at up to {fastest} m/s by a person walking at 1 m/s");
+    assert!(
+        !events(&w)
+            .iter()
+            .any(|e| matches!(e.kind, PhysicsEventKind::TipOver { .. })),
+        "{:?}",
+        events(&w)
+    );
+}

@@ -40,7 +40,11 @@ pub fn navigate(
     // The bar's end is the time limit: the robot may reach its goal sooner, never later.
     progress.set_length(closed.end.ceil() as u64);
     let outcome = closed.run(mapping, &mut log, &mut watch, progress)?;
-    mapping.simulation.world_mut().command(0.0, 0.0);
+    let world = mapping.simulation.world_mut();
+    world.command(0.0, 0.0);
+    if outcome == Outcome::Reached {
+        world.goal_reached();
+    }
     if let Some(row) = log.trajectory.last_mut() {
         row.planner_state = match outcome {
             Outcome::Reached => "reached",
@@ -61,9 +65,19 @@ fn drive_scripted(
 ) -> Result<()> {
     let s = inputs.scenario;
     let dt = s.tick_s;
-    let drive_end = mapping.simulation.world().drive_end_s().min(s.duration_s);
+    // A kinematic drive ends at its scheduled time; one on the wheels when the physics gets it to its last
+    // waypoint, within the scenario's duration.
+    let world = mapping.simulation.world();
+    let drive_end = if world.drives_on_wheels() {
+        s.duration_s
+    } else {
+        world.drive_end_s().min(s.duration_s)
+    };
     let ticks = (drive_end / dt).ceil() as u64;
     for k in 1..=ticks {
+        if mapping.simulation.world().scripted_drive_over() {
+            break;
+        }
         let t = (k as f64 * dt).min(drive_end);
         step_to(mapping, t, progress)?;
         log.sample(mapping, Command::default(), "scripted", None);
@@ -92,6 +106,9 @@ struct ClosedLoop<'i, 'a> {
     path: Vec<(f64, f64)>,
     progress_index: usize,
     plan_index: Option<u64>,
+    /// The plan last given to the world as the path the robot follows (`Some(None)`: none), so that a robot
+    /// on its wheels reports its distance from the plan it is following.
+    reference_plan: Option<Option<u64>>,
     /// The planner's state as the trajectory records it.
     state: &'static str,
     /// Whether the last replanning found a path (a no-path event is logged when that changes).
@@ -142,6 +159,7 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             path: Vec::new(),
             progress_index: 0,
             plan_index: None,
+            reference_plan: None,
             state: "following",
             had_path: true,
             anchor: (start.x_m, start.y_m),
@@ -338,10 +356,12 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             }
         }
         self.guard_stopped = guarded.stopped();
-        mapping
-            .simulation
-            .world_mut()
-            .command(command.speed_m_s, command.turn_rate_rad_s);
+        let world = mapping.simulation.world_mut();
+        if self.reference_plan != Some(self.plan_index) {
+            world.set_reference_path(&self.path);
+            self.reference_plan = Some(self.plan_index);
+        }
+        world.command(command.speed_m_s, command.turn_rate_rad_s);
         step_to(mapping, t_next, progress)?;
         log.sample(mapping, command, self.state, self.plan_index);
         if let Some(e) = log.watch(watch, mapping) {

@@ -19,7 +19,8 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use nalgebra::{Isometry3, Vector3};
 use rapier3d::prelude::{
-    CoefficientCombineRule, ColliderHandle, JointAxis, MultibodyJointHandle, PhysicsWorld, RigidBodyHandle,
+    CoefficientCombineRule, ColliderHandle, JointAxis, MotorModel, MultibodyJointHandle, PhysicsWorld,
+    RigidBodyHandle,
 };
 use rapier3d_urdf::UrdfMultibodyOptions;
 
@@ -42,8 +43,11 @@ const TURN_KI_PER_S: f64 = 2.0;
 /// The integral's bound, rad/s (anti-windup): a turn on the spot asks for up to twice the turn rate the
 /// no-slip kinematics give; the bound adds at most a radian a second to that.
 const TURN_INTEGRAL_MAX_RAD_S: f64 = 1.0;
-/// The motors' velocity-servo gain (Rapier's motor damping): stiff, so a wheel turns at its target speed
-/// unless its torque limit binds.
+/// The motors' velocity-servo gain, N m per rad/s (Rapier's motor damping under its force-based motor model):
+/// stiff, so a wheel turns at its target speed unless its torque limit binds; at the default torque limit the
+/// wheel lags its target by at most 5 mrad/s (0.6 mm/s at the rim). Rapier's default, acceleration-based
+/// model scales the gain by the joint's effective inertia instead, and a standing robot crept down a 20 %
+/// slope at 2 cm/s under it.
 const MOTOR_GAIN: f32 = 1000.0;
 /// A robot that covers less than this fraction of what its commands asked (and no more than `stall_distance_m`)
 /// over `stall_time_s` is stalled: pushing against a step, spinning its wheels, or dithering against an edge.
@@ -90,7 +94,9 @@ pub(crate) struct PhysicsDrive {
     steps: u64,
     sample_every: u64,
     target: Target,
-    scripted: Vec<[f64; 2]>,
+    /// The path the drive is asked to follow: the scripted waypoints, then a closed loop's plan (empty while
+    /// it has none). Every sample reports the distance from it.
+    reference: Vec<[f64; 2]>,
     commanded: (f64, f64),
     turn_integral: f64,
     watch: Option<Watch>,
@@ -186,7 +192,7 @@ impl PhysicsDrive {
                 speed_m_s: 0.0,
                 turn_rate_rad_s: 0.0,
             },
-            scripted: waypoints.to_vec(),
+            reference: waypoints.to_vec(),
             commanded: (0.0, 0.0),
             turn_integral: 0.0,
             watch: None,
@@ -216,6 +222,36 @@ impl PhysicsDrive {
         };
     }
 
+    /// Whether the scripted drive is over: the last waypoint reached, or a command given instead.
+    pub(crate) fn scripted_drive_over(&self) -> bool {
+        match &self.target {
+            Target::Waypoints(f) => f.arrived(),
+            Target::Command { .. } => true,
+        }
+    }
+
+    /// The path the commands follow from now on (a closed loop's plan; empty: none), for the samples' distance
+    /// from it.
+    pub(crate) fn set_reference(&mut self, path: &[(f64, f64)]) {
+        self.reference = path.iter().map(|&(x, y)| [x, y]).collect();
+    }
+
+    /// Logs the goal as reached at `(x_m, y_m)` now, once: a closed loop's goal, which the drive does not know.
+    pub(crate) fn goal_reached(&mut self, x_m: f64, y_m: f64) {
+        if !self
+            .events
+            .iter()
+            .any(|e| e.kind == PhysicsEventKind::GoalReached)
+        {
+            self.events.push(PhysicsEvent {
+                time_s: self.time_s(),
+                x_m,
+                y_m,
+                kind: PhysicsEventKind::GoalReached,
+            });
+        }
+    }
+
     /// The base's pose now.
     pub(crate) fn world_from_base(&self, physics: &PhysicsWorld) -> Isometry3<f64> {
         physics
@@ -235,12 +271,14 @@ impl PhysicsDrive {
     }
 
     /// Steps the physics until `t_s` (the steps whose end is at most half a step past it), controlling the
-    /// wheels before each step and watching the robot after it; `name_of` names a collider's `user_data`.
+    /// wheels before each step and watching the robot after it; `name_of` names a collider's `user_data`, and
+    /// `before_step` moves the rest of the world (the actors) to where it is at the step's end.
     pub(crate) fn advance_to(
         &mut self,
         physics: &mut PhysicsWorld,
         t_s: f64,
         name_of: &dyn Fn(u128) -> String,
+        before_step: &mut dyn FnMut(&mut PhysicsWorld, f64),
     ) {
         while (self.steps + 1) as f64 * self.dt_s <= t_s + self.dt_s / 2.0 {
             let pose = planar(&self.world_from_base(physics));
@@ -277,6 +315,7 @@ impl PhysicsDrive {
             }
             let turn_cmd = turn + TURN_KP * error + self.turn_integral;
             self.set_wheels(physics, speed, turn_cmd);
+            before_step(physics, (self.steps + 1) as f64 * self.dt_s);
             physics.step();
             self.steps += 1;
             self.watch(physics, name_of);
@@ -299,6 +338,7 @@ impl PhysicsDrive {
             {
                 l.joint
                     .data
+                    .set_motor_model(JointAxis::AngX, MotorModel::ForceBased)
                     .set_motor_velocity(JointAxis::AngX, (w.spin * target) as f32, MOTOR_GAIN)
                     .set_motor_max_force(JointAxis::AngX, self.torque_nm);
             }

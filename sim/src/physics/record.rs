@@ -26,7 +26,7 @@ pub enum PhysicsEventKind {
         /// Pitch at the time, degrees.
         pitch_deg: f64,
     },
-    /// The scripted drive reached its last waypoint.
+    /// The scripted drive reached its last waypoint, or a closed loop its goal.
     GoalReached,
 }
 
@@ -74,6 +74,7 @@ pub struct PhysicsSample {
     pub slip_left: f64,
     /// See `slip_left`.
     pub slip_right: f64,
-    /// Distance from the scripted path, metres (`None` once a command replaced it).
+    /// Distance from the path the drive follows, metres: the scripted waypoints, or a closed loop's plan
+    /// (`None` while it has none).
     pub path_error_m: Option<f64>,
 }

@@ -6,7 +6,7 @@ use rapier3d::prelude::PhysicsWorld;
 use super::follow::{self, distance_to_path};
 use super::{
     CONTACT_GAP_S, PhysicsDrive, PhysicsEvent, PhysicsEventKind, PhysicsSample, STALL_FRACTION, STILL_M_S,
-    STILL_RAD_S, Target, planar,
+    STILL_RAD_S, planar,
 };
 use crate::convert::to_point;
 use crate::drive::PlanarPose;
@@ -176,8 +176,8 @@ impl PhysicsDrive {
             turn_rate_deg_s: turn.to_degrees(),
             slip_left,
             slip_right,
-            path_error_m: matches!(self.target, Target::Waypoints(_))
-                .then(|| distance_to_path(&self.scripted, p.x_m, p.y_m)),
+            path_error_m: (!self.reference.is_empty())
+                .then(|| distance_to_path(&self.reference, p.x_m, p.y_m)),
         });
     }
 }

@@ -15,6 +15,7 @@ use rapier3d::math::{Rotation, Vector};
 use rapier3d::parry::utils::Array2;
 use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
 
+use super::clock::{Motion, move_actors};
 use super::{
     ActorTrack, KIND_ACTOR, KIND_OBSTACLE, KIND_ROBOT, KIND_TERRAIN, OBSTACLE_FOOTING_M, World, tag,
 };
@@ -92,6 +93,10 @@ impl World {
                 half_height_m: height_m / 2.0,
             });
         }
+        // Each actor where it is at the start, and those not yet in the scene out of it, before the robot settles
+        // among them.
+        let ground = world.ground_probe();
+        move_actors(&mut world.physics, &world.actors, ground, 0.0, Motion::Place);
         match &loaded.wheeled {
             Some(model) => {
                 let start = world.path.pose_at(0.0);

@@ -4,6 +4,9 @@
 use crate::convert::to_pose;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
+use rapier3d::prelude::PhysicsWorld;
+
+use super::queries::GroundProbe;
 use super::{ActorTrack, World};
 use crate::drive::{PlanarPose, VelocityCommand};
 
@@ -25,10 +28,17 @@ impl World {
     pub fn advance_to(&mut self, t_s: f64) {
         let t_s = t_s.max(self.time_s);
         self.time_s = t_s;
-        self.move_actors(t_s);
+        let ground = self.ground_probe();
         let planar = if let Some(wheels) = self.wheels.as_mut() {
-            let labels = &self.labels;
-            wheels.advance_to(&mut self.physics, t_s, &|u| Self::name_of(labels, u));
+            // On its wheels the robot meets the actors in the physics: each moves to where it is at the end of
+            // every physics step, with the velocity that takes it there, rather than jumping a tick at a time.
+            let (labels, actors) = (&self.labels, &self.actors);
+            wheels.advance_to(
+                &mut self.physics,
+                t_s,
+                &|u| Self::name_of(labels, u),
+                &mut |physics, step_end_s| move_actors(physics, actors, ground, step_end_s, Motion::Step),
+            );
             let pose = wheels.world_from_base(&self.physics);
             let mut now = crate::physics::planar(&pose);
             now.distance_m =
@@ -36,6 +46,7 @@ impl World {
             self.world_from_base = pose;
             now
         } else {
+            move_actors(&mut self.physics, &self.actors, ground, t_s, Motion::Place);
             let planar = match &self.command {
                 Some(c) => c.pose_at(t_s),
                 None => self.path.pose_at(t_s),
@@ -50,24 +61,6 @@ impl World {
             body.set_position(to_pose(&self.world_from_base), true);
         }
         self.physics.detect_collisions(&(), &());
-    }
-
-    /// Puts each actor where it is at `t_s`, and takes out of the scene those not in it.
-    fn move_actors(&mut self, t_s: f64) {
-        for k in 0..self.actors.len() {
-            let track = &self.actors[k];
-            let present = track.position_at(t_s);
-            let (body, collider, half) = (track.body, track.collider, track.half_height_m);
-            if let Some((x, y)) = present {
-                let z = self.ground_z(x, y).unwrap_or(0.0) + half;
-                if let Some(b) = self.physics.bodies.get_mut(body) {
-                    b.set_position(to_pose(&Isometry3::translation(x, y, z)), true);
-                }
-            }
-            if let Some(c) = self.physics.colliders.get_mut(collider) {
-                c.set_enabled(present.is_some());
-            }
-        }
     }
 
     /// The base pose at `(x, y, yaw)` resting on the terrain: height from the wheel contacts, pitch from the
@@ -120,14 +113,42 @@ impl World {
         });
     }
 
+    /// The path a closed loop's commands follow from now on (its plan; empty while it has none): a robot on its
+    /// wheels reports its distance from it in every sample, the difference between the commanded and the
+    /// achieved path. A kinematic robot keeps no physics log.
+    pub fn set_reference_path(&mut self, path: &[(f64, f64)]) {
+        if let Some(wheels) = self.wheels.as_mut() {
+            wheels.set_reference(path);
+        }
+    }
+
+    /// A closed loop's navigator reached its goal: a robot on its wheels logs it as its goal-reached event,
+    /// at the time and place it is now (its scripted drive logs its own at its last waypoint). A kinematic
+    /// robot keeps no physics log.
+    pub fn goal_reached(&mut self) {
+        if let Some(wheels) = self.wheels.as_mut() {
+            wheels.goal_reached(self.planar.x_m, self.planar.y_m);
+        }
+    }
+
     /// The robot's true planar pose now: position, heading and distance driven.
     pub fn planar_pose(&self) -> PlanarPose {
         self.planar
     }
 
-    /// The time at which the scripted drive ends (the robot stands at its last waypoint), seconds.
+    /// The time at which the kinematic scripted drive ends (the robot stands at its last waypoint), seconds.
+    /// A robot on its wheels takes the time the physics gives it: [`World::scripted_drive_over`].
     pub fn drive_end_s(&self) -> f64 {
         self.path.duration_s()
+    }
+
+    /// Whether the scripted drive is over: for a kinematic robot, its time has passed; for a robot on its
+    /// wheels, it reached the last waypoint or a velocity command replaced the script.
+    pub fn scripted_drive_over(&self) -> bool {
+        match &self.wheels {
+            Some(wheels) => wheels.scripted_drive_over(),
+            None => self.time_s >= self.drive_end_s(),
+        }
     }
 
     /// The robot's true pose, `world_from_base`.
@@ -150,5 +171,48 @@ impl World {
         self.robot
             .base_from_link(link)
             .map(|b| self.estimated_world_from_base * b)
+    }
+}
+
+/// How an actor gets to where it is next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Motion {
+    /// Placed there at once: a kinematic robot meets nothing in the physics.
+    Place,
+    /// Moved there over the next physics step, with the velocity that takes it there, so that a robot on its
+    /// wheels meets it as a moving body.
+    Step,
+}
+
+/// Puts each actor where it is at `t_s`, standing on the ground `ground` finds under it, and takes out of the
+/// scene those not in it.
+pub(super) fn move_actors(
+    physics: &mut PhysicsWorld,
+    actors: &[ActorTrack],
+    ground: GroundProbe,
+    t_s: f64,
+    motion: Motion,
+) {
+    for track in actors {
+        let present = track.position_at(t_s);
+        // An actor that enters the scene is placed: moved there over one step, it would sweep across it.
+        let entering = physics
+            .colliders
+            .get(track.collider)
+            .is_some_and(|c| !c.is_enabled());
+        if let Some((x, y)) = present {
+            let z = ground.z(physics, x, y).unwrap_or(0.0) + track.half_height_m;
+            if let Some(b) = physics.bodies.get_mut(track.body) {
+                let pose = to_pose(&Isometry3::translation(x, y, z));
+                if motion == Motion::Place || entering {
+                    b.set_position(pose, true);
+                } else {
+                    b.set_next_kinematic_position(pose);
+                }
+            }
+        }
+        if let Some(c) = physics.colliders.get_mut(track.collider) {
+            c.set_enabled(present.is_some());
+        }
     }
 }

@@ -158,6 +158,11 @@ impl World {
         self.physics.colliders.len()
     }
 
+    /// Whether the robot drives on its wheels (`[robot.drive] mode = "physics"`).
+    pub fn drives_on_wheels(&self) -> bool {
+        self.wheels.is_some()
+    }
+
     /// What happened to the robot on its wheels so far, by name (`None`: the robot is kinematic).
     pub fn physics_events(&self) -> Option<&[PhysicsEvent]> {
         self.wheels.as_ref().map(PhysicsDrive::events)

@@ -4,7 +4,7 @@
 use crate::convert::{from_pose, point_to_vector, to_vector};
 use nalgebra::{Isometry3, Point3, Vector3};
 use rapier3d::math::Vector;
-use rapier3d::prelude::{Collider, ColliderHandle, QueryFilter, Ray};
+use rapier3d::prelude::{Collider, ColliderHandle, PhysicsWorld, QueryFilter, Ray};
 
 use super::{
     Actors, HitKind, KIND_ACTOR, KIND_OBSTACLE, KIND_ROBOT, KIND_TERRAIN, RayHit, RayStart, World, kind_of,
@@ -58,18 +58,15 @@ impl World {
 
     /// The terrain's height at `(x, y)` (obstacles and actors ignored), or `None` off the terrain.
     pub fn ground_z(&self, x: f64, y: f64) -> Option<f64> {
-        // Start just above the terrain: Rapier works in f32, and a start far above would cost precision.
-        let from = self.terrain_top_m;
-        let ray = Ray::new(
-            point_to_vector(&Point3::new(x, y, from)),
-            Vector::new(0.0, 0.0, -1.0),
-        );
-        let only_terrain = |_: ColliderHandle, c: &Collider| kind_of(c) == KIND_TERRAIN;
-        let filter = QueryFilter::default().predicate(&only_terrain);
-        let (_, toi) = self
-            .physics
-            .cast_ray(&ray, self.terrain_span_m as f32, true, filter)?;
-        Some(from - f64::from(toi))
+        self.ground_probe().z(&self.physics, x, y)
+    }
+
+    /// What [`World::ground_z`] needs of the world besides its physics, to ask while the physics is borrowed.
+    pub(super) fn ground_probe(&self) -> GroundProbe {
+        GroundProbe {
+            top_m: self.terrain_top_m,
+            span_m: self.terrain_span_m,
+        }
     }
 
     /// Every robot collider's world pose, for checks and drawings.
@@ -80,5 +77,27 @@ impl World {
             .filter(|(_, c)| kind_of(c) == KIND_ROBOT)
             .map(|(_, c)| from_pose(c.position()))
             .collect()
+    }
+}
+
+/// The terrain's vertical extent, for a ray straight down onto it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct GroundProbe {
+    top_m: f64,
+    span_m: f64,
+}
+
+impl GroundProbe {
+    /// The terrain's height at `(x, y)` in `physics`, or `None` off the terrain.
+    pub(super) fn z(self, physics: &PhysicsWorld, x: f64, y: f64) -> Option<f64> {
+        // Start just above the terrain: Rapier works in f32, and a start far above would cost precision.
+        let ray = Ray::new(
+            point_to_vector(&Point3::new(x, y, self.top_m)),
+            Vector::new(0.0, 0.0, -1.0),
+        );
+        let only_terrain = |_: ColliderHandle, c: &Collider| kind_of(c) == KIND_TERRAIN;
+        let filter = QueryFilter::default().predicate(&only_terrain);
+        let (_, toi) = physics.cast_ray(&ray, self.span_m as f32, true, filter)?;
+        Some(self.top_m - f64::from(toi))
     }
 }
