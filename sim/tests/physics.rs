@@ -283,7 +283,10 @@ fn a_person_who_walks_into_the_standing_robot_pushes_it_at_a_walking_pace() {
         .windows(2)
         .map(|p| (p[1].x_m - p[0].x_m).hypot(p[1].y_m - p[0].y_m) / (p[1].time_s - p[0].time_s))
         .fold(0.0, f64::max);
-    assert!(fastest < 1.5, "pushed at up to {fastest} m/s by a person walking at 1 m/s");
+    assert!(
+        fastest < 1.5,
+        "pushed at up to {fastest} m/s by a person walking at 1 m/s"
+    );
     assert!(
         !events(&w)
             .iter()

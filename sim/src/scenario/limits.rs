@@ -43,9 +43,9 @@ struct ClimbLimit {
 /// names one. `stated(key)` says whether the scenario itself sets `robot.<key>`: a limit set twice is an error.
 ///
 /// # Errors
-/// [`crate::SimError::Scenario`] at `robot.limits_from` when the file cannot be read, is not the study's JSON, has no
-/// measurement at the scenario's wheel friction, or holds a limit that is not a positive length; or when the
-/// scenario also sets `max_step_m` or `height_m`.
+/// [`crate::SimError::Scenario`] at `robot.limits_from` when the file cannot be read, is not the study's JSON,
+/// has no measurement at the scenario's wheel friction, or holds a limit that is not a positive length; or when
+/// the scenario also sets `max_step_m` or `height_m`.
 pub(super) fn apply(
     checker: &Checker<'_>,
     scenario: &mut Scenario,
@@ -108,7 +108,7 @@ pub(super) fn apply(
 fn measured_length(value: Option<f64>, what: &str) -> std::result::Result<f64, String> {
     match value {
         None => Err(format!(
-            "`{what}` is null: the study measured no limit there, so it cannot set the robot's"
+            "`{what}` is null: the study measured no limit there, so it cannot set the robot's limit"
         )),
         Some(v) if v.is_finite() && v > 0.0 && v <= MAX_LIMIT_M => Ok(v),
         Some(v) => Err(format!(
