@@ -45,7 +45,7 @@ const TURN_KI_PER_S: f64 = 2.0;
 const TURN_INTEGRAL_MAX_RAD_S: f64 = 1.0;
 /// The motors' velocity-servo gain, N m per rad/s (Rapier's motor damping under its force-based motor model):
 /// stiff, so a wheel turns at its target speed unless its torque limit binds; at the default torque limit the
-/// wheel lags its target by at most 5 mrad/s (0.6 mm/s at the rim). Rapier's default, acceleration-based
+/// wheel lags its target by about 5 mrad/s (0.6 mm/s at the rim). Rapier's default, acceleration-based
 /// model scales the gain by the joint's effective inertia instead, and a standing robot crept down a 20 %
 /// slope at 2 cm/s under it.
 const MOTOR_GAIN: f32 = 1000.0;
