@@ -109,7 +109,7 @@ pub const DEFAULT_DOUBT_COST: f64 = 4.0;
 /// The extra cost of entering a cell inside the inflation, in cell lengths, for a robot that stands inside it
 /// (see [`plan`]): costmap_2d marks such a cell 253 and nav2's NavFn adds 0.8 of that to its neutral 50 for a
 /// free cell, about 5 times; so the cell costs 5 cell lengths, its own and 4 more.
-const INFLATED_CELL_COST: f64 = 4.0;
+pub const INFLATED_CELL_COST: f64 = 4.0;
 
 impl Default for PlannerOptions {
     fn default() -> Self {
