@@ -132,7 +132,7 @@ fn without_height(map: &Map) -> Vec<CellIndex> {
 }
 
 #[test]
-fn an_occupied_cell_with_no_height_is_judged_by_the_level_around_it_and_unknown_alone() {
+fn an_occupied_cell_with_no_height_is_judged_by_the_level_around_it_and_unknown_alone_under_every_rule() {
     let p = RobotProfile::default();
     // Level ground all round but on row 20 from x = 0.5 m on, which only the long readings reach: each cell
     // they leave without a height has level estimates beside it, and is ground.
@@ -156,11 +156,17 @@ fn an_occupied_cell_with_no_height_is_judged_by_the_level_around_it_and_unknown_
             "{c:?}"
         );
     }
-    // The paper's step rule assumes the worst of such a cell.
-    assert_eq!(
-        beside.traversability(cells[0], &p, TraversabilityRule::Absolute),
-        Traversability::Blocked
-    );
+    // The rules that judge a surface alone judge it as high as the highest estimate next to it: level ground,
+    // not the worst case (the end-point rule leaves such cells without a height by design).
+    for rule in [TraversabilityRule::Terrain, TraversabilityRule::Absolute] {
+        for c in &cells {
+            assert_eq!(
+                beside.traversability(*c, &p, rule),
+                Traversability::Traversable,
+                "{rule:?} {c:?}"
+            );
+        }
+    }
     // No ground measured within 0.15 m of row 20 from x = 0.5 m on, and readings known to 0.5 m: the cells they
     // leave without a height far from their end points have nothing to be judged by.
     let mut alone = robust_map();
@@ -180,6 +186,16 @@ fn an_occupied_cell_with_no_height_is_judged_by_the_level_around_it_and_unknown_
     for c in &far {
         assert_eq!(
             decide(&alone, c.i, c.j),
+            (Traversability::Unknown, Some(Doubt::NoHeight)),
+            "{c:?}"
+        );
+        // Nor has the terrain rule: no estimate in its 3 x 3 neighbourhood.
+        let terrain = TraversabilityRule::Terrain;
+        assert_eq!(
+            (
+                alone.traversability(*c, &p, terrain),
+                alone.doubt(*c, &p, terrain)
+            ),
             (Traversability::Unknown, Some(Doubt::NoHeight)),
             "{c:?}"
         );

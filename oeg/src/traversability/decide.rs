@@ -7,8 +7,7 @@ use super::rules::{
 };
 use crate::geometry::CellIndex;
 use crate::map::Map;
-use crate::model::{Elevation, Level, ceiling_confirmed, surface_level};
-use crate::storage::{TileIndex, offset_in_tile};
+use crate::model::{Elevation, HitHeight, ceiling_confirmed};
 
 /// How far `top` lies above `ground`, metres, with the standard deviation of the difference.
 fn rise_over(top: Elevation, ground: Elevation) -> (f32, f32) {
@@ -56,30 +55,6 @@ impl Map {
             };
         }
         d
-    }
-
-    /// Whether a cell within `distance_m` of a point of `cell` was never observed. The window mostly lies in
-    /// one tile, which is then looked up once rather than once a cell.
-    fn unobserved_within(&self, cell: CellIndex, distance_m: f32) -> bool {
-        let r = self.reach_cells(distance_m).floor() as i32 + 1;
-        let corner = |d: i32| CellIndex::new(cell.i.saturating_add(d), cell.j.saturating_add(d));
-        let tile = TileIndex::of(corner(-r));
-        if TileIndex::of(corner(r)) != tile {
-            return self
-                .cells_within(cell, distance_m)
-                .any(|(_, c)| !self.cell(c).is_observed());
-        }
-        let Some(cells) = self.cells.tile(tile) else {
-            return true;
-        };
-        self.cells_within(cell, distance_m)
-            .any(|(_, c)| !cells[offset_in_tile(c)].is_observed())
-    }
-
-    /// Whether a cell within `distance_m` of a point of `cell` (itself included) holds a height estimate.
-    fn has_estimate_within(&self, cell: CellIndex, distance_m: f32) -> bool {
-        self.cells_within(cell, distance_m)
-            .any(|(_, c)| self.cell(c).elevation().is_some())
     }
 
     /// [`Map::decision`] before the frontier test: the surface's decision or the structure's.
@@ -144,8 +119,7 @@ impl Map {
             };
         }
         let Some(e) = c.elevation() else {
-            // Occupied, height unknown: the rules without an uncertain answer assume the worst. Under the contact
-            // rule the cell lies within a beam's range noise of its end point, which alone measures a height
+            // Occupied, height unknown. Under the contact rule the cell lies within a beam's range noise of its end point, which alone measures a height
             // ([`crate::HitHeight::Endpoint`]): the surface it belongs to was measured around it, and it is
             // judged by the estimates within the contact distance as a free cell is. With none there, its
             // height is unknown, as a clearance never observed is: neither drivable nor an obstacle.
@@ -164,22 +138,24 @@ impl Map {
                         }
                     }
                 }
+                // Under the endpoint height rule only a beam's end cell measures a height, by design: the
+                // cells within its range noise are occupied and hold none, and the surface they belong to was
+                // measured around them. They are judged as high as the highest estimate next to them. Under
+                // the beam-sample rule an occupied cell without a height is weak evidence of something
+                // unmeasured, and the rules without an uncertain answer assume the worst, as published.
+                _ if self.config.model.hit_height == HitHeight::Endpoint => {
+                    match self.highest_neighbour(cell) {
+                        Some(h) => self.judge_surface(cell, h, profile, rule),
+                        None => Decision {
+                            class: Traversability::Unknown,
+                            doubt: Some(Doubt::NoHeight),
+                        },
+                    }
+                }
                 _ => Traversability::Blocked.into(),
             };
         };
-        let (step_m, var_m2) = match rule {
-            TraversabilityRule::Terrain => {
-                let mut ground = e.mean_m;
-                for dj in -1..=1 {
-                    for di in -1..=1 {
-                        let n = CellIndex::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
-                        if let Some(ne) = self.cell(n).elevation() {
-                            ground = ground.min(ne.mean_m);
-                        }
-                    }
-                }
-                (e.mean_m - ground, e.var_m2)
-            }
+        match rule {
             TraversabilityRule::Contact { kappa, reach_m } => {
                 // One walk over the wider of the two windows gives both grounds.
                 let [wide, ground] = self
@@ -203,7 +179,7 @@ impl Map {
                 // A wheel may come from any cell within the contact distance. One with no height that may be
                 // part of a step (the shadow behind a curb's far edge: `unmeasured_decision`) may lie a step
                 // lower: the cell cannot be called drivable.
-                return if decision == Traversability::Traversable
+                if decision == Traversability::Traversable
                     && self.step_may_hide_within(cell, (e, wide), profile, kappa, reach_m)
                 {
                     Decision::uncertain(Doubt::HiddenStep)
@@ -211,11 +187,33 @@ impl Map {
                     Decision::or_doubt(decision, Doubt::HeightBand)
                 } else {
                     Decision::or_doubt(decision, band_doubt(Doubt::StepBand))
-                };
+                }
             }
-            TraversabilityRule::Absolute | TraversabilityRule::Conservative { .. } => (e.mean_m, e.var_m2),
+            _ => self.judge_surface(cell, e, profile, rule),
+        }
+    }
+
+    /// The decision of the rules that judge a surface alone ([`TraversabilityRule::Terrain`], `Absolute` and
+    /// `Conservative`) for `cell` at the height `e`: the terrain rule's step over the lowest estimate of its 3 x 3
+    /// neighbourhood, or the absolute height.
+    fn judge_surface(
+        &self,
+        cell: CellIndex,
+        e: Elevation,
+        profile: &RobotProfile,
+        rule: TraversabilityRule,
+    ) -> Decision {
+        let step_m = match rule {
+            TraversabilityRule::Terrain => {
+                let ground = self
+                    .neighbourhood(cell)
+                    .filter_map(|n| self.cell(n).elevation())
+                    .fold(e.mean_m, |g, ne| g.min(ne.mean_m));
+                e.mean_m - ground
+            }
+            _ => e.mean_m,
         };
-        step_decision(step_m, var_m2.sqrt(), rule, profile).into()
+        step_decision(step_m, e.var_m2.sqrt(), rule, profile).into()
     }
 
     /// [`TraversabilityRule::Contact`]'s decision for a free cell, which holds no height: `Free` where the
@@ -284,43 +282,6 @@ impl Map {
         }
     }
 
-    /// The ground a wheel on `cell` would come from: the lowest level among the cells that hold a point within
-    /// `distance_m` of a point of `cell` (the gap between the two squares, not their centres), the cell itself
-    /// included. The level is every estimate that lies within `kappa` standard deviations (of the difference)
-    /// of the lowest one, and its elevation is their inverse-variance weighted mean. The lowest single estimate
-    /// would be biased: among the 45 cells within 0.10 m at 5 cm, noise puts the lowest about two standard
-    /// deviations below the ground, and every flat cell would seem to rise by that much. `None` if no cell in
-    /// reach has an estimate.
-    pub fn ground_within(&self, cell: CellIndex, distance_m: f32, kappa: f32) -> Option<Elevation> {
-        let [ground] = self.grounds_within(cell, [distance_m], kappa);
-        ground
-    }
-
-    /// `distance_m` in cells, the largest gap [`Map::cells_within`] keeps (a hair over, so that a distance of a
-    /// whole number of cells keeps its last ring despite rounding).
-    fn reach_cells(&self, distance_m: f32) -> f64 {
-        f64::from(distance_m) / self.geometry().resolution_m() + 1e-9
-    }
-
-    /// The cells that hold a point within `distance_m` of a point of `cell` (the gap between the two squares,
-    /// not their centres), `cell` included, with the square of that gap in cells, row by row.
-    fn cells_within(&self, cell: CellIndex, distance_m: f32) -> impl Iterator<Item = (f64, CellIndex)> {
-        let reach = self.reach_cells(distance_m);
-        let r = reach.floor() as i32 + 1;
-        (-r..=r)
-            .flat_map(move |dj| (-r..=r).map(move |di| (di, dj)))
-            .filter_map(move |(di, dj)| {
-                let (gi, gj) = (f64::from((di.abs() - 1).max(0)), f64::from((dj.abs() - 1).max(0)));
-                let gap2 = gi * gi + gj * gj;
-                (gap2 <= reach * reach).then(|| {
-                    (
-                        gap2,
-                        CellIndex::new(cell.i.saturating_add(di), cell.j.saturating_add(dj)),
-                    )
-                })
-            })
-    }
-
     /// Whether a free cell within the robot's contact distance of `cell` may lie a step below it: `cell`'s
     /// surface lies a step or more above the lowest ground within `reach_m` (`surface` and that ground), and
     /// the free cell may be part of a step ([`Map::unmeasured_decision`] says `Uncertain`). The shadow behind
@@ -345,89 +306,6 @@ impl Map {
                     && n.elevation().is_none()
                     && self.unmeasured_decision(c, profile, kappa, reach_m) == Traversability::Uncertain
             })
-    }
-
-    /// The top level within `distance_m` of `cell`, whose highest estimate is `highest`: every estimate there
-    /// within `kappa` standard deviations (of the difference) of it, their inverse-variance weighted mean. The
-    /// mirror of the ground level ([`Map::ground_within`]), for the same reason: the highest of many noisy
-    /// estimates of level ground lies about two standard deviations above it, and would make level ground
-    /// beside a cell with no height look like a step. A real step's top is a level of its own, and stays.
-    fn top_level(&self, cell: CellIndex, highest: Elevation, distance_m: f32, kappa: f32) -> Elevation {
-        let mut level = WeightedMean::default();
-        for (_, c) in self.cells_within(cell, distance_m) {
-            let Some(e) = self.cell(c).elevation() else {
-                continue;
-            };
-            if surface_level(highest, e.mean_m, e.var_m2, kappa) != Level::Below {
-                level.add(e);
-            }
-        }
-        level.elevation()
-    }
-
-    /// [`Map::ground_within`] for several distances at once, in one walk over the widest window: each
-    /// distance's cells are visited in the same order as alone, so each ground is the same to the bit.
-    pub fn grounds_within<const N: usize>(
-        &self,
-        cell: CellIndex,
-        distances_m: [f32; N],
-        kappa: f32,
-    ) -> [Option<Elevation>; N] {
-        let reach = distances_m.map(|d| self.reach_cells(d));
-        let widest = distances_m.iter().fold(0.0_f32, |a, b| a.max(*b));
-        // Every estimate in the widest window, with the square of its gap to `cell` in cells.
-        let window = move || {
-            self.cells_within(cell, widest)
-                .filter_map(move |(gap2, c)| Some((gap2, self.cell(c).elevation()?)))
-        };
-        let mut lowest: [Option<Elevation>; N] = [None; N];
-        for (gap2, e) in window() {
-            for (l, reach) in lowest.iter_mut().zip(&reach) {
-                if gap2 <= reach * reach && l.is_none_or(|l| e.mean_m.total_cmp(&l.mean_m).is_lt()) {
-                    *l = Some(e);
-                }
-            }
-        }
-        let mut sums = [WeightedMean::default(); N];
-        for (gap2, e) in window() {
-            for ((sum, reach), l) in sums.iter_mut().zip(&reach).zip(&lowest) {
-                let Some(l) = *l else { continue };
-                if gap2 > reach * reach || surface_level(l, e.mean_m, e.var_m2, kappa) == Level::Above {
-                    continue;
-                }
-                sum.add(e);
-            }
-        }
-        let mut out = [None; N];
-        for ((o, l), sum) in out.iter_mut().zip(&lowest).zip(sums) {
-            if l.is_some() {
-                *o = Some(sum.elevation());
-            }
-        }
-        out
-    }
-}
-
-/// The inverse-variance weighted mean of elevation estimates: a level (the ground's, the top's) and its variance.
-#[derive(Debug, Clone, Copy, Default)]
-struct WeightedMean {
-    sum_w: f64,
-    sum_wz: f64,
-}
-
-impl WeightedMean {
-    fn add(&mut self, e: Elevation) {
-        let w = 1.0 / f64::from(e.var_m2.max(f32::MIN_POSITIVE));
-        self.sum_w += w;
-        self.sum_wz += w * f64::from(e.mean_m);
-    }
-
-    /// The mean and its variance, `1 / sum(1 / var)`.
-    fn elevation(self) -> Elevation {
-        Elevation {
-            mean_m: (self.sum_wz / self.sum_w) as f32,
-            var_m2: (1.0 / self.sum_w) as f32,
-        }
     }
 }
 

@@ -77,9 +77,9 @@ impl RobotProfile {
 #[serde(rename_all = "snake_case")]
 #[repr(u8)]
 pub enum Traversability {
-    /// Never observed; under [`TraversabilityRule::Contact`], also an observed cell whose height nothing
-    /// around it measured ([`Doubt::NoHeight`]), and one that would be drivable beside a cell never observed
-    /// ([`Doubt::Frontier`]).
+    /// Never observed; under [`TraversabilityRule::Contact`] or [`crate::HitHeight::Endpoint`], also an observed
+    /// cell whose height nothing around it measured ([`Doubt::NoHeight`]); under the contact rule, one that
+    /// would be drivable beside a cell never observed ([`Doubt::Frontier`]).
     Unknown = 0,
     /// Observed and not occupied.
     Free = 1,
@@ -133,8 +133,8 @@ pub enum Doubt {
     /// closer and looking again decides it.
     Imprecise,
     /// Occupied with no height estimate (it lies within a beam's range noise of its end point, which alone
-    /// measures a height), and no estimate within the contact distance to judge it by. The cell is
-    /// [`Traversability::Unknown`], as a clearance never observed is: neither drivable nor an obstacle.
+    /// measures a height), and no estimate to judge it by within the contact distance (the 3 x 3 neighbourhood
+    /// for the other rules). It is [`Traversability::Unknown`], as a clearance never observed is.
     NoHeight,
     /// A cell with no height (free: beams passed over it; or occupied within a beam's range noise of its end
     /// point) beside an estimate a step higher: it may be part of the step (the top of a low wall the lidar
