@@ -11,7 +11,7 @@ use oeg_eval::progress::Progress;
 #[derive(clap::Args, Debug)]
 pub(crate) struct MapArgs {
     /// Input files: .graph (OctoMap scan graph), .pcd (ascii, binary or binary_compressed), .oeglog (a
-    /// sensor log of `oeg record`).
+    /// sensor log of `oeg record`), a ROS 2 bag (its .mcap file or its folder).
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Cell size in metres (the setting map.resolution_m).
@@ -23,7 +23,9 @@ pub(crate) struct MapArgs {
     /// A setting by its scenario key (repeatable), e.g. --set map.model.max_height_m=0.5 or
     /// --set input.pcd_frame=optical: map.model.* (every model option), map.traversability, robot.max_step_m,
     /// robot.height_m, input.graph_sensor (laser|stereo), input.pcd_sensor (laser|stereo), input.pcd_frame
-    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true). Every key: docs/guide.md#settings-one-door.
+    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true), input.bag.topics
+    /// (["/points"]), input.bag.map_frame, input.bag.odometry, input.bag.start_s, input.bag.end_s,
+    /// input.bag.stride, input.bag.tf_tolerance_s, input.bag.cloud_sensor. Every key: docs/guide.md#settings-one-door.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
     /// Also write the files a planner reads over the observed region, in `planner/`: the decisions as a nav2
@@ -59,6 +61,7 @@ impl MapArgs {
                 sensor: settings.input.pcd_sensor.model(),
             },
             log_pose: settings.input.log_pose,
+            bag: settings.input.bag.options(),
             profile: settings.robot,
             rule: settings.map.traversability,
             keep_inputs: false,
@@ -85,6 +88,15 @@ pub(crate) fn print_report(report: &MapReport) {
         report.timing.integrate_wall_time_s,
         report.timing.integrate_rays_per_s / 1e6
     );
+    for (bag, skip) in &report.skipped {
+        say!(
+            "skipped {} messages of {} in {}: {}",
+            skip.count,
+            skip.topic,
+            bag.display(),
+            skip.reason
+        );
+    }
     for f in &report.files {
         say!("wrote {}", f.display());
     }

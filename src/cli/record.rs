@@ -11,12 +11,14 @@ use oeg_eval::progress::Progress;
 pub(crate) struct RecordArgs {
     /// A scenario file (.toml).
     scenario: PathBuf,
-    /// The file to write (.oeglog, .graph with --format graph, .mcap with --format mcap).
+    /// The file to write (.oeglog, .graph with --format graph, .mcap with --format mcap), or the folder of a
+    /// ROS 2 bag with --format rosbag2.
     #[arg(long)]
     out: PathBuf,
     /// log: the testbed's sensor log (both poses, no-returns, range errors); graph: OctoMap's scan graph
     /// (estimated pose, hits only) for other mappers; mcap: a recording for Foxglove (both poses, each
-    /// sensor's returns, the truth's grid; docs/mcap.md).
+    /// sensor's returns, the truth's grid; docs/mcap.md); rosbag2: a ROS 2 bag (each sensor's hits as
+    /// PointCloud2, the poses as /tf and /tf_static; docs/guide.md#from-your-robots-logs).
     #[arg(long, value_enum, default_value_t = FormatArg::Log)]
     format: FormatArg,
     /// Replace the scenario's seed.
@@ -31,6 +33,7 @@ enum FormatArg {
     Log,
     Graph,
     Mcap,
+    Rosbag2,
 }
 
 /// Records the scans and says what was written.
@@ -39,6 +42,7 @@ pub(crate) fn run(args: &RecordArgs) -> anyhow::Result<()> {
         FormatArg::Log => RecordFormat::Log,
         FormatArg::Graph => RecordFormat::Graph,
         FormatArg::Mcap => RecordFormat::Mcap,
+        FormatArg::Rosbag2 => RecordFormat::Rosbag2,
     };
     let progress = Progress::new(0, "scans");
     let r = record::record(&args.scenario, &args.out, format, args.seed, &progress)?;
@@ -49,7 +53,7 @@ pub(crate) fn run(args: &RecordArgs) -> anyhow::Result<()> {
         r.wall_time_s,
         r.rays_per_s / 1e6,
         if r.num_rays_left_out > 0 {
-            format!(", {} no-return rays left out of the graph", r.num_rays_left_out)
+            format!(", {} no-return rays left out (a graph or a cloud holds hits only)", r.num_rays_left_out)
         } else {
             String::new()
         },

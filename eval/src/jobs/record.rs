@@ -1,9 +1,10 @@
-//! `oeg record`: run a scenario's drive and sensors and write every scan to a log, an OctoMap scan graph or an
-//! MCAP recording for Foxglove.
+//! `oeg record`: run a scenario's drive and sensors and write every scan to a log, an OctoMap scan graph, an
+//! MCAP recording for Foxglove or a ROS 2 bag.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use nalgebra::{Isometry3, Vector3};
 use sim::log::{LogHeader, LogSensor, LogWriter};
 use sim::sensors::PoseSource;
 use sim::{Simulation, scenario};
@@ -22,6 +23,11 @@ pub enum RecordFormat {
     /// An MCAP recording (`.mcap`, `docs/mcap.md`): the true and estimated poses, each sensor's scans and
     /// the truth's grid; no map (`oeg run --mcap` adds the map's layers, the plans and the events).
     Mcap,
+    /// A ROS 2 bag (a folder with an MCAP file and `metadata.yaml`): each sensor's hits as
+    /// `sensor_msgs/PointCloud2` on `/<sensor>/points` in the sensor's frame, and the poses as `/tf`
+    /// (`map` -> `odom`: the true pose's correction of the estimated one; `odom` -> `base_link`: the estimated
+    /// pose) and `/tf_static` (`base_link` -> each sensor). No-return rays are not written: a cloud holds points.
+    Rosbag2,
 }
 
 /// What a recording produced.
@@ -86,6 +92,66 @@ fn record_mcap(
     Ok(num_scans)
 }
 
+/// Records every scan of `sim` into a ROS 2 bag folder at `out` ([`RecordFormat::Rosbag2`]); returns the scans
+/// written and the no-return rays left out.
+fn record_rosbag2(sim: &mut Simulation, header: &LogHeader, out: &Path, progress: &Progress) -> Result<(u64, u64)> {
+    let mut bag = oeg::BagWriter::new(out)?;
+    // base_link -> each sensor, fixed on the robot (the URDF's fixed joints and the mount).
+    let mounts: Vec<Isometry3<f64>> = sim
+        .sensors()
+        .iter()
+        .map(|s| {
+            let base_from_link = sim.world().robot().base_from_link(&s.spec.mount_link);
+            base_from_link.unwrap_or_else(Isometry3::identity) * s.link_from_sensor
+        })
+        .collect();
+    let transform = |parent: &str, child: &str, stamp_ns, transform| oeg::BagTransform {
+        parent: parent.into(),
+        child: child.into(),
+        stamp_ns,
+        transform,
+    };
+    let statics: Vec<oeg::BagTransform> = header
+        .sensors
+        .iter()
+        .zip(&mounts)
+        .map(|(s, m)| transform(BASE_FRAME, &s.name, 0, *m))
+        .collect();
+    bag.transforms("/tf_static", 0, &statics)?;
+    let (mut num_scans, mut left_out) = (0, 0);
+    while let Some(scan) = sim.next_scan() {
+        let sensor = &header.sensors[scan.sensor_index];
+        let stamp_ns = (scan.stamp_s * 1e9).round() as i64;
+        let base_from_sensor = mounts[scan.sensor_index].inverse();
+        let estimated = scan.estimated_world_from_sensor * base_from_sensor;
+        let truth = scan.world_from_sensor * base_from_sensor;
+        bag.transforms(
+            "/tf",
+            stamp_ns,
+            &[
+                transform("map", "odom", stamp_ns, truth * estimated.inverse()),
+                transform("odom", BASE_FRAME, stamp_ns, estimated),
+            ],
+        )?;
+        let points: Vec<Vector3<f64>> = scan
+            .rays
+            .iter()
+            .filter(|r| r.kind == oeg::RayKind::Hit)
+            .map(|r| r.vector_in_sensor.cast())
+            .collect();
+        left_out += (scan.rays.len() - points.len()) as u64;
+        let topic = format!("/{}/points", sensor.name);
+        bag.cloud(&topic, &sensor.name, stamp_ns, &points, oeg::CloudPrecision::Float32)?;
+        num_scans += 1;
+        progress.inc(1);
+    }
+    bag.finish()?;
+    Ok((num_scans, left_out))
+}
+
+/// The robot's frame in a written bag (REP 105).
+const BASE_FRAME: &str = "base_link";
+
 /// Runs the scenario (its seed replaced by `seed` when given) and records every scan to `out`.
 ///
 /// # Errors
@@ -97,8 +163,17 @@ pub fn record(
     seed: Option<u64>,
     progress: &Progress,
 ) -> Result<RecordReport> {
-    // Refuse an output that is not a regular file before simulating anything.
-    oeg_files::output_target(out)?;
+    // Refuse an output that is not a regular file (a bag: a folder) before simulating anything.
+    if format == RecordFormat::Rosbag2 {
+        if out.exists() && !out.is_dir() {
+            return Err(EvalError::Input {
+                path: out.to_path_buf(),
+                message: "a ROS 2 bag is a folder, and this is a file".into(),
+            });
+        }
+    } else {
+        oeg_files::output_target(out)?;
+    }
     let mut loaded = scenario::load(path)?;
     if let Some(seed) = seed {
         loaded.scenario.seed = seed;
@@ -132,6 +207,7 @@ pub fn record(
             (scans.len() as u64, left_out)
         }
         RecordFormat::Mcap => (record_mcap(&loaded, &mut sim, &header, out, progress)?, 0),
+        RecordFormat::Rosbag2 => record_rosbag2(&mut sim, &header, out, progress)?,
     };
     progress.finish();
     let wall_time_s = start.elapsed().as_secs_f64();

@@ -10,7 +10,7 @@
 //! | `map.traversability` | yes | yes | yes |
 //! | `robot.max_step_m`, `robot.height_m` | yes | yes | yes |
 //! | `planner.inflation_radius_m`, `planner.footprint_radius_m`, `planner.unknown`, `planner.uncertain` | yes | no | yes |
-//! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose` | no | yes | no |
+//! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose`, `input.bag.*` | no | yes | no |
 //! | every other scenario key | yes | no | no |
 //!
 //! An override that makes the settings invalid is named in the error (`--set map.model.p_max=2: ...`), by
@@ -102,7 +102,7 @@ impl RangeModel {
 }
 
 /// `[input]` of `oeg map`: how files become scans.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct InputSettings {
     /// Range-error model of scan-graph rays (`laser`).
@@ -115,6 +115,63 @@ pub struct InputSettings {
     pub pcd_invalid: oeg::InvalidPoints,
     /// Pose of sensor-log scans: `estimated` or `true`.
     pub log_pose: sim::sensors::PoseSource,
+    /// How a ROS 2 bag becomes scans (`input.bag.*`).
+    pub bag: BagInput,
+}
+
+/// `[input.bag]` of `oeg map`: a ROS 2 bag's topics, frames and time range ([`oeg::BagOptions`]).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BagInput {
+    /// The `PointCloud2` and `LaserScan` topics to map; empty: every one.
+    pub topics: Vec<String>,
+    /// The map frame; none: `map`, else `odom`.
+    pub map_frame: Option<String>,
+    /// `nav_msgs/Odometry` topics whose poses join the transform tree.
+    pub odometry: Vec<String>,
+    /// Seconds after the bag's first message to start at.
+    pub start_s: Option<f64>,
+    /// Seconds after the bag's first message to end at.
+    pub end_s: Option<f64>,
+    /// Every how many range messages of a topic one is mapped.
+    pub stride: u32,
+    /// How far a scan's stamp may lie outside its transforms, seconds.
+    pub tf_tolerance_s: f64,
+    /// Range-error model of `PointCloud2` points (`laser`).
+    pub cloud_sensor: RangeModel,
+}
+
+impl Default for BagInput {
+    fn default() -> Self {
+        let o = oeg::BagOptions::default();
+        Self {
+            topics: o.topics,
+            map_frame: o.map_frame,
+            odometry: o.odometry_topics,
+            start_s: o.start_s,
+            end_s: o.end_s,
+            stride: o.stride,
+            tf_tolerance_s: o.tf_tolerance_s,
+            cloud_sensor: RangeModel::Laser,
+        }
+    }
+}
+
+impl BagInput {
+    /// The reader's options.
+    pub fn options(&self) -> oeg::BagOptions {
+        oeg::BagOptions {
+            topics: self.topics.clone(),
+            map_frame: self.map_frame.clone(),
+            odometry_topics: self.odometry.clone(),
+            start_s: self.start_s,
+            end_s: self.end_s,
+            stride: self.stride,
+            tf_tolerance_s: self.tf_tolerance_s,
+            cloud_sensor: self.cloud_sensor.model(),
+            laser_sensor: oeg::SensorModel::laser(),
+        }
+    }
 }
 
 impl Default for InputSettings {
@@ -125,6 +182,7 @@ impl Default for InputSettings {
             pcd_frame: oeg::PcdFrame::default(),
             pcd_invalid: oeg::InvalidPoints::default(),
             log_pose: sim::sensors::PoseSource::Estimated,
+            bag: BagInput::default(),
         }
     }
 }
@@ -153,7 +211,7 @@ pub struct MapPart {
 }
 
 /// Everything `oeg map` can be told.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MapJobSettings {
     /// Resolution and model.

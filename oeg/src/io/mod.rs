@@ -2,6 +2,8 @@
 //!
 //! * [`graph`]: OctoMap scan graphs (`.graph`), the format of OctoMap's published data sets;
 //! * [`pcd`]: PCL point clouds (`.pcd`: ascii, binary, binary_compressed);
+//! * [`rosbag`]: ROS 2 bags (MCAP storage): `PointCloud2` and `LaserScan` in, placed by `/tf`; clouds and
+//!   transforms out;
 //! * [`mapfile`]: this crate's own map format (`.oeg`).
 //!
 //! Every reader checks sizes against the file before allocating, rejects non-finite numbers, and names the
@@ -14,6 +16,7 @@ pub(crate) mod nav2;
 pub(crate) mod npy;
 pub(crate) mod pcd;
 pub(crate) mod planner_files;
+pub(crate) mod rosbag;
 
 use std::path::Path;
 

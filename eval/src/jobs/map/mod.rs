@@ -1,5 +1,5 @@
-//! `oeg map`: build a map from recorded range data (OctoMap scan graphs, PCD files) and write the map, its
-//! layer images, `summary.json` and `timing.json`.
+//! `oeg map`: build a map from recorded range data (OctoMap scan graphs, PCD files, sensor logs, ROS 2 bags) and
+//! write the map, its layer images, `summary.json` and `timing.json`.
 
 pub mod demo;
 
@@ -23,28 +23,39 @@ pub enum InputFormat {
     Pcd,
     /// `.oeglog`: a recorded sensor log (`oeg record`), one scan per record.
     Log,
+    /// A ROS 2 bag: its `.mcap` file (recognised by its first bytes) or its folder with `metadata.yaml`; one
+    /// scan per `PointCloud2` or `LaserScan` message ([`oeg::read_bag`]).
+    Bag,
 }
+
+/// The first bytes of an MCAP file.
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 impl InputFormat {
     /// How many times its size a file of this format takes in memory while it is mapped, at most: its bytes,
     /// its records as read and the scans made of them (24 bytes a ray). A graph's point is 24 bytes in the file,
-    /// a log's ray 17, a binary PCD point 12 (ascii more).
+    /// a log's ray 17, a binary PCD point 12 (ascii more), a bag's point 12 or more, and a compressed chunk
+    /// is held decompressed while it is read.
     pub fn memory_factor(self) -> u64 {
         match self {
             Self::Graph => 3,
             Self::Log => 4,
             Self::Pcd => 5,
+            Self::Bag => 6,
         }
     }
 
-    /// The format of `path`: a sensor log by its magic bytes whatever its name, anything else by its
-    /// extension.
+    /// The format of `path`: a sensor log or an MCAP file by its magic bytes whatever its name, a folder with a
+    /// `metadata.yaml` as a ROS 2 bag, anything else by its extension.
     ///
     /// # Errors
     /// [`EvalError::Input`] for a file that is not a sensor log and has another extension.
     pub fn of(path: &Path) -> Result<Self> {
         if starts_with(path, sim::log::MAGIC) {
             return Ok(Self::Log);
+        }
+        if starts_with(path, MCAP_MAGIC) || path.join("metadata.yaml").is_file() {
+            return Ok(Self::Bag);
         }
         match path
             .extension()
@@ -58,8 +69,9 @@ impl InputFormat {
             _ => Err(EvalError::Input {
                 path: path.to_path_buf(),
                 message:
-                    "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd) \
-                          or a sensor log (`oeg record`'s, recognised by its first bytes)"
+                    "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd), \
+                          a sensor log (`oeg record`'s, recognised by its first bytes) or a ROS 2 bag (its \
+                          .mcap file, or its folder with metadata.yaml)"
                         .into(),
             }),
         }
@@ -88,6 +100,8 @@ pub struct MapJob {
     pub graph_sensor: SensorModel,
     /// How PCD files become scans (includes their sensor model).
     pub pcd: oeg::PcdOptions,
+    /// How ROS 2 bags become scans.
+    pub bag: oeg::BagOptions,
     /// Which pose sensor-log scans are placed with.
     pub log_pose: sim::sensors::PoseSource,
     /// The robot for the traversability layer.
@@ -113,6 +127,9 @@ pub struct MapSummary {
     pub num_scans: u64,
     /// Rays integrated (hits and no-returns).
     pub num_rays: u64,
+    /// Range messages of ROS 2 bags not mapped: no transform to the map frame at their stamp, or no valid
+    /// reading (the reasons are printed and in the report).
+    pub num_messages_skipped: u64,
     /// Cell visits by rays.
     pub num_cell_visits: u64,
     /// Cell size.
@@ -175,6 +192,8 @@ pub struct MapReport {
     pub timing: MapTiming,
     /// Every file written, in order.
     pub files: Vec<PathBuf>,
+    /// Range messages of a bag that were not mapped, by bag, topic and reason.
+    pub skipped: Vec<(PathBuf, oeg::BagSkip)>,
 }
 
 /// Where a scan came from: its file and its place in it, for errors while it is integrated.
@@ -186,13 +205,52 @@ pub struct ScanSource {
     pub place: String,
 }
 
+/// The inputs as scans, each with its [`ScanSource`], and the bags' messages that were not mapped.
+#[derive(Debug, Clone, Default)]
+pub struct Inputs {
+    /// The scans, in the inputs' order.
+    pub scans: Vec<(ScanSource, Scan)>,
+    /// Range messages of a bag skipped for a missing transform or no valid reading, with their bag.
+    pub skipped: Vec<(PathBuf, oeg::BagSkip)>,
+}
+
+/// The bytes `path` holds: a file's size, or the files of a bag's folder together.
+fn input_bytes(path: &Path) -> Result<u64> {
+    let io = |source| EvalError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.is_dir() && path.join("metadata.yaml").is_file() {
+        let mut total = 0_u64;
+        for entry in std::fs::read_dir(path).map_err(io)? {
+            let meta = entry.map_err(io)?.metadata().map_err(io)?;
+            if meta.is_file() {
+                total = total.saturating_add(meta.len());
+            }
+        }
+        return Ok(total);
+    }
+    // A device or a pipe has no size to check (`/dev/zero` would be read until memory runs out).
+    if !meta.is_file() {
+        return Err(EvalError::Input {
+            path: path.to_path_buf(),
+            message: "is not a regular file (a folder, a device or a pipe) nor a ROS 2 bag's folder; `oeg map` \
+                      checks each input's size against the memory limit before reading it, so save the data to a \
+                      file first"
+                .into(),
+        });
+    }
+    Ok(meta.len())
+}
+
 /// Reads every input into scans, each with its [`ScanSource`], before anything is written, so a bad input
 /// leaves no partial output.
 ///
 /// # Errors
 /// The first unreadable or malformed input, named, and inputs that would not fit the memory limit.
-pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
-    let mut scans = Vec::new();
+pub fn read_inputs(job: &MapJob) -> Result<Inputs> {
+    let mut inputs = Inputs::default();
     let source = |path: &Path, place: String| ScanSource {
         file: path.to_path_buf(),
         place,
@@ -207,21 +265,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
         .collect::<Result<Vec<_>>>()?;
     let mut held = 0_u64;
     for (path, format) in job.inputs.iter().zip(&formats) {
-        let meta = std::fs::metadata(path).map_err(|source| EvalError::Io {
-            path: path.clone(),
-            source,
-        })?;
-        // A device or a pipe has no size to check (`/dev/zero` would be read until memory runs out).
-        if !meta.is_file() {
-            return Err(EvalError::Input {
-                path: path.clone(),
-                message:
-                    "is not a regular file (a folder, a device or a pipe); `oeg map` checks each input's \
-                          size against the memory limit before reading it, so save the data to a file first"
-                        .into(),
-            });
-        }
-        let bytes = meta.len();
+        let bytes = input_bytes(path)?;
         let factor = format.memory_factor();
         held = held.saturating_add(bytes.saturating_mul(factor));
         if held > limit {
@@ -235,6 +279,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
             });
         }
     }
+    let scans = &mut inputs.scans;
     for (path, format) in job.inputs.iter().zip(formats) {
         match format {
             InputFormat::Graph => scans.extend(oeg::read_graph(path)?.iter().enumerate().map(|(k, n)| {
@@ -245,7 +290,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
             })),
             InputFormat::Pcd => scans.push((
                 source(path, "the cloud".into()),
-                oeg::read_pcd_scan_within(path, &job.pcd, job.config.memory_limit_bytes)?,
+                oeg::read_pcd_scan_within(path, &job.pcd, limit)?,
             )),
             InputFormat::Log => {
                 let log = sim::log::read_log(path)?;
@@ -263,9 +308,19 @@ pub fn read_inputs(job: &MapJob) -> Result<Vec<(ScanSource, Scan)>> {
                     )
                 }));
             }
+            InputFormat::Bag => {
+                let bag = oeg::read_bag_within(path, &job.bag, limit)?;
+                scans.extend(bag.scans.into_iter().map(|s| {
+                    let place = format!("message {} of {} at {:.3} s", s.index, s.topic, s.scan.stamp_s);
+                    (source(path, place), s.scan)
+                }));
+                inputs
+                    .skipped
+                    .extend(bag.skipped.into_iter().map(|s| (path.clone(), s)));
+            }
         }
     }
-    Ok(scans)
+    Ok(inputs)
 }
 
 /// Scans given to the map at once ([`Map::integrate_batch`]).
@@ -286,7 +341,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let staged = Staged::begin(&job.out_dir, &inputs)?;
     let mut map = Map::new(job.config)?;
     let read_start = Instant::now();
-    let scans = read_inputs(job)?;
+    let Inputs { scans, skipped } = read_inputs(job)?;
     let read_wall_time_s = read_start.elapsed().as_secs_f64();
 
     let start = Instant::now();
@@ -317,7 +372,8 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         let stage = staged.dir();
         let (mut files, map_file_bytes) = write_map_files(job, &map, stage)?;
         let totals = map.totals();
-        let summary = summarize(job, &map, map_bytes, map_file_bytes);
+        let mut summary = summarize(job, &map, map_bytes, map_file_bytes);
+        summary.num_messages_skipped = skipped.iter().map(|(_, s)| s.count).sum();
         let per_s = |n: u64| {
             if integrate_wall_time_s > 0.0 {
                 n as f64 / integrate_wall_time_s
@@ -348,6 +404,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         summary,
         timing,
         files,
+        skipped,
     })
 }
 
@@ -425,6 +482,7 @@ fn summarize(job: &MapJob, map: &Map, map_bytes: u64, map_file_bytes: u64) -> Ma
         num_inputs: job.inputs.len() as u64,
         num_scans: map.num_scans(),
         num_rays: totals.num_rays,
+        num_messages_skipped: 0,
         num_cell_visits: totals.num_cell_visits,
         resolution_m: map.geometry().resolution_m(),
         free_space_elevation: job.config.model.free_space_elevation,

@@ -1,0 +1,462 @@
+//! The ROS 2 messages a bag's range data and poses come in, hand-written: each decoded from CDR field by field
+//! (no ROS installation), and those the writer needs encoded, with the message definitions a bag's schemas
+//! carry (`ros2msg`, as `ros2 bag record` writes them).
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+
+use super::cdr::{CdrError, CdrReader, CdrResult, CdrWriter};
+use crate::io::unit_quaternion;
+
+/// `sensor_msgs/PointCloud2`.
+pub(crate) const POINT_CLOUD2: &str = "sensor_msgs/msg/PointCloud2";
+/// `sensor_msgs/LaserScan`.
+pub(crate) const LASER_SCAN: &str = "sensor_msgs/msg/LaserScan";
+/// `tf2_msgs/TFMessage`.
+pub(crate) const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
+/// `nav_msgs/Odometry`.
+pub(crate) const ODOMETRY: &str = "nav_msgs/msg/Odometry";
+
+/// Whether a schema's name (`package/msg/Name`, or `package/Name` as ROS 1 and some tools write it) is `kind`.
+pub(crate) fn is_type(name: &str, kind: &str) -> bool {
+    name == kind || name == kind.replace("/msg/", "/")
+}
+
+/// `std_msgs/Header`: the stamp in nanoseconds since the epoch, and the frame.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Header {
+    pub(crate) stamp_ns: i64,
+    pub(crate) frame_id: String,
+}
+
+impl Header {
+    fn read(r: &mut CdrReader) -> CdrResult<Self> {
+        let sec = r.i32("header.stamp.sec")?;
+        let nanosec = r.u32("header.stamp.nanosec")?;
+        Ok(Self {
+            stamp_ns: i64::from(sec) * 1_000_000_000 + i64::from(nanosec),
+            frame_id: frame_name(&r.string("header.frame_id")?),
+        })
+    }
+
+    fn write(&self, w: &mut CdrWriter) {
+        w.i32(self.stamp_ns.div_euclid(1_000_000_000) as i32);
+        w.u32(self.stamp_ns.rem_euclid(1_000_000_000) as u32);
+        w.string(&self.frame_id);
+    }
+}
+
+/// A frame's name as tf2 uses it: without a leading `/` (ROS 1 wrote one).
+pub(crate) fn frame_name(name: &str) -> String {
+    name.trim_start_matches('/').to_string()
+}
+
+/// `sensor_msgs/PointField`'s `FLOAT32` and `FLOAT64`: the coordinates' types this reader takes.
+const FLOAT32: u8 = 7;
+const FLOAT64: u8 = 8;
+
+/// `sensor_msgs/PointField`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PointField {
+    pub(crate) name: String,
+    pub(crate) offset: u32,
+    pub(crate) datatype: u8,
+}
+
+/// `sensor_msgs/PointCloud2`, its `data` borrowed from the message.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PointCloud2<'a> {
+    pub(crate) header: Header,
+    pub(crate) height: u32,
+    pub(crate) width: u32,
+    pub(crate) fields: Vec<PointField>,
+    pub(crate) is_bigendian: bool,
+    pub(crate) point_step: u32,
+    pub(crate) row_step: u32,
+    pub(crate) data: &'a [u8],
+}
+
+impl<'a> PointCloud2<'a> {
+    pub(crate) fn decode(data: &'a [u8]) -> CdrResult<Self> {
+        let mut r = CdrReader::new(data)?;
+        let header = Header::read(&mut r)?;
+        let height = r.u32("height")?;
+        let width = r.u32("width")?;
+        // A field is at least a 4-byte name length, its offset, type and count.
+        let n = r.sequence_len("fields", 13)?;
+        let fields = (0..n)
+            .map(|k| {
+                let field = PointField {
+                    name: r.string(&format!("fields[{k}].name"))?,
+                    offset: r.u32(&format!("fields[{k}].offset"))?,
+                    datatype: r.u8(&format!("fields[{k}].datatype"))?,
+                };
+                r.u32(&format!("fields[{k}].count"))?;
+                Ok(field)
+            })
+            .collect::<CdrResult<Vec<_>>>()?;
+        let cloud = Self {
+            header,
+            height,
+            width,
+            fields,
+            is_bigendian: r.bool("is_bigendian")?,
+            point_step: r.u32("point_step")?,
+            row_step: r.u32("row_step")?,
+            data: r.bytes("data")?,
+        };
+        r.bool("is_dense")?;
+        Ok(cloud)
+    }
+
+    /// The offset and type of the coordinate field `axis`, checked to lie within a point.
+    fn coordinate(&self, axis: &str) -> CdrResult<(usize, u8)> {
+        let f = self.fields.iter().find(|f| f.name == axis).ok_or_else(|| CdrError {
+            field: "fields".into(),
+            message: format!(
+                "no field `{axis}` (the cloud has {})",
+                self.fields
+                    .iter()
+                    .map(|f| f.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })?;
+        let size = match f.datatype {
+            FLOAT32 => 4,
+            FLOAT64 => 8,
+            t => {
+                return Err(CdrError {
+                    field: format!("fields[{axis}].datatype"),
+                    message: format!("{t}, where FLOAT32 (7) or FLOAT64 (8) is expected"),
+                });
+            }
+        };
+        if f.offset as usize + size > self.point_step as usize {
+            return Err(CdrError {
+                field: format!("fields[{axis}].offset"),
+                message: format!("{} + {size} bytes runs past point_step {}", f.offset, self.point_step),
+            });
+        }
+        Ok((f.offset as usize, f.datatype))
+    }
+
+    /// The points in the cloud's frame, row by row; points with a NaN or infinite coordinate (`is_dense =
+    /// false`) left out. The fields `x`, `y` and `z` are found by name (FLOAT32 or FLOAT64); any other field
+    /// (intensity, ring, time) and padding are skipped.
+    pub(crate) fn points(&self) -> CdrResult<Vec<Vector3<f64>>> {
+        let axes = [self.coordinate("x")?, self.coordinate("y")?, self.coordinate("z")?];
+        let step = self.point_step as usize;
+        let (w, h) = (self.width as usize, self.height as usize);
+        if w == 0 || h == 0 {
+            return Ok(Vec::new());
+        }
+        let row_step = self.row_step as usize;
+        // The last row needs its points only; the rows before it, `row_step` bytes each.
+        let fits = w
+            .checked_mul(step)
+            .filter(|&row| h == 1 || row <= row_step)
+            .and_then(|row| row_step.checked_mul(h - 1)?.checked_add(row))
+            .is_some_and(|n| n <= self.data.len());
+        if !fits {
+            return Err(CdrError {
+                field: "data".into(),
+                message: format!(
+                    "{} bytes cannot hold {h} rows of {w} points of {step} bytes, {row_step} bytes a row",
+                    self.data.len()
+                ),
+            });
+        }
+        let big = self.is_bigendian;
+        let read = |p: &[u8], (offset, datatype): (usize, u8)| -> f64 {
+            if datatype == FLOAT32 {
+                let mut b = [0u8; 4];
+                b.copy_from_slice(&p[offset..offset + 4]);
+                f64::from(if big { f32::from_be_bytes(b) } else { f32::from_le_bytes(b) })
+            } else {
+                let mut b = [0u8; 8];
+                b.copy_from_slice(&p[offset..offset + 8]);
+                if big { f64::from_be_bytes(b) } else { f64::from_le_bytes(b) }
+            }
+        };
+        let mut points = Vec::with_capacity(w * h);
+        for row in 0..h {
+            let start = row * row_step;
+            for k in 0..w {
+                let p = &self.data[start + k * step..start + (k + 1) * step];
+                let v = Vector3::new(read(p, axes[0]), read(p, axes[1]), read(p, axes[2]));
+                if v.iter().all(|c| c.is_finite()) {
+                    points.push(v);
+                }
+            }
+        }
+        Ok(points)
+    }
+
+    /// A cloud of `points` (x, y, z, FLOAT64 or FLOAT32, unorganized), little-endian.
+    pub(crate) fn encode(header: &Header, points: &[Vector3<f64>], float64: bool) -> Vec<u8> {
+        let size: u32 = if float64 { 8 } else { 4 };
+        let mut w = CdrWriter::new();
+        header.write(&mut w);
+        w.u32(1);
+        w.len(points.len());
+        w.len(3);
+        for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
+            w.string(name);
+            w.u32(size * k as u32);
+            w.u8(if float64 { FLOAT64 } else { FLOAT32 });
+            w.u32(1);
+        }
+        w.bool(false);
+        w.u32(3 * size);
+        w.len(3 * size as usize * points.len());
+        let mut data = Vec::with_capacity(3 * size as usize * points.len());
+        for p in points {
+            for c in p.iter() {
+                if float64 {
+                    data.extend_from_slice(&c.to_le_bytes());
+                } else {
+                    data.extend_from_slice(&(*c as f32).to_le_bytes());
+                }
+            }
+        }
+        w.bytes(&data);
+        w.bool(points.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        w.finish()
+    }
+}
+
+/// `sensor_msgs/LaserScan`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LaserScan {
+    pub(crate) header: Header,
+    pub(crate) angle_min: f32,
+    pub(crate) angle_increment: f32,
+    pub(crate) range_min: f32,
+    pub(crate) range_max: f32,
+    pub(crate) ranges: Vec<f32>,
+}
+
+impl LaserScan {
+    pub(crate) fn decode(data: &[u8]) -> CdrResult<Self> {
+        let mut r = CdrReader::new(data)?;
+        let header = Header::read(&mut r)?;
+        let angle_min = r.f32("angle_min")?;
+        r.f32("angle_max")?;
+        let angle_increment = r.f32("angle_increment")?;
+        r.f32("time_increment")?;
+        r.f32("scan_time")?;
+        let range_min = r.f32("range_min")?;
+        let range_max = r.f32("range_max")?;
+        let ranges = r.f32s("ranges")?;
+        for (v, name) in [
+            (angle_min, "angle_min"),
+            (angle_increment, "angle_increment"),
+            (range_min, "range_min"),
+            (range_max, "range_max"),
+        ] {
+            if !v.is_finite() {
+                return Err(CdrError {
+                    field: name.into(),
+                    message: format!("{v}, where a finite number is expected"),
+                });
+            }
+        }
+        if !(range_max > 0.0 && range_min <= range_max) {
+            return Err(CdrError {
+                field: "range_max".into(),
+                message: format!("{range_max} m with range_min {range_min} m: an empty range"),
+            });
+        }
+        Ok(Self {
+            header,
+            angle_min,
+            angle_increment,
+            range_min,
+            range_max,
+            ranges,
+        })
+    }
+}
+
+/// One edge of the transform tree: `parent_from_child` at the header's stamp (the header's frame is the parent).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct TransformStamped {
+    pub(crate) header: Header,
+    pub(crate) child_frame_id: String,
+    pub(crate) transform: Isometry3<f64>,
+}
+
+impl TransformStamped {
+    fn read(r: &mut CdrReader, field: &str) -> CdrResult<Self> {
+        let header = Header::read(r)?;
+        let child_frame_id = frame_name(&r.string(&format!("{field}.child_frame_id"))?);
+        let transform = read_pose(r, &format!("{field}.transform"))?;
+        Ok(Self {
+            header,
+            child_frame_id,
+            transform,
+        })
+    }
+
+    fn write(&self, w: &mut CdrWriter) {
+        self.header.write(w);
+        w.string(&self.child_frame_id);
+        write_pose(w, &self.transform);
+    }
+}
+
+/// A translation (`x y z`, float64) and a rotation (`x y z w`, float64), as `geometry_msgs/Transform` and
+/// `geometry_msgs/Pose` both are; the rotation normalised, a zero or non-finite one refused.
+fn read_pose(r: &mut CdrReader, field: &str) -> CdrResult<Isometry3<f64>> {
+    let mut v = [0.0; 7];
+    for (k, x) in v.iter_mut().enumerate() {
+        *x = r.f64(field)?;
+        if !x.is_finite() {
+            return Err(CdrError {
+                field: field.into(),
+                message: format!("component {k} is {x}, where a finite number is expected"),
+            });
+        }
+    }
+    // A rotation that is unit to rounding is taken as written, so that a pose survives a bag bit for bit;
+    // another is normalised as every reader of the project does.
+    let q = Quaternion::new(v[6], v[3], v[4], v[5]);
+    let rotation = if (q.norm_squared() - 1.0).abs() <= 4.0 * f64::EPSILON {
+        UnitQuaternion::new_unchecked(q)
+    } else {
+        unit_quaternion(v[6], v[3], v[4], v[5]).ok_or_else(|| CdrError {
+            field: format!("{field}.rotation"),
+            message: "a zero quaternion".into(),
+        })?
+    };
+    Ok(Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation))
+}
+
+fn write_pose(w: &mut CdrWriter, pose: &Isometry3<f64>) {
+    let (t, q) = (pose.translation.vector, pose.rotation.quaternion());
+    for x in [t.x, t.y, t.z, q.i, q.j, q.k, q.w] {
+        w.f64(x);
+    }
+}
+
+/// `tf2_msgs/TFMessage`.
+pub(crate) fn decode_tf(data: &[u8]) -> CdrResult<Vec<TransformStamped>> {
+    let mut r = CdrReader::new(data)?;
+    // A transform is at least its stamp, two string lengths and seven float64s.
+    let n = r.sequence_len("transforms", 16 + 56)?;
+    (0..n)
+        .map(|k| TransformStamped::read(&mut r, &format!("transforms[{k}]")))
+        .collect()
+}
+
+pub(crate) fn encode_tf(transforms: &[TransformStamped]) -> Vec<u8> {
+    let mut w = CdrWriter::new();
+    w.len(transforms.len());
+    for t in transforms {
+        t.write(&mut w);
+    }
+    w.finish()
+}
+
+/// `nav_msgs/Odometry`'s pose as a transform: the child frame (the robot) in the header's frame. The
+/// covariance and the twist are not read.
+pub(crate) fn decode_odometry(data: &[u8]) -> CdrResult<TransformStamped> {
+    let mut r = CdrReader::new(data)?;
+    TransformStamped::read(&mut r, "pose.pose")
+}
+
+/// The definitions a bag's schema records carry (`ros2msg`): the message's own, then each message it uses,
+/// after a line of 80 `=` and `MSG: package/Name`, as `ros2 bag record` writes them.
+pub(crate) fn schema_text(name: &str) -> String {
+    let (own, deps): (&str, &[(&str, &str)]) = if name == POINT_CLOUD2 {
+        (
+            "std_msgs/Header header\nuint32 height\nuint32 width\nsensor_msgs/PointField[] fields\nbool is_bigendian\n\
+             uint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n",
+            &[
+                ("std_msgs/Header", HEADER),
+                ("builtin_interfaces/Time", TIME),
+                (
+                    "sensor_msgs/PointField",
+                    "uint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\nuint8 UINT32=6\n\
+                     uint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n",
+                ),
+            ],
+        )
+    } else {
+        (
+            "geometry_msgs/TransformStamped[] transforms\n",
+            &[
+                (
+                    "geometry_msgs/TransformStamped",
+                    "std_msgs/Header header\nstring child_frame_id\nTransform transform\n",
+                ),
+                ("std_msgs/Header", HEADER),
+                ("builtin_interfaces/Time", TIME),
+                ("geometry_msgs/Transform", "Vector3 translation\nQuaternion rotation\n"),
+                ("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
+                (
+                    "geometry_msgs/Quaternion",
+                    "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n",
+                ),
+            ],
+        )
+    };
+    let mut text = own.to_string();
+    for (dep, body) in deps {
+        text.push_str(&format!("{}\nMSG: {dep}\n{body}", "=".repeat(80)));
+    }
+    text
+}
+
+const HEADER: &str = "builtin_interfaces/Time stamp\nstring frame_id\n";
+const TIME: &str = "int32 sec\nuint32 nanosec\n";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lidar_header() -> Header {
+        Header {
+            stamp_ns: 1_500_000_123,
+            frame_id: "lidar".into(),
+        }
+    }
+
+    #[test]
+    fn a_cloud_and_a_transform_read_back_as_written() {
+        let points = [Vector3::new(1.0, 2.0, 3.0), Vector3::new(-1.0, 0.5, f64::NAN)];
+        for float64 in [false, true] {
+            let data = PointCloud2::encode(&lidar_header(), &points, float64);
+            let cloud = PointCloud2::decode(&data).expect("decodes");
+            assert_eq!(cloud.header, lidar_header());
+            assert_eq!(cloud.points().expect("points"), vec![Vector3::new(1.0, 2.0, 3.0)]);
+        }
+        let t = TransformStamped {
+            header: Header {
+                stamp_ns: -5,
+                frame_id: "map".into(),
+            },
+            child_frame_id: "base_link".into(),
+            transform: Isometry3::new(Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.0, 0.0, 0.5)),
+        };
+        let back = decode_tf(&encode_tf(std::slice::from_ref(&t))).expect("decodes");
+        assert_eq!(back.len(), 1);
+        assert_eq!(back[0].header, t.header);
+        assert!((back[0].transform.to_homogeneous() - t.transform.to_homogeneous()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn a_cloud_whose_sizes_lie_is_refused_by_field() {
+        let data = PointCloud2::encode(&lidar_header(), &[Vector3::new(1.0, 2.0, 3.0)], true);
+        let mut cloud = PointCloud2::decode(&data).expect("decodes");
+        cloud.width = u32::MAX;
+        cloud.height = u32::MAX;
+        assert_eq!(cloud.points().unwrap_err().field, "data");
+        cloud.width = 1;
+        cloud.height = 1;
+        cloud.fields[2].offset = 20;
+        assert_eq!(cloud.points().unwrap_err().field, "fields[z].offset");
+        cloud.fields[2].name = "intensity".into();
+        assert!(cloud.points().unwrap_err().message.contains("no field `z`"));
+    }
+}

@@ -1,0 +1,212 @@
+//! Writing a ROS 2 bag: a folder with one MCAP file (profile `ros2`, CDR messages, `ros2msg` schemas) and the
+//! `metadata.yaml` that `ros2 bag info` and the Python `rosbags` package open it by.
+
+use std::collections::BTreeMap;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Isometry3, Vector3};
+
+use super::msgs::{self, Header, POINT_CLOUD2, PointCloud2, TF_MESSAGE, TransformStamped};
+use crate::io::write_atomically;
+use crate::error::{Error, Result};
+
+/// One transform for [`BagWriter::transforms`]: `parent_from_child` at `stamp_ns`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagTransform {
+    /// The parent frame.
+    pub parent: String,
+    /// The child frame.
+    pub child: String,
+    /// Nanoseconds since the epoch (ignored on `/tf_static`'s latched stamp: written as given).
+    pub stamp_ns: i64,
+    /// `parent_from_child`.
+    pub transform: Isometry3<f64>,
+}
+
+/// The type of a written cloud's coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CloudPrecision {
+    /// FLOAT32, as lidar drivers write them (12 bytes a point).
+    Float32,
+    /// FLOAT64 (24 bytes a point): coordinates kept to the bit.
+    Float64,
+}
+
+/// A ROS 2 bag being written, held in memory until [`BagWriter::finish`] writes it whole.
+pub struct BagWriter {
+    folder: PathBuf,
+    writer: mcap::Writer<Cursor<Vec<u8>>>,
+    schemas: BTreeMap<&'static str, u16>,
+    /// By topic: the channel, its type and its messages so far.
+    channels: BTreeMap<String, (u16, &'static str, u64)>,
+    first_ns: Option<i64>,
+    last_ns: i64,
+}
+
+impl std::fmt::Debug for BagWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BagWriter").field("folder", &self.folder).finish_non_exhaustive()
+    }
+}
+
+impl BagWriter {
+    /// A bag that [`BagWriter::finish`] will write into `folder` (created if needed) as `<name>_0.mcap`
+    /// (`name` the folder's) and `metadata.yaml`.
+    ///
+    /// # Errors
+    /// [`Error::Parse`] if the folder has no name to give the file.
+    pub fn new(folder: &Path) -> Result<Self> {
+        if folder.file_name().is_none() {
+            return Err(Error::parse(folder, "a bag's folder needs a name (its MCAP file is named after it)"));
+        }
+        let writer = mcap::WriteOptions::new()
+            .compression(None)
+            .profile("ros2")
+            .library("oeg")
+            .create(Cursor::new(Vec::new()))
+            .map_err(|e| mcap_error(folder, &e))?;
+        Ok(Self {
+            folder: folder.to_path_buf(),
+            writer,
+            schemas: BTreeMap::new(),
+            channels: BTreeMap::new(),
+            first_ns: None,
+            last_ns: 0,
+        })
+    }
+
+    fn channel(&mut self, topic: &str, kind: &'static str) -> Result<u16> {
+        if let Some((id, k, _)) = self.channels.get(topic) {
+            if *k != kind {
+                return Err(Error::parse(&self.folder, format!("topic {topic} is a {k}, not a {kind}")));
+            }
+            return Ok(*id);
+        }
+        let schema = match self.schemas.get(kind) {
+            Some(id) => *id,
+            None => {
+                let id = self
+                    .writer
+                    .add_schema(kind, "ros2msg", msgs::schema_text(kind).as_bytes())
+                    .map_err(|e| mcap_error(&self.folder, &e))?;
+                self.schemas.insert(kind, id);
+                id
+            }
+        };
+        let id = self
+            .writer
+            .add_channel(schema, topic, "cdr", &BTreeMap::new())
+            .map_err(|e| mcap_error(&self.folder, &e))?;
+        self.channels.insert(topic.to_string(), (id, kind, 0));
+        Ok(id)
+    }
+
+    fn write(&mut self, topic: &str, kind: &'static str, stamp_ns: i64, data: &[u8]) -> Result<()> {
+        let id = self.channel(topic, kind)?;
+        let entry = self.channels.get_mut(topic).map(|c| &mut c.2);
+        let sequence = entry.map_or(0, |n| {
+            *n += 1;
+            *n
+        });
+        let log_time = u64::try_from(stamp_ns).unwrap_or(0);
+        self.first_ns = Some(self.first_ns.map_or(stamp_ns, |f| f.min(stamp_ns)));
+        self.last_ns = self.last_ns.max(stamp_ns);
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: sequence as u32,
+            log_time,
+            publish_time: log_time,
+        };
+        self.writer
+            .write_to_known_channel(&header, data)
+            .map_err(|e| mcap_error(&self.folder, &e))
+    }
+
+    /// A `sensor_msgs/PointCloud2` of `points` (in `frame`, x y z of `precision`) on `topic`.
+    ///
+    /// # Errors
+    /// [`Error::Parse`] if `topic` already carries another type.
+    pub fn cloud(
+        &mut self,
+        topic: &str,
+        frame: &str,
+        stamp_ns: i64,
+        points: &[Vector3<f64>],
+        precision: CloudPrecision,
+    ) -> Result<()> {
+        let header = Header {
+            stamp_ns,
+            frame_id: frame.to_string(),
+        };
+        let data = PointCloud2::encode(&header, points, precision == CloudPrecision::Float64);
+        self.write(topic, POINT_CLOUD2, stamp_ns, &data)
+    }
+
+    /// A `tf2_msgs/TFMessage` of `transforms` on `topic` (`/tf`, or `/tf_static` for transforms that hold at
+    /// every time), logged at `stamp_ns`.
+    ///
+    /// # Errors
+    /// [`Error::Parse`] if `topic` already carries another type.
+    pub fn transforms(&mut self, topic: &str, stamp_ns: i64, transforms: &[BagTransform]) -> Result<()> {
+        let stamped: Vec<TransformStamped> = transforms
+            .iter()
+            .map(|t| TransformStamped {
+                header: Header {
+                    stamp_ns: t.stamp_ns,
+                    frame_id: t.parent.clone(),
+                },
+                child_frame_id: t.child.clone(),
+                transform: t.transform,
+            })
+            .collect();
+        self.write(topic, TF_MESSAGE, stamp_ns, &msgs::encode_tf(&stamped))
+    }
+
+    /// Writes the bag: `<folder>/<name>_0.mcap` and `<folder>/metadata.yaml`, each whole or not at all.
+    /// Returns the MCAP file's path.
+    ///
+    /// # Errors
+    /// A failed write, naming the file.
+    pub fn finish(mut self) -> Result<PathBuf> {
+        self.writer.finish().map_err(|e| mcap_error(&self.folder, &e))?;
+        let name = self.folder.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+        let file = format!("{name}_0.mcap");
+        let metadata = self.metadata(&file);
+        let bytes = self.writer.into_inner().into_inner();
+        std::fs::create_dir_all(&self.folder).map_err(|source| Error::Io {
+            path: self.folder.clone(),
+            source,
+        })?;
+        let mcap_path = self.folder.join(&file);
+        write_atomically(&mcap_path, &bytes)?;
+        write_atomically(&self.folder.join("metadata.yaml"), metadata.as_bytes())?;
+        Ok(mcap_path)
+    }
+
+    /// rosbag2's `metadata.yaml` (version 5, MCAP storage).
+    fn metadata(&self, file: &str) -> String {
+        let start = self.first_ns.unwrap_or(0);
+        let duration = self.last_ns - start;
+        let total: u64 = self.channels.values().map(|c| c.2).sum();
+        let mut topics = String::new();
+        for (topic, (_, kind, n)) in &self.channels {
+            topics.push_str(&format!(
+                "    - topic_metadata:\n        name: {topic}\n        type: {kind}\n        serialization_format: cdr\n        \
+                 offered_qos_profiles: \"\"\n      message_count: {n}\n"
+            ));
+        }
+        format!(
+            "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n  duration:\n    nanoseconds: \
+             {duration}\n  starting_time:\n    nanoseconds_since_epoch: {start}\n  message_count: {total}\n  \
+             topics_with_message_count:\n{topics}  compression_format: \"\"\n  compression_mode: \"\"\n  \
+             relative_file_paths:\n    - {file}\n  files:\n    - path: {file}\n      starting_time:\n        \
+             nanoseconds_since_epoch: {start}\n      duration:\n        nanoseconds: {duration}\n      \
+             message_count: {total}\n"
+        )
+    }
+}
+
+fn mcap_error(folder: &Path, e: &mcap::McapError) -> Error {
+    Error::parse(folder, format!("writing the bag: {e}"))
+}
