@@ -6,8 +6,8 @@
 //! robot's URDF, the sweep file (read, checked and planned against the shipped base scenarios), a sweep
 //! run's `row.json`, the maps `oeg score` reads from other tools: a `.npy` array and a nav2 map (its YAML,
 //! a NUL byte, then its PGM image), and the new doors of a run: the truth of a scenario (its settings fuzzed:
-//! the region, the resolution, the robot's step and grade), a planner's path file, and `oeg check-path` on a
-//! fixed scene.
+//! the region, the resolution, the robot's step and grade), a planner's path file, `oeg check-path` on a
+//! fixed scene, and a ROS 2 bag's MCAP file.
 
 use std::path::{Path, PathBuf};
 
@@ -42,10 +42,12 @@ pub enum Target {
     Path,
     /// A path file checked by `oeg check-path` against `tests/scenes/nav_wall.toml`.
     CheckPath,
+    /// A ROS 2 bag's MCAP file (chunks, CDR messages, the transform tree), its scans placed in `odom`.
+    Bag,
 }
 
 /// Every target, in the order of the corpus folders.
-pub const TARGETS: [Target; 14] = [
+pub const TARGETS: [Target; 15] = [
     Target::Graph,
     Target::Pcd,
     Target::Log,
@@ -60,6 +62,7 @@ pub const TARGETS: [Target; 14] = [
     Target::Truth,
     Target::Path,
     Target::CheckPath,
+    Target::Bag,
 ];
 
 /// The most sample points the truth target computes (a larger valid truth is bounded by validation,
@@ -101,6 +104,7 @@ impl Target {
             Self::Truth => "truth",
             Self::Path => "path",
             Self::CheckPath => "check_path",
+            Self::Bag => "bag",
         }
     }
 
@@ -177,6 +181,18 @@ pub fn run(target: Target, data: &[u8]) -> bool {
         Target::Truth => std::str::from_utf8(data).is_ok_and(truth_of_text),
         Target::Path => oeg_eval::navigation::external::parse_path(path, data, PATH_EXTENT).is_ok(),
         Target::CheckPath => check_path(path, data),
+        // As `oeg map` reads it, and with `/odom`'s odometry in the transform tree (refused without that topic).
+        Target::Bag => [Vec::new(), vec!["/odom".to_string()]]
+            .into_iter()
+            .map(|odometry_topics| {
+                let options = oeg::BagOptions {
+                    odometry_topics,
+                    tf_tolerance_s: 0.5,
+                    ..oeg::BagOptions::default()
+                };
+                oeg::parse_bag(path, data, &options, MAP_LIMIT_BYTES).is_ok()
+            })
+            .fold(false, |a, b| a | b),
     }
 }
 

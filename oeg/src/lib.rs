@@ -76,7 +76,8 @@ pub use io::pcd::{
     InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, parse_pcd, parse_pcd_within, read_pcd,
     read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd,
 };
-pub use io::rosbag::{
-    Bag, BagOptions, BagScan, BagSkip, BagTransform, BagWriter, CloudPrecision, read_bag, read_bag_within,
-};
 pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
+pub use io::rosbag::{
+    Bag, BagOptions, BagScan, BagSkip, BagTransform, BagWriter, CloudPrecision, parse_bag, read_bag,
+    read_bag_within,
+};

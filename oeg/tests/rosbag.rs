@@ -102,7 +102,11 @@ fn a_cloud_is_placed_through_the_tree_at_its_stamp_and_one_without_a_transform_i
     // The cloud at 1.5 s lies 0.5 s past the last odometry transform: skipped, with the reason.
     assert_eq!(bag.skipped.len(), 1);
     assert_eq!(bag.skipped[0].count, 1);
-    assert!(bag.skipped[0].reason.contains("0.500 s older"), "{}", bag.skipped[0].reason);
+    assert!(
+        bag.skipped[0].reason.contains("0.500 s older"),
+        "{}",
+        bag.skipped[0].reason
+    );
     // Within a tolerance it is mapped at the last transform; in the odom frame the static `map` edge is unused.
     let options = BagOptions {
         tf_tolerance_s: 0.6,
@@ -140,17 +144,22 @@ fn options_that_name_what_the_bag_lacks_are_refused() {
         topics: vec!["/tf".into()],
         ..BagOptions::default()
     });
-    assert!(not_range.contains("not a PointCloud2 or LaserScan"), "{not_range}");
+    assert!(
+        not_range.contains("not a PointCloud2 or LaserScan"),
+        "{not_range}"
+    );
     let frame = e(BagOptions {
         map_frame: Some("world".into()),
         ..BagOptions::default()
     });
     assert!(frame.contains("`world`") && frame.contains("odom"), "{frame}");
-    assert!(e(BagOptions {
-        stride: 0,
-        ..BagOptions::default()
-    })
-    .contains("stride"));
+    assert!(
+        e(BagOptions {
+            stride: 0,
+            ..BagOptions::default()
+        })
+        .contains("stride")
+    );
     let _ = std::fs::remove_dir_all(&folder);
 }
 
@@ -176,4 +185,25 @@ fn a_corrupt_or_truncated_bag_gets_an_error_naming_the_file_never_a_panic() {
         let _ = oeg::read_bag(&file, &options);
     }
     let _ = std::fs::remove_dir_all(&folder);
+}
+
+#[test]
+fn every_byte_of_a_zstd_and_an_lz4_bag_flipped_gives_an_error_or_a_map_never_a_panic() {
+    // Written by the Python `mcap` package in zstd and lz4 chunks (`fuzz/corpus/bag`, from the Python tests'
+    // robot bag).
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/bag");
+    let options = BagOptions {
+        odometry_topics: vec!["/odom".into()],
+        ..BagOptions::default()
+    };
+    for name in ["robot_zstd.mcap", "robot_lz4.mcap"] {
+        let bytes = std::fs::read(corpus.join(name)).expect("committed");
+        let whole = oeg::parse_bag(Path::new(name), &bytes, &options, 1 << 26).expect("readable");
+        assert_eq!(whole.scans.len(), 2, "{name}");
+        for k in 0..bytes.len() {
+            let mut flipped = bytes.clone();
+            flipped[k] ^= 0xA5;
+            let _ = oeg::parse_bag(Path::new(name), &flipped, &options, 1 << 26);
+        }
+    }
 }

@@ -20,24 +20,9 @@ import numpy as np
 import pytest
 
 import oeg
+from _cli import ROOT, oeg_binary, run_cli
 
-ROOT = Path(__file__).resolve().parents[2]
 SHARED_DATA = ROOT.parent / "shared" / "data"
-
-
-def oeg_binary() -> Path:
-    """The `oeg` command: $OEG_BIN, else the workspace's release or debug build."""
-    candidates = [os.environ.get("OEG_BIN", "")] + [str(ROOT / "target" / p / "oeg") for p in ("release", "debug")]
-    for c in candidates:
-        if c and Path(c).is_file():
-            return Path(c)
-    pytest.fail("no oeg binary: build it with `cargo build` or set OEG_BIN")
-
-
-def run_cli(*args: str, check: bool = True) -> str:
-    done = subprocess.run([str(oeg_binary()), *args], capture_output=True, text=True, cwd=ROOT)
-    assert done.returncode == 0 or not check, done.stderr
-    return done.stdout
 
 
 def floor_and_box(step_m: float = 0.04) -> np.ndarray:

@@ -53,7 +53,10 @@ pub(crate) fn run(args: &RecordArgs) -> anyhow::Result<()> {
         r.wall_time_s,
         r.rays_per_s / 1e6,
         if r.num_rays_left_out > 0 {
-            format!(", {} no-return rays left out (a graph or a cloud holds hits only)", r.num_rays_left_out)
+            format!(
+                ", {} no-return rays left out (a graph or a cloud holds hits only)",
+                r.num_rays_left_out
+            )
         } else {
             String::new()
         },

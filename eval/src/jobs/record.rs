@@ -94,7 +94,12 @@ fn record_mcap(
 
 /// Records every scan of `sim` into a ROS 2 bag folder at `out` ([`RecordFormat::Rosbag2`]); returns the scans
 /// written and the no-return rays left out.
-fn record_rosbag2(sim: &mut Simulation, header: &LogHeader, out: &Path, progress: &Progress) -> Result<(u64, u64)> {
+fn record_rosbag2(
+    sim: &mut Simulation,
+    header: &LogHeader,
+    out: &Path,
+    progress: &Progress,
+) -> Result<(u64, u64)> {
     let mut bag = oeg::BagWriter::new(out)?;
     // base_link -> each sensor, fixed on the robot (the URDF's fixed joints and the mount).
     let mounts: Vec<Isometry3<f64>> = sim
@@ -141,7 +146,13 @@ fn record_rosbag2(sim: &mut Simulation, header: &LogHeader, out: &Path, progress
             .collect();
         left_out += (scan.rays.len() - points.len()) as u64;
         let topic = format!("/{}/points", sensor.name);
-        bag.cloud(&topic, &sensor.name, stamp_ns, &points, oeg::CloudPrecision::Float32)?;
+        bag.cloud(
+            &topic,
+            &sensor.name,
+            stamp_ns,
+            &points,
+            oeg::CloudPrecision::Float32,
+        )?;
         num_scans += 1;
         progress.inc(1);
     }

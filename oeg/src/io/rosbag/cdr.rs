@@ -40,7 +40,10 @@ impl<'a> CdrReader<'a> {
         let Some((header, body)) = data.split_first_chunk::<4>() else {
             return Err(error(
                 "encapsulation header",
-                format!("the message is {} bytes, shorter than CDR's 4-byte header", data.len()),
+                format!(
+                    "the message is {} bytes, shorter than CDR's 4-byte header",
+                    data.len()
+                ),
             ));
         };
         let little_endian = match header[..2] {
@@ -70,16 +73,19 @@ impl<'a> CdrReader<'a> {
 
     fn take(&mut self, n: usize, align: usize, field: &str) -> CdrResult<&'a [u8]> {
         let start = self.pos.next_multiple_of(align);
-        let end = start.checked_add(n).filter(|&e| e <= self.body.len()).ok_or_else(|| {
-            error(
-                field,
-                format!(
-                    "needs {n} bytes at byte {} of the message body, which is {} bytes long (truncated?)",
-                    start,
-                    self.body.len()
-                ),
-            )
-        })?;
+        let end = start
+            .checked_add(n)
+            .filter(|&e| e <= self.body.len())
+            .ok_or_else(|| {
+                error(
+                    field,
+                    format!(
+                        "needs {n} bytes at byte {} of the message body, which is {} bytes long (truncated?)",
+                        start,
+                        self.body.len()
+                    ),
+                )
+            })?;
         self.pos = end;
         Ok(&self.body[start..end])
     }
@@ -161,7 +167,6 @@ impl<'a> CdrReader<'a> {
         let n = self.sequence_len(field, 4)?;
         (0..n).map(|_| self.f32(field)).collect()
     }
-
 }
 
 /// Writes one message, little-endian, its encapsulation header first.
@@ -199,7 +204,6 @@ impl CdrWriter {
         self.out.extend_from_slice(&v.to_le_bytes());
     }
 
-
     pub(crate) fn f64(&mut self, v: f64) {
         self.align(8);
         self.out.extend_from_slice(&v.to_le_bytes());
@@ -220,8 +224,6 @@ impl CdrWriter {
         self.len(b.len());
         self.out.extend_from_slice(b);
     }
-
-
 
     pub(crate) fn finish(self) -> Vec<u8> {
         self.out
@@ -267,7 +269,10 @@ mod tests {
         assert!(e.message.contains("1000000"), "{e}");
         assert!(CdrReader::new(&[0, 1]).is_err());
         assert!(CdrReader::new(&[7, 7, 0, 0]).is_err());
-        let e = CdrReader::new(&[0, 1, 0, 0, 2]).expect("header").f64("x").unwrap_err();
+        let e = CdrReader::new(&[0, 1, 0, 0, 2])
+            .expect("header")
+            .f64("x")
+            .unwrap_err();
         assert!(e.message.contains("truncated"), "{e}");
     }
 }

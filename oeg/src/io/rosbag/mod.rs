@@ -33,9 +33,9 @@ use mcap::records::Record;
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-pub use self::write::{BagTransform, BagWriter, CloudPrecision};
 use self::msgs::{LASER_SCAN, LaserScan, ODOMETRY, POINT_CLOUD2, PointCloud2, TF_MESSAGE, is_type};
 use self::tf::TfTree;
+pub use self::write::{BagTransform, BagWriter, CloudPrecision};
 use super::read_file;
 use crate::error::{Error, Result};
 use crate::scan::{Ray, Scan};
@@ -153,21 +153,49 @@ pub fn read_bag_within(path: &Path, options: &BagOptions, limit_bytes: u64) -> R
     check_options(path, options)?;
     let files = bag_files(path)?;
     let mut data = Vec::with_capacity(files.len());
+    let mut left = limit_bytes;
     for f in &files {
-        data.push((f.clone(), read_file(f, limit_bytes)?));
+        let bytes = read_file(f, left)?;
+        left = left.saturating_sub(bytes.len() as u64);
+        data.push((f.clone(), bytes));
     }
+    parse_files(path, &data, options, limit_bytes)
+}
+
+/// [`read_bag_within`] for one MCAP file's bytes, `data`, named `path` in errors.
+///
+/// # Errors
+/// As [`read_bag`].
+pub fn parse_bag(path: &Path, data: &[u8], options: &BagOptions, limit_bytes: u64) -> Result<Bag> {
+    check_options(path, options)?;
+    parse_files(path, &[(path.to_path_buf(), data.to_vec())], options, limit_bytes)
+}
+
+/// The bag at `path` from its files' bytes, in order.
+fn parse_files(
+    path: &Path,
+    data: &[(PathBuf, Vec<u8>)],
+    options: &BagOptions,
+    limit_bytes: u64,
+) -> Result<Bag> {
     // First pass: the channels, the transform tree and the bag's first log time.
     let mut channels = Channels::default();
     let mut tree = TfTree::default();
     let mut first_log_ns = u64::MAX;
     let mut counts: BTreeMap<u16, u64> = BTreeMap::new();
-    for (file, bytes) in &data {
-        for_each_message(file, bytes, limit_bytes, &mut channels, &mut |c, header, message| {
-            first_log_ns = first_log_ns.min(header.log_time);
-            let index = bump(&mut counts, header.channel_id);
-            add_transforms(&mut tree, c, options, header.log_time, message)
-                .map_err(|e| message_error(file, c, index, &e))
-        })?;
+    for (file, bytes) in data {
+        for_each_message(
+            file,
+            bytes,
+            limit_bytes,
+            &mut channels,
+            &mut |c, header, message| {
+                first_log_ns = first_log_ns.min(header.log_time);
+                let index = bump(&mut counts, header.channel_id);
+                add_transforms(&mut tree, c, options, header.log_time, message)
+                    .map_err(|e| message_error(file, c, index, &e))
+            },
+        )?;
     }
     tree.finish();
     let topics = topic_list(&channels, &counts);
@@ -187,7 +215,10 @@ pub fn read_bag_within(path: &Path, options: &BagOptions, limit_bytes: u64) -> R
     if !tree.has_frame(&map_frame) {
         return Err(Error::parse(
             path,
-            format!("the map frame `{map_frame}` is not in the transforms, which name {}", tree.frames()),
+            format!(
+                "the map frame `{map_frame}` is not in the transforms, which name {}",
+                tree.frames()
+            ),
         ));
     }
     // Second pass: the scans.
@@ -205,16 +236,22 @@ pub fn read_bag_within(path: &Path, options: &BagOptions, limit_bytes: u64) -> R
         },
     };
     counts.clear();
-    for (file, bytes) in &data {
-        for_each_message(file, bytes, limit_bytes, &mut Channels::default(), &mut |c, header, message| {
-            let index = bump(&mut counts, header.channel_id);
-            if !ranges.contains(&c.topic) {
-                return Ok(());
-            }
-            reader
-                .message(c, index, header.log_time, message)
-                .map_err(|e| message_error(file, c, index, &e))
-        })?;
+    for (file, bytes) in data {
+        for_each_message(
+            file,
+            bytes,
+            limit_bytes,
+            &mut Channels::default(),
+            &mut |c, header, message| {
+                let index = bump(&mut counts, header.channel_id);
+                if !ranges.contains(&c.topic) {
+                    return Ok(());
+                }
+                reader
+                    .message(c, index, header.log_time, message)
+                    .map_err(|e| message_error(file, c, index, &e))
+            },
+        )?;
     }
     Ok(reader.bag)
 }
@@ -226,7 +263,10 @@ fn bump(counts: &mut BTreeMap<u16, u64>, channel: u16) -> u64 {
 }
 
 fn message_error(file: &Path, c: &Channel, index: u64, e: &str) -> Error {
-    Error::parse(file, format!("topic {} ({}), message {index}: {e}", c.topic, c.kind))
+    Error::parse(
+        file,
+        format!("topic {} ({}), message {index}: {e}", c.topic, c.kind),
+    )
 }
 
 fn check_options(path: &Path, o: &BagOptions) -> Result<()> {
@@ -354,13 +394,25 @@ fn visit(
 }
 
 /// A chunk's records, decompressed (none, zstd or lz4) and checked against its declared size and CRC.
-fn decompress(file: &Path, header: &mcap::records::ChunkHeader, data: &[u8], limit_bytes: u64) -> Result<Vec<u8>> {
+fn decompress(
+    file: &Path,
+    header: &mcap::records::ChunkHeader,
+    data: &[u8],
+    limit_bytes: u64,
+) -> Result<Vec<u8>> {
     let size = header.uncompressed_size;
-    let at = format!("a chunk ({} compression, {size} bytes uncompressed)", header.compression);
+    let at = format!(
+        "a chunk ({} compression, {size} bytes uncompressed)",
+        header.compression
+    );
     if size > limit_bytes {
-        return Err(Error::parse(file, format!("{at}: over the memory limit of {limit_bytes} bytes")));
+        return Err(Error::parse(
+            file,
+            format!("{at}: over the memory limit of {limit_bytes} bytes"),
+        ));
     }
-    let mut out = Vec::with_capacity(size as usize);
+    // Grown as it decodes: a lying size within the limit allocates no more than the data makes.
+    let mut out = Vec::with_capacity((size as usize).min(data.len().saturating_mul(4)));
     let read = match header.compression.as_str() {
         "" => {
             out.extend_from_slice(data);
@@ -383,11 +435,17 @@ fn decompress(file: &Path, header: &mcap::records::ChunkHeader, data: &[u8], lim
     if out.len() as u64 != size {
         return Err(Error::parse(
             file,
-            format!("{at}: decompresses to {} bytes, not the {size} it declares", out.len()),
+            format!(
+                "{at}: decompresses to {} bytes, not the {size} it declares",
+                out.len()
+            ),
         ));
     }
     if header.uncompressed_crc != 0 && crc32fast::hash(&out) != header.uncompressed_crc {
-        return Err(Error::parse(file, format!("{at}: its CRC does not match (corrupt)")));
+        return Err(Error::parse(
+            file,
+            format!("{at}: its CRC does not match (corrupt)"),
+        ));
     }
     Ok(out)
 }
@@ -447,7 +505,10 @@ fn range_topics(path: &Path, options: &BagOptions, channels: &Channels) -> Resul
     };
     for t in options.topics.iter().chain(&options.odometry_topics) {
         if !channels.channels.values().any(|c| &c.topic == t) {
-            return Err(Error::parse(path, format!("no topic `{t}` in the bag; it holds {}", listed())));
+            return Err(Error::parse(
+                path,
+                format!("no topic `{t}` in the bag; it holds {}", listed()),
+            ));
         }
     }
     let mut topics = Vec::new();
@@ -463,7 +524,10 @@ fn range_topics(path: &Path, options: &BagOptions, channels: &Channels) -> Resul
         if !is_range(&c.kind) {
             return Err(Error::parse(
                 path,
-                format!("topic `{}` is a {}, not a PointCloud2 or LaserScan", c.topic, c.kind),
+                format!(
+                    "topic `{}` is a {}, not a PointCloud2 or LaserScan",
+                    c.topic, c.kind
+                ),
             ));
         }
         if c.encoding != "cdr" {
@@ -475,7 +539,13 @@ fn range_topics(path: &Path, options: &BagOptions, channels: &Channels) -> Resul
         topics.push(c.topic.clone());
     }
     if topics.is_empty() {
-        return Err(Error::parse(path, format!("no PointCloud2 or LaserScan topic in the bag; it holds {}", listed())));
+        return Err(Error::parse(
+            path,
+            format!(
+                "no PointCloud2 or LaserScan topic in the bag; it holds {}",
+                listed()
+            ),
+        ));
     }
     Ok(topics)
 }
@@ -490,10 +560,17 @@ struct ScanReader<'a> {
 }
 
 impl ScanReader<'_> {
-    fn message(&mut self, c: &Channel, index: u64, log_time: u64, data: &[u8]) -> std::result::Result<(), String> {
+    fn message(
+        &mut self,
+        c: &Channel,
+        index: u64,
+        log_time: u64,
+        data: &[u8],
+    ) -> std::result::Result<(), String> {
         let o = self.options;
         let since_start_s = log_time.saturating_sub(self.first_log_ns) as f64 * 1e-9;
-        let in_range = o.start_s.is_none_or(|s| since_start_s >= s) && o.end_s.is_none_or(|e| since_start_s <= e);
+        let in_range =
+            o.start_s.is_none_or(|s| since_start_s >= s) && o.end_s.is_none_or(|e| since_start_s <= e);
         if !in_range || index % u64::from(o.stride) != 0 {
             self.bag.num_not_selected += 1;
             return Ok(());
@@ -509,10 +586,19 @@ impl ScanReader<'_> {
         };
         let stamp_ns = stamp_or_log_time(header.stamp_ns, log_time);
         let tolerance_ns = (o.tf_tolerance_s * 1e9).round() as i64;
-        let pose = match self.tree.lookup(self.map_frame, &header.frame_id, stamp_ns, tolerance_ns) {
+        let pose = match self
+            .tree
+            .lookup(self.map_frame, &header.frame_id, stamp_ns, tolerance_ns)
+        {
             Ok(p) => p,
             Err(reason) => {
-                self.skip(&c.topic, format!("no transform from `{}` to `{}`: {reason}", header.frame_id, self.map_frame));
+                self.skip(
+                    &c.topic,
+                    format!(
+                        "no transform from `{}` to `{}`: {reason}",
+                        header.frame_id, self.map_frame
+                    ),
+                );
                 return Ok(());
             }
         };

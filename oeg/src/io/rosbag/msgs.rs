@@ -110,17 +110,21 @@ impl<'a> PointCloud2<'a> {
 
     /// The offset and type of the coordinate field `axis`, checked to lie within a point.
     fn coordinate(&self, axis: &str) -> CdrResult<(usize, u8)> {
-        let f = self.fields.iter().find(|f| f.name == axis).ok_or_else(|| CdrError {
-            field: "fields".into(),
-            message: format!(
-                "no field `{axis}` (the cloud has {})",
-                self.fields
-                    .iter()
-                    .map(|f| f.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        })?;
+        let f = self
+            .fields
+            .iter()
+            .find(|f| f.name == axis)
+            .ok_or_else(|| CdrError {
+                field: "fields".into(),
+                message: format!(
+                    "no field `{axis}` (the cloud has {})",
+                    self.fields
+                        .iter()
+                        .map(|f| f.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            })?;
         let size = match f.datatype {
             FLOAT32 => 4,
             FLOAT64 => 8,
@@ -134,7 +138,10 @@ impl<'a> PointCloud2<'a> {
         if f.offset as usize + size > self.point_step as usize {
             return Err(CdrError {
                 field: format!("fields[{axis}].offset"),
-                message: format!("{} + {size} bytes runs past point_step {}", f.offset, self.point_step),
+                message: format!(
+                    "{} + {size} bytes runs past point_step {}",
+                    f.offset, self.point_step
+                ),
             });
         }
         Ok((f.offset as usize, f.datatype))
@@ -144,7 +151,11 @@ impl<'a> PointCloud2<'a> {
     /// false`) left out. The fields `x`, `y` and `z` are found by name (FLOAT32 or FLOAT64); any other field
     /// (intensity, ring, time) and padding are skipped.
     pub(crate) fn points(&self) -> CdrResult<Vec<Vector3<f64>>> {
-        let axes = [self.coordinate("x")?, self.coordinate("y")?, self.coordinate("z")?];
+        let axes = [
+            self.coordinate("x")?,
+            self.coordinate("y")?,
+            self.coordinate("z")?,
+        ];
         let step = self.point_step as usize;
         let (w, h) = (self.width as usize, self.height as usize);
         if w == 0 || h == 0 {
@@ -171,11 +182,19 @@ impl<'a> PointCloud2<'a> {
             if datatype == FLOAT32 {
                 let mut b = [0u8; 4];
                 b.copy_from_slice(&p[offset..offset + 4]);
-                f64::from(if big { f32::from_be_bytes(b) } else { f32::from_le_bytes(b) })
+                f64::from(if big {
+                    f32::from_be_bytes(b)
+                } else {
+                    f32::from_le_bytes(b)
+                })
             } else {
                 let mut b = [0u8; 8];
                 b.copy_from_slice(&p[offset..offset + 8]);
-                if big { f64::from_be_bytes(b) } else { f64::from_le_bytes(b) }
+                if big {
+                    f64::from_be_bytes(b)
+                } else {
+                    f64::from_le_bytes(b)
+                }
             }
         };
         let mut points = Vec::with_capacity(w * h);
@@ -329,7 +348,10 @@ fn read_pose(r: &mut CdrReader, field: &str) -> CdrResult<Isometry3<f64>> {
             message: "a zero quaternion".into(),
         })?
     };
-    Ok(Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation))
+    Ok(Isometry3::from_parts(
+        Translation3::new(v[0], v[1], v[2]),
+        rotation,
+    ))
 }
 
 fn write_pose(w: &mut CdrWriter, pose: &Isometry3<f64>) {
@@ -392,7 +414,10 @@ pub(crate) fn schema_text(name: &str) -> String {
                 ),
                 ("std_msgs/Header", HEADER),
                 ("builtin_interfaces/Time", TIME),
-                ("geometry_msgs/Transform", "Vector3 translation\nQuaternion rotation\n"),
+                (
+                    "geometry_msgs/Transform",
+                    "Vector3 translation\nQuaternion rotation\n",
+                ),
                 ("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
                 (
                     "geometry_msgs/Quaternion",

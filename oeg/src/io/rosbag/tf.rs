@@ -47,7 +47,11 @@ impl TfTree {
     pub(crate) fn frames(&self) -> String {
         let mut names: Vec<&str> = self.names.iter().map(String::as_str).collect();
         names.sort_unstable();
-        names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+        names
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Adds `parent_from_child`, static or at `stamp_ns`.
@@ -219,8 +223,10 @@ mod tests {
     fn a_lookup_interpolates_stamped_edges_and_composes_through_the_tree() {
         let mut tf = TfTree::default();
         tf.add("map", "odom", None, shift(10.0, 0.0)).expect("edge");
-        tf.add("odom", "base_link", Some(0), shift(0.0, 0.0)).expect("edge");
-        tf.add("odom", "base_link", Some(1_000_000_000), shift(2.0, 0.0)).expect("edge");
+        tf.add("odom", "base_link", Some(0), shift(0.0, 0.0))
+            .expect("edge");
+        tf.add("odom", "base_link", Some(1_000_000_000), shift(2.0, 0.0))
+            .expect("edge");
         tf.add("base_link", "lidar", None, shift(0.0, 1.0)).expect("edge");
         tf.finish();
         let half = tf.lookup("map", "lidar", 500_000_000, 0).expect("found");
@@ -228,7 +234,9 @@ mod tests {
         // The other way round, and between two frames below the root.
         let back = tf.lookup("lidar", "map", 500_000_000, 0).expect("found");
         assert!((back * half).translation.vector.norm() < 1e-12);
-        let sibling = tf.lookup("base_link", "lidar", 123, 0).expect("static edges only");
+        let sibling = tf
+            .lookup("base_link", "lidar", 123, 0)
+            .expect("static edges only");
         assert_eq!(sibling.translation.vector, Vector3::new(0.0, 1.0, 0.0));
         // Beyond the samples: within the tolerance, the nearest; beyond it, refused with the gap.
         assert!(tf.lookup("map", "lidar", 1_050_000_000, 100_000_000).is_ok());
@@ -242,10 +250,26 @@ mod tests {
         let mut tf = TfTree::default();
         tf.add("a", "b", None, shift(1.0, 0.0)).expect("edge");
         tf.add("b", "c", None, shift(1.0, 0.0)).expect("edge");
-        assert!(tf.add("c", "a", None, shift(1.0, 0.0)).unwrap_err().contains("cycle"));
-        assert!(tf.add("a", "a", None, shift(1.0, 0.0)).unwrap_err().contains("itself"));
-        assert!(tf.add("x", "c", None, shift(1.0, 0.0)).unwrap_err().contains("two parents"));
-        assert!(tf.add("b", "c", Some(5), shift(1.0, 0.0)).unwrap_err().contains("/tf_static"));
+        assert!(
+            tf.add("c", "a", None, shift(1.0, 0.0))
+                .unwrap_err()
+                .contains("cycle")
+        );
+        assert!(
+            tf.add("a", "a", None, shift(1.0, 0.0))
+                .unwrap_err()
+                .contains("itself")
+        );
+        assert!(
+            tf.add("x", "c", None, shift(1.0, 0.0))
+                .unwrap_err()
+                .contains("two parents")
+        );
+        assert!(
+            tf.add("b", "c", Some(5), shift(1.0, 0.0))
+                .unwrap_err()
+                .contains("/tf_static")
+        );
         tf.add("q", "r", None, shift(0.0, 0.0)).expect("edge");
         tf.finish();
         assert!(tf.lookup("a", "r", 0, 0).unwrap_err().contains("not connected"));

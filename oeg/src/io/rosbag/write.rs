@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Vector3};
 
 use super::msgs::{self, Header, POINT_CLOUD2, PointCloud2, TF_MESSAGE, TransformStamped};
-use crate::io::write_atomically;
 use crate::error::{Error, Result};
+use crate::io::write_atomically;
 
 /// One transform for [`BagWriter::transforms`]: `parent_from_child` at `stamp_ns`.
 #[derive(Debug, Clone, PartialEq)]
@@ -46,7 +46,9 @@ pub struct BagWriter {
 
 impl std::fmt::Debug for BagWriter {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("BagWriter").field("folder", &self.folder).finish_non_exhaustive()
+        f.debug_struct("BagWriter")
+            .field("folder", &self.folder)
+            .finish_non_exhaustive()
     }
 }
 
@@ -58,7 +60,10 @@ impl BagWriter {
     /// [`Error::Parse`] if the folder has no name to give the file.
     pub fn new(folder: &Path) -> Result<Self> {
         if folder.file_name().is_none() {
-            return Err(Error::parse(folder, "a bag's folder needs a name (its MCAP file is named after it)"));
+            return Err(Error::parse(
+                folder,
+                "a bag's folder needs a name (its MCAP file is named after it)",
+            ));
         }
         let writer = mcap::WriteOptions::new()
             .compression(None)
@@ -79,7 +84,10 @@ impl BagWriter {
     fn channel(&mut self, topic: &str, kind: &'static str) -> Result<u16> {
         if let Some((id, k, _)) = self.channels.get(topic) {
             if *k != kind {
-                return Err(Error::parse(&self.folder, format!("topic {topic} is a {k}, not a {kind}")));
+                return Err(Error::parse(
+                    &self.folder,
+                    format!("topic {topic} is a {k}, not a {kind}"),
+                ));
             }
             return Ok(*id);
         }
@@ -170,7 +178,11 @@ impl BagWriter {
     /// A failed write, naming the file.
     pub fn finish(mut self) -> Result<PathBuf> {
         self.writer.finish().map_err(|e| mcap_error(&self.folder, &e))?;
-        let name = self.folder.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+        let name = self
+            .folder
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
         let file = format!("{name}_0.mcap");
         let metadata = self.metadata(&file);
         let bytes = self.writer.into_inner().into_inner();

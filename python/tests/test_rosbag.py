@@ -1,0 +1,215 @@
+"""ROS 2 bags against independent tools: the `rosbags` package reads what `oeg record --format rosbag2` writes,
+and writes the bags (LaserScan, PointCloud2 with extra fields, Odometry, /tf_static) that `oeg map` reads; the
+`mcap` package writes the same messages in zstd and lz4 chunks, which map to the same bytes.
+
+Both packages are pure Python (`pip install rosbags mcap`); without them these tests skip with the reason.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from pathlib import Path
+from typing import Any, List, Tuple
+
+import numpy as np
+import pytest
+
+from _cli import ROOT, oeg_binary, run_cli
+
+rosbag2 = pytest.importorskip("rosbags.rosbag2", reason="the rosbags package is not installed (pip install rosbags)")
+typesys = pytest.importorskip("rosbags.typesys", reason="the rosbags package is not installed (pip install rosbags)")
+
+TS = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
+
+
+def _fails(*args: str) -> str:
+    """Runs `oeg` expecting it to fail; returns what it printed to stderr."""
+    import subprocess
+
+    done = subprocess.run([str(oeg_binary()), *args], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode != 0, done.stdout
+    assert "panicked" not in done.stderr, done.stderr
+    return done.stderr
+
+
+def _summary(folder: Path) -> Any:
+    return json.loads((folder / "summary.json").read_text())
+
+
+def test_a_recorded_bag_reads_in_rosbags_with_its_clouds_and_transforms(tmp_path: Path) -> None:
+    bag = tmp_path / "corridor"
+    out = run_cli("record", "scenarios/corridor_lasers.toml", "--format", "rosbag2", "--out", str(bag))
+    num_rays = int(out.split(" scans, ")[1].split(" rays")[0])
+    points = 0
+    frames = set()
+    with rosbag2.Reader(bag) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        assert topics["/laser_left/points"] == "sensor_msgs/msg/PointCloud2"
+        assert topics["/tf"] == topics["/tf_static"] == "tf2_msgs/msg/TFMessage"
+        for conn, _, raw in reader.messages():
+            msg = TS.deserialize_cdr(raw, conn.msgtype)
+            if conn.msgtype.endswith("PointCloud2"):
+                assert msg.point_step == 12 and [f.name for f in msg.fields] == ["x", "y", "z"]
+                points += msg.width * msg.height
+            else:
+                frames |= {(t.header.frame_id, t.child_frame_id) for t in msg.transforms}
+    # corridor_lasers' lasers return every beam: each ray is a point.
+    assert points == num_rays
+    assert {("map", "odom"), ("odom", "base_link"), ("base_link", "laser_left")} <= frames
+    # Mapped in the odom frame (the estimated pose), the bag gives the map of the same scans as a scan graph.
+    graph = tmp_path / "corridor.graph"
+    run_cli("record", "scenarios/corridor_lasers.toml", "--format", "graph", "--out", str(graph))
+    run_cli("map", str(bag), "--resolution", "0.05", "--out", str(tmp_path / "from_bag"), "--set", 'input.bag.map_frame="odom"')
+    run_cli("map", str(graph), "--resolution", "0.05", "--out", str(tmp_path / "from_graph"))
+    a, b = _summary(tmp_path / "from_bag"), _summary(tmp_path / "from_graph")
+    for key in ("num_rays", "num_cells_observed", "num_cells_occupied", "num_cells_blocked"):
+        assert a[key] == b[key], key
+
+
+def _header(stamp_ns: int, frame: str) -> Any:
+    msgs = TS.types
+    time = msgs["builtin_interfaces/msg/Time"](sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
+    return msgs["std_msgs/msg/Header"](stamp=time, frame_id=frame)
+
+
+def _robot_messages() -> List[Tuple[str, str, int, bytes]]:
+    """A robot driving 2 m along x in 1 s (Odometry), a lidar 0.5 m over its base (/tf_static), a LaserScan at
+    0.5 s (two hits, an infinite reading, a NaN and one under range_min) and a PointCloud2 at 0.5 s with an
+    intensity field, padding and a NaN point (is_dense false)."""
+    m = TS.types
+    vec = m["geometry_msgs/msg/Vector3"]
+    quat = m["geometry_msgs/msg/Quaternion"]
+    out: List[Tuple[str, str, int, bytes]] = []
+
+    def add(topic: str, msg: Any, stamp_ns: int) -> None:
+        out.append((topic, msg.__msgtype__, stamp_ns, bytes(TS.serialize_cdr(msg, msg.__msgtype__))))
+
+    mount = m["geometry_msgs/msg/TransformStamped"](
+        header=_header(0, "base_link"),
+        child_frame_id="lidar",
+        transform=m["geometry_msgs/msg/Transform"](translation=vec(x=0.0, y=0.0, z=0.5), rotation=quat(x=0.0, y=0.0, z=0.0, w=1.0)),
+    )
+    add("/tf_static", m["tf2_msgs/msg/TFMessage"](transforms=[mount]), 0)
+    for t_ns, x in ((0, 0.0), (10**9, 2.0)):
+        pose = m["geometry_msgs/msg/Pose"](
+            position=m["geometry_msgs/msg/Point"](x=x, y=0.0, z=0.0), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0)
+        )
+        odom = m["nav_msgs/msg/Odometry"](
+            header=_header(t_ns, "odom"),
+            child_frame_id="base_link",
+            pose=m["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+            twist=m["geometry_msgs/msg/TwistWithCovariance"](
+                twist=m["geometry_msgs/msg/Twist"](linear=vec(x=2.0, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=0.0)),
+                covariance=np.zeros(36),
+            ),
+        )
+        add("/odom", odom, t_ns)
+    ranges = np.array([1.0, 2.0, math.inf, math.nan, 0.01], dtype=np.float32)
+    scan = m["sensor_msgs/msg/LaserScan"](
+        header=_header(5 * 10**8, "lidar"),
+        angle_min=-0.2,
+        angle_max=0.2,
+        angle_increment=0.1,
+        time_increment=0.0,
+        scan_time=0.1,
+        range_min=0.05,
+        range_max=8.0,
+        ranges=ranges,
+        intensities=np.zeros(5, dtype=np.float32),
+    )
+    add("/scan", scan, 5 * 10**8)
+    field = m["sensor_msgs/msg/PointField"]
+    fields = [
+        field(name="x", offset=0, datatype=7, count=1),
+        field(name="y", offset=4, datatype=7, count=1),
+        field(name="z", offset=8, datatype=7, count=1),
+        field(name="intensity", offset=16, datatype=7, count=1),
+    ]
+    pts = [(1.0, 0.0, -0.5, 7.0), (math.nan, 0.0, 0.0, 1.0), (2.0, 1.0, -0.5, 3.0)]
+    data = b"".join(struct.pack("<fff4xf", *p) for p in pts)
+    cloud = m["sensor_msgs/msg/PointCloud2"](
+        header=_header(5 * 10**8, "lidar"),
+        height=1,
+        width=3,
+        fields=fields,
+        is_bigendian=False,
+        point_step=20,
+        row_step=60,
+        data=np.frombuffer(data, dtype=np.uint8),
+        is_dense=False,
+    )
+    add("/points", cloud, 5 * 10**8)
+    return out
+
+
+def _write_rosbags(folder: Path) -> None:
+    messages = _robot_messages()
+    with rosbag2.Writer(folder, version=8, storage_plugin=rosbag2.StoragePlugin.MCAP) as writer:
+        connections = {}
+        for topic, msgtype, _, _ in messages:
+            if topic not in connections:
+                connections[topic] = writer.add_connection(topic, msgtype, typestore=TS)
+        for topic, _, stamp, raw in messages:
+            writer.write(connections[topic], stamp, raw)
+
+
+def test_a_bag_written_by_rosbags_maps_laser_scans_clouds_and_odometry(tmp_path: Path) -> None:
+    bag = tmp_path / "robot"
+    _write_rosbags(bag)
+    out = tmp_path / "map"
+    printed = run_cli(
+        "map", str(bag), "--resolution", "0.05", "--out", str(out), "--set", 'input.bag.odometry=["/odom"]', "--set", 'input.bag.map_frame="odom"'
+    )
+    s = _summary(out)
+    # The scan: two hits and one no-return (the NaN and the reading under range_min left out); the cloud: two
+    # points (the NaN one left out).
+    assert (s["num_scans"], s["num_rays"], s["num_messages_skipped"]) == (2, 5, 0), printed
+    # The robot was half way, at x = 1 m: the infinite reading, straight ahead, clears to range_max (8 m), so
+    # the map ends 9 m along x; without the interpolated odometry it would end at 8 or 10 m.
+    assert 8.95 < s["extent_max_x_m"] < 9.1, s
+    # Without the odometry topic no transform names `map` or `odom`: the map frame must be chosen.
+    err = _fails("map", str(bag), "--resolution", "0.05", "--out", str(tmp_path / "no_odom"))
+    assert "neither `map` nor `odom`" in err and "robot" in err, err
+    assert not (tmp_path / "no_odom").exists()
+
+
+mcap_writer = pytest.importorskip("mcap.writer", reason="the mcap package is not installed (pip install mcap)")
+
+
+@pytest.mark.parametrize("compression", ["ZSTD", "LZ4"])
+def test_zstd_and_lz4_chunks_map_to_the_bytes_of_an_uncompressed_bag(compression: str, tmp_path: Path) -> None:
+    messages = _robot_messages()
+    maps = []
+    for kind in ("NONE", compression):
+        path = tmp_path / f"robot_{kind}.mcap"
+        with open(path, "wb") as f:
+            w = mcap_writer.Writer(f, compression=getattr(mcap_writer.CompressionType, kind))
+            w.start(profile="ros2", library="test")
+            channels = {}
+            for topic, msgtype, stamp, raw in messages:
+                if topic not in channels:
+                    schema = w.register_schema(name=msgtype, encoding="ros2msg", data=b"")
+                    channels[topic] = w.register_channel(topic=topic, message_encoding="cdr", schema_id=schema)
+                w.add_message(channel_id=channels[topic], log_time=stamp, publish_time=stamp, data=raw)
+            w.finish()
+        out = tmp_path / f"map_{kind}"
+        run_cli("map", str(path), "--resolution", "0.05", "--out", str(out), "--set", 'input.bag.odometry=["/odom"]')
+        maps.append((out / "map.oeg").read_bytes())
+    assert maps[0] == maps[1]
+    # A corrupt chunk is an error naming the file, never a crash: a byte flipped in the middle of the first
+    # chunk's compressed records.
+    data = bytearray((tmp_path / f"robot_{compression}.mcap").read_bytes())
+    pos = 8 + 9 + struct.unpack_from("<Q", data, 9)[0]
+    assert data[pos] == 0x06, "the record after the header is a chunk"
+    body = pos + 9
+    name_len = struct.unpack_from("<I", data, body + 28)[0]
+    records = body + 32 + name_len + 8
+    records_len = struct.unpack_from("<Q", data, records - 8)[0]
+    data[records + records_len // 2] ^= 0xFF
+    bad = tmp_path / "corrupt.mcap"
+    bad.write_bytes(bytes(data))
+    err = _fails("map", str(bad), "--resolution", "0.05", "--out", str(tmp_path / "bad"), "--set", 'input.bag.odometry=["/odom"]')
+    assert "corrupt.mcap" in err and "chunk" in err, err
+    assert not (tmp_path / "bad").exists()
