@@ -264,7 +264,10 @@ mod tests {
         let mut w = CdrWriter::new();
         w.u32(1_000_000);
         let data = w.finish();
-        let e = CdrReader::new(&data).expect("header").bytes("data").unwrap_err();
+        let e = CdrReader::new(&data)
+            .expect("header")
+            .bytes("data")
+            .expect_err("refused");
         assert_eq!(e.field, "data");
         assert!(e.message.contains("1000000"), "{e}");
         assert!(CdrReader::new(&[0, 1]).is_err());
@@ -272,7 +275,7 @@ mod tests {
         let e = CdrReader::new(&[0, 1, 0, 0, 2])
             .expect("header")
             .f64("x")
-            .unwrap_err();
+            .expect_err("refused");
         assert!(e.message.contains("truncated"), "{e}");
     }
 }

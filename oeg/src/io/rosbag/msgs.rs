@@ -476,12 +476,18 @@ mod tests {
         let mut cloud = PointCloud2::decode(&data).expect("decodes");
         cloud.width = u32::MAX;
         cloud.height = u32::MAX;
-        assert_eq!(cloud.points().unwrap_err().field, "data");
+        assert_eq!(cloud.points().expect_err("refused").field, "data");
         cloud.width = 1;
         cloud.height = 1;
         cloud.fields[2].offset = 20;
-        assert_eq!(cloud.points().unwrap_err().field, "fields[z].offset");
+        assert_eq!(cloud.points().expect_err("refused").field, "fields[z].offset");
         cloud.fields[2].name = "intensity".into();
-        assert!(cloud.points().unwrap_err().message.contains("no field `z`"));
+        assert!(
+            cloud
+                .points()
+                .expect_err("refused")
+                .message
+                .contains("no field `z`")
+        );
     }
 }
