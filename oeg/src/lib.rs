@@ -65,6 +65,7 @@ pub use traversability::{
 // Files: real range data in (OctoMap scan graphs, PCL point clouds), maps out and back, and the framing and
 // atomic writes the testbed's own files share.
 pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_graph};
+pub use io::kitti::{kitti_scan_files, read_kitti};
 pub use io::mapfile::{
     MapFileHeader, load_map, load_map_within, map_from_bytes, map_to_bytes, read_map_header, save_map,
 };
@@ -73,8 +74,8 @@ pub use io::nav2::{
 };
 pub use io::npy::{NpyArray, NpyData};
 pub use io::pcd::{
-    InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, parse_pcd, parse_pcd_within, read_pcd,
-    read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd,
+    InvalidPoints, PcdCloud, PcdEncoding, PcdFrame, PcdOptions, PcdPoints, parse_pcd, parse_pcd_within,
+    read_pcd, read_pcd_scan, read_pcd_scan_within, read_pcd_within, write_pcd, write_pcd_with_intensity,
 };
 pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
 pub use io::rosbag::{

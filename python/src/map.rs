@@ -311,6 +311,7 @@ pub(crate) fn read_pcd<'py>(
     let s = settings(0.1, &overrides)?;
     let options = oeg::PcdOptions {
         frame: s.input.pcd_frame,
+        points: s.input.pcd_points,
         invalid_points: s.input.pcd_invalid,
         sensor: s.input.pcd_sensor.model(),
     };

@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::scenario::LoadedScenario;
-use crate::sensors::{ObstacleReturns, SensorRay, SensorScan, SimSensor};
+use crate::sensors::{ObstacleReturns, ReturnSource, SensorRay, SensorScan, SimSensor};
 use crate::world::World;
 
 /// A running simulation of one scenario.
@@ -15,7 +15,7 @@ pub struct Simulation {
     next: Vec<u64>,
     duration_s: f64,
     buffer: Vec<SensorRay>,
-    sources: Vec<Option<u32>>,
+    sources: Vec<ReturnSource>,
     returns: ObstacleReturns,
     num_rays: u64,
 }
@@ -56,6 +56,11 @@ impl Simulation {
     /// The world, to move it to the end of the run for the truth.
     pub fn world_mut(&mut self) -> &mut World {
         &mut self.world
+    }
+
+    /// What each reading of the last scan returned from, in the order of its rays.
+    pub fn last_scan_sources(&self) -> &[ReturnSource] {
+        &self.sources
     }
 
     /// The sensors.

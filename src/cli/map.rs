@@ -11,7 +11,8 @@ use oeg_eval::progress::Progress;
 #[derive(clap::Args, Debug)]
 pub(crate) struct MapArgs {
     /// Input files: .graph (OctoMap scan graph), .pcd (ascii, binary or binary_compressed), .oeglog (a
-    /// sensor log of `oeg record`), a ROS 2 bag (its .mcap file or its folder).
+    /// sensor log of `oeg record`), a ROS 2 bag (its .mcap file or its folder), a KITTI sequence's folder
+    /// (velodyne/, poses, calib.txt) or a DynamicMap sequence's folder (pcd/, world-frame frames).
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Cell size in metres (the setting map.resolution_m).
@@ -23,7 +24,7 @@ pub(crate) struct MapArgs {
     /// A setting by its scenario key (repeatable), e.g. --set map.model.max_height_m=0.5 or
     /// --set input.pcd_frame=optical: map.model.* (every model option), map.traversability, robot.max_step_m,
     /// robot.height_m, input.graph_sensor (laser|stereo), input.pcd_sensor (laser|stereo), input.pcd_frame
-    /// (as_is|optical), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true), input.bag.topics
+    /// (as_is|optical), input.pcd_points (sensor|world), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true), input.bag.topics
     /// (["/points"]), input.bag.map_frame, input.bag.odometry, input.bag.start_s, input.bag.end_s,
     /// input.bag.stride, input.bag.tf_tolerance_s, input.bag.cloud_sensor. Every key: docs/guide.md#settings-one-door.
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -57,6 +58,7 @@ impl MapArgs {
             graph_sensor: settings.input.graph_sensor.model(),
             pcd: PcdOptions {
                 frame: settings.input.pcd_frame,
+                points: settings.input.pcd_points,
                 invalid_points: settings.input.pcd_invalid,
                 sensor: settings.input.pcd_sensor.model(),
             },

@@ -12,13 +12,15 @@ pub(crate) struct RecordArgs {
     /// A scenario file (.toml).
     scenario: PathBuf,
     /// The file to write (.oeglog, .graph with --format graph, .mcap with --format mcap), or the folder of a
-    /// ROS 2 bag with --format rosbag2.
+    /// ROS 2 bag with --format rosbag2 or of a DynamicMap sequence with --format dynamicmap.
     #[arg(long)]
     out: PathBuf,
     /// log: the testbed's sensor log (both poses, no-returns, range errors); graph: OctoMap's scan graph
     /// (estimated pose, hits only) for other mappers; mcap: a recording for Foxglove (both poses, each
     /// sensor's returns, the truth's grid; docs/mcap.md); rosbag2: a ROS 2 bag (each sensor's hits as
-    /// PointCloud2, the poses as /tf and /tf_static; docs/guide.md#from-your-robots-logs).
+    /// PointCloud2, the poses as /tf and /tf_static; docs/guide.md#from-your-robots-logs); dynamicmap: the
+    /// DynamicMap benchmark's unified format (a folder: pcd/ frames in the world frame with each point's label,
+    /// 1 for a moving actor, and gt_cloud.pcd).
     #[arg(long, value_enum, default_value_t = FormatArg::Log)]
     format: FormatArg,
     /// Replace the scenario's seed.
@@ -34,6 +36,7 @@ enum FormatArg {
     Graph,
     Mcap,
     Rosbag2,
+    Dynamicmap,
 }
 
 /// Records the scans and says what was written.
@@ -43,6 +46,7 @@ pub(crate) fn run(args: &RecordArgs) -> anyhow::Result<()> {
         FormatArg::Graph => RecordFormat::Graph,
         FormatArg::Mcap => RecordFormat::Mcap,
         FormatArg::Rosbag2 => RecordFormat::Rosbag2,
+        FormatArg::Dynamicmap => RecordFormat::DynamicMap,
     };
     let progress = Progress::new(0, "scans");
     let r = record::record(&args.scenario, &args.out, format, args.seed, &progress)?;

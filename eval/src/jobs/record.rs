@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use nalgebra::{Isometry3, Vector3};
 use sim::log::{LogHeader, LogSensor, LogWriter};
-use sim::sensors::PoseSource;
+use sim::sensors::{PoseSource, ReturnSource};
 use sim::{Simulation, scenario};
 
 use crate::error::{EvalError, Result};
@@ -28,6 +28,11 @@ pub enum RecordFormat {
     /// (`map` -> `odom`: the true pose's correction of the estimated one; `odom` -> `base_link`: the estimated
     /// pose) and `/tf_static` (`base_link` -> each sensor). No-return rays are not written: a cloud holds points.
     Rosbag2,
+    /// The DynamicMap benchmark's unified format (a folder): `pcd/NNNNNN.pcd` a scan, its hits in the world
+    /// frame at the estimated pose, `VIEWPOINT` the sensor's pose, and each point's label in `intensity` (1: the
+    /// reading returned from a moving actor, 0: from the static scene); `gt_cloud.pcd`, every frame's points
+    /// and labels in order, as the benchmark's evaluation reads them.
+    DynamicMap,
 }
 
 /// What a recording produced.
@@ -160,6 +165,57 @@ fn record_rosbag2(
     Ok((num_scans, left_out))
 }
 
+/// Records every scan of `sim` into a DynamicMap sequence folder at `out` ([`RecordFormat::DynamicMap`]);
+/// returns the scans written and the no-return rays left out.
+fn record_dynamicmap(
+    sim: &mut Simulation,
+    header: &LogHeader,
+    out: &Path,
+    progress: &Progress,
+) -> Result<(u64, u64)> {
+    let frames = out.join("pcd");
+    crate::output::create_dir(&frames)?;
+    let (mut all_points, mut all_labels) = (Vec::new(), Vec::new());
+    let (mut num_scans, mut left_out) = (0_u64, 0_u64);
+    while let Some(scan) = sim.next_scan() {
+        let placed = scan.to_scan(PoseSource::Estimated, header.sensors[scan.sensor_index].map_model);
+        let origin = placed.origin_in_world;
+        let (mut points, mut labels) = (Vec::new(), Vec::new());
+        for (ray, source) in placed.rays.iter().zip(sim.last_scan_sources()) {
+            if ray.kind == oeg::RayKind::Hit {
+                points.push((origin + ray.offset_in_world.cast::<f64>()).cast::<f32>());
+                labels.push(if *source == ReturnSource::Actor { 1.0 } else { 0.0 });
+            }
+        }
+        left_out += (placed.rays.len() - points.len()) as u64;
+        let cloud = oeg::PcdCloud {
+            width: points.len() as u32,
+            height: 1,
+            viewpoint: scan.estimated_world_from_sensor,
+            points,
+        };
+        let path = frames.join(format!("{num_scans:06}.pcd"));
+        oeg::write_pcd_with_intensity(&path, &cloud, Some(&labels), oeg::PcdEncoding::Binary)?;
+        all_points.extend(cloud.points);
+        all_labels.extend(labels);
+        num_scans += 1;
+        progress.inc(1);
+    }
+    let gt = oeg::PcdCloud {
+        width: all_points.len() as u32,
+        height: 1,
+        viewpoint: Isometry3::identity(),
+        points: all_points,
+    };
+    oeg::write_pcd_with_intensity(
+        &out.join("gt_cloud.pcd"),
+        &gt,
+        Some(&all_labels),
+        oeg::PcdEncoding::Binary,
+    )?;
+    Ok((num_scans, left_out))
+}
+
 /// The robot's frame in a written bag (REP 105).
 const BASE_FRAME: &str = "base_link";
 
@@ -175,11 +231,11 @@ pub fn record(
     progress: &Progress,
 ) -> Result<RecordReport> {
     // Refuse an output that is not a regular file (a bag: a folder) before simulating anything.
-    if format == RecordFormat::Rosbag2 {
+    if matches!(format, RecordFormat::Rosbag2 | RecordFormat::DynamicMap) {
         if out.exists() && !out.is_dir() {
             return Err(EvalError::Input {
                 path: out.to_path_buf(),
-                message: "a ROS 2 bag is a folder, and this is a file".into(),
+                message: "a ROS 2 bag or a DynamicMap sequence is a folder, and this is a file".into(),
             });
         }
     } else {
@@ -219,6 +275,7 @@ pub fn record(
         }
         RecordFormat::Mcap => (record_mcap(&loaded, &mut sim, &header, out, progress)?, 0),
         RecordFormat::Rosbag2 => record_rosbag2(&mut sim, &header, out, progress)?,
+        RecordFormat::DynamicMap => record_dynamicmap(&mut sim, &header, out, progress)?,
     };
     progress.finish();
     let wall_time_s = start.elapsed().as_secs_f64();

@@ -35,6 +35,9 @@ pub struct InputSettings {
     pub pcd_sensor: RangeModel,
     /// Frame of PCD points: `as_is`, or `optical` (x right, y down, z forward).
     pub pcd_frame: oeg::PcdFrame,
+    /// Where PCD points are: `sensor` (placed by `VIEWPOINT`) or `world` (already placed, `VIEWPOINT` the
+    /// sensor's pose, as the DynamicMap benchmark writes them).
+    pub pcd_points: oeg::PcdPoints,
     /// NaN points of an organized PCD: `drop`, or `no_return` rays along their pixel.
     pub pcd_invalid: oeg::InvalidPoints,
     /// Pose of sensor-log scans: `estimated` or `true`.
@@ -104,6 +107,7 @@ impl Default for InputSettings {
             graph_sensor: RangeModel::Laser,
             pcd_sensor: RangeModel::Stereo,
             pcd_frame: oeg::PcdFrame::default(),
+            pcd_points: oeg::PcdPoints::default(),
             pcd_invalid: oeg::InvalidPoints::default(),
             log_pose: sim::sensors::PoseSource::Estimated,
             bag: BagInput::default(),

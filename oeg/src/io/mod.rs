@@ -1,7 +1,9 @@
 //! Reading real data into [`crate::Scan`]s, and saving and loading maps.
 //!
 //! * [`graph`]: OctoMap scan graphs (`.graph`), the format of OctoMap's published data sets;
-//! * [`pcd`]: PCL point clouds (`.pcd`: ascii, binary, binary_compressed);
+//! * [`pcd`]: PCL point clouds (`.pcd`: ascii, binary, binary_compressed), and the DynamicMap benchmark's
+//!   frames (world-frame points);
+//! * [`kitti`]: KITTI odometry sequences (`velodyne/*.bin`, the poses, `calib.txt`'s `Tr`);
 //! * [`rosbag`]: ROS 2 bags (MCAP storage): `PointCloud2` and `LaserScan` in, placed by `/tf`; clouds and
 //!   transforms out;
 //! * [`mapfile`]: this crate's own map format (`.oeg`).
@@ -10,6 +12,7 @@
 //! file and the byte or line of the problem.
 
 pub(crate) mod graph;
+pub(crate) mod kitti;
 mod lzf;
 pub(crate) mod mapfile;
 pub(crate) mod nav2;

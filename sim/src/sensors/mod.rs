@@ -262,7 +262,7 @@ impl SimSensor {
         world: &World,
         sensor_index: usize,
         rays: &mut Vec<SensorRay>,
-        sources: &mut Vec<Option<u32>>,
+        sources: &mut Vec<ReturnSource>,
         returns: &mut ObstacleReturns,
     ) -> Option<SensorScan> {
         let world_from_link = world.world_from_link(&self.spec.mount_link)?;
@@ -277,12 +277,16 @@ impl SimSensor {
             .into_par_iter()
             .map(|k| this.beam(world, &origin, &rotation, scan_index, k))
             .unzip_into_vecs(rays, sources);
-        for index in sources.iter().flatten() {
-            returns.add(*index as usize);
+        for source in sources.iter() {
+            if let ReturnSource::Obstacle(index) = source {
+                returns.add(*index as usize);
+            }
         }
         if matches!(self.spec.kind, SensorKind::Stereo | SensorKind::DepthCamera) {
             // A camera pixel without depth is an invalid measurement, not a ray that saw nothing up to its
-            // range (a laser's no return): it is left out, as depth images mark it NaN.
+            // range (a laser's no return): it is left out, as depth images mark it NaN. Its source goes with it.
+            let mut kept = rays.iter().map(|r| r.kind == RayKind::Hit);
+            sources.retain(|_| kept.next().unwrap_or(false));
             rays.retain(|r| r.kind == RayKind::Hit);
         }
         Some(SensorScan {
@@ -304,7 +308,7 @@ impl SimSensor {
         rotation: &nalgebra::UnitQuaternion<f64>,
         scan_index: u64,
         k: usize,
-    ) -> (SensorRay, Option<u32>) {
+    ) -> (SensorRay, ReturnSource) {
         let noise = &self.spec.noise;
         let nominal = self.directions[k];
         let no_return = SensorRay {
@@ -326,10 +330,10 @@ impl SimSensor {
             travelled = (nominal + (e1 * a + e2 * b) * noise.angular_jitter_rad).normalize();
         }
         if noise.hole_probability > 0.0 && rng.random::<f64>() < noise.hole_probability {
-            return (no_return, None);
+            return (no_return, ReturnSource::None);
         }
         if noise.dropout_probability > 0.0 && rng.random::<f64>() < noise.dropout_probability {
-            return (no_return, None);
+            return (no_return, ReturnSource::None);
         }
         let cast = |d: &Vector3<f64>| {
             world.cast_ray(
@@ -345,11 +349,11 @@ impl SimSensor {
                 true_range_m: f32::INFINITY,
                 ..no_return
             };
-            return (nothing, None);
+            return (nothing, ReturnSource::None);
         };
         let mut range = hit.distance_m;
         if range < self.spec.min_range_m {
-            return (no_return, None);
+            return (no_return, ReturnSource::None);
         }
         if noise.mixed_pixel_probability > 0.0 && rng.random::<f64>() < noise.mixed_pixel_probability {
             let neighbour = (travelled + e1 * self.spacing_rad).normalize();
@@ -359,12 +363,15 @@ impl SimSensor {
             }
         }
         let mut source = match hit.kind {
-            HitKind::Obstacle { index } => u32::try_from(index).ok(),
-            HitKind::Terrain | HitKind::Actor { .. } => None,
+            HitKind::Obstacle { index } => {
+                u32::try_from(index).map_or(ReturnSource::None, ReturnSource::Obstacle)
+            }
+            HitKind::Actor { .. } => ReturnSource::Actor,
+            HitKind::Terrain => ReturnSource::Terrain,
         };
         if noise.spurious_probability > 0.0 && rng.random::<f64>() < noise.spurious_probability {
             range = rng.random_range(self.spec.min_range_m..range.max(self.spec.min_range_m + 1e-6));
-            source = None;
+            source = ReturnSource::None;
         }
         let forward = nominal.x.max(1e-6);
         let sigma = noise.range_sigma_m(range, forward);
@@ -374,7 +381,7 @@ impl SimSensor {
             measured += sigma * z;
         }
         if measured <= self.spec.min_range_m || measured > self.spec.max_range_m {
-            return (no_return, None);
+            return (no_return, ReturnSource::None);
         }
         let sigma_at_measured = noise.range_sigma_m(measured, forward);
         (
@@ -387,6 +394,20 @@ impl SimSensor {
             source,
         )
     }
+}
+
+/// What a scan's reading returned from: the scene's own surfaces, a moving actor, or nothing (a no-return, a
+/// hole, a dropout, a reading out of range, a spurious return).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReturnSource {
+    /// No surface: the reading is not a return of the scene.
+    None,
+    /// The ground.
+    Terrain,
+    /// Static obstacle number `index` of the scenario.
+    Obstacle(u32),
+    /// A moving actor (a person).
+    Actor,
 }
 
 /// The unit beam directions of a pattern, in the sensor frame (x forward, y left, z up).

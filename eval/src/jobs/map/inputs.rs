@@ -20,6 +20,12 @@ pub enum InputFormat {
     /// A ROS 2 bag: its `.mcap` file (recognised by its first bytes) or its folder with `metadata.yaml`; one
     /// scan per `PointCloud2` or `LaserScan` message ([`oeg::read_bag`]).
     Bag,
+    /// A KITTI odometry sequence's folder (`velodyne/*.bin`, its poses, `calib.txt`): one scan per `.bin`
+    /// ([`oeg::read_kitti`]).
+    Kitti,
+    /// A sequence of the DynamicMap benchmark's unified format: a folder with `pcd/*.pcd`, each frame's points
+    /// in the world frame and the sensor's pose in `VIEWPOINT`; one scan per frame, in name order.
+    DynamicMap,
 }
 
 /// The first bytes of an MCAP file.
@@ -36,11 +42,15 @@ impl InputFormat {
             Self::Log => 4,
             Self::Pcd => 5,
             Self::Bag => 6,
+            // 16 bytes a point in the file, a 24-byte ray in memory.
+            Self::Kitti => 3,
+            Self::DynamicMap => 5,
         }
     }
 
-    /// The format of `path`: a sensor log or an MCAP file by its magic bytes whatever its name, a folder with a
-    /// `metadata.yaml` as a ROS 2 bag, anything else by its extension.
+    /// The format of `path`: a sensor log or an MCAP file by its magic bytes whatever its name; a folder with a
+    /// `metadata.yaml` as a ROS 2 bag, with `velodyne/` as a KITTI sequence, with `pcd/` as a DynamicMap
+    /// sequence; anything else by its extension.
     ///
     /// # Errors
     /// [`EvalError::Input`] for a file that is not a sensor log and has another extension.
@@ -50,6 +60,12 @@ impl InputFormat {
         }
         if starts_with(path, MCAP_MAGIC) || path.join("metadata.yaml").is_file() {
             return Ok(Self::Bag);
+        }
+        if path.join("velodyne").is_dir() {
+            return Ok(Self::Kitti);
+        }
+        if path.join("pcd").is_dir() {
+            return Ok(Self::DynamicMap);
         }
         match path
             .extension()
@@ -64,8 +80,9 @@ impl InputFormat {
                 path: path.to_path_buf(),
                 message:
                     "unknown input format: expected an OctoMap scan graph (.graph), a point cloud (.pcd), \
-                          a sensor log (`oeg record`'s, recognised by its first bytes) or a ROS 2 bag (its \
-                          .mcap file, or its folder with metadata.yaml)"
+                          a sensor log (`oeg record`'s, recognised by its first bytes), a ROS 2 bag (its \
+                          .mcap file, or its folder with metadata.yaml), a KITTI sequence's folder (with \
+                          velodyne/) or a DynamicMap sequence's folder (with pcd/)"
                         .into(),
             }),
         }
@@ -99,16 +116,22 @@ pub struct Inputs {
     pub skipped: Vec<(PathBuf, oeg::BagSkip)>,
 }
 
-/// The bytes `path` holds: a file's size, or the files of a bag's folder together.
-fn input_bytes(path: &Path) -> Result<u64> {
+/// The bytes `path` holds: a file's size, or the regular files of a folder input's data folder together (a bag's
+/// own folder, a KITTI sequence's `velodyne/`, a DynamicMap sequence's `pcd/`).
+fn input_bytes(path: &Path, format: InputFormat) -> Result<u64> {
     let io = |source| EvalError::Io {
         path: path.to_path_buf(),
         source,
     };
     let meta = std::fs::metadata(path).map_err(io)?;
-    if meta.is_dir() && path.join("metadata.yaml").is_file() {
+    if meta.is_dir() {
+        let data = match format {
+            InputFormat::Kitti => path.join("velodyne"),
+            InputFormat::DynamicMap => path.join("pcd"),
+            _ => path.to_path_buf(),
+        };
         let mut total = 0_u64;
-        for entry in std::fs::read_dir(path).map_err(io)? {
+        for entry in std::fs::read_dir(&data).map_err(io)? {
             let meta = entry.map_err(io)?.metadata().map_err(io)?;
             if meta.is_file() {
                 total = total.saturating_add(meta.len());
@@ -120,13 +143,37 @@ fn input_bytes(path: &Path) -> Result<u64> {
     if !meta.is_file() {
         return Err(EvalError::Input {
             path: path.to_path_buf(),
-            message: "is not a regular file (a folder, a device or a pipe) nor a ROS 2 bag's folder; `oeg map` \
-                      checks each input's size against the memory limit before reading it, so save the data to a \
-                      file first"
-                .into(),
+            message:
+                "is not a regular file (a device or a pipe); `oeg map` checks each input's size against the \
+                      memory limit before reading it, so save the data to a file first"
+                    .into(),
         });
     }
     Ok(meta.len())
+}
+
+/// The frames of a DynamicMap sequence, `pcd/*.pcd` in name order.
+fn dynamicmap_frames(folder: &Path) -> Result<Vec<PathBuf>> {
+    let dir = folder.join("pcd");
+    let io = |source| EvalError::Io {
+        path: dir.clone(),
+        source,
+    };
+    let mut frames = Vec::new();
+    for entry in std::fs::read_dir(&dir).map_err(io)? {
+        let path = entry.map_err(io)?.path();
+        if path.extension().is_some_and(|e| e == "pcd") {
+            frames.push(path);
+        }
+    }
+    frames.sort();
+    if frames.is_empty() {
+        return Err(EvalError::Input {
+            path: dir,
+            message: "no .pcd frame in the folder".into(),
+        });
+    }
+    Ok(frames)
 }
 
 /// Reads every input into scans, each with its [`ScanSource`], before anything is written, so a bad input
@@ -150,7 +197,7 @@ pub fn read_inputs(job: &MapJob) -> Result<Inputs> {
         .collect::<Result<Vec<_>>>()?;
     let mut held = 0_u64;
     for (path, format) in job.inputs.iter().zip(&formats) {
-        let bytes = input_bytes(path)?;
+        let bytes = input_bytes(path, *format)?;
         let factor = format.memory_factor();
         held = held.saturating_add(bytes.saturating_mul(factor));
         if held > limit {
@@ -202,6 +249,29 @@ pub fn read_inputs(job: &MapJob) -> Result<Inputs> {
                 inputs
                     .skipped
                     .extend(bag.skipped.into_iter().map(|s| (path.clone(), s)));
+            }
+            InputFormat::Kitti => {
+                let read = oeg::read_kitti(path, job.graph_sensor, limit)?;
+                scans.extend(read.into_iter().map(|(file, scan)| {
+                    let name = file.file_name().unwrap_or_default().to_string_lossy().to_string();
+                    (source(path, format!("scan {name}")), scan)
+                }));
+            }
+            InputFormat::DynamicMap => {
+                let options = oeg::PcdOptions {
+                    points: oeg::PcdPoints::World,
+                    sensor: job.graph_sensor,
+                    ..job.pcd
+                };
+                for frame in dynamicmap_frames(path)? {
+                    let scan = oeg::read_pcd_scan_within(&frame, &options, limit)?;
+                    let name = frame
+                        .file_name()
+                        .unwrap_or_default()
+                        .to_string_lossy()
+                        .to_string();
+                    scans.push((source(path, format!("frame {name}")), scan));
+                }
             }
         }
     }

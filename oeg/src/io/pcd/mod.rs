@@ -9,6 +9,8 @@
 //!   the pixel's viewing direction comes from a pinhole model fitted by least squares to the valid pixels
 //!   (`x / z = a u + b`, `y / z = c v + d` in the camera frame), so a pixel that saw nothing clears space.
 //! * Infinite coordinates are an error.
+//! * The DynamicMap benchmark's frames hold points already in the world frame, `VIEWPOINT` the sensor's pose
+//!   ([`PcdPoints::World`]): each point is then a hit from the viewpoint's position.
 //! * Depth cameras write points in the optical frame (x right, y down, z forward); [`PcdFrame::Optical`] turns
 //!   them into the robot convention (x forward, y left, z up: `X = z, Y = -x, Z = -y`) before `VIEWPOINT` is
 //!   applied.
@@ -61,11 +63,25 @@ pub enum InvalidPoints {
     NoReturn,
 }
 
+/// Where a cloud's points are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PcdPoints {
+    /// In the sensor's frame, placed in the world by `VIEWPOINT` (PCL's convention).
+    #[default]
+    Sensor,
+    /// Already in the world frame, `VIEWPOINT` the sensor's pose only (the DynamicMap benchmark's unified
+    /// format): each point is a hit from the viewpoint's position.
+    World,
+}
+
 /// How to turn a cloud into a scan.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PcdOptions {
     /// The points' frame.
     pub frame: PcdFrame,
+    /// Whether the points are in the sensor's frame or the world's.
+    pub points: PcdPoints,
     /// NaN points.
     pub invalid_points: InvalidPoints,
     /// The sensor model attached to the scan.
@@ -76,6 +92,7 @@ impl Default for PcdOptions {
     fn default() -> Self {
         Self {
             frame: PcdFrame::AsIs,
+            points: PcdPoints::Sensor,
             invalid_points: InvalidPoints::Drop,
             sensor: SensorModel::stereo(),
         }
@@ -122,6 +139,12 @@ impl PcdCloud {
             None
         };
         scan.rays.reserve(self.points.len());
+        if options.points == PcdPoints::World {
+            for p in self.points.iter().filter(|p| p.iter().all(|c| c.is_finite())) {
+                scan.push_hit(Point3::from(p.coords.cast::<f64>()));
+            }
+            return Ok(scan);
+        }
         for (k, p) in self.points.iter().enumerate() {
             if p.x.is_nan() || p.y.is_nan() || p.z.is_nan() {
                 if let Some(pin) = &pinhole {
@@ -494,11 +517,28 @@ fn finish_ref(header: &Header, points: Vec<Point3<f32>>) -> Result<PcdCloud> {
 /// # Errors
 /// [`Error::Io`] naming the file; [`Error::InvalidSetting`] if `width * height` differs from the number of points.
 pub fn write_pcd(path: &Path, cloud: &PcdCloud, encoding: PcdEncoding) -> Result<()> {
+    write_pcd_with_intensity(path, cloud, None, encoding)
+}
+
+/// [`write_pcd`], with a field `intensity` (float32) of one value a point when given: the DynamicMap
+/// benchmark's frames and ground truth carry each point's label there (0 static, 1 dynamic).
+///
+/// # Errors
+/// As [`write_pcd`], and [`Error::Setting`] when `intensity` has not one value a point.
+pub fn write_pcd_with_intensity(
+    path: &Path,
+    cloud: &PcdCloud,
+    intensity: Option<&[f32]>,
+    encoding: PcdEncoding,
+) -> Result<()> {
     if cloud.width as usize * cloud.height as usize != cloud.points.len() {
         return Err(Error::setting(
             "cloud",
             "width x height must equal the number of points",
         ));
+    }
+    if intensity.is_some_and(|i| i.len() != cloud.points.len()) {
+        return Err(Error::setting("intensity", "one value a point"));
     }
     let t = cloud.viewpoint.translation.vector;
     let q = cloud.viewpoint.rotation.quaternion();
@@ -507,9 +547,14 @@ pub fn write_pcd(path: &Path, cloud: &PcdCloud, encoding: PcdEncoding) -> Result
         PcdEncoding::Binary => "binary",
         PcdEncoding::BinaryCompressed => "binary_compressed",
     };
+    let (fields, sizes, types, counts) = if intensity.is_some() {
+        ("x y z intensity", "4 4 4 4", "F F F F", "1 1 1 1")
+    } else {
+        ("x y z", "4 4 4", "F F F", "1 1 1")
+    };
     let mut out = format!(
-        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n\
-         WIDTH {}\nHEIGHT {}\nVIEWPOINT {} {} {} {} {} {} {}\nPOINTS {}\nDATA {data}\n",
+        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {fields}\nSIZE {sizes}\nTYPE {types}\n\
+         COUNT {counts}\nWIDTH {}\nHEIGHT {}\nVIEWPOINT {} {} {} {} {} {} {}\nPOINTS {}\nDATA {data}\n",
         cloud.width,
         cloud.height,
         t.x,
@@ -522,24 +567,30 @@ pub fn write_pcd(path: &Path, cloud: &PcdCloud, encoding: PcdEncoding) -> Result
         cloud.points.len()
     )
     .into_bytes();
+    let num_fields = 3 + usize::from(intensity.is_some());
+    let values = |k: usize| -> [f32; 4] {
+        let p = cloud.points[k];
+        [p.x, p.y, p.z, intensity.map_or(0.0, |i| i[k])]
+    };
     match encoding {
         PcdEncoding::Ascii => {
-            for p in &cloud.points {
-                out.extend_from_slice(format!("{} {} {}\n", p.x, p.y, p.z).as_bytes());
+            for k in 0..cloud.points.len() {
+                let line: Vec<String> = values(k)[..num_fields].iter().map(f32::to_string).collect();
+                out.extend_from_slice(format!("{}\n", line.join(" ")).as_bytes());
             }
         }
         PcdEncoding::Binary => {
-            for p in &cloud.points {
-                for v in [p.x, p.y, p.z] {
+            for k in 0..cloud.points.len() {
+                for v in &values(k)[..num_fields] {
                     out.extend_from_slice(&v.to_le_bytes());
                 }
             }
         }
         PcdEncoding::BinaryCompressed => {
-            let mut field_major = Vec::with_capacity(cloud.points.len() * 12);
-            for axis in 0..3 {
-                for p in &cloud.points {
-                    field_major.extend_from_slice(&p[axis].to_le_bytes());
+            let mut field_major = Vec::with_capacity(cloud.points.len() * 4 * num_fields);
+            for field in 0..num_fields {
+                for k in 0..cloud.points.len() {
+                    field_major.extend_from_slice(&values(k)[field].to_le_bytes());
                 }
             }
             let packed = lzf::compress(&field_major);
