@@ -30,8 +30,8 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Build a map from OctoMap scan graphs (.graph) and point clouds (.pcd); write map.oeg, layer images,
-    /// summary.json and timing.json.
+    /// Build a map from recorded range data (scan graphs, point clouds, sensor logs, ROS 2 bags, KITTI and
+    /// DynamicMap sequences); write map.oeg, layer images, summary.json and timing.json.
     Map(cli::map::MapArgs),
     /// Plan a path on a saved map (map.oeg) from one point to another: write plan.json, path.csv and
     /// plan.png. Exit status 0 with a path, 3 with none (the reason is printed and in plan.json), 1 on an
@@ -41,9 +41,10 @@ enum Command {
     /// with the robot's footprint: the first contact, the closest approach, the cells crossed; exit non-zero
     /// on a contact.
     CheckPath(cli::check_path::CheckPathArgs),
-    /// Score a map made by another tool (.npy layers, or a nav2 map) against a scenario's truth, as `oeg run`
-    /// scores its own: verdict counts, per-obstacle table, planner check (docs/scoring.md).
-    Score(cli::score::ScoreArgs),
+    /// Score a map made by another tool (.npy layers, a nav2 map, or a grid_map in a ROS 2 bag) against a
+    /// scenario's truth, as `oeg run` scores its own: verdict counts, per-obstacle table, planner check
+    /// (docs/scoring.md).
+    Score(Box<cli::score::ScoreArgs>),
     /// Print a saved map's header and statistics.
     Inspect(cli::inspect::InspectArgs),
     /// Run a scenario end to end: simulate, map, compare with the truth, write the report; exit non-zero when

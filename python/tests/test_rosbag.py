@@ -213,3 +213,84 @@ def test_zstd_and_lz4_chunks_map_to_the_bytes_of_an_uncompressed_bag(compression
     err = _fails("map", str(bad), "--resolution", "0.05", "--out", str(tmp_path / "bad"), "--set", 'input.bag.odometry=["/odom"]')
     assert "corrupt.mcap" in err and "chunk" in err, err
     assert not (tmp_path / "bad").exists()
+
+
+GRID_MAP_INFO = "float64 resolution\nfloat64 length_x\nfloat64 length_y\ngeometry_msgs/Pose pose\n"
+GRID_MAP = (
+    "std_msgs/Header header\ngrid_map_msgs/GridMapInfo info\nstring[] layers\nstring[] basic_layers\n"
+    "std_msgs/Float32MultiArray[] data\nuint16 outer_start_index\nuint16 inner_start_index\n"
+)
+
+
+def test_a_grid_map_in_a_bag_scores_as_its_layers_given_as_npy(tmp_path: Path) -> None:
+    """A GridMap written by rosbags' serializer (column-major layers, a wrapped circular buffer) scores as the
+    same elevation, variance and decisions written as .npy files with their sidecar."""
+    ts = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
+    ts.register(typesys.get_types_from_msg(GRID_MAP_INFO, "grid_map_msgs/msg/GridMapInfo"))
+    ts.register(typesys.get_types_from_msg(GRID_MAP, "grid_map_msgs/msg/GridMap"))
+    m = ts.types
+    res, n_x, n_y, centre = 0.1, 40, 30, (4.0, 0.5)
+    # grid_map's unwrapped index (i, j): i against x, j against y, from the map's +x, +y corner.
+    i, j = np.meshgrid(np.arange(n_x), np.arange(n_y), indexing="ij")
+    x = centre[0] + n_x * res / 2 - (i + 0.5) * res
+    y = centre[1] + n_y * res / 2 - (j + 0.5) * res
+    elevation = np.where((x > 5.0) & (x < 5.5), 0.3, 0.0).astype(np.float32)
+    elevation[(x < 2.2) & (y > 1.5)] = np.nan
+    variance = np.full_like(elevation, 1e-4)
+    traversability = np.where(elevation > 0.1, 0.0, 1.0).astype(np.float32)
+    start = (7, 11)
+
+    def array(u: np.ndarray) -> Any:
+        stored = np.roll(u, shift=start, axis=(0, 1))
+        dim = m["std_msgs/msg/MultiArrayDimension"]
+        layout = m["std_msgs/msg/MultiArrayLayout"](
+            dim=[dim(label="column_index", size=n_y, stride=n_x * n_y), dim(label="row_index", size=n_x, stride=n_x)],
+            data_offset=0,
+        )
+        return m["std_msgs/msg/Float32MultiArray"](layout=layout, data=stored.flatten(order="F").astype(np.float32))
+
+    pose = m["geometry_msgs/msg/Pose"](
+        position=m["geometry_msgs/msg/Point"](x=centre[0], y=centre[1], z=0.0),
+        orientation=m["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+    )
+    msg = m["grid_map_msgs/msg/GridMap"](
+        header=_header(10**9, "map"),
+        info=m["grid_map_msgs/msg/GridMapInfo"](resolution=res, length_x=n_x * res, length_y=n_y * res, pose=pose),
+        layers=["elevation", "variance", "traversability"],
+        basic_layers=["elevation"],
+        data=[array(elevation), array(variance), array(traversability)],
+        outer_start_index=start[0],
+        inner_start_index=start[1],
+    )
+    bag = tmp_path / "elevation_bag"
+    with rosbag2.Writer(bag, version=8, storage_plugin=rosbag2.StoragePlugin.MCAP) as writer:
+        conn = writer.add_connection("/elevation_map", "grid_map_msgs/msg/GridMap", typestore=ts)
+        writer.write(conn, 10**9, bytes(ts.serialize_cdr(msg, "grid_map_msgs/msg/GridMap")))
+    # The same layers as the arrays oeg score reads: row 0 the min-y row, column 0 the min-x column.
+    def lower_left(u: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(u[::-1, ::-1].T)
+
+    decisions = np.where(np.isnan(elevation), 0, np.where(traversability >= 0.5, 2, 3)).astype(np.int64)
+    for name, values in (("decisions", decisions), ("elevation_m", elevation), ("variance_m2", variance)):
+        np.save(tmp_path / f"{name}.npy", lower_left(values) if name == "decisions" else lower_left(values).astype(np.float64))
+    sidecar = {
+        "origin_xy_m": [centre[0] - n_x * res / 2, centre[1] - n_y * res / 2],
+        "resolution_m": res,
+        "layers": {name: {"file": f"{name}.npy"} for name in ("decisions", "elevation_m", "variance_m2")},
+    }
+    (tmp_path / "layers.json").write_text(json.dumps(sidecar))
+    scenario = "scenarios/corridor_lasers.toml"
+    common = ("--no-observability",)
+    # The scenario's regression bounds are its own map's: this small map fails them, and the scores are written.
+    run_cli("score", scenario, "--grid-map", str(bag), "--out", str(tmp_path / "from_bag"), *common, check=False)
+    run_cli("score", scenario, "--layers", str(tmp_path / "layers.json"), "--out", str(tmp_path / "from_npy"), *common, check=False)
+    a = json.loads((tmp_path / "from_bag" / "score.json").read_text())
+    b = json.loads((tmp_path / "from_npy" / "score.json").read_text())
+    assert a == b
+    assert a["num_observed_cells"] > 0
+    # The wall the grid map holds is blocked, where the truth has level floor: over-cautious cells, counted
+    # the same both ways.
+    assert a["overcautious_cells"] > 0
+    # A topic that is not there is named.
+    err = _fails("score", scenario, "--grid-map", str(bag), "--topic", "/grid", "--out", str(tmp_path / "x"), *common)
+    assert "no topic /grid" in err, err

@@ -7,7 +7,7 @@ use oeg_eval::progress::Progress;
 
 /// `oeg score`'s arguments.
 #[derive(clap::Args, Debug)]
-#[command(group(clap::ArgGroup::new("grid").required(true).args(["layers", "nav2", "decisions"])))]
+#[command(group(clap::ArgGroup::new("grid").required(true).args(["layers", "nav2", "decisions", "grid_map"])))]
 pub(crate) struct ScoreArgs {
     /// The scenario whose truth judges the map (.toml).
     scenario: PathBuf,
@@ -19,6 +19,22 @@ pub(crate) struct ScoreArgs {
     /// (occupied: blocked, free: free, the rest unknown).
     #[arg(long, value_name = "MAP_YAML")]
     nav2: Option<PathBuf>,
+    /// A ROS 2 bag (its .mcap file or its folder) holding grid_map_msgs/GridMap messages on --topic: the last
+    /// map (or the last at --time) is scored, its `elevation` and `variance` layers, and its `traversability`
+    /// layer (>= 0.5 drivable) or, without one, the terrain step rule (docs/scoring.md).
+    #[arg(long, value_name = "BAG", conflicts_with_all = ["layers", "nav2", "decisions", "elevation", "variance", "occupancy"])]
+    grid_map: Option<PathBuf>,
+    /// The GridMap topic of --grid-map.
+    #[arg(
+        long,
+        value_name = "TOPIC",
+        default_value = "/elevation_map",
+        requires = "grid_map"
+    )]
+    topic: String,
+    /// Seconds after the bag's first message: score the last GridMap at or before it (default: the last one).
+    #[arg(long, value_name = "SECONDS", requires = "grid_map")]
+    time: Option<f64>,
     /// The decisions as a 2D .npy of integer codes: 0 unknown, 1 free, 2 traversable, 3 blocked, 4 uncertain;
     /// row 0 the min-y row. Needs --origin and --resolution.
     #[arg(long, value_name = "NPY", conflicts_with_all = ["layers", "nav2"], requires_all = ["origin", "resolution"])]
@@ -60,6 +76,11 @@ pub(crate) struct ScoreArgs {
 /// Scores the map and prints its verdict counts.
 pub(crate) fn run(args: &ScoreArgs) -> anyhow::Result<()> {
     let grid = match (&args.layers, &args.nav2, &args.decisions) {
+        _ if let Some(bag) = &args.grid_map => GridSource::GridMap {
+            bag: bag.clone(),
+            topic: args.topic.clone(),
+            at_s: args.time,
+        },
         (Some(l), _, _) => GridSource::Layers(l.clone()),
         (_, Some(n), _) => GridSource::Nav2(n.clone()),
         (_, _, Some(d)) => {
@@ -72,7 +93,7 @@ pub(crate) fn run(args: &ScoreArgs) -> anyhow::Result<()> {
                 resolution_m,
             }
         }
-        _ => anyhow::bail!("give the map: --layers, --nav2 or --decisions"),
+        _ => anyhow::bail!("give the map: --layers, --nav2, --decisions or --grid-map"),
     };
     let job = ScoreJob {
         scenario: args.scenario.clone(),

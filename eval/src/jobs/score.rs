@@ -22,6 +22,17 @@ pub enum GridSource {
     Layers(PathBuf),
     /// A nav2 map's YAML file: the origin, the resolution and the decisions of its image.
     Nav2(PathBuf),
+    /// A `grid_map_msgs/GridMap` in a ROS 2 bag (elevation_mapping's, grid_map's): its geometry, its
+    /// `elevation` and `variance` layers, and the decisions of its `traversability` layer or, without one, of
+    /// the terrain step rule ([`grid_map_foreign`]).
+    GridMap {
+        /// The bag (its `.mcap` file or its folder).
+        bag: PathBuf,
+        /// The topic.
+        topic: String,
+        /// Seconds after the bag's first message: the last map at or before it (none: the last map).
+        at_s: Option<f64>,
+    },
     /// The decisions as a `.npy` file, on a grid given by hand.
     Grid {
         /// The decision codes (`docs/planner-protocol.md`).
@@ -209,7 +220,19 @@ pub struct ForeignRead {
 ///
 /// # Errors
 /// A file that cannot be read or is malformed, arrays of different shapes, bad values; each names its file.
-pub fn read_foreign(job: &ScoreJob) -> Result<ForeignRead> {
+pub fn read_foreign(job: &ScoreJob, profile: &oeg::RobotProfile) -> Result<ForeignRead> {
+    if let GridSource::GridMap { bag, topic, at_s } = &job.grid {
+        let grid = oeg::read_grid_map(bag, topic, *at_s, MAX_NPY_BYTES.saturating_mul(8))?;
+        let map = grid_map_foreign(&grid, profile).map_err(|message| EvalError::Input {
+            path: bag.clone(),
+            message: format!("topic {topic}: {message}"),
+        })?;
+        map.check(bag, [None; 3])?;
+        return Ok(ForeignRead {
+            map,
+            files: vec![bag.clone()],
+        });
+    }
     let mut layers: Vec<(String, PathBuf)> = Vec::new();
     let mut inputs = Vec::new();
     let (source, origin_xy_m, resolution_m, (rows, cols, decisions)) = match &job.grid {
@@ -253,6 +276,7 @@ pub fn read_foreign(job: &ScoreJob) -> Result<ForeignRead> {
             *resolution_m,
             read_decisions(decisions)?,
         ),
+        GridSource::GridMap { .. } => unreachable!("read above"),
     };
     inputs.insert(0, source.clone());
     let file = |name: &str, flag: &Option<PathBuf>| {
@@ -309,7 +333,7 @@ pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<ScoreReport> {
     let ForeignRead {
         map: foreign,
         files: mut inputs,
-    } = read_foreign(job)?;
+    } = read_foreign(job, &loaded.scenario.robot.profile())?;
     inputs.extend(loaded.files());
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let staged = Staged::begin(&job.out_dir, &inputs)?;
@@ -330,5 +354,68 @@ pub fn run_job(job: &ScoreJob, progress: &Progress) -> Result<ScoreReport> {
         evaluation,
         files,
         observability: truth.observability.is_some(),
+    })
+}
+
+/// The value of a grid_map's `traversability` layer (elevation_mapping's convention: 1 fully traversable, 0
+/// not) at and above which a cell is drivable.
+pub const GRID_MAP_TRAVERSABLE_AT: f32 = 0.5;
+
+/// A grid_map's layers as another mapper's arrays: `elevation` (metres) and `variance` (m^2) as they are, and
+/// each cell's decision: unknown without an elevation; else, where a `traversability` layer has a value,
+/// traversable at [`GRID_MAP_TRAVERSABLE_AT`] or above and blocked below; else by the terrain step rule (the
+/// paper's: the cell's rise over the lowest elevation of its 3 x 3 neighbourhood against the robot's step,
+/// [`oeg::step_decision`]). A grid map has no occupancy.
+///
+/// # Errors
+/// No `elevation` layer, in words.
+pub fn grid_map_foreign(
+    grid: &oeg::GridMapLayers,
+    profile: &oeg::RobotProfile,
+) -> std::result::Result<ForeignMap, String> {
+    let layer = |name: &str| grid.layers.iter().find(|(n, _)| n == name).map(|(_, v)| v);
+    let Some(elevation) = layer("elevation") else {
+        let names: Vec<&str> = grid.layers.iter().map(|(n, _)| n.as_str()).collect();
+        return Err(format!("no `elevation` layer (it has {})", names.join(", ")));
+    };
+    let traversability = layer("traversability");
+    let (rows, cols) = (grid.rows, grid.cols);
+    let at = |r: usize, c: usize| elevation[r * cols + c];
+    let decisions = (0..rows * cols)
+        .map(|k| {
+            let (r, c) = (k / cols, k % cols);
+            let e = at(r, c);
+            if !e.is_finite() {
+                return oeg::Traversability::Unknown;
+            }
+            if let Some(t) = traversability.map(|t| t[k]).filter(|t| t.is_finite()) {
+                return if t >= GRID_MAP_TRAVERSABLE_AT {
+                    oeg::Traversability::Traversable
+                } else {
+                    oeg::Traversability::Blocked
+                };
+            }
+            let mut ground = e;
+            for nr in r.saturating_sub(1)..(r + 2).min(rows) {
+                for nc in c.saturating_sub(1)..(c + 2).min(cols) {
+                    let n = at(nr, nc);
+                    if n.is_finite() {
+                        ground = ground.min(n);
+                    }
+                }
+            }
+            oeg::step_decision(e - ground, 0.0, oeg::TraversabilityRule::Terrain, profile)
+        })
+        .collect();
+    let widen = |v: &Vec<f32>| v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>();
+    Ok(ForeignMap {
+        origin_xy_m: grid.origin_xy_m,
+        resolution_m: grid.resolution_m,
+        rows,
+        cols,
+        decisions,
+        elevation_m: Some(widen(elevation)),
+        variance_m2: layer("variance").map(widen),
+        occupancy: None,
     })
 }

@@ -112,6 +112,10 @@ impl<'a> CdrReader<'a> {
         }
     }
 
+    pub(crate) fn u16(&mut self, field: &str) -> CdrResult<u16> {
+        Ok(u16::from_le_bytes(self.array(field)?))
+    }
+
     pub(crate) fn u32(&mut self, field: &str) -> CdrResult<u32> {
         Ok(u32::from_le_bytes(self.array(field)?))
     }
@@ -144,6 +148,18 @@ impl<'a> CdrReader<'a> {
         Ok(n)
     }
 
+    /// A `float32[]` of at most `max` elements.
+    pub(crate) fn f32s_within(&mut self, field: &str, max: u64) -> CdrResult<Vec<f32>> {
+        let n = self.sequence_len(field, 4)?;
+        if n as u64 > max {
+            return Err(error(
+                field,
+                format!("{n} values, over the {max} this reader takes"),
+            ));
+        }
+        (0..n).map(|_| self.f32(field)).collect()
+    }
+
     pub(crate) fn string(&mut self, field: &str) -> CdrResult<String> {
         let n = self.sequence_len(field, 1)?;
         let bytes = self.take(n, 1, field)?;
@@ -164,8 +180,7 @@ impl<'a> CdrReader<'a> {
 
     /// A `float32[]`.
     pub(crate) fn f32s(&mut self, field: &str) -> CdrResult<Vec<f32>> {
-        let n = self.sequence_len(field, 4)?;
-        (0..n).map(|_| self.f32(field)).collect()
+        self.f32s_within(field, u64::MAX)
     }
 }
 

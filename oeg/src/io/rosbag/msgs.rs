@@ -15,6 +15,8 @@ pub(crate) const LASER_SCAN: &str = "sensor_msgs/msg/LaserScan";
 pub(crate) const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
 /// `nav_msgs/Odometry`.
 pub(crate) const ODOMETRY: &str = "nav_msgs/msg/Odometry";
+/// `grid_map_msgs/GridMap`.
+pub(crate) const GRID_MAP: &str = "grid_map_msgs/msg/GridMap";
 
 /// Whether a schema's name (`package/msg/Name`, or `package/Name` as ROS 1 and some tools write it) is `kind`.
 pub(crate) fn is_type(name: &str, kind: &str) -> bool {
