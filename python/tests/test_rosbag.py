@@ -22,6 +22,7 @@ rosbag2 = pytest.importorskip("rosbags.rosbag2", reason="the rosbags package is 
 typesys = pytest.importorskip("rosbags.typesys", reason="the rosbags package is not installed (pip install rosbags)")
 
 TS = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
+TS_ANY: Any = None
 
 
 def _fails(*args: str) -> str:
@@ -48,7 +49,7 @@ def test_a_recorded_bag_reads_in_rosbags_with_its_clouds_and_transforms(tmp_path
         topics = {c.topic: c.msgtype for c in reader.connections}
         assert topics["/laser_left/points"] == "sensor_msgs/msg/PointCloud2"
         assert topics["/tf"] == topics["/tf_static"] == "tf2_msgs/msg/TFMessage"
-        for conn, _, raw in reader.messages():
+        for conn, _, raw in reader.messages(connections=[c for c in reader.connections if not c.topic.startswith("/truth")]):
             msg = TS.deserialize_cdr(raw, conn.msgtype)
             if conn.msgtype.endswith("PointCloud2"):
                 assert msg.point_step == 12 and [f.name for f in msg.fields] == ["x", "y", "z"]
@@ -57,6 +58,20 @@ def test_a_recorded_bag_reads_in_rosbags_with_its_clouds_and_transforms(tmp_path
                 frames |= {(t.header.frame_id, t.child_frame_id) for t in msg.transforms}
     # corridor_lasers' lasers return every beam: each ray is a point.
     assert points == num_rays
+    # The truth at the end, as a GridMap (its type read from the bag's own schema) and an OccupancyGrid that
+    # agree: a truly blocked cell is 0 in `traversability` and 100 in the occupancy grid.
+    with rosbag2.Reader(bag) as reader:
+        ts = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
+        grid_conn = next(c for c in reader.connections if c.topic == "/truth/grid_map")
+        ts.register(typesys.get_types_from_msg(grid_conn.msgdef.data, grid_conn.msgtype))
+        truth = {c.topic: TS_ANY for c in reader.connections if c.topic.startswith("/truth")}
+        for conn, _, raw in reader.messages(connections=[c for c in reader.connections if c.topic in truth]):
+            truth[conn.topic] = ts.deserialize_cdr(raw, conn.msgtype)
+    grid, occupancy = truth["/truth/grid_map"], truth["/truth/occupancy"]
+    assert grid.layers == ["elevation", "traversability"]
+    blocked_in_grid = int(np.count_nonzero(grid.data[1].data == 0.0))
+    assert blocked_in_grid == int(np.count_nonzero(occupancy.data == 100)) > 0
+    assert occupancy.info.width * occupancy.info.height == grid.data[0].data.size
     assert {("map", "odom"), ("odom", "base_link"), ("base_link", "laser_left")} <= frames
     # Mapped in the odom frame (the estimated pose), the bag gives the map of the same scans as a scan graph.
     graph = tmp_path / "corridor.graph"

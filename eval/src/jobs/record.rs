@@ -26,7 +26,8 @@ pub enum RecordFormat {
     /// A ROS 2 bag (a folder with an MCAP file and `metadata.yaml`): each sensor's hits as
     /// `sensor_msgs/PointCloud2` on `/<sensor>/points` in the sensor's frame, and the poses as `/tf`
     /// (`map` -> `odom`: the true pose's correction of the estimated one; `odom` -> `base_link`: the estimated
-    /// pose) and `/tf_static` (`base_link` -> each sensor). No-return rays are not written: a cloud holds points.
+    /// pose) and `/tf_static` (`base_link` -> each sensor); at the end, the truth as `/truth/grid_map` and
+    /// `/truth/occupancy`. No-return rays are not written: a cloud holds points.
     Rosbag2,
     /// The DynamicMap benchmark's unified format (a folder): `pcd/NNNNNN.pcd` a scan, its hits in the world
     /// frame at the estimated pose, `VIEWPOINT` the sensor's pose, and each point's label in `intensity` (1: the
@@ -100,6 +101,7 @@ fn record_mcap(
 /// Records every scan of `sim` into a ROS 2 bag folder at `out` ([`RecordFormat::Rosbag2`]); returns the scans
 /// written and the no-return rays left out.
 fn record_rosbag2(
+    loaded: &scenario::LoadedScenario,
     sim: &mut Simulation,
     header: &LogHeader,
     out: &Path,
@@ -161,8 +163,48 @@ fn record_rosbag2(
         num_scans += 1;
         progress.inc(1);
     }
+    write_truth(
+        &mut bag,
+        &crate::pipeline::truth_of(loaded, sim.world(), progress)?,
+        sim.world().time_s(),
+    )?;
     bag.finish()?;
     Ok((num_scans, left_out))
+}
+
+/// The static world's truth (people left out, as a run's recording has it) at the end of a bag, in the `map`
+/// frame: `/truth/grid_map` (a `grid_map_msgs/GridMap` of the layers `elevation`, NaN off the terrain, and
+/// `traversability`, 1 drivable and 0 truly blocked) and `/truth/occupancy` (a `nav_msgs/OccupancyGrid`: 100
+/// truly blocked, 0 drivable, -1 off the terrain). `oeg score --grid-map` scores the first as a perfect map.
+fn write_truth(bag: &mut oeg::BagWriter, truth: &sim::truth::TruthRaster, time_s: f64) -> Result<()> {
+    let region = truth.window.region();
+    let (x, y) = truth.window.min_corner_m();
+    let raster = oeg::BagRaster {
+        frame: "map".into(),
+        stamp_ns: (time_s * 1e9).round() as i64,
+        origin_xy_m: [x, y],
+        resolution_m: truth.window.resolution_m(),
+        rows: region.num_y as usize,
+        cols: region.num_x as usize,
+    };
+    let elevation: Vec<f32> = truth.cells.iter().map(|c| c.elevation_m).collect();
+    let traversability: Vec<f32> = (0..truth.cells.len())
+        .map(|k| if truth.truly_blocked(k) { 0.0 } else { 1.0 })
+        .collect();
+    bag.grid_map(
+        "/truth/grid_map",
+        &raster,
+        &[("elevation", &elevation), ("traversability", &traversability)],
+    )?;
+    let occupancy: Vec<i8> = (0..truth.cells.len())
+        .map(|k| match (elevation[k].is_nan(), truth.truly_blocked(k)) {
+            (true, _) => -1,
+            (false, true) => 100,
+            (false, false) => 0,
+        })
+        .collect();
+    bag.occupancy_grid("/truth/occupancy", &raster, &occupancy)?;
+    Ok(())
 }
 
 /// Records every scan of `sim` into a DynamicMap sequence folder at `out` ([`RecordFormat::DynamicMap`]);
@@ -274,7 +316,7 @@ pub fn record(
             (scans.len() as u64, left_out)
         }
         RecordFormat::Mcap => (record_mcap(&loaded, &mut sim, &header, out, progress)?, 0),
-        RecordFormat::Rosbag2 => record_rosbag2(&mut sim, &header, out, progress)?,
+        RecordFormat::Rosbag2 => record_rosbag2(&loaded, &mut sim, &header, out, progress)?,
         RecordFormat::DynamicMap => record_dynamicmap(&mut sim, &header, out, progress)?,
     };
     progress.finish();

@@ -229,6 +229,24 @@ impl CdrWriter {
         self.u32(u32::try_from(n).unwrap_or(u32::MAX));
     }
 
+    pub(crate) fn u16(&mut self, v: u16) {
+        self.align(2);
+        self.out.extend_from_slice(&v.to_le_bytes());
+    }
+
+    pub(crate) fn f32(&mut self, v: f32) {
+        self.align(4);
+        self.out.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// A `float32[]`.
+    pub(crate) fn f32s(&mut self, v: &[f32]) {
+        self.len(v.len());
+        for x in v {
+            self.out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+
     pub(crate) fn string(&mut self, s: &str) {
         self.len(s.len() + 1);
         self.out.extend_from_slice(s.as_bytes());

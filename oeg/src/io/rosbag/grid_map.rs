@@ -168,6 +168,24 @@ fn read_layer(r: &mut CdrReader, k: usize) -> CdrResult<Layer> {
     })
 }
 
+/// A layer stored from `start` in grid_map's circular buffer of `rows_g x cols_g`, as an array on the world's
+/// axes: output row `row` (y up) and column `col` (x up) are grid_map's unwrapped `(i, j)` counted back.
+fn unwrap(a: &Layer, (rows_g, cols_g): (usize, usize), start: (usize, usize)) -> Vec<f32> {
+    let mut out = vec![f32::NAN; rows_g * cols_g];
+    for row in 0..cols_g {
+        let sj = (cols_g - 1 - row + start.1) % cols_g;
+        for col in 0..rows_g {
+            let si = (rows_g - 1 - col + start.0) % rows_g;
+            out[row * rows_g + col] = if a.column_major {
+                a.values[sj * rows_g + si]
+            } else {
+                a.values[si * cols_g + sj]
+            };
+        }
+    }
+    out
+}
+
 fn decode(message: &[u8]) -> CdrResult<GridMapLayers> {
     let mut r = CdrReader::new(message)?;
     let sec = r.i32("header.stamp.sec")?;
@@ -248,22 +266,7 @@ fn decode(message: &[u8]) -> CdrResult<GridMapLayers> {
                 ),
             ));
         }
-        // Output row `row` (y up) and column `col` (x up) are grid_map's unwrapped (i, j) counted back.
-        let mut out = vec![f32::NAN; rows_g * cols_g];
-        for row in 0..cols_g {
-            let j = cols_g - 1 - row;
-            let sj = (j + start.1) % cols_g;
-            for col in 0..rows_g {
-                let i = rows_g - 1 - col;
-                let si = (i + start.0) % rows_g;
-                out[row * rows_g + col] = if a.column_major {
-                    a.values[sj * rows_g + si]
-                } else {
-                    a.values[si * cols_g + sj]
-                };
-            }
-        }
-        layers.push((name, out));
+        layers.push((name, unwrap(&a, (rows_g, cols_g), start)));
     }
     Ok(GridMapLayers {
         frame_id: super::msgs::frame_name(&frame_id),

@@ -25,6 +25,7 @@ mod container;
 mod grid_map;
 mod msgs;
 mod scans;
+mod schemas;
 mod tf;
 mod write;
 
@@ -38,7 +39,7 @@ pub use self::grid_map::{GridMapLayers, MAX_GRID_MAP_CELLS, read_grid_map};
 use self::msgs::{ODOMETRY, TF_MESSAGE, is_type};
 use self::scans::{ScanReader, range_topics, stamp_or_log_time};
 use self::tf::TfTree;
-pub use self::write::{BagTransform, BagWriter, CloudPrecision};
+pub use self::write::{BagRaster, BagTransform, BagWriter, CloudPrecision};
 use super::read_file;
 use crate::error::{Error, Result};
 use crate::scan::Scan;

@@ -17,6 +17,8 @@ pub(crate) const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
 pub(crate) const ODOMETRY: &str = "nav_msgs/msg/Odometry";
 /// `grid_map_msgs/GridMap`.
 pub(crate) const GRID_MAP: &str = "grid_map_msgs/msg/GridMap";
+/// `nav_msgs/OccupancyGrid`.
+pub(crate) const OCCUPANCY_GRID: &str = "nav_msgs/msg/OccupancyGrid";
 
 /// Whether a schema's name (`package/msg/Name`, or `package/Name` as ROS 1 and some tools write it) is `kind`.
 pub(crate) fn is_type(name: &str, kind: &str) -> bool {
@@ -40,10 +42,15 @@ impl Header {
         })
     }
 
-    fn write(&self, w: &mut CdrWriter) {
+    pub(crate) fn write(&self, w: &mut CdrWriter) {
+        self.write_stamp(w);
+        w.string(&self.frame_id);
+    }
+
+    /// The stamp alone, as `builtin_interfaces/Time`.
+    pub(crate) fn write_stamp(&self, w: &mut CdrWriter) {
         w.i32(self.stamp_ns.div_euclid(1_000_000_000) as i32);
         w.u32(self.stamp_ns.rem_euclid(1_000_000_000) as u32);
-        w.string(&self.frame_id);
     }
 }
 
@@ -356,7 +363,7 @@ fn read_pose(r: &mut CdrReader, field: &str) -> CdrResult<Isometry3<f64>> {
     ))
 }
 
-fn write_pose(w: &mut CdrWriter, pose: &Isometry3<f64>) {
+pub(crate) fn write_pose(w: &mut CdrWriter, pose: &Isometry3<f64>) {
     let (t, q) = (pose.translation.vector, pose.rotation.quaternion());
     for x in [t.x, t.y, t.z, q.i, q.j, q.k, q.w] {
         w.f64(x);
@@ -388,55 +395,6 @@ pub(crate) fn decode_odometry(data: &[u8]) -> CdrResult<TransformStamped> {
     let mut r = CdrReader::new(data)?;
     TransformStamped::read(&mut r, "pose.pose")
 }
-
-/// The definitions a bag's schema records carry (`ros2msg`): the message's own, then each message it uses,
-/// after a line of 80 `=` and `MSG: package/Name`, as `ros2 bag record` writes them.
-pub(crate) fn schema_text(name: &str) -> String {
-    let (own, deps): (&str, &[(&str, &str)]) = if name == POINT_CLOUD2 {
-        (
-            "std_msgs/Header header\nuint32 height\nuint32 width\nsensor_msgs/PointField[] fields\nbool is_bigendian\n\
-             uint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n",
-            &[
-                ("std_msgs/Header", HEADER),
-                ("builtin_interfaces/Time", TIME),
-                (
-                    "sensor_msgs/PointField",
-                    "uint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\nuint8 UINT32=6\n\
-                     uint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n",
-                ),
-            ],
-        )
-    } else {
-        (
-            "geometry_msgs/TransformStamped[] transforms\n",
-            &[
-                (
-                    "geometry_msgs/TransformStamped",
-                    "std_msgs/Header header\nstring child_frame_id\nTransform transform\n",
-                ),
-                ("std_msgs/Header", HEADER),
-                ("builtin_interfaces/Time", TIME),
-                (
-                    "geometry_msgs/Transform",
-                    "Vector3 translation\nQuaternion rotation\n",
-                ),
-                ("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
-                (
-                    "geometry_msgs/Quaternion",
-                    "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n",
-                ),
-            ],
-        )
-    };
-    let mut text = own.to_string();
-    for (dep, body) in deps {
-        text.push_str(&format!("{}\nMSG: {dep}\n{body}", "=".repeat(80)));
-    }
-    text
-}
-
-const HEADER: &str = "builtin_interfaces/Time stamp\nstring frame_id\n";
-const TIME: &str = "int32 sec\nuint32 nanosec\n";
 
 #[cfg(test)]
 mod tests {

@@ -7,7 +7,11 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Vector3};
 
-use super::msgs::{self, Header, POINT_CLOUD2, PointCloud2, TF_MESSAGE, TransformStamped};
+use super::cdr::CdrWriter;
+use super::msgs::{
+    self, GRID_MAP, Header, OCCUPANCY_GRID, POINT_CLOUD2, PointCloud2, TF_MESSAGE, TransformStamped,
+};
+use super::schemas;
 use crate::error::{Error, Result};
 use crate::io::write_atomically;
 
@@ -31,6 +35,32 @@ pub enum CloudPrecision {
     Float32,
     /// FLOAT64 (24 bytes a point): coordinates kept to the bit.
     Float64,
+}
+
+/// The grid of a raster written to a bag ([`BagWriter::grid_map`], [`BagWriter::occupancy_grid`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagRaster {
+    /// The frame.
+    pub frame: String,
+    /// Nanoseconds since the epoch.
+    pub stamp_ns: i64,
+    /// World x and y of the lower-left corner of cell `[0, 0]`, metres.
+    pub origin_xy_m: [f64; 2],
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// Rows (along y).
+    pub rows: usize,
+    /// Columns (along x).
+    pub cols: usize,
+}
+
+impl BagRaster {
+    fn header(&self) -> Header {
+        Header {
+            stamp_ns: self.stamp_ns,
+            frame_id: self.frame.clone(),
+        }
+    }
 }
 
 /// A ROS 2 bag being written, held in memory until [`BagWriter::finish`] writes it whole.
@@ -96,7 +126,7 @@ impl BagWriter {
             None => {
                 let id = self
                     .writer
-                    .add_schema(kind, "ros2msg", msgs::schema_text(kind).as_bytes())
+                    .add_schema(kind, "ros2msg", schemas::schema_text(kind).as_bytes())
                     .map_err(|e| mcap_error(&self.folder, &e))?;
                 self.schemas.insert(kind, id);
                 id
@@ -169,6 +199,87 @@ impl BagWriter {
             })
             .collect();
         self.write(topic, TF_MESSAGE, stamp_ns, &msgs::encode_tf(&stamped))
+    }
+
+    /// A `grid_map_msgs/GridMap` of `layers` on `topic`: arrays of `raster.rows` x `raster.cols`, row 0 the min-y
+    /// row and column 0 the min-x column (the layout [`crate::read_grid_map`] reads back), written as grid_map
+    /// does (column-major, the circular buffer at its start).
+    ///
+    /// # Errors
+    /// [`Error::Parse`] if `topic` already carries another type, or a layer is not `rows x cols` values.
+    pub fn grid_map(&mut self, topic: &str, raster: &BagRaster, layers: &[(&str, &[f32])]) -> Result<()> {
+        let (rows, cols) = (raster.rows, raster.cols);
+        if let Some((name, _)) = layers.iter().find(|(_, v)| v.len() != rows * cols) {
+            return Err(Error::parse(
+                &self.folder,
+                format!("layer {name} is not {rows} x {cols} values"),
+            ));
+        }
+        let mut w = CdrWriter::new();
+        raster.header().write(&mut w);
+        let r = raster.resolution_m;
+        let (length_x, length_y) = (cols as f64 * r, rows as f64 * r);
+        w.f64(r);
+        w.f64(length_x);
+        w.f64(length_y);
+        let centre = Isometry3::translation(
+            raster.origin_xy_m[0] + length_x / 2.0,
+            raster.origin_xy_m[1] + length_y / 2.0,
+            0.0,
+        );
+        msgs::write_pose(&mut w, &centre);
+        w.len(layers.len());
+        for (name, _) in layers {
+            w.string(name);
+        }
+        w.len(0);
+        w.len(layers.len());
+        // grid_map's (i, j) runs from the +x, +y corner: i along -x (its rows), j along -y (its columns).
+        let (n_i, n_j) = (cols, rows);
+        for (_, values) in layers {
+            w.len(2);
+            for (label, size, stride) in [("column_index", n_j, n_i * n_j), ("row_index", n_i, n_i)] {
+                w.string(label);
+                w.u32(size as u32);
+                w.u32(stride as u32);
+            }
+            w.u32(0);
+            let mut stored = Vec::with_capacity(n_i * n_j);
+            for j in 0..n_j {
+                for i in 0..n_i {
+                    stored.push(values[(n_j - 1 - j) * cols + (n_i - 1 - i)]);
+                }
+            }
+            w.f32s(&stored);
+        }
+        w.u16(0);
+        w.u16(0);
+        self.write(topic, GRID_MAP, raster.stamp_ns, &w.finish())
+    }
+
+    /// A `nav_msgs/OccupancyGrid` of `occupancy` (0 to 100, -1 unknown; `rows x cols`, row 0 the min-y row) on
+    /// `topic`.
+    ///
+    /// # Errors
+    /// [`Error::Parse`] if `topic` already carries another type, or `occupancy` is not `rows x cols` values.
+    pub fn occupancy_grid(&mut self, topic: &str, raster: &BagRaster, occupancy: &[i8]) -> Result<()> {
+        if occupancy.len() != raster.rows * raster.cols {
+            return Err(Error::parse(
+                &self.folder,
+                format!("{topic}: not {} x {} cells", raster.rows, raster.cols),
+            ));
+        }
+        let mut w = CdrWriter::new();
+        let header = raster.header();
+        header.write(&mut w);
+        header.write_stamp(&mut w);
+        w.f32(raster.resolution_m as f32);
+        w.u32(raster.cols as u32);
+        w.u32(raster.rows as u32);
+        let origin = Isometry3::translation(raster.origin_xy_m[0], raster.origin_xy_m[1], 0.0);
+        msgs::write_pose(&mut w, &origin);
+        w.bytes(&occupancy.iter().map(|v| *v as u8).collect::<Vec<u8>>());
+        self.write(topic, OCCUPANCY_GRID, raster.stamp_ns, &w.finish())
     }
 
     /// Writes the bag: `<folder>/<name>_0.mcap` and `<folder>/metadata.yaml`, each whole or not at all.
