@@ -64,6 +64,7 @@ pub use traversability::{
 
 // Files: real range data in (OctoMap scan graphs, PCL point clouds), maps out and back, and the framing and
 // atomic writes the testbed's own files share.
+pub use io::dynamicmap::read_dynamicmap;
 pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_graph};
 pub use io::kitti::{kitti_scan_files, read_kitti};
 pub use io::mapfile::{

@@ -104,7 +104,8 @@ fn a_dynamicmap_frame_is_hits_from_its_viewpoint_to_its_world_points() {
         viewpoint,
         points: vec![Point3::new(12.0, 5.0, 0.0), Point3::new(10.0, 8.0, 0.5)],
     };
-    let path = dir.join("000000.pcd");
+    std::fs::create_dir_all(dir.join("pcd")).expect("frames");
+    let path = dir.join("pcd/000000.pcd");
     oeg::write_pcd(&path, &cloud, PcdEncoding::Binary).expect("written");
     let options = PcdOptions {
         points: PcdPoints::World,
@@ -115,6 +116,11 @@ fn a_dynamicmap_frame_is_hits_from_its_viewpoint_to_its_world_points() {
     // The points stay where they are: not turned nor moved by the viewpoint a second time.
     let first = scan.origin_in_world + scan.rays[0].offset_in_world.cast::<f64>();
     assert!((first - Point3::new(12.0, 5.0, 0.0)).norm() < 1e-6);
+    // The sequence's folder reads its frames so.
+    let sequence = oeg::read_dynamicmap(&dir, SensorModel::laser(), 1 << 20).expect("readable");
+    assert_eq!(sequence.len(), 1);
+    assert_eq!(sequence[0].1.rays, scan.rays);
+    assert!(oeg::read_dynamicmap(&dir.join("pcd"), SensorModel::laser(), 1 << 20).is_err());
     let placed = oeg::read_pcd_scan(&path, &PcdOptions::default()).expect("readable");
     let moved = placed.origin_in_world + placed.rays[0].offset_in_world.cast::<f64>();
     assert!(

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
-use super::read_file;
+use super::{read_file, sorted_files};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
 use crate::sensor::SensorModel;
@@ -65,23 +65,7 @@ pub fn read_kitti(folder: &Path, sensor: SensorModel, limit_bytes: u64) -> Resul
 /// # Errors
 /// [`Error::Io`] for a folder that cannot be listed, [`Error::Parse`] when it holds no `.bin` file.
 pub fn kitti_scan_files(folder: &Path) -> Result<Vec<PathBuf>> {
-    let dir = folder.join("velodyne");
-    let io = |source| Error::Io {
-        path: dir.clone(),
-        source,
-    };
-    let mut files = Vec::new();
-    for entry in std::fs::read_dir(&dir).map_err(io)? {
-        let path = entry.map_err(io)?.path();
-        if path.extension().is_some_and(|e| e == "bin") {
-            files.push(path);
-        }
-    }
-    files.sort();
-    if files.is_empty() {
-        return Err(Error::parse(&dir, "no .bin scan in the folder"));
-    }
-    Ok(files)
+    sorted_files(&folder.join("velodyne"), "bin")
 }
 
 /// `poses.txt` in the sequence's folder, else `poses/<sequence>.txt` two folders up.

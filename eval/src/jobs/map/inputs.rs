@@ -152,30 +152,6 @@ fn input_bytes(path: &Path, format: InputFormat) -> Result<u64> {
     Ok(meta.len())
 }
 
-/// The frames of a DynamicMap sequence, `pcd/*.pcd` in name order.
-fn dynamicmap_frames(folder: &Path) -> Result<Vec<PathBuf>> {
-    let dir = folder.join("pcd");
-    let io = |source| EvalError::Io {
-        path: dir.clone(),
-        source,
-    };
-    let mut frames = Vec::new();
-    for entry in std::fs::read_dir(&dir).map_err(io)? {
-        let path = entry.map_err(io)?.path();
-        if path.extension().is_some_and(|e| e == "pcd") {
-            frames.push(path);
-        }
-    }
-    frames.sort();
-    if frames.is_empty() {
-        return Err(EvalError::Input {
-            path: dir,
-            message: "no .pcd frame in the folder".into(),
-        });
-    }
-    Ok(frames)
-}
-
 /// Reads every input into scans, each with its [`ScanSource`], before anything is written, so a bad input
 /// leaves no partial output.
 ///
@@ -250,28 +226,16 @@ pub fn read_inputs(job: &MapJob) -> Result<Inputs> {
                     .skipped
                     .extend(bag.skipped.into_iter().map(|s| (path.clone(), s)));
             }
-            InputFormat::Kitti => {
-                let read = oeg::read_kitti(path, job.graph_sensor, limit)?;
+            InputFormat::DynamicMap | InputFormat::Kitti => {
+                let read = if format == InputFormat::Kitti {
+                    oeg::read_kitti(path, job.graph_sensor, limit)?
+                } else {
+                    oeg::read_dynamicmap(path, job.graph_sensor, limit)?
+                };
                 scans.extend(read.into_iter().map(|(file, scan)| {
                     let name = file.file_name().unwrap_or_default().to_string_lossy().to_string();
-                    (source(path, format!("scan {name}")), scan)
+                    (source(path, format!("frame {name}")), scan)
                 }));
-            }
-            InputFormat::DynamicMap => {
-                let options = oeg::PcdOptions {
-                    points: oeg::PcdPoints::World,
-                    sensor: job.graph_sensor,
-                    ..job.pcd
-                };
-                for frame in dynamicmap_frames(path)? {
-                    let scan = oeg::read_pcd_scan_within(&frame, &options, limit)?;
-                    let name = frame
-                        .file_name()
-                        .unwrap_or_default()
-                        .to_string_lossy()
-                        .to_string();
-                    scans.push((source(path, format!("frame {name}")), scan));
-                }
             }
         }
     }

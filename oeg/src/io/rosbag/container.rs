@@ -20,7 +20,7 @@ pub(super) struct Channel {
 #[derive(Default)]
 pub(super) struct Channels {
     schemas: HashMap<u16, String>,
-    pub(super) channels: HashMap<u16, Channel>,
+    pub(super) channels: BTreeMap<u16, Channel>,
 }
 
 /// The bag's files: the `.mcap` itself, or a folder's `metadata.yaml`'s `relative_file_paths`.

@@ -196,7 +196,7 @@ fn parse_files(
         None => {
             return Err(Error::parse(
                 path,
-                "the transforms name neither `map` nor `odom`: choose the map frame (`input.bag_map_frame` of \
+                "the transforms name neither `map` nor `odom`: choose the map frame (`input.bag.map_frame` of \
                  `oeg map`, `BagOptions::map_frame`)",
             ));
         }
