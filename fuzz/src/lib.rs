@@ -42,7 +42,7 @@ pub enum Target {
     Path,
     /// A path file checked by `oeg check-path` against `tests/scenes/nav_wall.toml`.
     CheckPath,
-    /// A ROS 2 bag's MCAP file (chunks, CDR messages, the transform tree), its scans placed in `odom`.
+    /// A ROS 2 bag's MCAP file (chunks, CDR messages, the transform tree) as scans, and its grid map.
     Bag,
 }
 
@@ -181,18 +181,22 @@ pub fn run(target: Target, data: &[u8]) -> bool {
         Target::Truth => std::str::from_utf8(data).is_ok_and(truth_of_text),
         Target::Path => oeg_eval::navigation::external::parse_path(path, data, PATH_EXTENT).is_ok(),
         Target::CheckPath => check_path(path, data),
-        // As `oeg map` reads it, and with `/odom`'s odometry in the transform tree (refused without that topic).
-        Target::Bag => [Vec::new(), vec!["/odom".to_string()]]
-            .into_iter()
-            .map(|odometry_topics| {
-                let options = oeg::BagOptions {
-                    odometry_topics,
-                    tf_tolerance_s: 0.5,
-                    ..oeg::BagOptions::default()
-                };
-                oeg::parse_bag(path, data, &options, MAP_LIMIT_BYTES).is_ok()
-            })
-            .fold(false, |a, b| a | b),
+        // As `oeg map` reads it, and with `/odom`'s odometry in the transform tree (refused without that topic);
+        // and its grid map as `oeg score --grid-map` reads it.
+        Target::Bag => {
+            oeg::parse_grid_map(path, data, "/elevation_map", None, MAP_LIMIT_BYTES).is_ok()
+                | [Vec::new(), vec!["/odom".to_string()]]
+                    .into_iter()
+                    .map(|odometry_topics| {
+                        let options = oeg::BagOptions {
+                            odometry_topics,
+                            tf_tolerance_s: 0.5,
+                            ..oeg::BagOptions::default()
+                        };
+                        oeg::parse_bag(path, data, &options, MAP_LIMIT_BYTES).is_ok()
+                    })
+                    .fold(false, |a, b| a | b)
+        }
     }
 }
 

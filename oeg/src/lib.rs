@@ -81,5 +81,5 @@ pub use io::pcd::{
 pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
 pub use io::rosbag::{
     Bag, BagOptions, BagRaster, BagScan, BagSkip, BagTransform, BagWriter, CloudPrecision, GridMapLayers,
-    MAX_GRID_MAP_CELLS, parse_bag, read_bag, read_bag_within, read_grid_map,
+    MAX_GRID_MAP_CELLS, parse_bag, parse_grid_map, read_bag, read_bag_within, read_grid_map,
 };

@@ -6,7 +6,7 @@
 //! centred at `x = px + lx / 2 - (i + 0.5) r`, `y = py + ly / 2 - (j + 0.5) r`, and is stored at
 //! `((i + outer_start_index) mod rows, (j + inner_start_index) mod cols)` (`GridMapRosConverter::toMessage`).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::cdr::{CdrError, CdrReader, CdrResult};
 use super::container::{Channels, bag_files, for_each_message};
@@ -44,16 +44,46 @@ pub const MAX_GRID_MAP_CELLS: u64 = 1 << 26;
 /// another type, a malformed message, a layer whose size is not the geometry's, a rotated map (grid_map has
 /// no orientation).
 pub fn read_grid_map(path: &Path, topic: &str, at_s: Option<f64>, limit_bytes: u64) -> Result<GridMapLayers> {
-    let mut chosen: Option<(u64, Vec<u8>, std::path::PathBuf)> = None;
-    let mut first_log_ns = u64::MAX;
-    let mut kinds = Vec::new();
-    let files = bag_files(path)?;
     let mut data = Vec::new();
-    for f in &files {
+    for f in &bag_files(path)? {
         data.push((f.clone(), read_file(f, limit_bytes)?));
     }
+    from_files(path, &data, topic, at_s, limit_bytes)
+}
+
+/// [`read_grid_map`] for one MCAP file's bytes, `data`, named `path` in errors.
+///
+/// # Errors
+/// As [`read_grid_map`].
+pub fn parse_grid_map(
+    path: &Path,
+    data: &[u8],
+    topic: &str,
+    at_s: Option<f64>,
+    limit_bytes: u64,
+) -> Result<GridMapLayers> {
+    from_files(
+        path,
+        &[(path.to_path_buf(), data.to_vec())],
+        topic,
+        at_s,
+        limit_bytes,
+    )
+}
+
+/// The grid map of a bag from its files' bytes, in order.
+fn from_files(
+    path: &Path,
+    data: &[(PathBuf, Vec<u8>)],
+    topic: &str,
+    at_s: Option<f64>,
+    limit_bytes: u64,
+) -> Result<GridMapLayers> {
+    let mut chosen: Option<(u64, Vec<u8>, PathBuf)> = None;
+    let mut first_log_ns = u64::MAX;
+    let mut kinds = Vec::new();
     // First the bag's first log time (the time origin), then the message.
-    for (file, bytes) in &data {
+    for (file, bytes) in data {
         for_each_message(
             file,
             bytes,
@@ -66,7 +96,7 @@ pub fn read_grid_map(path: &Path, topic: &str, at_s: Option<f64>, limit_bytes: u
         )?;
     }
     let until_ns = at_s.map(|s| first_log_ns.saturating_add((s.max(0.0) * 1e9) as u64));
-    for (file, bytes) in &data {
+    for (file, bytes) in data {
         for_each_message(
             file,
             bytes,

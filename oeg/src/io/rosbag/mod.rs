@@ -35,7 +35,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use self::container::{Channel, Channels, bag_files, for_each_message, topic_list};
-pub use self::grid_map::{GridMapLayers, MAX_GRID_MAP_CELLS, read_grid_map};
+pub use self::grid_map::{GridMapLayers, MAX_GRID_MAP_CELLS, parse_grid_map, read_grid_map};
 use self::msgs::{ODOMETRY, TF_MESSAGE, is_type};
 use self::scans::{ScanReader, range_topics, stamp_or_log_time};
 use self::tf::TfTree;
