@@ -23,8 +23,39 @@ pub(super) struct Channels {
     pub(super) channels: BTreeMap<u16, Channel>,
 }
 
+/// The bytes of the bag's files ([`bag_files`]), in order, at most `limit_bytes` of them together.
+pub(super) fn read_bag_files(path: &Path, limit_bytes: u64) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let mut data = Vec::new();
+    let mut left = limit_bytes;
+    for f in bag_files(path)? {
+        let bytes = crate::io::read_file(&f, left)?;
+        left = left.saturating_sub(bytes.len() as u64);
+        data.push((f, bytes));
+    }
+    Ok(data)
+}
+
+/// The earliest log time of the bag's messages, nanoseconds (`u64::MAX` for a bag without any): the origin of
+/// the times its options count from.
+pub(super) fn first_log_time(data: &[(PathBuf, Vec<u8>)], limit_bytes: u64) -> Result<u64> {
+    let mut first = u64::MAX;
+    for (file, bytes) in data {
+        for_each_message(
+            file,
+            bytes,
+            limit_bytes,
+            &mut Channels::default(),
+            &mut |_, h, _| {
+                first = first.min(h.log_time);
+                Ok(())
+            },
+        )?;
+    }
+    Ok(first)
+}
+
 /// The bag's files: the `.mcap` itself, or a folder's `metadata.yaml`'s `relative_file_paths`.
-pub(super) fn bag_files(path: &Path) -> Result<Vec<PathBuf>> {
+fn bag_files(path: &Path) -> Result<Vec<PathBuf>> {
     if !path.is_dir() {
         return Ok(vec![path.to_path_buf()]);
     }

@@ -9,10 +9,9 @@
 use std::path::{Path, PathBuf};
 
 use super::cdr::{CdrError, CdrReader, CdrResult};
-use super::container::{Channels, bag_files, for_each_message};
+use super::container::{Channels, first_log_time, for_each_message, read_bag_files};
 use super::msgs::{GRID_MAP, is_type};
 use crate::error::{Error, Result};
-use crate::io::read_file;
 
 /// A grid_map's layers as arrays of `rows` x `cols`, row 0 the min-y row and column 0 the min-x column.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,11 +43,13 @@ pub const MAX_GRID_MAP_CELLS: u64 = 1 << 26;
 /// another type, a malformed message, a layer whose size is not the geometry's, a rotated map (grid_map has
 /// no orientation).
 pub fn read_grid_map(path: &Path, topic: &str, at_s: Option<f64>, limit_bytes: u64) -> Result<GridMapLayers> {
-    let mut data = Vec::new();
-    for f in &bag_files(path)? {
-        data.push((f.clone(), read_file(f, limit_bytes)?));
-    }
-    from_files(path, &data, topic, at_s, limit_bytes)
+    from_files(
+        path,
+        &read_bag_files(path, limit_bytes)?,
+        topic,
+        at_s,
+        limit_bytes,
+    )
 }
 
 /// [`read_grid_map`] for one MCAP file's bytes, `data`, named `path` in errors.
@@ -80,22 +81,12 @@ fn from_files(
     limit_bytes: u64,
 ) -> Result<GridMapLayers> {
     let mut chosen: Option<(u64, Vec<u8>, PathBuf)> = None;
-    let mut first_log_ns = u64::MAX;
     let mut kinds = Vec::new();
-    // First the bag's first log time (the time origin), then the message.
-    for (file, bytes) in data {
-        for_each_message(
-            file,
-            bytes,
-            limit_bytes,
-            &mut Channels::default(),
-            &mut |_, h, _| {
-                first_log_ns = first_log_ns.min(h.log_time);
-                Ok(())
-            },
-        )?;
-    }
-    let until_ns = at_s.map(|s| first_log_ns.saturating_add((s.max(0.0) * 1e9) as u64));
+    // A time counts from the bag's first message: read only when one is given.
+    let until_ns = match at_s {
+        Some(s) => Some(first_log_time(data, limit_bytes)?.saturating_add((s.max(0.0) * 1e9) as u64)),
+        None => None,
+    };
     for (file, bytes) in data {
         for_each_message(
             file,

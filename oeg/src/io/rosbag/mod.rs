@@ -34,13 +34,12 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use self::container::{Channel, Channels, bag_files, for_each_message, topic_list};
+use self::container::{Channel, Channels, for_each_message, read_bag_files, topic_list};
 pub use self::grid_map::{GridMapLayers, MAX_GRID_MAP_CELLS, parse_grid_map, read_grid_map};
 use self::msgs::{ODOMETRY, TF_MESSAGE, is_type};
 use self::scans::{ScanReader, range_topics, stamp_or_log_time};
 use self::tf::TfTree;
 pub use self::write::{BagRaster, BagTransform, BagWriter, CloudPrecision};
-use super::read_file;
 use crate::error::{Error, Result};
 use crate::scan::Scan;
 use crate::sensor::SensorModel;
@@ -140,15 +139,7 @@ pub fn read_bag(path: &Path, options: &BagOptions) -> Result<Bag> {
 /// As [`read_bag`], and [`Error::Parse`] for a file or chunk over the limit.
 pub fn read_bag_within(path: &Path, options: &BagOptions, limit_bytes: u64) -> Result<Bag> {
     check_options(path, options)?;
-    let files = bag_files(path)?;
-    let mut data = Vec::with_capacity(files.len());
-    let mut left = limit_bytes;
-    for f in &files {
-        let bytes = read_file(f, left)?;
-        left = left.saturating_sub(bytes.len() as u64);
-        data.push((f.clone(), bytes));
-    }
-    parse_files(path, &data, options, limit_bytes)
+    parse_files(path, &read_bag_files(path, limit_bytes)?, options, limit_bytes)
 }
 
 /// [`read_bag_within`] for one MCAP file's bytes, `data`, named `path` in errors.
