@@ -13,7 +13,7 @@ SECONDS_PER_TARGET="${1:-600}"
 shift || true
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then
-    TARGETS=(graph pcd log map scenario png urdf sweep row npy nav2 truth path check_path bag)
+    TARGETS=(graph pcd log map scenario png urdf sweep row npy nav2 truth path check_path bag kitti)
 fi
 if ! cargo afl --version >/dev/null 2>&1; then
     echo "cargo-afl is not installed: run 'cargo install cargo-afl' first" >&2

@@ -7,7 +7,7 @@
 //! run's `row.json`, the maps `oeg score` reads from other tools: a `.npy` array and a nav2 map (its YAML,
 //! a NUL byte, then its PGM image), and the new doors of a run: the truth of a scenario (its settings fuzzed:
 //! the region, the resolution, the robot's step and grade), a planner's path file, `oeg check-path` on a
-//! fixed scene, and a ROS 2 bag's MCAP file.
+//! fixed scene, a ROS 2 bag's MCAP file, and a KITTI scan with its poses and calibration.
 
 use std::path::{Path, PathBuf};
 
@@ -44,10 +44,12 @@ pub enum Target {
     CheckPath,
     /// A ROS 2 bag's MCAP file (chunks, CDR messages, the transform tree) as scans, and its grid map.
     Bag,
+    /// A KITTI scan: its poses' text, a NUL byte, the calibration's text, a NUL byte, the scan's `.bin` bytes.
+    Kitti,
 }
 
 /// Every target, in the order of the corpus folders.
-pub const TARGETS: [Target; 15] = [
+pub const TARGETS: [Target; 16] = [
     Target::Graph,
     Target::Pcd,
     Target::Log,
@@ -63,6 +65,7 @@ pub const TARGETS: [Target; 15] = [
     Target::Path,
     Target::CheckPath,
     Target::Bag,
+    Target::Kitti,
 ];
 
 /// The most sample points the truth target computes (a larger valid truth is bounded by validation,
@@ -105,6 +108,7 @@ impl Target {
             Self::Path => "path",
             Self::CheckPath => "check_path",
             Self::Bag => "bag",
+            Self::Kitti => "kitti",
         }
     }
 
@@ -181,6 +185,23 @@ pub fn run(target: Target, data: &[u8]) -> bool {
         Target::Truth => std::str::from_utf8(data).is_ok_and(truth_of_text),
         Target::Path => oeg_eval::navigation::external::parse_path(path, data, PATH_EXTENT).is_ok(),
         Target::CheckPath => check_path(path, data),
+        Target::Kitti => {
+            let mut parts = data.splitn(3, |b| *b == 0);
+            let (poses, calib, bin) = (parts.next(), parts.next(), parts.next());
+            let text = |p: Option<&[u8]>| String::from_utf8_lossy(p.unwrap_or_default()).into_owned();
+            let sensor = oeg::SensorModel::laser();
+            (0..2).any(|index| {
+                oeg::parse_kitti_scan(
+                    path,
+                    &text(poses),
+                    &text(calib),
+                    index,
+                    bin.unwrap_or_default(),
+                    sensor,
+                )
+                .is_ok()
+            })
+        }
         // As `oeg map` reads it, and with `/odom`'s odometry in the transform tree (refused without that topic);
         // and its grid map as `oeg score --grid-map` reads it.
         Target::Bag => {

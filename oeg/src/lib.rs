@@ -66,7 +66,7 @@ pub use traversability::{
 // atomic writes the testbed's own files share.
 pub use io::dynamicmap::read_dynamicmap;
 pub use io::graph::{GraphNode, parse_graph, read_graph, read_graph_scans, write_graph};
-pub use io::kitti::{kitti_scan_files, read_kitti};
+pub use io::kitti::{kitti_scan_files, parse_kitti_scan, read_kitti};
 pub use io::mapfile::{
     MapFileHeader, load_map, load_map_within, map_from_bytes, map_to_bytes, read_map_header, save_map,
 };

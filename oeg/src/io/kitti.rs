@@ -60,6 +60,27 @@ pub fn read_kitti(folder: &Path, sensor: SensorModel, limit_bytes: u64) -> Resul
     Ok(out)
 }
 
+/// Scan `index` of a sequence from its files' contents: the poses' and the calibration's text and the scan's
+/// bytes, each named by `path` in errors (what [`read_kitti`] does for every scan, from memory).
+///
+/// # Errors
+/// [`Error::Parse`] for a malformed pose or calibration, no pose `index`, or bytes that are not whole points.
+pub fn parse_kitti_scan(
+    path: &Path,
+    poses: &str,
+    calib: &str,
+    index: usize,
+    bin: &[u8],
+    sensor: SensorModel,
+) -> Result<Scan> {
+    let poses = parse_poses(path, poses)?;
+    let tr = parse_tr(path, calib)?;
+    let camera = poses
+        .get(index)
+        .ok_or_else(|| Error::parse(path, format!("no pose {index}: the file has {}", poses.len())))?;
+    parse_bin(path, bin, tr.inverse() * camera * tr, sensor)
+}
+
 /// The `.bin` files of `folder/velodyne`, sorted by name.
 ///
 /// # Errors
@@ -89,11 +110,22 @@ fn poses_file(folder: &Path) -> Result<PathBuf> {
 }
 
 /// Twelve numbers as a 3 x 4 `[R | t]`, row by row; the rotation made orthonormal (the files round it).
-fn pose_of(v: &[f64]) -> Isometry3<f64> {
+/// `None` when the rotation part is no rotation (far from orthonormal, or too large to make one of).
+fn pose_of(v: &[f64]) -> Option<Isometry3<f64>> {
     let r = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
-    let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
-    Isometry3::from_parts(Translation3::new(v[3], v[7], v[11]), rotation)
+    // A rotation rounded to the file's digits is orthonormal to about 1e-9; a bounded number of iterations
+    // (nalgebra's default loops until it converges, which a garbage matrix never does).
+    let rotation = Rotation3::from_matrix_eps(&r, 1e-12, 100, Rotation3::identity());
+    let orthonormal = (r - rotation.matrix()).norm() < 1e-3;
+    (orthonormal && rotation.matrix().iter().all(|x| x.is_finite())).then(|| {
+        Isometry3::from_parts(
+            Translation3::new(v[3], v[7], v[11]),
+            UnitQuaternion::from_rotation_matrix(&rotation),
+        )
+    })
 }
+
+const NOT_A_ROTATION: &str = "the 3 x 3 part is not a rotation (its rows are not orthonormal)";
 
 /// Twelve finite numbers from `text`, or what is wrong with them.
 fn twelve(text: &str) -> std::result::Result<Vec<f64>, String> {
@@ -116,7 +148,7 @@ fn parse_poses(path: &Path, text: &str) -> Result<Vec<Isometry3<f64>>> {
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(k, l)| {
             twelve(l)
-                .map(|v| pose_of(&v))
+                .and_then(|v| pose_of(&v).ok_or_else(|| NOT_A_ROTATION.to_string()))
                 .map_err(|e| Error::parse(path, format!("line {}: {e}", k + 1)))
         })
         .collect()
@@ -131,7 +163,7 @@ fn parse_tr(path: &Path, text: &str) -> Result<Isometry3<f64>> {
         .ok_or_else(|| Error::parse(path, "no `Tr:` line (the lidar's pose in the camera's frame)"))?;
     let rest = line.trim_start().trim_start_matches("Tr:");
     twelve(rest)
-        .map(|v| pose_of(&v))
+        .and_then(|v| pose_of(&v).ok_or_else(|| NOT_A_ROTATION.to_string()))
         .map_err(|e| Error::parse(path, format!("line {}: {e}", k + 1)))
 }
 
@@ -188,7 +220,8 @@ mod tests {
     fn a_lidar_pose_is_the_camera_pose_seen_through_the_calibration() {
         // KITTI's calibration turns the camera (z forward, x right, y down) into the lidar (x forward, y
         // left, z up); a camera moving 1 m along its z moves the lidar 1 m along its x.
-        let tr = pose_of(&[0.0, -1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+        let tr =
+            pose_of(&[0.0, -1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0]).expect("a rotation");
         let camera = Isometry3::translation(0.0, 0.0, 1.0);
         let lidar = tr.inverse() * camera * tr;
         assert!((lidar.translation.vector - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12);
