@@ -39,18 +39,10 @@ pub(super) fn read_bag_files(path: &Path, limit_bytes: u64) -> Result<Vec<(PathB
 /// the times its options count from.
 pub(super) fn first_log_time(data: &[(PathBuf, Vec<u8>)], limit_bytes: u64) -> Result<u64> {
     let mut first = u64::MAX;
-    for (file, bytes) in data {
-        for_each_message(
-            file,
-            bytes,
-            limit_bytes,
-            &mut Channels::default(),
-            &mut |_, h, _| {
-                first = first.min(h.log_time);
-                Ok(())
-            },
-        )?;
-    }
+    for_each_message(data, limit_bytes, &mut Channels::default(), &mut |_, _, h, _| {
+        first = first.min(h.log_time);
+        Ok(())
+    })?;
     Ok(first)
 }
 
@@ -101,11 +93,26 @@ fn relative_file_paths(text: &str) -> Vec<String> {
     Vec::new()
 }
 
-/// What is done with each message: its channel, its record header and its bytes.
-pub(super) type OnMessage<'a> = dyn FnMut(&Channel, &mcap::records::MessageHeader, &[u8]) -> Result<()> + 'a;
+/// What is done with each message: its file, its channel, its record header and its bytes.
+pub(super) type OnMessage<'a> =
+    dyn FnMut(&Path, &Channel, &mcap::records::MessageHeader, &[u8]) -> Result<()> + 'a;
 
-/// Calls `f` with every message of the file, chunks decompressed, with its channel.
+/// Calls `f` with every message of the bag's files (`data`, in order), chunks decompressed, with its channel
+/// (`channels` gathers them as their records come).
 pub(super) fn for_each_message(
+    data: &[(PathBuf, Vec<u8>)],
+    limit_bytes: u64,
+    channels: &mut Channels,
+    f: &mut OnMessage,
+) -> Result<()> {
+    for (file, bytes) in data {
+        file_messages(file, bytes, limit_bytes, channels, f)?;
+    }
+    Ok(())
+}
+
+/// [`for_each_message`] for one file.
+fn file_messages(
     file: &Path,
     bytes: &[u8],
     limit_bytes: u64,
@@ -153,7 +160,7 @@ fn visit(file: &Path, record: Record, channels: &mut Channels, f: &mut OnMessage
                     ),
                 ));
             };
-            f(c, &header, &data)?;
+            f(file, c, &header, &data)?;
         }
         _ => {}
     }

@@ -87,28 +87,25 @@ fn from_files(
         Some(s) => Some(first_log_time(data, limit_bytes)?.saturating_add((s.max(0.0) * 1e9) as u64)),
         None => None,
     };
-    for (file, bytes) in data {
-        for_each_message(
-            file,
-            bytes,
-            limit_bytes,
-            &mut Channels::default(),
-            &mut |c, h, message| {
-                if c.topic != topic {
-                    return Ok(());
-                }
-                if !kinds.contains(&c.kind) {
-                    kinds.push(c.kind.clone());
-                }
-                if until_ns.is_none_or(|u| h.log_time <= u)
-                    && chosen.as_ref().is_none_or(|(t, _, _)| h.log_time >= *t)
-                {
-                    chosen = Some((h.log_time, message.to_vec(), file.clone()));
-                }
-                Ok(())
-            },
-        )?;
-    }
+    for_each_message(
+        data,
+        limit_bytes,
+        &mut Channels::default(),
+        &mut |file, c, h, message| {
+            if c.topic != topic {
+                return Ok(());
+            }
+            if !kinds.contains(&c.kind) {
+                kinds.push(c.kind.clone());
+            }
+            if until_ns.is_none_or(|u| h.log_time <= u)
+                && chosen.as_ref().is_none_or(|(t, _, _)| h.log_time >= *t)
+            {
+                chosen = Some((h.log_time, message.to_vec(), file.to_path_buf()));
+            }
+            Ok(())
+        },
+    )?;
     if let Some(kind) = kinds.iter().find(|k| !is_type(k, GRID_MAP)) {
         return Err(Error::parse(
             path,

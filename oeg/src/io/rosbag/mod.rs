@@ -163,20 +163,17 @@ fn parse_files(
     let mut tree = TfTree::default();
     let mut first_log_ns = u64::MAX;
     let mut counts: BTreeMap<u16, u64> = BTreeMap::new();
-    for (file, bytes) in data {
-        for_each_message(
-            file,
-            bytes,
-            limit_bytes,
-            &mut channels,
-            &mut |c, header, message| {
-                first_log_ns = first_log_ns.min(header.log_time);
-                let index = bump(&mut counts, header.channel_id);
-                add_transforms(&mut tree, c, options, header.log_time, message)
-                    .map_err(|e| message_error(file, c, index, &e))
-            },
-        )?;
-    }
+    for_each_message(
+        data,
+        limit_bytes,
+        &mut channels,
+        &mut |file, c, header, message| {
+            first_log_ns = first_log_ns.min(header.log_time);
+            let index = bump(&mut counts, header.channel_id);
+            add_transforms(&mut tree, c, options, header.log_time, message)
+                .map_err(|e| message_error(file, c, index, &e))
+        },
+    )?;
     tree.finish();
     let topics = topic_list(&channels, &counts);
     let ranges = range_topics(path, options, &channels)?;
@@ -216,23 +213,20 @@ fn parse_files(
         },
     };
     counts.clear();
-    for (file, bytes) in data {
-        for_each_message(
-            file,
-            bytes,
-            limit_bytes,
-            &mut Channels::default(),
-            &mut |c, header, message| {
-                let index = bump(&mut counts, header.channel_id);
-                if !ranges.contains(&c.topic) {
-                    return Ok(());
-                }
-                reader
-                    .message(c, index, header.log_time, message)
-                    .map_err(|e| message_error(file, c, index, &e))
-            },
-        )?;
-    }
+    for_each_message(
+        data,
+        limit_bytes,
+        &mut Channels::default(),
+        &mut |file, c, header, message| {
+            let index = bump(&mut counts, header.channel_id);
+            if !ranges.contains(&c.topic) {
+                return Ok(());
+            }
+            reader
+                .message(c, index, header.log_time, message)
+                .map_err(|e| message_error(file, c, index, &e))
+        },
+    )?;
     Ok(reader.bag)
 }
 
