@@ -8,6 +8,7 @@
 //! the two side cells is visited as well.
 
 use crate::geometry::{CellIndex, GridGeometry};
+use crate::storage::{TILE_MASK, TILE_SHIFT, TileIndex, offset_in_tile};
 
 /// One cell crossed by a ray, with the part of the ray inside it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +34,7 @@ pub(crate) struct GroundTraversal {
     t_delta_x: f64,
     t_delta_y: f64,
     l: f64,
+    l_start: f64,
     l_end: f64,
     remaining_steps: u64,
     done: bool,
@@ -88,6 +90,9 @@ impl GroundTraversal {
         };
         let (step_i, t_max_x, t_delta_x) = axis(start.i, end.i, ox, dx);
         let (step_j, t_max_y, t_delta_y) = axis(start.j, end.j, oy, dy);
+        // An axis already at the end cell's index never steps: its next boundary is at infinity.
+        let t_max_x = if start.i == end.i { f64::INFINITY } else { t_max_x };
+        let t_max_y = if start.j == end.j { f64::INFINITY } else { t_max_y };
         let remaining_steps = (i64::from(end.i) - i64::from(start.i)).unsigned_abs()
             + (i64::from(end.j) - i64::from(start.j)).unsigned_abs();
         Some(Self {
@@ -101,6 +106,7 @@ impl GroundTraversal {
             t_delta_x,
             t_delta_y,
             l: l_start,
+            l_start,
             l_end,
             remaining_steps,
             done: false,
@@ -117,6 +123,106 @@ impl GroundTraversal {
     /// The cell the walk ends in.
     pub(crate) fn last_cell(&self) -> CellIndex {
         self.end
+    }
+}
+
+impl GroundTraversal {
+    /// The tile of the cell the walk is in, or `None` once the walk is over.
+    #[inline(always)]
+    pub(crate) fn tile(&self) -> Option<TileIndex> {
+        (!self.done).then(|| TileIndex::of(self.cell))
+    }
+
+    /// The [`offset_in_tile`] of the cell the walk is in.
+    #[inline(always)]
+    pub(crate) fn offset_in_tile(&self) -> usize {
+        offset_in_tile(self.cell)
+    }
+
+    /// Walks on through the tile of the cell the walk is in, as [`Iterator::next`] would, calling
+    /// `visit(offset, crossing)` for each crossed cell of that tile with its [`offset_in_tile`]; stops at the
+    /// first cell of another tile (where the next call starts) or at the end. A straight walk crosses a tile
+    /// once, in one call.
+    ///
+    /// The hot loop of integration: the cell's offset is stepped along with it (one add) and the tile's edge
+    /// is a count of steps per axis, where the iterator finds each cell's tile and offset afresh.
+    #[inline(always)]
+    pub(crate) fn walk_tile(&mut self, mut visit: impl FnMut(usize, &CellCrossing)) {
+        if self.done {
+            return;
+        }
+        let edge = |index: i32, step: i32| -> u32 {
+            let within = (index & TILE_MASK) as u32;
+            if step > 0 {
+                TILE_MASK as u32 - within
+            } else {
+                within
+            }
+        };
+        // Steps the walk can take along each axis before it leaves the tile.
+        let mut inside_x = edge(self.cell.i, self.step_i);
+        let mut inside_y = edge(self.cell.j, self.step_j);
+        let mut offset = offset_in_tile(self.cell);
+        let (offset_step_x, offset_step_y) = (self.step_i as isize, (self.step_j as isize) << TILE_SHIFT);
+        // The state in locals, written back when the walk leaves the tile: kept in registers.
+        let (mut cell, end) = (self.cell, self.end);
+        let (mut t_max_x, mut t_max_y, mut l) = (self.t_max_x, self.t_max_y, self.l);
+        let mut remaining = self.remaining_steps;
+        loop {
+            let l_enter = l;
+            if remaining == 0 {
+                let crossing = CellCrossing {
+                    cell,
+                    l_enter,
+                    l_exit: self.l_end.max(l_enter),
+                };
+                visit(offset, &crossing);
+                self.done = true;
+                return;
+            }
+            let step_x = t_max_x <= t_max_y;
+            // The nearer boundary (`min`, without NaN handling: none is NaN).
+            let t_next = if t_max_y < t_max_x { t_max_y } else { t_max_x };
+            let l_exit = t_next.clamp(self.l_start, self.l_end);
+            visit(
+                offset,
+                &CellCrossing {
+                    cell,
+                    l_enter,
+                    l_exit,
+                },
+            );
+            l = l_exit;
+            remaining -= 1;
+            let leaves = if step_x {
+                cell.i += self.step_i;
+                t_max_x = if cell.i == end.i {
+                    f64::INFINITY
+                } else {
+                    t_max_x + self.t_delta_x
+                };
+                let leaves = inside_x == 0;
+                inside_x = inside_x.wrapping_sub(1);
+                offset = offset.wrapping_add_signed(offset_step_x);
+                leaves
+            } else {
+                cell.j += self.step_j;
+                t_max_y = if cell.j == end.j {
+                    f64::INFINITY
+                } else {
+                    t_max_y + self.t_delta_y
+                };
+                let leaves = inside_y == 0;
+                inside_y = inside_y.wrapping_sub(1);
+                offset = offset.wrapping_add_signed(offset_step_y);
+                leaves
+            };
+            if leaves {
+                (self.cell, self.t_max_x, self.t_max_y) = (cell, t_max_x, t_max_y);
+                (self.l, self.remaining_steps) = (l, remaining);
+                return;
+            }
+        }
     }
 }
 
@@ -140,27 +246,29 @@ impl Iterator for GroundTraversal {
                 l_exit: self.l_end.max(l_enter),
             });
         }
-        // Step along the axis whose boundary comes first; once an axis has reached the end cell's index, only
-        // the other may move, which keeps the walk on the end cell despite rounding. Written without branches:
-        // which axis steps is data-dependent and would be mispredicted about every other cell.
-        let step_x =
-            (self.t_max_x <= self.t_max_y || self.cell.j == self.end.j) & (self.cell.i != self.end.i);
+        // Step along the axis whose boundary comes first. An axis that has reached the end cell's index has its
+        // next boundary at infinity (`new` and each step set it so), so only the other moves, which keeps the
+        // walk on the end cell despite rounding.
+        let step_x = self.t_max_x <= self.t_max_y;
         let t_next = if step_x { self.t_max_x } else { self.t_max_y };
-        let l_exit = t_next.clamp(l_enter, self.l_end);
-        let (dx, dy) = if step_x {
-            (self.step_i, 0)
+        // `t_next` never decreases along the walk (each axis's boundaries increase, and the walk takes the
+        // nearer one), so clamping it to the span gives each crossing's exit without the previous one's.
+        let l_exit = t_next.clamp(self.l_start, self.l_end);
+        if step_x {
+            self.cell.i += self.step_i;
+            self.t_max_x = if self.cell.i == self.end.i {
+                f64::INFINITY
+            } else {
+                self.t_max_x + self.t_delta_x
+            };
         } else {
-            (0, self.step_j)
-        };
-        self.cell.i += dx;
-        self.cell.j += dy;
-        let (ax, ay) = if step_x {
-            (self.t_delta_x, 0.0)
-        } else {
-            (0.0, self.t_delta_y)
-        };
-        self.t_max_x += ax;
-        self.t_max_y += ay;
+            self.cell.j += self.step_j;
+            self.t_max_y = if self.cell.j == self.end.j {
+                f64::INFINITY
+            } else {
+                self.t_max_y + self.t_delta_y
+            };
+        }
         self.remaining_steps -= 1;
         self.l = l_exit;
         Some(CellCrossing {
@@ -296,5 +404,111 @@ mod tests {
                 prop_assert!(w[0].l_exit == w[1].l_enter && w[0].l_enter <= w[0].l_exit);
             }
         }
+
+        /// The walk's crossings are bit for bit those of the textbook walk ([`reference_walk`]), and walking
+        /// tile by tile ([`GroundTraversal::walk_tile`]) gives the same crossings as the iterator, each with its
+        /// cell's offset, and stops exactly where the walk enters another tile.
+        #[test]
+        fn the_tile_walk_and_the_iterator_are_the_textbook_walk(
+            ox in -20.0f64..20.0, oy in -20.0f64..20.0,
+            dx in -1.0f64..1.0, dy in -1.0f64..1.0, dz in -1.0f64..1.0,
+            l_start in 0.0f64..5.0, length in 0.0f64..40.0,
+            axis in prop::sample::select(vec![None, Some(0), Some(1)]),
+            r in prop::sample::select(vec![0.05, 0.1, 0.2, 0.37]),
+        ) {
+            // Some rays along an axis, where one step is never taken.
+            let (dx, dy) = match axis {
+                Some(0) => (dx, 0.0),
+                Some(_) => (0.0, dy),
+                None => (dx, dy),
+            };
+            let norm = (dx * dx + dy * dy + dz * dz).sqrt().max(1e-9);
+            let (dx, dy) = (dx / norm, dy / norm);
+            let g = GridGeometry::new(r).expect("valid");
+            let l_end = l_start + length;
+            let walk = GroundTraversal::new(&g, (ox, oy), (dx, dy), l_start, l_end).expect("finite");
+            let expected = reference_walk(&g, (ox, oy), (dx, dy), l_start, l_end);
+            let by_iterator: Vec<CellCrossing> = walk.clone().collect();
+            prop_assert_eq!(&by_iterator, &expected);
+            let mut tiled = walk;
+            let mut by_tile = Vec::new();
+            while let Some(tile) = tiled.tile() {
+                let before = by_tile.len();
+                tiled.walk_tile(|offset, crossing| {
+                    assert_eq!(offset, offset_in_tile(crossing.cell));
+                    assert_eq!(TileIndex::of(crossing.cell), tile);
+                    by_tile.push(*crossing);
+                });
+                prop_assert!(by_tile.len() > before, "a call walked no cell");
+                if let Some(next) = tiled.tile() {
+                    prop_assert_ne!(next, tile);
+                }
+            }
+            prop_assert_eq!(&by_tile, &expected);
+        }
+    }
+
+    /// The Amanatides-Woo walk as first written here: each crossing's exit clamped to its entry, and an axis
+    /// that has reached the end cell's index held by a test of the cell.
+    fn reference_walk(
+        g: &GridGeometry,
+        (ox, oy): (f64, f64),
+        (dx, dy): (f64, f64),
+        l_start: f64,
+        l_end: f64,
+    ) -> Vec<CellCrossing> {
+        let start = g.cell_of(ox + dx * l_start, oy + dy * l_start).expect("finite");
+        let end = g.cell_of(ox + dx * l_end, oy + dy * l_end).expect("finite");
+        let r = g.resolution_m();
+        let axis = |index: i32, end_index: i32, o: f64, d: f64| -> (i32, f64, f64) {
+            let step = match end_index.cmp(&index) {
+                std::cmp::Ordering::Greater => 1,
+                std::cmp::Ordering::Less => -1,
+                std::cmp::Ordering::Equal => {
+                    if d >= 0.0 {
+                        1
+                    } else {
+                        -1
+                    }
+                }
+            };
+            if d == 0.0 {
+                return (step, f64::INFINITY, f64::INFINITY);
+            }
+            let boundary = if d > 0.0 {
+                f64::from(index) + 1.0
+            } else {
+                f64::from(index)
+            } * r;
+            (step, (boundary - o) / d, r / d.abs())
+        };
+        let (step_i, mut t_max_x, t_delta_x) = axis(start.i, end.i, ox, dx);
+        let (step_j, mut t_max_y, t_delta_y) = axis(start.j, end.j, oy, dy);
+        let (mut cell, mut l) = (start, l_start);
+        let mut crossings = Vec::new();
+        for _ in 0..start.i.abs_diff(end.i) + start.j.abs_diff(end.j) {
+            let step_x = (t_max_x <= t_max_y || cell.j == end.j) && cell.i != end.i;
+            let t_next = if step_x { t_max_x } else { t_max_y };
+            let l_exit = t_next.clamp(l, l_end);
+            crossings.push(CellCrossing {
+                cell,
+                l_enter: l,
+                l_exit,
+            });
+            if step_x {
+                cell.i += step_i;
+                t_max_x += t_delta_x;
+            } else {
+                cell.j += step_j;
+                t_max_y += t_delta_y;
+            }
+            l = l_exit;
+        }
+        crossings.push(CellCrossing {
+            cell,
+            l_enter: l,
+            l_exit: l_end.max(l),
+        });
+        crossings
     }
 }

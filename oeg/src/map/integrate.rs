@@ -16,7 +16,7 @@ use super::scratch::{Evidence, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex, offset_in_tile};
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex};
 use crate::traversal::GroundTraversal;
 
 /// Rays between two questions of [`Map::integrate_unless`]'s `stop`: a few milliseconds of work.
@@ -293,9 +293,8 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
     grid: &mut TileGrid<E>,
     limit_bytes: u64,
 ) -> Result<()> {
-    let mut next = walk.next();
-    while let Some(first) = next {
-        let tile = TileIndex::of(first.cell);
+    let mut z_enter_m = span.height_at(span.l_lo);
+    while let Some(tile) = walk.tile() {
         let slot = grid
             .slot_or_insert(tile, limit_bytes)
             .map_err(|e| Error::MemoryLimit {
@@ -309,32 +308,34 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
             (grid.slot_tile_mut(slot), None)
         };
         let mut here = Here::tile::<E>(before, tile);
-        let first_row = offset_in_tile(first.cell) >> TILE_SHIFT;
-        let mut crossing = first;
         let mut marked = marks.as_ref().map_or(0, |m| m.count());
-        let last_offset = loop {
-            let offset = offset_in_tile(crossing.cell);
-            here.offset = offset;
-            let ev = &mut evidence[offset & (TILE_CELLS - 1)];
-            if let Some(marks) = marks.as_deref_mut() {
-                marked = marks.mark_after(marked, offset, ev.first_visit());
-            }
-            if !HIT {
-                ev.cleared(before, span, &crossing, &here);
-            } else if crossing.l_exit < span.free_until {
-                ev.free(before, span, &crossing, &here);
-            } else {
-                ev.near_hit(before, span, &crossing, &here);
-            }
-            next = walk.next();
-            match next {
-                Some(c) if TileIndex::of(c.cell) == tile => crossing = c,
-                _ => break offset,
-            }
-        };
+        let (first_offset, mut last_offset) = (walk.offset_in_tile(), 0);
+        walk.walk_tile(
+            #[inline(always)]
+            |offset, crossing| {
+                last_offset = offset;
+                here.offset = offset;
+                // The beam's height where it leaves this cell is where it enters the next one.
+                let z_exit_m = span.height_at(crossing.l_exit);
+                (here.beam_top_m, here.beam_bottom_m) = RaySpan::top_and_bottom(z_enter_m, z_exit_m);
+                z_enter_m = z_exit_m;
+                let ev = &mut evidence[offset & (TILE_CELLS - 1)];
+                if let Some(marks) = marks.as_deref_mut() {
+                    marked = marks.mark_after(marked, offset, ev.first_visit());
+                }
+                if !HIT {
+                    ev.cleared(before, span, crossing, &here);
+                } else if crossing.l_exit < span.free_until {
+                    ev.free(before, span, crossing, &here);
+                } else {
+                    ev.near_hit(before, span, crossing, &here);
+                }
+            },
+        );
         if let Some(marks) = marks {
             marks.set_len(marked);
         } else {
+            let first_row = first_offset >> TILE_SHIFT;
             grid.mark_rows(slot, rows_between(first_row, last_offset >> TILE_SHIFT));
         }
     }

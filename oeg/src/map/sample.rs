@@ -35,6 +35,9 @@ pub(super) struct Here<'a> {
     ceilings: Option<&'a [Ceiling; TILE_CELLS]>,
     /// The crossed cell's [`crate::storage::offset_in_tile`].
     pub(super) offset: usize,
+    /// The beam's highest and lowest heights inside the crossed cell ([`RaySpan::top_and_bottom`]).
+    pub(super) beam_top_m: f32,
+    pub(super) beam_bottom_m: f32,
 }
 
 impl<'a> Here<'a> {
@@ -46,12 +49,16 @@ impl<'a> Here<'a> {
                 cells: before.cells.tile(tile),
                 ceilings: before.ceilings.tile(tile),
                 offset: 0,
+                beam_top_m: 0.0,
+                beam_bottom_m: 0.0,
             }
         } else {
             Self {
                 cells: None,
                 ceilings: None,
                 offset: 0,
+                beam_top_m: 0.0,
+                beam_bottom_m: 0.0,
             }
         }
     }
@@ -92,8 +99,8 @@ impl Sampling for PaperEvidence {
     }
 
     #[inline(always)]
-    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, _here: &Here) {
-        self.add_free(before.opts.p_min, span.top_and_bottom(crossing).0, span.s2);
+    fn free(&mut self, before: &Before, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+        self.add_free(before.opts.p_min, here.beam_top_m, span.s2);
     }
 
     #[inline(always)]
@@ -109,13 +116,13 @@ impl Sampling for ScanEvidence {
     const READS_MAP: bool = true;
 
     #[inline(always)]
-    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
-        free_sample(before, span, crossing, here, self);
+    fn cleared(&mut self, before: &Before, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+        free_sample(before, span, here, self);
     }
 
     #[inline(always)]
-    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
-        free_sample(before, span, crossing, here, self);
+    fn free(&mut self, before: &Before, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+        free_sample(before, span, here, self);
     }
 
     #[inline(always)]
@@ -215,17 +222,23 @@ impl RaySpan {
         })
     }
 
-    /// The beam's highest and lowest heights inside a crossed cell.
-    pub(super) fn top_and_bottom(&self, crossing: &CellCrossing) -> (f32, f32) {
-        let (l_top, l_bottom) = if self.dir.z > 0.0 {
-            (crossing.l_exit, crossing.l_enter)
+    /// The beam's height at `l` along it.
+    #[inline(always)]
+    pub(super) fn height_at(&self, l: f64) -> f64 {
+        self.origin.z + self.dir.z * l
+    }
+
+    /// The beam's highest and lowest heights inside a crossed cell, from its heights where it enters
+    /// (`z_enter_m`, [`RaySpan::height_at`] the crossing's `l_enter`) and leaves (`z_exit_m`): the beam is
+    /// straight, so they are its heights at the crossing's two ends, the higher first (the enter height when
+    /// the two are equal).
+    #[inline(always)]
+    pub(super) fn top_and_bottom(z_enter_m: f64, z_exit_m: f64) -> (f32, f32) {
+        if z_exit_m > z_enter_m {
+            (z_exit_m as f32, z_enter_m as f32)
         } else {
-            (crossing.l_enter, crossing.l_exit)
-        };
-        (
-            (self.origin.z + self.dir.z * l_top) as f32,
-            (self.origin.z + self.dir.z * l_bottom) as f32,
-        )
+            (z_enter_m as f32, z_exit_m as f32)
+        }
     }
 
     /// A sample within 3 sigma of the hit: eq. 10's probability (clamped), and eq. 12's height where the cell
@@ -263,13 +276,7 @@ impl RaySpan {
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
 /// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
 #[inline(always)]
-fn free_sample(
-    before: &Before,
-    span: &RaySpan,
-    crossing: &CellCrossing,
-    here: &Here,
-    evidence: &mut ScanEvidence,
-) {
+fn free_sample(before: &Before, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
     let opts = before.opts;
     let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
     let needs_surface = band_rule || opts.free_space_max_depth_m.is_some();
@@ -279,7 +286,7 @@ fn free_sample(
     } else {
         None
     };
-    let (beam_top, beam_bottom) = span.top_and_bottom(crossing);
+    let (beam_top, beam_bottom) = (here.beam_top_m, here.beam_bottom_m);
     if span.hit.is_none() {
         // A ray that returned nothing clears, but bounds no height: it may have left through the ground or
         // past anything (a dropout), so its heights prove nothing. Under the surface-band rule it therefore

@@ -218,8 +218,8 @@ pub fn fuse_with_disagreement(
 /// The anchors' visibility clean-up (elevation_mapping, elevation_mapping_cupy) removes a cell whenever a
 /// ray passes below its height, which also removes every overhang a ray passes under; the band keeps them.
 pub fn band_contradicts(prior: Elevation, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
-    let half = band_sigmas * prior.var_m2.sqrt();
-    z_lo_m <= prior.mean_m && z_hi_m >= prior.mean_m - half
+    // The square root only for a beam that reaches down to the mean: most pass over the surface.
+    z_lo_m <= prior.mean_m && z_hi_m >= prior.mean_m - band_sigmas * prior.var_m2.sqrt()
 }
 
 /// One scan's measurement of the structure over a cell ([`crate::OverheadHits::Ceiling`]): the lowest level of

@@ -19,7 +19,7 @@ pub(crate) const TILE_SHIFT: u32 = 6;
 pub(crate) const TILE_SIZE: usize = 1 << TILE_SHIFT;
 /// Cells per tile.
 pub(crate) const TILE_CELLS: usize = TILE_SIZE * TILE_SIZE;
-const TILE_MASK: i32 = (TILE_SIZE as i32) - 1;
+pub(crate) const TILE_MASK: i32 = (TILE_SIZE as i32) - 1;
 
 /// A tile's coordinates: cell `(i, j)` is in tile `(i >> TILE_SHIFT, j >> TILE_SHIFT)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
