@@ -5,6 +5,7 @@
 //! evidence in their order: the same map, bit for bit, as [`Map::integrate`] on each scan in turn.
 
 use std::borrow::Borrow;
+use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
@@ -17,9 +18,11 @@ use crate::error::Error;
 use crate::scan::Scan;
 use crate::storage::{TileGrid, TileIndex};
 
-/// Scans of a window per thread: enough work between two meetings of the threads that their waking costs
-/// little, and scans of different lengths even out.
-const SCANS_PER_THREAD: usize = 8;
+/// Scans of a window per thread. One: each scan of a window is gathered into a scratch grid of its own, and
+/// every grid more is a working set more that the cores' caches must hold between two uses of it. Measured on
+/// the default run's log on 2 threads: 8 scans a thread took 1.4x the gathering time and 1.3x the update time
+/// of 1 (docs/performance.md); the threads' meetings, twice a window, cost less than that.
+const SCANS_PER_THREAD: usize = 1;
 
 /// Why [`Map::integrate_batch`] stopped: the scan that failed and its error. The scans before it are in the
 /// map; it and those after it are not.
@@ -37,8 +40,9 @@ impl Map {
     /// of their statistics.
     ///
     /// Under a model whose samples do not read the map (one whose scratch is the paper's evidence), runs of
-    /// consecutive short scans (fewer than 8,192 rays) go in windows of 8 scans a thread: a window's scans are
-    /// gathered side by side, one per thread, then its cells are updated tile by tile in parallel. This is what
+    /// consecutive short scans (fewer than 8,192 rays) go in windows of one scan a thread: a window's scans
+    /// are gathered side by side, then its cells are updated tile by tile in parallel, where the evidence read
+    /// is reset. This is what
     /// makes a robot's log, thousands of scans of a few hundred rays each, use every core; a long scan is split
     /// between the threads on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold
     /// less than half the memory limit: near it, scans go one at a time, so that a limit stops the same scan at
@@ -124,8 +128,8 @@ impl Map {
         };
         let budget = config.memory_limit_bytes / 2;
         let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
+        // The evidence is reset as it is read: the scratch is empty again.
         stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, *levels);
-        scratch.recycle();
         self.num_scans += scans.len() as u64;
         self.totals += stats;
         Some(stats)
@@ -196,39 +200,61 @@ fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
 }
 
 /// Updates every cell the first `num_scans` grids of the scratch touched, from each grid's evidence in their
-/// order, tile by tile in parallel; the tiles are placed first, scan by scan, in the order [`Map::integrate`]
-/// places them. Returns the cell updates.
+/// order, tile by tile in parallel, and resets that evidence where it was read, on the same thread (while it is
+/// in that core's cache), before the grids take their tiles back; the tiles are placed first, scan by scan, in
+/// the order [`Map::integrate`] places them. Returns the cell updates.
 fn apply_in_order<E: Sampling>(
     cells: &mut TileGrid<crate::cell::Cell>,
-    scratch: &Scratch<E>,
+    scratch: &mut Scratch<E>,
     num_scans: usize,
     opts: &crate::model::ModelOptions,
     levels: LogOddsLevels,
 ) -> u64 {
-    let grids: Vec<&TileGrid<E>> = std::iter::once(&scratch.main)
-        .chain(scratch.workers.iter())
+    let Scratch { main, workers } = scratch;
+    let mut grids: Vec<&mut TileGrid<E>> = std::iter::once(main)
+        .chain(workers.iter_mut())
         .take(num_scans)
         .collect();
-    let mut touched: Vec<TileIndex> = Vec::new();
     for grid in &grids {
         for (tile, _, _) in grid.marked_tiles() {
             // The budget checked before leaves room for every tile: placing one cannot fail.
-            if cells.tile_or_insert(tile, u64::MAX).is_ok() {
-                touched.push(tile);
-            }
+            let _ = cells.tile_or_insert(tile, u64::MAX);
         }
     }
-    // Row by row over the tile index, the order the cells' grid lends its tiles in.
-    touched.sort_unstable_by_key(|t| (t.tj, t.ti));
-    touched.dedup();
-    let work: Vec<_> = cells.tiles_mut_in_order(touched).into_iter().collect();
-    work.into_par_iter()
-        .map(|(tile, cells)| {
-            grids
-                .iter()
-                .filter_map(|grid| grid.marked_tile(tile))
-                .map(|(evidence, marks)| update_marked(cells, evidence, marks, opts, levels))
-                .sum::<u64>()
+    let fill = grids.first().map_or(E::NONE, |g| g.fill());
+    // Each touched tile's evidence, grid by grid in the scans' order, row by row over the tile index: the
+    // order the cells' grid lends its tiles in.
+    let mut by_tile: BTreeMap<(i32, i32), (TileIndex, Vec<_>)> = BTreeMap::new();
+    for grid in &mut grids {
+        for (tile, evidence, marks) in grid.marked_tiles_mut() {
+            by_tile
+                .entry((tile.tj, tile.ti))
+                .or_insert_with(|| (tile, Vec::new()))
+                .1
+                .push((evidence, marks));
+        }
+    }
+    let mut lent = cells
+        .tiles_mut_in_order(by_tile.values().map(|(tile, _)| *tile))
+        .into_iter()
+        .peekable();
+    let work: Vec<_> = by_tile
+        .into_values()
+        .map(|(tile, evidence)| (lent.next_if(|(t, _)| *t == tile).map(|(_, c)| c), evidence))
+        .collect();
+    let updated = work
+        .into_par_iter()
+        .map(|(mut cells, evidence)| {
+            let mut updated = 0;
+            for (evidence, marks) in evidence {
+                if let Some(cells) = cells.as_deref_mut() {
+                    updated += update_marked(cells, evidence, marks, opts, levels);
+                }
+                marks.reset(evidence, fill);
+            }
+            updated
         })
-        .sum()
+        .sum();
+    grids.iter_mut().for_each(|g| g.release_reset());
+    updated
 }

@@ -60,6 +60,18 @@ impl Marked<'_> {
     }
 }
 
+impl Marked<'_> {
+    /// Resets every cell that may have been written in `tile` to `fill`: the cells of the marked rows, and the
+    /// marked cells.
+    #[inline]
+    pub(crate) fn reset<T: Copy>(self, tile: &mut [T; TILE_CELLS], fill: T) {
+        for_each_row(self.rows, |r| tile[r * TILE_SIZE..(r + 1) * TILE_SIZE].fill(fill));
+        for &offset in self.cells {
+            tile[usize::from(offset) & (TILE_CELLS - 1)] = fill;
+        }
+    }
+}
+
 impl CellMarks {
     pub(super) const EMPTY: Self = Self {
         len: 0,

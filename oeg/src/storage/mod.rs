@@ -7,7 +7,9 @@
 
 mod marks;
 
-pub(crate) use marks::{CellMarks, Marked, for_each_row};
+#[cfg(test)]
+use marks::for_each_row;
+pub(crate) use marks::{CellMarks, Marked};
 
 use crate::geometry::CellIndex;
 #[cfg(test)]
@@ -465,18 +467,56 @@ impl<T: Copy> TileGrid<T> {
     /// so the cost is that of what was written, not of the tiles' size.
     pub(crate) fn recycle_marked(&mut self) {
         let fill = self.fill;
+        for (_, tile, marked) in self.marked_tiles_mut() {
+            marked.reset(tile, fill);
+        }
+        self.release_reset();
+    }
+
+    /// The allocated tiles with something marked written, mutable, in the order of [`TileGrid::tiles`], with
+    /// what was marked, and the grid's fill: for a caller that reads what was written where it is (on any
+    /// thread) and resets it there ([`Marked::reset`]) before [`TileGrid::release_reset`] takes the tiles back.
+    pub(crate) fn marked_tiles_mut(&mut self) -> Vec<(TileIndex, &mut [T; TILE_CELLS], Marked<'_>)> {
+        let (min, tiles_x) = (self.tile_min, self.tiles_x.max(1));
+        let (rows, marks) = (&self.rows, &self.marks);
+        self.slots
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(slot, t)| {
+                let marked = Marked {
+                    rows: rows.get(slot).copied().unwrap_or(0),
+                    cells: marks
+                        .get(slot)
+                        .and_then(Option::as_deref)
+                        .map_or(&[][..], CellMarks::as_slice),
+                };
+                let tile = TileIndex {
+                    ti: min.ti + (slot % tiles_x) as i32,
+                    tj: min.tj + (slot / tiles_x) as i32,
+                };
+                t.as_deref_mut()
+                    .filter(|_| !marked.is_empty())
+                    .map(|t| (tile, t, marked))
+            })
+            .collect()
+    }
+
+    /// The grid's fill value: what a cell never written reads as.
+    pub(crate) fn fill(&self) -> T {
+        self.fill
+    }
+
+    /// Releases every tile into the grid's pool, for a grid whose marked cells were reset to `fill` already
+    /// ([`TileGrid::marked_tiles_mut`], [`Marked::reset`]): the marks are cleared, the tiles are not read.
+    pub(crate) fn release_reset(&mut self) {
         for (slot, t) in self.slots.iter_mut().enumerate() {
-            let Some(mut t) = t.take() else {
+            let Some(t) = t.take() else {
                 continue;
             };
             if let Some(rows) = self.rows.get_mut(slot) {
-                for_each_row(*rows, |r| t[r * TILE_SIZE..(r + 1) * TILE_SIZE].fill(fill));
                 *rows = 0;
             }
             if let Some(Some(marks)) = self.marks.get_mut(slot) {
-                for &offset in marks.as_slice() {
-                    t[usize::from(offset) & (TILE_CELLS - 1)] = fill;
-                }
                 marks.clear();
             }
             self.pool.push(t);

@@ -146,6 +146,45 @@ fn marked_rows_and_cells_are_visited_once_and_recycled() {
 }
 
 #[test]
+fn evidence_reset_where_it_is_read_leaves_the_grid_as_recycling_does() {
+    let mut g = TileGrid::new(0u8);
+    let tiles = [TileIndex { ti: 0, tj: 0 }, TileIndex { ti: 2, tj: -1 }];
+    for (n, tile) in tiles.into_iter().enumerate() {
+        let slot = g.slot_or_insert(tile, u64::MAX).expect("room");
+        let (t, marks) = g.slot_tile_and_marks_mut(slot);
+        t[7 + n] = 3;
+        marks.mark_if(7 + n, true);
+        g.slot_tile_mut(slot)[5 * TILE_SIZE + 1] = 4;
+        g.mark_rows(slot, 1 << 5);
+    }
+    // Read and reset on the caller's side, in the order of the grid's tiles, then taken back.
+    let fill = g.fill();
+    let mut seen = Vec::new();
+    for (tile, t, marked) in g.marked_tiles_mut() {
+        let mut values = Vec::new();
+        marked.for_each(|k| values.push(t[k]));
+        seen.push((tile, values.iter().map(|&v| u32::from(v)).sum::<u32>()));
+        marked.reset(t, fill);
+    }
+    assert_eq!(
+        seen,
+        vec![(tiles[1], 7), (tiles[0], 7)],
+        "row by row over the tile index"
+    );
+    g.release_reset();
+    assert_eq!(g.num_tiles(), 0);
+    assert_eq!(g.marked_tiles().count(), 0);
+    assert_eq!(g.num_pooled(), 2);
+    for tile in tiles {
+        let slot = g.slot_or_insert(tile, u64::MAX).expect("pooled");
+        assert!(
+            g.slot_tile_mut(slot).iter().all(|&v| v == 0),
+            "a pooled tile reads as new"
+        );
+    }
+}
+
+#[test]
 fn rows_are_listed_in_order() {
     let mut seen = Vec::new();
     for_each_row((1 << 63) | (1 << 7) | 1, |r| seen.push(r));
