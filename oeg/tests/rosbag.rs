@@ -131,6 +131,127 @@ fn a_cloud_is_placed_through_the_tree_at_its_stamp_and_one_without_a_transform_i
     let _ = std::fs::remove_dir_all(&folder);
 }
 
+/// Writes one file of a split bag into `folder` as `file` (through a bag of its own) and returns its name.
+fn split_file(folder: &Path, file: &str, write: impl FnOnce(&mut BagWriter)) -> String {
+    let part = scratch(&format!("part-{file}"));
+    let mut bag = BagWriter::new(&part).expect("writer");
+    write(&mut bag);
+    let written = bag.finish().expect("written");
+    std::fs::create_dir_all(folder).expect("folder");
+    std::fs::rename(&written, folder.join(file)).expect("moved");
+    let _ = std::fs::remove_dir_all(&part);
+    file.to_string()
+}
+
+#[test]
+fn a_bag_split_over_files_reads_as_one_with_the_transforms_of_every_file() {
+    // The whole bag in one file, and the same messages split as rosbag2 splits a long recording: the static
+    // transforms in the first file only, each file with its own schema and channel ids (the second file's
+    // topics come in another order, so its ids differ), and a cloud in the second file placed by a transform
+    // from the first.
+    let whole = scratch("whole");
+    driving_bag(&whole, &[500_000_000, 900_000_000]);
+    let split = scratch("split");
+    let up = Isometry3::translation(0.0, 0.0, 0.5);
+    let points = [Vector3::new(1.0, 0.0, -0.5), Vector3::new(2.0, 1.0, -0.5)];
+    let first = split_file(&split, "split_0.mcap", |bag| {
+        let statics = [
+            transform("map", "odom", 0, Isometry3::translation(10.0, 0.0, 0.0)),
+            transform("base_link", "lidar", 0, up),
+        ];
+        bag.transforms("/tf_static", 0, &statics).expect("static");
+        let odom = transform("odom", "base_link", 0, Isometry3::identity());
+        bag.transforms("/tf", 0, &[odom]).expect("tf");
+        bag.cloud("/points", "lidar", 500_000_000, &points, CloudPrecision::Float32)
+            .expect("cloud");
+    });
+    let second = split_file(&split, "split_1.mcap", |bag| {
+        bag.cloud("/points", "lidar", 900_000_000, &points, CloudPrecision::Float32)
+            .expect("cloud");
+        let odom = transform(
+            "odom",
+            "base_link",
+            1_000_000_000,
+            Isometry3::translation(2.0, 0.0, 0.0),
+        );
+        bag.transforms("/tf", 1_000_000_000, &[odom]).expect("tf");
+    });
+    std::fs::write(
+        split.join("metadata.yaml"),
+        format!(
+            "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: mcap\n  relative_file_paths:\n    \
+             - {first}\n    - {second}\n"
+        ),
+    )
+    .expect("metadata");
+    let one = oeg::read_bag(&whole, &BagOptions::default()).expect("whole");
+    let both = oeg::read_bag(&split, &BagOptions::default()).expect("split");
+    assert_eq!(both.scans.len(), 2, "{:?}", both.skipped);
+    assert_eq!(
+        map_of(both.scans.iter().map(|s| &s.scan)),
+        map_of(one.scans.iter().map(|s| &s.scan)),
+        "the split bag maps as the whole one"
+    );
+    // The second file's cloud, at 0.9 s, between the first file's transform at 0 s and the second's at 1 s.
+    assert!((both.scans[1].scan.origin_in_world - Point3::new(11.8, 0.0, 0.5)).norm() < 1e-9);
+    // A file the metadata names outside the bag's folder is refused, naming the metadata and the entry.
+    for outside in ["../elsewhere.mcap", "/etc/hostname"] {
+        std::fs::write(
+            split.join("metadata.yaml"),
+            format!("rosbag2_bagfile_information:\n  relative_file_paths:\n    - {first}\n    - {outside}\n"),
+        )
+        .expect("metadata");
+        let e = oeg::read_bag(&split, &BagOptions::default())
+            .expect_err("outside the folder")
+            .to_string();
+        assert!(e.contains("metadata.yaml") && e.contains(outside), "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&whole);
+    let _ = std::fs::remove_dir_all(&split);
+}
+
+#[test]
+fn a_grid_map_is_chosen_by_time_counted_from_the_bag_s_first_message() {
+    let folder = scratch("grid_map_times");
+    let mut bag = BagWriter::new(&folder).expect("writer");
+    // The bag starts at 1 s with a transform; maps at 3 s and 5 s, 2 and 4 s after its start.
+    let odom = transform("odom", "base_link", 1_000_000_000, Isometry3::identity());
+    bag.transforms("/tf", 1_000_000_000, &[odom]).expect("tf");
+    for (stamp_ns, level) in [(3_000_000_000, 1.0), (5_000_000_000, 2.0)] {
+        let raster = oeg::BagRaster {
+            frame: "map".into(),
+            stamp_ns,
+            origin_xy_m: [0.0, 0.0],
+            resolution_m: 0.1,
+            rows: 2,
+            cols: 2,
+        };
+        bag.grid_map("/elevation_map", &raster, &[("elevation", &[level; 4])])
+            .expect("grid map");
+    }
+    bag.finish().expect("written");
+    let level_at = |at_s: Option<f64>| {
+        let read = oeg::read_grid_map(&folder, "/elevation_map", at_s, 1 << 26).expect("a map");
+        read.layers[0].1[0]
+    };
+    assert_eq!(level_at(None), 2.0, "the last map");
+    assert_eq!(
+        level_at(Some(3.0)),
+        1.0,
+        "the map at or before 3 s after the start"
+    );
+    assert_eq!(level_at(Some(4.0)), 2.0);
+    assert_eq!(level_at(Some(60.0)), 2.0);
+    let e = oeg::read_grid_map(&folder, "/elevation_map", Some(1.5), 1 << 26)
+        .expect_err("no map yet")
+        .to_string();
+    assert!(
+        e.contains("no message on /elevation_map at or before 1.5 s"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&folder);
+}
+
 #[test]
 fn options_that_name_what_the_bag_lacks_are_refused() {
     let folder = scratch("options");

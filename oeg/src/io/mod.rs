@@ -28,7 +28,7 @@ use crate::error::Result;
 
 pub(crate) use oeg_files::{ByteReader, container, unit_quaternion, write_atomically};
 
-/// Reads a whole file of at most `limit` bytes ([`read_bounded`]), naming it on failure: a binary input (a map,
+/// Reads a whole file of at most `limit` bytes ([`oeg_files::read_bounded`]), naming it on failure: a binary input (a map,
 /// a scan graph, a PCD) is never read past the memory its caller allows, whatever the file (a device) says.
 pub(crate) fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>> {
     Ok(oeg_files::read_bounded(path, limit)?)

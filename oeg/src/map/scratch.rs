@@ -11,7 +11,7 @@ use crate::storage::TileGrid;
 
 /// What one scan says about one cell under the paper's rules (eq. 10-12), gathered over all its rays before
 /// the cell is updated once: all a model reads that judges no sample against the cell's surface or ceiling
-/// and fuses a cell's hits by their highest or their weighted mean ([`Evidence::for_model`]).
+/// and fuses a cell's hits by their highest or their weighted mean ([`ScanScratch::for_model`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PaperEvidence {
     /// The largest inverse-sensor-model probability of any ray's sample in the cell; 0: untouched (a sample's

@@ -5,6 +5,7 @@
 //! shifts, a bounds check and two indexings: no hashing in the hot loop. The index costs 8 bytes per tile
 //! slot (512 bytes per 409.6 m^2 at 0.05 m), which is counted in [`TileGrid::memory_bytes`].
 
+mod marked;
 mod marks;
 
 #[cfg(test)]
@@ -394,134 +395,11 @@ impl<T: Copy> TileGrid<T> {
         self.allocate(tile, limit_bytes, Some(cells)).map(|_| ())
     }
 
-    /// The tile in `slot` (from [`TileGrid::slot_or_insert`], with no allocation or re-indexing in between)
-    /// and the list of its cells written since it was placed, to which the caller adds the offset
-    /// ([`offset_in_tile`]) of each cell it writes for the first time: [`TileGrid::marked_tiles`] and
-    /// [`TileGrid::recycle_marked`] then visit those cells alone. The list has room for the whole tile.
-    #[inline]
-    pub(crate) fn slot_tile_and_marks_mut(&mut self, slot: usize) -> (&mut [T; TILE_CELLS], &mut CellMarks) {
-        if self.marks.len() != self.slots.len() {
-            self.marks.resize_with(self.slots.len(), || None);
-        }
-        let marks = self.marks[slot].get_or_insert_with(|| {
-            self.num_mark_lists += 1;
-            Box::new(CellMarks::EMPTY)
-        });
-        match self.slots[slot].as_deref_mut() {
-            Some(t) => (t, marks),
-            None => unreachable!("slots come from slot_or_insert"),
-        }
-    }
-
-    /// Records that rows `rows` (bit `r` for row `r`, [`offset_in_tile`] `>> TILE_SHIFT`) of the tile in `slot`
-    /// were written, for [`TileGrid::marked_tiles`] and [`TileGrid::recycle_marked`]: a walk marks the rows
-    /// it crossed once per tile, at no cost per cell, where its cells are many.
-    #[inline]
-    pub(crate) fn mark_rows(&mut self, slot: usize, rows: u64) {
-        if self.rows.len() != self.slots.len() {
-            self.rows.resize(self.slots.len(), 0);
-        }
-        self.rows[slot] |= rows;
-    }
-
-    /// What was marked written in the tile in `slot`.
-    fn marked_in(&self, slot: usize) -> Marked<'_> {
-        Marked {
-            rows: self.rows.get(slot).copied().unwrap_or(0),
-            cells: self
-                .marks
-                .get(slot)
-                .and_then(Option::as_deref)
-                .map_or(&[][..], CellMarks::as_slice),
-        }
-    }
-
-    /// Allocated tiles with something marked written ([`TileGrid::mark_rows`],
-    /// [`TileGrid::slot_tile_and_marks_mut`]), in the order of [`TileGrid::tiles`], with what was marked.
-    pub(crate) fn marked_tiles(
-        &self,
-    ) -> impl Iterator<Item = (TileIndex, &[T; TILE_CELLS], Marked<'_>)> + '_ {
-        self.tiles().filter_map(move |(tile, t)| {
-            let marked = self.slot(tile).map(|s| self.marked_in(s))?;
-            (!marked.is_empty()).then_some((tile, t, marked))
-        })
-    }
-
     /// The tile at `tile`, if allocated.
     #[inline]
     pub(crate) fn tile(&self, tile: TileIndex) -> Option<&[T; TILE_CELLS]> {
         let slot = self.slot(tile)?;
         self.slots[slot].as_deref()
-    }
-
-    /// The tile at `tile` with what was marked written in it, if allocated.
-    pub(crate) fn marked_tile(&self, tile: TileIndex) -> Option<(&[T; TILE_CELLS], Marked<'_>)> {
-        let slot = self.slot(tile)?;
-        let t = self.slots[slot].as_deref()?;
-        Some((t, self.marked_in(slot)))
-    }
-
-    /// Releases every tile into the grid's pool, its marked rows and cells reset to `fill`: the grid reads as
-    /// empty again but keeps its memory for the next use (the per-scan scratch of [`crate::Map::integrate`]).
-    /// For a grid written only where it marked ([`TileGrid::mark_rows`], [`TileGrid::slot_tile_and_marks_mut`]),
-    /// so the cost is that of what was written, not of the tiles' size.
-    pub(crate) fn recycle_marked(&mut self) {
-        let fill = self.fill;
-        for (_, tile, marked) in self.marked_tiles_mut() {
-            marked.reset(tile, fill);
-        }
-        self.release_reset();
-    }
-
-    /// The allocated tiles with something marked written, mutable, in the order of [`TileGrid::tiles`], with
-    /// what was marked, and the grid's fill: for a caller that reads what was written where it is (on any
-    /// thread) and resets it there ([`Marked::reset`]) before [`TileGrid::release_reset`] takes the tiles back.
-    pub(crate) fn marked_tiles_mut(&mut self) -> Vec<(TileIndex, &mut [T; TILE_CELLS], Marked<'_>)> {
-        let (min, tiles_x) = (self.tile_min, self.tiles_x.max(1));
-        let (rows, marks) = (&self.rows, &self.marks);
-        self.slots
-            .iter_mut()
-            .enumerate()
-            .filter_map(|(slot, t)| {
-                let marked = Marked {
-                    rows: rows.get(slot).copied().unwrap_or(0),
-                    cells: marks
-                        .get(slot)
-                        .and_then(Option::as_deref)
-                        .map_or(&[][..], CellMarks::as_slice),
-                };
-                let tile = TileIndex {
-                    ti: min.ti + (slot % tiles_x) as i32,
-                    tj: min.tj + (slot / tiles_x) as i32,
-                };
-                t.as_deref_mut()
-                    .filter(|_| !marked.is_empty())
-                    .map(|t| (tile, t, marked))
-            })
-            .collect()
-    }
-
-    /// The grid's fill value: what a cell never written reads as.
-    pub(crate) fn fill(&self) -> T {
-        self.fill
-    }
-
-    /// Releases every tile into the grid's pool, for a grid whose marked cells were reset to `fill` already
-    /// ([`TileGrid::marked_tiles_mut`], [`Marked::reset`]): the marks are cleared, the tiles are not read.
-    pub(crate) fn release_reset(&mut self) {
-        for (slot, t) in self.slots.iter_mut().enumerate() {
-            let Some(t) = t.take() else {
-                continue;
-            };
-            if let Some(rows) = self.rows.get_mut(slot) {
-                *rows = 0;
-            }
-            if let Some(Some(marks)) = self.marks.get_mut(slot) {
-                marks.clear();
-            }
-            self.pool.push(t);
-        }
-        self.num_tiles = 0;
     }
 
     /// The cell region spanned by the allocated tiles, or `None` if there are none.

@@ -60,7 +60,26 @@ fn bag_files(path: &Path) -> Result<Vec<PathBuf>> {
             "no `relative_file_paths` entries: is this a rosbag2 folder's metadata?",
         ));
     }
-    Ok(files.into_iter().map(|f| path.join(f)).collect())
+    files
+        .into_iter()
+        .map(|f| {
+            // rosbag2 writes names relative to the bag's folder; one that leaves it (an absolute path, `..`) is
+            // not a file of this bag.
+            let inside = Path::new(&f)
+                .components()
+                .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
+            if inside {
+                Ok(path.join(&f))
+            } else {
+                Err(Error::parse(
+                    &metadata,
+                    format!(
+                        "`relative_file_paths` entry `{f}` leaves the bag's folder; expected a file name inside it"
+                    ),
+                ))
+            }
+        })
+        .collect()
 }
 
 /// The entries of `relative_file_paths:` in a rosbag2 `metadata.yaml`, in block (`- a.mcap`) or flow
