@@ -25,7 +25,7 @@ impl<T: Copy> TileGrid<T> {
         }
     }
 
-    /// Records that rows `rows` (bit `r` for row `r`, [`offset_in_tile`] `>> TILE_SHIFT`) of the tile in `slot`
+    /// Records that rows `rows` (bit `r` for row `r`, [`super::offset_in_tile`] `>> TILE_SHIFT`) of the tile in `slot`
     /// were written, for [`TileGrid::marked_tiles`] and [`TileGrid::recycle_marked`]: a walk marks the rows
     /// it crossed once per tile, at no cost per cell, where its cells are many.
     #[inline]

@@ -15,7 +15,7 @@ pub(crate) fn for_each_row(mut rows: u64, mut f: impl FnMut(usize)) {
     }
 }
 
-/// The cells of a tile written since it was placed, as offsets ([`offset_in_tile`]) in the order they were first
+/// The cells of a tile written since it was placed, as offsets ([`super::offset_in_tile`]) in the order they were first
 /// written: what a grid written a few cells at a time (the scan scratch) visits and clears. Marking is
 /// branch-free, for the hottest loop: every call writes, and only a first write counts.
 #[derive(Debug, Clone)]
