@@ -6,6 +6,7 @@
 //! grids merged in the runs' order (where the evidence merges exactly: [`Evidence::exact_merge`]), and the
 //! touched tiles are updated in parallel, each cell from its own evidence alone.
 
+use std::collections::BTreeMap;
 use std::ops::Range;
 
 use rayon::prelude::*;
@@ -196,32 +197,77 @@ fn gather_in_parallel<E: Sampling>(
             gather_rays(before, scan, rays, grid, share, &mut stats, stop).map(|()| stats)
         })
         .collect::<Result<Vec<_>>>()?;
-    let Scratch { main, workers } = scratch;
-    for worker in workers.iter_mut().take(runs - 1) {
-        for (tile, later, later_marks) in worker.marked_tiles() {
-            let slot = main
-                .slot_or_insert(tile, scratch_limit)
-                .map_err(|e| Error::MemoryLimit {
-                    requested_bytes: e.requested_bytes,
-                    limit_bytes: before.memory_limit_bytes,
-                })?;
-            // Only the paper's evidence merges exactly, and an untouched cell's evidence merges as nothing.
-            let (merged, marks) = main.slot_tile_and_marks_mut(slot);
-            later_marks.for_each(|k| {
-                if !later[k].paper().is_untouched() {
-                    marks.mark_if(k, merged[k].first_visit());
-                    merge(&mut merged[k], &later[k]);
-                }
-            });
-        }
-        worker.recycle_marked();
-    }
+    merge_runs(
+        &mut scratch.main,
+        &mut scratch.workers[..runs - 1],
+        scratch_limit,
+        merge,
+    )
+    .map_err(|e| Error::MemoryLimit {
+        requested_bytes: e.requested_bytes,
+        limit_bytes: before.memory_limit_bytes,
+    })?;
     Ok(run_stats
         .into_iter()
         .fold(IntegrationStats::default(), |mut a, s| {
             a += s;
             a
         }))
+}
+
+/// Merges the workers' evidence into `main`'s, in the workers' order, where each cell's evidence merges exactly
+/// (`merge`): first the tiles `main` lacks are placed, in order, under `limit_bytes`, and the rows the workers
+/// wrote are marked in `main` (the update visits them, and skips the cells no ray touched); then tile by tile
+/// in parallel, each worker's cells are merged and reset where they are read, and the workers take their tiles
+/// back.
+fn merge_runs<E: Evidence>(
+    main: &mut TileGrid<E>,
+    workers: &mut [TileGrid<E>],
+    limit_bytes: u64,
+    merge: fn(&mut E, &E),
+) -> std::result::Result<(), crate::storage::CapacityExceeded> {
+    for worker in workers.iter() {
+        for (tile, _, marked) in worker.marked_tiles() {
+            let slot = main.slot_or_insert(tile, limit_bytes)?;
+            main.mark_rows(slot, marked.rows_covered());
+        }
+    }
+    let fill = main.fill();
+    // Each touched tile's later runs, in the runs' order, row by row over the tile index.
+    let mut later: BTreeMap<(i32, i32), (TileIndex, Vec<_>)> = BTreeMap::new();
+    for worker in workers.iter_mut() {
+        for (tile, evidence, marked) in worker.marked_tiles_mut() {
+            later
+                .entry((tile.tj, tile.ti))
+                .or_insert_with(|| (tile, Vec::new()))
+                .1
+                .push((evidence, marked));
+        }
+    }
+    let mut lent = main
+        .tiles_mut_in_order(later.values().map(|(tile, _)| *tile))
+        .into_iter()
+        .peekable();
+    // Every worker tile has its tile in `main`, placed above; a worker's evidence is reset in any case.
+    let work: Vec<_> = later
+        .into_values()
+        .map(|(tile, runs)| (lent.next_if(|(t, _)| *t == tile).map(|(_, m)| m), runs))
+        .collect();
+    work.into_par_iter().for_each(|(mut merged, runs)| {
+        for (evidence, marked) in runs {
+            if let Some(merged) = merged.as_deref_mut() {
+                marked.for_each(|k| {
+                    // An untouched cell's evidence merges as nothing.
+                    if !evidence[k].paper().is_untouched() {
+                        merge(&mut merged[k], &evidence[k]);
+                    }
+                });
+            }
+            marked.reset(evidence, fill);
+        }
+    });
+    workers.iter_mut().for_each(TileGrid::release_reset);
+    Ok(())
 }
 
 /// The bounds of `runs` runs of consecutive rays of `scan` with about equal work: a ray's walk crosses about

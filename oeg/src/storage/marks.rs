@@ -61,6 +61,13 @@ impl Marked<'_> {
 }
 
 impl Marked<'_> {
+    /// The rows that hold a marked cell or are marked whole, as a row mask ([`super::TileGrid::mark_rows`]).
+    pub(crate) fn rows_covered(self) -> u64 {
+        self.cells.iter().fold(self.rows, |rows, &offset| {
+            rows | 1 << ((usize::from(offset) & (TILE_CELLS - 1)) >> TILE_SHIFT)
+        })
+    }
+
     /// Resets every cell that may have been written in `tile` to `fill`: the cells of the marked rows, and the
     /// marked cells.
     #[inline]
@@ -79,7 +86,7 @@ impl CellMarks {
     };
 
     /// Marks the cell at `offset` if `first` (its first write since the tile was placed).
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn mark_if(&mut self, offset: usize, first: bool) {
         self.len = self.mark_after(self.len, offset, first);
     }
