@@ -24,6 +24,9 @@ use crate::storage::{TileGrid, TileIndex};
 /// of 1 (docs/performance.md); the threads' meetings, twice a window, cost less than that.
 const SCANS_PER_THREAD: usize = 1;
 
+/// The parts of the budget a window's grids are given at least: each grid may take at most this share.
+const MIN_WINDOW_SHARES: usize = 16;
+
 /// Why [`Map::integrate_batch`] stopped: the scan that failed and its error. The scans before it are in the
 /// map; it and those after it are not.
 #[derive(Debug, thiserror::Error)]
@@ -128,6 +131,14 @@ impl Map {
         };
         let budget = config.memory_limit_bytes / 2;
         let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
+        // The cells' tiles, under the budget: the map's tile index grows with them, which the gathering's check
+        // could not count. Near the budget the scans go one by one, as the caller does with `None` (tiles placed
+        // here stay, empty, as a failed scan's do in `Map::integrate`).
+        let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes());
+        if !place_tiles(cells, scratch, scans.len(), room) {
+            scratch.recycle();
+            return None;
+        }
         // The evidence is reset as it is read: the scratch is empty again.
         stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, *levels);
         self.num_scans += scans.len() as u64;
@@ -149,8 +160,10 @@ fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
         return None;
     }
     let map_bytes = before.cells.memory_bytes() + before.ceilings.memory_bytes();
-    // Each grid under an equal share of what the budget leaves.
-    let share = budget.checked_sub(map_bytes)? / scans.len() as u64;
+    // Each grid under an equal share of what the budget leaves, and at most a sixteenth of it: a window is for
+    // scans of ordinary rays (a few megabytes of scratch each); a scan whose rays need more goes alone, under
+    // the whole limit, rather than leave a window's grids holding (and the allocator keeping) large pools.
+    let share = budget.checked_sub(map_bytes)? / scans.len().max(MIN_WINDOW_SHARES) as u64;
     if scratch.workers.len() < scans.len() - 1 {
         scratch
             .workers
@@ -199,10 +212,25 @@ fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
     }
 }
 
+/// Places the cells' tiles that the first `num_scans` grids of the scratch touched, scan by scan in the order
+/// [`Map::integrate`] places them, the cells' grid under `limit_bytes`; false if one does not fit.
+fn place_tiles<E: Sampling>(
+    cells: &mut TileGrid<crate::cell::Cell>,
+    scratch: &Scratch<E>,
+    num_scans: usize,
+    limit_bytes: u64,
+) -> bool {
+    std::iter::once(&scratch.main)
+        .chain(scratch.workers.iter())
+        .take(num_scans)
+        .flat_map(|grid| grid.marked_tiles())
+        .all(|(tile, _, _)| cells.tile_or_insert(tile, limit_bytes).is_ok())
+}
+
 /// Updates every cell the first `num_scans` grids of the scratch touched, from each grid's evidence in their
 /// order, tile by tile in parallel, and resets that evidence where it was read, on the same thread (while it is
-/// in that core's cache), before the grids take their tiles back; the tiles are placed first, scan by scan, in
-/// the order [`Map::integrate`] places them. Returns the cell updates.
+/// in that core's cache), before the grids take their tiles back; the cells' tiles are placed ([`place_tiles`]).
+/// Returns the cell updates.
 fn apply_in_order<E: Sampling>(
     cells: &mut TileGrid<crate::cell::Cell>,
     scratch: &mut Scratch<E>,
@@ -215,12 +243,6 @@ fn apply_in_order<E: Sampling>(
         .chain(workers.iter_mut())
         .take(num_scans)
         .collect();
-    for grid in &grids {
-        for (tile, _, _) in grid.marked_tiles() {
-            // The budget checked before leaves room for every tile: placing one cannot fail.
-            let _ = cells.tile_or_insert(tile, u64::MAX);
-        }
-    }
     let fill = grids.first().map_or(E::NONE, |g| g.fill());
     // Each touched tile's evidence, grid by grid in the scans' order, row by row over the tile index: the
     // order the cells' grid lends its tiles in.

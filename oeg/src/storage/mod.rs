@@ -285,16 +285,25 @@ impl<T: Copy> TileGrid<T> {
         let (lo_i, lo_j, hi_i, hi_j) = (clamp(lo_i), clamp(lo_j), clamp(hi_i), clamp(hi_j));
         let new_x = (hi_i - lo_i + 1) as u64;
         let new_y = (hi_j - lo_j + 1) as u64;
-        let slot_bytes = size_of::<Option<Tile<T>>>() as u64;
+        // Each slot of the index: the tile's pointer, and a grid that marks has a row mask and a list's pointer
+        // too. The old index is still held while the new one is filled.
+        let (by_rows, by_cells) = (!self.rows.is_empty(), !self.marks.is_empty());
+        let slot_bytes = (size_of::<Option<Tile<T>>>()
+            + if by_rows { size_of::<u64>() } else { 0 }
+            + if by_cells {
+                size_of::<Option<Box<CellMarks>>>()
+            } else {
+                0
+            }) as u64;
+        let old_slots = (self.tiles_x * self.tiles_y) as u64;
         let requested_bytes = ((self.num_tiles + self.pool.len()) * Self::tile_bytes()) as u64
-            + new_x.saturating_mul(new_y) * slot_bytes;
+            + (new_x.saturating_mul(new_y).saturating_add(old_slots)).saturating_mul(slot_bytes);
         if requested_bytes > limit_bytes {
             return Err(CapacityExceeded { requested_bytes });
         }
         let (new_x, new_y) = (new_x as usize, new_y as usize);
         let mut slots: Vec<Option<Tile<T>>> = Vec::new();
         slots.resize_with(new_x * new_y, || None);
-        let (by_rows, by_cells) = (!self.rows.is_empty(), !self.marks.is_empty());
         let mut rows = vec![0u64; if by_rows { new_x * new_y } else { 0 }];
         let mut marks: Vec<Option<Box<CellMarks>>> = Vec::new();
         marks.resize_with(if by_cells { new_x * new_y } else { 0 }, || None);

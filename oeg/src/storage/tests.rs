@@ -185,6 +185,28 @@ fn evidence_reset_where_it_is_read_leaves_the_grid_as_recycling_does() {
 }
 
 #[test]
+fn growing_a_marking_grid_s_index_counts_its_marks_and_the_old_index_held_meanwhile() {
+    let mut g = TileGrid::new(0u8);
+    let slot = g
+        .slot_or_insert(TileIndex { ti: 0, tj: 0 }, u64::MAX)
+        .expect("room");
+    g.mark_rows(slot, 1);
+    // The index is 9 x 9 tiles; a tile 1,000 tiles away grows it to 1,009 x 9 (with 4 tiles of slack). Each
+    // slot holds a tile pointer and a row mask (8 + 8 bytes), and the old 81 slots are held while the new ones
+    // are filled: one 4 KiB tile plus (9,081 + 81) x 16 bytes.
+    let far = TileIndex { ti: 1000, tj: 0 };
+    let needed = 4096 + (1009 * 9 + 81) * 16;
+    assert_eq!(
+        g.slot_or_insert(far, needed - 1),
+        Err(CapacityExceeded {
+            requested_bytes: needed
+        })
+    );
+    assert!(g.slot_or_insert(far, u64::MAX).is_ok());
+    assert!(g.memory_bytes() >= 2 * 4096 + 1009 * 9 * 16, "the grown index is counted");
+}
+
+#[test]
 fn rows_are_listed_in_order() {
     let mut seen = Vec::new();
     for_each_row((1 << 63) | (1 << 7) | 1, |r| seen.push(r));
