@@ -203,7 +203,10 @@ fn growing_a_marking_grid_s_index_counts_its_marks_and_the_old_index_held_meanwh
         })
     );
     assert!(g.slot_or_insert(far, u64::MAX).is_ok());
-    assert!(g.memory_bytes() >= 2 * 4096 + 1009 * 9 * 16, "the grown index is counted");
+    assert!(
+        g.memory_bytes() >= 2 * 4096 + 1009 * 9 * 16,
+        "the grown index is counted"
+    );
 }
 
 #[test]
