@@ -5,7 +5,6 @@
 //! evidence in their order: the same map, bit for bit, as [`Map::integrate`] on each scan in turn.
 
 use std::borrow::Borrow;
-use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
@@ -16,7 +15,7 @@ use super::scratch::{ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
 use crate::error::Error;
 use crate::scan::Scan;
-use crate::storage::{TileGrid, TileIndex};
+use crate::storage::{TileGrid, marked_by_tile};
 
 /// Scans of a window per thread. One: each scan of a window is gathered into a scratch grid of its own, and
 /// every grid more is a working set more that the cores' caches must hold between two uses of it. Measured on
@@ -244,26 +243,7 @@ fn apply_in_order<E: Sampling>(
         .take(num_scans)
         .collect();
     let fill = grids.first().map_or(E::NONE, |g| g.fill());
-    // Each touched tile's evidence, grid by grid in the scans' order, row by row over the tile index: the
-    // order the cells' grid lends its tiles in.
-    let mut by_tile: BTreeMap<(i32, i32), (TileIndex, Vec<_>)> = BTreeMap::new();
-    for grid in &mut grids {
-        for (tile, evidence, marks) in grid.marked_tiles_mut() {
-            by_tile
-                .entry((tile.tj, tile.ti))
-                .or_insert_with(|| (tile, Vec::new()))
-                .1
-                .push((evidence, marks));
-        }
-    }
-    let mut lent = cells
-        .tiles_mut_in_order(by_tile.values().map(|(tile, _)| *tile))
-        .into_iter()
-        .peekable();
-    let work: Vec<_> = by_tile
-        .into_values()
-        .map(|(tile, evidence)| (lent.next_if(|(t, _)| *t == tile).map(|(_, c)| c), evidence))
-        .collect();
+    let work = marked_by_tile(cells, grids.iter_mut().map(|g| &mut **g));
     let updated = work
         .into_par_iter()
         .map(|(mut cells, evidence)| {

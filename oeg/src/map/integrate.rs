@@ -6,7 +6,6 @@
 //! grids merged in the runs' order (where the evidence merges exactly: [`Evidence::exact_merge`]), and the
 //! touched tiles are updated in parallel, each cell from its own evidence alone.
 
-use std::collections::BTreeMap;
 use std::ops::Range;
 
 use rayon::prelude::*;
@@ -17,7 +16,7 @@ use super::scratch::{Evidence, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex};
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex, marked_by_tile};
 use crate::traversal::GroundTraversal;
 
 /// Rays between two questions of [`Map::integrate_unless`]'s `stop`: a few milliseconds of work.
@@ -233,26 +232,8 @@ fn merge_runs<E: Evidence>(
         }
     }
     let fill = main.fill();
-    // Each touched tile's later runs, in the runs' order, row by row over the tile index.
-    let mut later: BTreeMap<(i32, i32), (TileIndex, Vec<_>)> = BTreeMap::new();
-    for worker in workers.iter_mut() {
-        for (tile, evidence, marked) in worker.marked_tiles_mut() {
-            later
-                .entry((tile.tj, tile.ti))
-                .or_insert_with(|| (tile, Vec::new()))
-                .1
-                .push((evidence, marked));
-        }
-    }
-    let mut lent = main
-        .tiles_mut_in_order(later.values().map(|(tile, _)| *tile))
-        .into_iter()
-        .peekable();
     // Every worker tile has its tile in `main`, placed above; a worker's evidence is reset in any case.
-    let work: Vec<_> = later
-        .into_values()
-        .map(|(tile, runs)| (lent.next_if(|(t, _)| *t == tile).map(|(_, m)| m), runs))
-        .collect();
+    let work = marked_by_tile(main, workers.iter_mut());
     work.into_par_iter().for_each(|(mut merged, runs)| {
         for (evidence, marked) in runs {
             if let Some(merged) = merged.as_deref_mut() {

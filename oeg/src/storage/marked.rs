@@ -129,3 +129,38 @@ impl<T: Copy> TileGrid<T> {
         self.num_tiles = 0;
     }
 }
+
+/// One tile of a pass over what some grids marked ([`marked_by_tile`]): the target grid's tile there, if it has
+/// one, and each grid's marked tile with its marks, in the grids' order.
+pub(crate) type MarkedTileWork<'a, T, E> = (
+    Option<&'a mut [T; TILE_CELLS]>,
+    Vec<(&'a mut [E; TILE_CELLS], Marked<'a>)>,
+);
+
+/// Every tile that any of `grids` marked, row by row over the tile index, with `target`'s tile there and each
+/// grid's marked tile, lent mutably so that the pass resets what it reads ([`Marked::reset`]) on the thread that
+/// read it; each tile's work is independent of the others', for a parallel pass. The grids then take their
+/// tiles back ([`TileGrid::release_reset`]).
+pub(crate) fn marked_by_tile<'a, T: Copy, E: Copy + 'a>(
+    target: &'a mut TileGrid<T>,
+    grids: impl IntoIterator<Item = &'a mut TileGrid<E>>,
+) -> Vec<MarkedTileWork<'a, T, E>> {
+    let mut by_tile: std::collections::BTreeMap<(i32, i32), (TileIndex, Vec<_>)> = Default::default();
+    for grid in grids {
+        for (tile, evidence, marked) in grid.marked_tiles_mut() {
+            by_tile
+                .entry((tile.tj, tile.ti))
+                .or_insert_with(|| (tile, Vec::new()))
+                .1
+                .push((evidence, marked));
+        }
+    }
+    let mut lent = target
+        .tiles_mut_in_order(by_tile.values().map(|(tile, _)| *tile))
+        .into_iter()
+        .peekable();
+    by_tile
+        .into_values()
+        .map(|(tile, marked)| (lent.next_if(|(t, _)| *t == tile).map(|(_, t)| t), marked))
+        .collect()
+}

@@ -8,6 +8,7 @@
 mod marked;
 mod marks;
 
+pub(crate) use marked::marked_by_tile;
 #[cfg(test)]
 use marks::for_each_row;
 pub(crate) use marks::{CellMarks, Marked};
