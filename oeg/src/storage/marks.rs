@@ -91,9 +91,9 @@ impl CellMarks {
         self.len = self.mark_after(self.len, offset, first);
     }
 
-    /// [`CellMarks::mark_if`] for a caller that keeps the count itself, in a register across a loop: marks
-    /// the cell at `offset` after the first `len` marks if `first`, and returns the new count, to be stored
-    /// with [`CellMarks::set_len`] when the loop ends.
+    /// Marks the cell at `offset` after the first `len` marks if `first` (its first write since the tile was
+    /// placed), and returns the new count, for a caller that keeps the count itself, in a register across a
+    /// loop, and stores it with [`CellMarks::set_len`] when the loop ends.
     #[inline(always)]
     pub(crate) fn mark_after(&mut self, len: usize, offset: usize, first: bool) -> usize {
         let n = len.min(TILE_CELLS);
