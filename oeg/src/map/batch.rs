@@ -19,8 +19,8 @@ use crate::storage::{TileGrid, marked_by_tile};
 
 /// Scans of a window per thread. One: each scan of a window is gathered into a scratch grid of its own, and
 /// every grid more is a working set more that the cores' caches must hold between two uses of it. Measured on
-/// the default run's log on 2 threads: 8 scans a thread took 1.4x the gathering time and 1.3x the update time
-/// of 1 (docs/performance.md); the threads' meetings, twice a window, cost less than that.
+/// the default run's log on 2 threads, in a build with phase timers: 8 scans a thread took 1.4x the gathering
+/// time and 1.3x the update time of 1; the threads' meetings, twice a window, cost less than that.
 const SCANS_PER_THREAD: usize = 1;
 
 /// The parts of the budget a window's grids are given at least: each grid may take at most this share.
@@ -44,9 +44,8 @@ impl Map {
     /// Under a model whose samples do not read the map (one whose scratch is the paper's evidence), runs of
     /// consecutive short scans (fewer than 8,192 rays) go in windows of one scan a thread: a window's scans
     /// are gathered side by side, then its cells are updated tile by tile in parallel, where the evidence read
-    /// is reset. This is what
-    /// makes a robot's log, thousands of scans of a few hundred rays each, use every core; a long scan is split
-    /// between the threads on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold
+    /// is reset. This is what makes a robot's log, thousands of scans of a few hundred rays each, use every
+    /// core; a long scan is split between the threads on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold
     /// less than half the memory limit: near it, scans go one at a time, so that a limit stops the same scan at
     /// the same place.
     ///
