@@ -45,9 +45,10 @@ impl Map {
     /// consecutive short scans (fewer than 8,192 rays) go in windows of one scan a thread: a window's scans
     /// are gathered side by side, then its cells are updated tile by tile in parallel, where the evidence read
     /// is reset. This is what makes a robot's log, thousands of scans of a few hundred rays each, use every
-    /// core; a long scan is split between the threads on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold
-    /// less than half the memory limit: near it, scans go one at a time, so that a limit stops the same scan at
-    /// the same place.
+    /// core; a long scan is split between the threads on its own ([`Map::integrate`]). Windows run only while
+    /// the map and its scratch hold less than half the memory limit, each scan's scratch under a sixteenth of
+    /// that half: near it, or for a scan of very long rays, scans go one at a time, so that a limit stops the
+    /// same scan at the same place.
     ///
     /// # Errors
     /// The first scan [`Map::integrate`] refuses, with its place in `scans`.
