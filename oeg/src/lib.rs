@@ -52,7 +52,8 @@ pub use preset::{MapModel, MapPreset, ModelChoice, ModelKeys, ROBUST_HEIGHT_MARG
 // The decision: where the robot can drive, and a planner that uses it.
 pub use footprint::{Footprint, Pose2};
 pub use planner::{
-    DEFAULT_DOUBT_COST, DEFAULT_FOOTPRINT_RADIUS_M, DEFAULT_INFLATION_RADIUS_M, INFLATED_CELL_COST, NoPath,
+    DEFAULT_COST_SCALING_FACTOR, DEFAULT_DOUBT_COST, DEFAULT_FOOTPRINT_RADIUS_M,
+    DEFAULT_INFLATION_COST_WIDTH_M, DEFAULT_INFLATION_RADIUS_M, INFLATED_CELL_COST, NoPath,
     PLANNER_BYTES_PER_CELL, Plan, PlannerOptions, UncertainCells, UnknownCells, forbidden_mask, plan,
     plan_or_why,
 };

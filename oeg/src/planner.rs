@@ -2,9 +2,12 @@
 //!
 //! 8-connected A* over a [`GridWindow`] from a start cell to a goal cell. The robot's centre may enter a cell
 //! when the cell is drivable and no blocked cell lies within [`PlannerOptions::inflation_radius_m`] of it (ROS
-//! costmap_2d's lethal inscribed radius); unknown cells follow [`UnknownCells`]. Diagonal moves may not cut a
-//! corner (both cells beside the diagonal must be enterable). Costs are integers (1000 a side, 1414 a diagonal)
-//! and ties are broken by cell offset, so the same decisions always give the same path.
+//! costmap_2d's lethal inscribed radius); unknown cells follow [`UnknownCells`]. Beyond that radius a cell
+//! costs more to enter the nearer it lies to a blocked cell, decaying to nothing over
+//! [`PlannerOptions::inflation_cost_width_m`] (costmap_2d's inflation cost), so a path keeps a margin where
+//! there is room. Diagonal moves may not cut a corner (both cells beside the diagonal must be enterable).
+//! Costs are integers (1000 a side, 1414 a diagonal) and ties are broken by cell offset, so the same decisions
+//! always give the same path.
 //!
 //! ```
 //! use oeg::{PlannerOptions, plan};
@@ -17,7 +20,11 @@
 //!     .cells()
 //!     .map(|c| if c.i == 5 && c.j < 4 { Traversability::Blocked } else { Traversability::Free })
 //!     .collect();
-//! let options = PlannerOptions { inflation_radius_m: 0.0, ..PlannerOptions::default() };
+//! let options = PlannerOptions {
+//!     inflation_radius_m: 0.0,
+//!     inflation_cost_width_m: 0.0,
+//!     ..PlannerOptions::default()
+//! };
 //! let path = plan(&window, &decisions, CellIndex::new(0, 0), CellIndex::new(9, 0), &options)?
 //!     .expect("through the gap");
 //! assert!(path.cells.contains(&CellIndex::new(5, 4)));
@@ -99,7 +106,27 @@ pub struct PlannerOptions {
     /// in cell lengths: a path crosses `n` such cells only when going round them is more than
     /// `n * doubt_cost` cells longer. Default [`DEFAULT_DOUBT_COST`].
     pub doubt_cost: f64,
+    /// Beyond the inflation radius, over this distance, metres, a cell costs more to enter the nearer it lies
+    /// to a blocked cell (costmap_2d's inflation cost, which decays from the lethal radius out to nav2's
+    /// `inflation_radius`): a cell `d` metres beyond the inflation radius costs [`INFLATED_CELL_COST`] x
+    /// exp(-[`PlannerOptions::cost_scaling_factor`] x `d`) cell lengths more. A path then keeps a margin
+    /// where there is room, instead of running along the inflation's edge, where any tracking error puts
+    /// the footprint onto what the inflation grew from. Default [`DEFAULT_INFLATION_COST_WIDTH_M`]; 0: no
+    /// cost.
+    pub inflation_cost_width_m: f64,
+    /// How fast that cost decays, per metre (nav2's `cost_scaling_factor`). Default
+    /// [`DEFAULT_COST_SCALING_FACTOR`].
+    pub cost_scaling_factor: f64,
 }
+
+/// The default [`PlannerOptions::inflation_cost_width_m`], metres: nav2's default `inflation_radius` (0.55 m)
+/// less the inscribed radius its lethal cost stands for ([`DEFAULT_INFLATION_RADIUS_M`], 0.25 m), so that a
+/// planner whose inflation radius is larger (a footprint's circumscribed radius) keeps the same band beyond it.
+pub const DEFAULT_INFLATION_COST_WIDTH_M: f64 = 0.30;
+
+/// The default [`PlannerOptions::cost_scaling_factor`], per metre: nav2's inflation layer's (10). The cost
+/// halves every 7 cm: 4 cell lengths at the inflation's edge, 1.5 at 10 cm beyond it, 0.2 at 30 cm.
+pub const DEFAULT_COST_SCALING_FACTOR: f64 = 10.0;
 
 /// The default [`PlannerOptions::doubt_cost`]: a cell the map cannot decide costs 5 cell lengths to enter, its
 /// own and 4 more, so the planner goes round a few such cells but crosses a band of them rather than make a
@@ -120,6 +147,8 @@ impl Default for PlannerOptions {
             uncertain: UncertainCells::default(),
             optimistic_beyond_m: None,
             doubt_cost: DEFAULT_DOUBT_COST,
+            inflation_cost_width_m: DEFAULT_INFLATION_COST_WIDTH_M,
+            cost_scaling_factor: DEFAULT_COST_SCALING_FACTOR,
         }
     }
 }
@@ -129,7 +158,8 @@ impl PlannerOptions {
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] for a negative, non-finite or absurd (over 100 m) inflation or footprint
-    /// radius or optimistic distance, or a doubt cost that is not a number from 0 to 1000.
+    /// radius, optimistic distance or inflation cost width, a doubt cost that is not a number from 0 to 1000,
+    /// or a cost scaling factor that is not a number from 0 to 1000 per metre.
     pub fn validate(&self) -> Result<()> {
         if !(self.doubt_cost.is_finite() && (0.0..=1000.0).contains(&self.doubt_cost)) {
             return Err(Error::setting(
@@ -140,10 +170,18 @@ impl PlannerOptions {
                 ),
             ));
         }
+        let k = self.cost_scaling_factor;
+        if !(k.is_finite() && (0.0..=1000.0).contains(&k)) {
+            return Err(Error::setting(
+                "cost_scaling_factor",
+                format!("must be a number per metre from 0 to 1000, got {k}"),
+            ));
+        }
         for (name, r) in [
             ("inflation_radius_m", self.inflation_radius_m),
             ("footprint_radius_m", self.footprint_radius_m),
             ("optimistic_beyond_m", self.optimistic_beyond_m.unwrap_or(0.0)),
+            ("inflation_cost_width_m", self.inflation_cost_width_m),
         ] {
             if !(r.is_finite() && (0.0..=100.0).contains(&r)) {
                 return Err(Error::setting(
@@ -176,31 +214,89 @@ pub fn forbidden_mask(
     decisions: &[Traversability],
     options: &PlannerOptions,
 ) -> Result<Vec<bool>> {
-    let (region, resolution_m) = (window.region(), window.resolution_m());
-    validate_inputs(region, decisions, options)?;
-    let is_obstacle = |t: Traversability| match t {
+    validate_inputs(window.region(), decisions, options)?;
+    Ok(Inflation::of(window, decisions, options).forbidden(options.inflation_radius_m))
+}
+
+/// What the planner's inflation grows from and how far every cell lies from it.
+struct Inflation {
+    /// The cells the robot's centre may not enter whatever the radius: the obstacles, and unknown cells
+    /// under [`UnknownCells::Avoid`].
+    forbidden: Vec<bool>,
+    /// The squared distance, in cells centre to centre, from every cell to the nearest obstacle; `None`
+    /// when there is none or neither the inflation nor its cost reaches a neighbour.
+    squared_distances: Option<Vec<f64>>,
+    resolution_m: f64,
+}
+
+impl Inflation {
+    /// The inflation of `decisions` under `options`.
+    fn of(window: &GridWindow, decisions: &[Traversability], options: &PlannerOptions) -> Self {
+        let (region, resolution_m) = (window.region(), window.resolution_m());
+        let obstacle: Vec<bool> = decisions.iter().map(|t| grows_inflation(*t, options)).collect();
+        let forbidden = decisions
+            .iter()
+            .zip(&obstacle)
+            .map(|(t, o)| *o || (*t == Traversability::Unknown && options.unknown == UnknownCells::Avoid))
+            .collect();
+        // Exact squared distances (in cells, centre to centre) to the nearest obstacle: linear in the
+        // region's size whatever the radius, so a large radius at a fine resolution costs no more than a
+        // small one.
+        let reach = (options.inflation_radius_m + options.inflation_cost_width_m) / resolution_m;
+        let squared_distances = (reach + 1e-9 >= 1.0 && obstacle.iter().any(|o| *o))
+            .then(|| squared_distances(&obstacle, region.num_x as usize, region.num_y as usize));
+        Self {
+            forbidden,
+            squared_distances,
+            resolution_m,
+        }
+    }
+
+    /// Where the robot's centre may not be with the inflation `radius_m`.
+    fn forbidden(&self, radius_m: f64) -> Vec<bool> {
+        let r = radius_m / self.resolution_m + 1e-9;
+        match &self.squared_distances {
+            Some(d2) if r >= 1.0 => self
+                .forbidden
+                .iter()
+                .zip(d2)
+                .map(|(f, d)| *f || *d <= r * r)
+                .collect(),
+            _ => self.forbidden.clone(),
+        }
+    }
+
+    /// Adds to `extra` the cost of entering each cell beyond the inflation radius and within
+    /// [`PlannerOptions::inflation_cost_width_m`] of it, in A*'s units: [`INFLATED_CELL_COST`] cell lengths
+    /// at the radius, decaying by [`PlannerOptions::cost_scaling_factor`].
+    fn add_costs(&self, extra: &mut [u64], options: &PlannerOptions) {
+        let Some(d2) = self
+            .squared_distances
+            .as_ref()
+            .filter(|_| options.inflation_cost_width_m > 0.0)
+        else {
+            return;
+        };
+        let radius = options.inflation_radius_m / self.resolution_m + 1e-9;
+        let reach = radius + options.inflation_cost_width_m / self.resolution_m;
+        for (e, d2) in extra.iter_mut().zip(d2) {
+            if *d2 > radius * radius && *d2 <= reach * reach {
+                let beyond_m = (d2.sqrt() - radius) * self.resolution_m;
+                let cost = INFLATED_CELL_COST * (-options.cost_scaling_factor * beyond_m).exp();
+                *e += (cost * SIDE_COST as f64).round() as u64;
+            }
+        }
+    }
+}
+
+/// Whether the inflation grows from a cell of class `t`.
+fn grows_inflation(t: Traversability, options: &PlannerOptions) -> bool {
+    match t {
         Traversability::Blocked => true,
         Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
         Traversability::Unknown => options.unknown == UnknownCells::Inflate,
         Traversability::Free | Traversability::Traversable => false,
-    };
-    let obstacle: Vec<bool> = decisions.iter().map(|t| is_obstacle(*t)).collect();
-    let mut forbidden: Vec<bool> = decisions
-        .iter()
-        .zip(&obstacle)
-        .map(|(t, o)| *o || (*t == Traversability::Unknown && options.unknown == UnknownCells::Avoid))
-        .collect();
-
-    // Exact squared distances (in cells, centre to centre) to the nearest obstacle: linear in the region's size
-    // whatever the radius, so a large radius at a fine resolution costs no more than a small one.
-    let r = options.inflation_radius_m / resolution_m + 1e-9;
-    if r >= 1.0 && obstacle.iter().any(|o| *o) {
-        let d2 = squared_distances(&obstacle, region.num_x as usize, region.num_y as usize);
-        for (f, d) in forbidden.iter_mut().zip(&d2) {
-            *f |= *d <= r * r;
-        }
     }
-    Ok(forbidden)
 }
 
 /// The checks every entry point makes: sane options and one decision per cell (the window's resolution was
@@ -348,25 +444,16 @@ pub fn plan_or_why(
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
-    let mut extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options);
-    let mut forbidden = forbidden_mask(window, &decisions, options)?;
+    let mut extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options)
+        .unwrap_or_else(|| vec![0; decisions.len()]);
+    let inflation = Inflation::of(window, &decisions, options);
+    let mut forbidden = inflation.forbidden(options.inflation_radius_m);
     if forbidden[s]
         && let Some(clearance) = start_clearance(region, resolution_m, &decisions, start, options)
     {
-        let inflated = std::mem::replace(
-            &mut forbidden,
-            forbidden_mask(
-                window,
-                &decisions,
-                &PlannerOptions {
-                    inflation_radius_m: clearance,
-                    ..*options
-                },
-            )?,
-        );
+        let inflated = std::mem::replace(&mut forbidden, inflation.forbidden(clearance));
         // The way out of the inflation is a cost, as costmap_2d's: a path leaves it the shortest way rather
         // than run along it at the start's clearance, where the footprint's corners meet what it inflates.
-        let extra = extra.get_or_insert_with(|| vec![0; forbidden.len()]);
         let cost = (INFLATED_CELL_COST * SIDE_COST as f64).round() as u64;
         for ((e, inflated), allowed) in extra.iter_mut().zip(&inflated).zip(&forbidden) {
             if *inflated && !*allowed {
@@ -374,13 +461,15 @@ pub fn plan_or_why(
             }
         }
     }
+    inflation.add_costs(&mut extra, options);
+    drop(inflation);
     if forbidden[s] {
         return Ok(Err(NoPath::Start(original[s])));
     }
     if forbidden[g] {
         return Ok(Err(NoPath::Goal(original[g])));
     }
-    let found = astar(region, &forbidden, extra.as_deref(), s, g).ok_or(NoPath::NoConnection);
+    let found = astar(region, &forbidden, &extra, s, g).ok_or(NoPath::NoConnection);
     Ok(found.map(|offsets| {
         let nx = region.num_x as usize;
         let cells: Vec<CellIndex> = offsets
@@ -440,17 +529,14 @@ fn start_clearance(
     let reach = (options.inflation_radius_m / resolution_m)
         .ceil()
         .min(f64::from(region.num_x.max(region.num_y))) as i32;
-    let grows = |t: Traversability| match t {
-        Traversability::Blocked => true,
-        Traversability::Uncertain => options.uncertain == UncertainCells::Blocked,
-        Traversability::Unknown => options.unknown == UnknownCells::Inflate,
-        Traversability::Free | Traversability::Traversable => false,
-    };
     let mut nearest = f64::INFINITY;
     for dj in -reach..=reach {
         for di in -reach..=reach {
             let c = CellIndex::new(start.i.saturating_add(di), start.j.saturating_add(dj));
-            if region.offset(c).is_some_and(|k| grows(decisions[k])) {
+            if region
+                .offset(c)
+                .is_some_and(|k| grows_inflation(decisions[k], options))
+            {
                 nearest = nearest.min(f64::from(di).hypot(f64::from(dj)) * resolution_m);
             }
         }
@@ -460,9 +546,10 @@ fn start_clearance(
 }
 
 /// The memory [`plan`] takes per cell of its region, bytes, at most in practice: the decisions' copy and the
-/// forbidden mask (1 each), A*'s cost (8), parent (4) and closed flag (1), and its open list (24 a cell pushed
-/// once; 40 in all, rounded up). A caller bounds a plan's region with it before planning.
-pub const PLANNER_BYTES_PER_CELL: u64 = 40;
+/// forbidden mask (1 each), the cost of entering each cell (8), A*'s cost (8), parent (4) and closed flag
+/// (1), and its open list (24 a cell pushed once); 47 in all, rounded up. The inflation's distances (8) and
+/// masks are freed before A* starts. A caller bounds a plan's region with it before planning.
+pub const PLANNER_BYTES_PER_CELL: u64 = 48;
 
 /// Octile distance in cost units: exact for 8-connected moves on an empty grid, so A* stays optimal.
 fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
@@ -474,11 +561,11 @@ fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
 }
 
 /// A* over the offsets of a `region`-shaped mask; the path's offsets, start first.
-/// `extra`: a cost added for entering each cell (none: every cell costs its move alone).
+/// `extra`: a cost added for entering each cell.
 fn astar(
     region: &CellRegion,
     forbidden: &[bool],
-    extra: Option<&[u64]>,
+    extra: &[u64],
     start: usize,
     goal: usize,
 ) -> Option<Vec<usize>> {
@@ -531,7 +618,7 @@ fn astar(
                 continue; // no corner cutting
             }
             let step = if diagonal { DIAGONAL_COST } else { SIDE_COST };
-            let g_n = g + step + extra.map_or(0, |e| e[n]);
+            let g_n = g + step + extra[n];
             if g_n < cost[n] {
                 cost[n] = g_n;
                 parent[n] = k as u32;

@@ -19,8 +19,9 @@ pub(crate) struct PlanArgs {
     #[arg(long, default_value = "out/plan")]
     out: PathBuf,
     /// A setting by its scenario key (repeatable): planner.inflation_radius_m (0.25, the Pioneer 3-AT's
-    /// inscribed radius), planner.unknown (avoid, inflate or drivable), robot.max_step_m (0.035),
-    /// robot.height_m (0.46), map.traversability.
+    /// inscribed radius), planner.inflation_cost_width_m (0.30) and planner.cost_scaling_factor (10, per
+    /// metre: the cost of cells near the inflation), planner.unknown (avoid, inflate or drivable),
+    /// robot.max_step_m (0.035), robot.height_m (0.46), map.traversability.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
     /// Also write each figure as SVG beside its PNG, for papers.

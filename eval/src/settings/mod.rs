@@ -9,7 +9,7 @@
 //! | `map.resolution_m`, `map.model.*` | yes | yes | no (the map file has them) |
 //! | `map.traversability` | yes | yes | yes |
 //! | `robot.max_step_m`, `robot.height_m` | yes | yes | yes |
-//! | `planner.inflation_radius_m`, `planner.footprint_radius_m`, `planner.unknown`, `planner.uncertain` | yes | no | yes |
+//! | `planner.inflation_radius_m`, `planner.footprint_radius_m`, `planner.unknown`, `planner.uncertain`, `planner.inflation_cost_width_m`, `planner.cost_scaling_factor` | yes | no | yes |
 //! | `input.graph_sensor`, `input.pcd_sensor`, `input.pcd_frame`, `input.pcd_invalid`, `input.log_pose`, `input.bag.*` | no | yes | no |
 //! | every other scenario key | yes | no | no |
 //!

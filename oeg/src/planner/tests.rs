@@ -25,6 +25,7 @@ fn no_inflation(unknown: UnknownCells) -> PlannerOptions {
         footprint_radius_m: 0.0,
         unknown,
         uncertain: UncertainCells::Blocked,
+        inflation_cost_width_m: 0.0,
         ..PlannerOptions::default()
     }
 }
@@ -94,7 +95,7 @@ fn undecided_cells_cost_more_than_sure_ones() {
 }
 
 #[test]
-fn a_doubt_cost_or_an_optimistic_distance_out_of_range_is_refused() {
+fn a_doubt_cost_an_optimistic_distance_or_an_inflation_cost_out_of_range_is_refused() {
     for bad in [
         PlannerOptions {
             doubt_cost: -1.0,
@@ -106,6 +107,18 @@ fn a_doubt_cost_or_an_optimistic_distance_out_of_range_is_refused() {
         },
         PlannerOptions {
             optimistic_beyond_m: Some(f64::INFINITY),
+            ..PlannerOptions::default()
+        },
+        PlannerOptions {
+            inflation_cost_width_m: -0.1,
+            ..PlannerOptions::default()
+        },
+        PlannerOptions {
+            cost_scaling_factor: f64::NAN,
+            ..PlannerOptions::default()
+        },
+        PlannerOptions {
+            cost_scaling_factor: -1.0,
             ..PlannerOptions::default()
         },
     ] {
@@ -319,6 +332,66 @@ fn a_robot_inside_the_inflation_leaves_it_before_driving_along_it() {
     );
     let first_out = p.cells.iter().position(|c| c.j > 5).expect("leaves");
     assert!(p.cells[first_out..].iter().all(|c| c.j > 5), "{:?}", p.cells);
+}
+
+#[test]
+fn beyond_the_inflation_a_path_keeps_the_margin_the_room_allows() {
+    // 0.05 m cells; a wall along y = 0 under a 120 x 20 room; start and goal 0.30 m above it, just outside a
+    // 0.25 m inflation. Without the inflation cost the shortest path runs straight along the wall at 0.30 m;
+    // with it, the path moves out to where entering a cell costs almost nothing and comes back at the end.
+    let r = region(120, 20);
+    let d = marked(&r, Traversability::Blocked, |c| c.j == 0);
+    let (s, g) = (CellIndex::new(2, 6), CellIndex::new(117, 6));
+    let costed = PlannerOptions {
+        inflation_radius_m: 0.25,
+        footprint_radius_m: 0.25,
+        ..PlannerOptions::default()
+    };
+    let flat = PlannerOptions {
+        inflation_cost_width_m: 0.0,
+        ..costed
+    };
+    let straight = plan(&on(&r, 0.05), &d, s, g, &flat)
+        .expect("valid")
+        .expect("a path");
+    assert!(straight.cells.iter().all(|c| c.j == 6), "{:?}", straight.cells);
+    let kept = plan(&on(&r, 0.05), &d, s, g, &costed)
+        .expect("valid")
+        .expect("a path");
+    let middle = &kept.cells[kept.cells.len() / 3..2 * kept.cells.len() / 3];
+    // Out past most of the 0.30 m band: the cost 0.20 m beyond the radius is 0.5 cell lengths a cell.
+    assert!(middle.iter().map(|c| c.j).min() >= Some(10), "{:?}", kept.cells);
+    assert!(kept.length_m > straight.length_m);
+    // The cost never forbids: in a corridor with no room, the path is the straight one.
+    let corridor = marked(&r, Traversability::Blocked, |c| c.j == 0 || c.j == 12);
+    let through = plan(&on(&r, 0.05), &corridor, s, g, &costed)
+        .expect("valid")
+        .expect("a path");
+    assert!(through.cells.iter().all(|c| c.j == 6), "{:?}", through.cells);
+}
+
+#[test]
+fn the_inflation_cost_decays_from_the_radius_to_nothing_at_the_band_s_edge() {
+    // One blocked cell at the origin of a 40 x 1 row of 0.05 m cells: each cell's cost is a function of its
+    // distance alone, 4 cell lengths just beyond the radius, halving about every 7 cm, none beyond the band.
+    let r = region(40, 1);
+    let d = marked(&r, Traversability::Blocked, |c| c.i == 0);
+    let options = PlannerOptions::default();
+    let inflation = Inflation::of(&on(&r, 0.05), &d, &options);
+    let mut extra = vec![0; 40];
+    inflation.add_costs(&mut extra, &options);
+    for (i, e) in extra.iter().enumerate() {
+        let distance_m = i as f64 * 0.05;
+        let expected = if distance_m <= 0.25 + 1e-9 || distance_m > 0.55 + 1e-9 {
+            0.0
+        } else {
+            INFLATED_CELL_COST * (-10.0 * (distance_m - 0.25)).exp()
+        };
+        assert_eq!(*e, (expected * 1000.0).round() as u64, "cell {i}");
+    }
+    assert!((2000..4000).contains(&extra[6]), "{extra:?}");
+    assert!(extra[6..=11].windows(2).all(|w| w[0] > w[1]), "{extra:?}");
+    assert!(extra[12..].iter().all(|e| *e == 0), "{extra:?}");
 }
 
 #[test]

@@ -151,6 +151,11 @@ pub struct PlannerSettings {
     /// The extra cost, in cell lengths, of crossing a cell the map cannot decide where a closed loop plans
     /// optimistically (beyond `[navigation] decide_within_m`); default `oeg::DEFAULT_DOUBT_COST` (4).
     pub doubt_cost: Option<f64>,
+    /// The band beyond the inflation radius over which entering a cell costs more the nearer it lies to a
+    /// blocked cell, metres; default `oeg::DEFAULT_INFLATION_COST_WIDTH_M` (0.30); 0: no cost.
+    pub inflation_cost_width_m: Option<f64>,
+    /// How fast that cost decays, per metre; default `oeg::DEFAULT_COST_SCALING_FACTOR` (10, nav2's).
+    pub cost_scaling_factor: Option<f64>,
 }
 
 impl PlannerSettings {
@@ -163,6 +168,12 @@ impl PlannerSettings {
             uncertain: self.uncertain,
             optimistic_beyond_m: None,
             doubt_cost: self.doubt_cost.unwrap_or(oeg::DEFAULT_DOUBT_COST),
+            inflation_cost_width_m: self
+                .inflation_cost_width_m
+                .unwrap_or(oeg::DEFAULT_INFLATION_COST_WIDTH_M),
+            cost_scaling_factor: self
+                .cost_scaling_factor
+                .unwrap_or(oeg::DEFAULT_COST_SCALING_FACTOR),
         }
     }
 
