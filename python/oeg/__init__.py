@@ -282,7 +282,8 @@ def plan(
 
     Args:
         start, goal: World x and y, metres.
-        settings: ``oeg plan``'s keys: ``planner.inflation_radius_m``, ``planner.unknown``,
+        settings: ``oeg plan``'s keys: ``planner.inflation_radius_m``,
+            ``planner.inflation_cost_width_m``, ``planner.cost_scaling_factor``, ``planner.unknown``,
             ``robot.max_step_m``, ``robot.height_m``, ``map.traversability``.
 
     Returns:
