@@ -157,7 +157,9 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 24] = [
     ("long_range_stereo", 4, 2, 0.87),
     ("nav_around_wall", 3, 2, 0.96),
     ("nav_blind_spot", 2, 214, 0.95),
-    ("nav_board_and_branch", 2, 46, 0.96),
+    // Measured again with the planner's inflation cost (75 clearance cells, 40 before): the robot passes 0.41 m
+    // from the low board instead of 0.23 m, and sees less of its underside.
+    ("nav_board_and_branch", 2, 85, 0.96),
     ("nav_curbs", 118, 2, 0.97),
     ("nav_person_crossing", 2, 2, 0.97),
     ("outdoor_stereo", 2, 3, 0.89),
@@ -166,7 +168,7 @@ const ROBUST_BOUNDS: [(&str, u64, u64, f64); 24] = [
     ("physics_curbs", 81, 2, 0.94),
     // Physics in the closed loop, under robust already (measured on 2026-12-05: 100, 0, 0.976; 0, 69, 0.947;
     // 0, 0, 0.916).
-    ("physics_nav_board", 2, 78, 0.92),
+    ("physics_nav_board", 2, 137, 0.92),
     ("physics_nav_curbs", 112, 2, 0.95),
     ("physics_nav_slope", 2, 2, 0.89),
     ("pose_drift", 7, 2, 0.96),
