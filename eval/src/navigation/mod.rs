@@ -8,12 +8,14 @@
 //! the controller's command moves the robot in the world, settled on the terrain. The judge watches the true
 //! footprint against the truth (`contact`); nothing the robot decides reads the truth.
 
+mod builtin;
 mod closed_loop;
 pub(crate) mod contact;
 pub(crate) mod controller;
 mod diagnosis;
 pub mod external;
 mod guard;
+mod looked_at;
 pub(crate) mod record;
 mod recovery;
 
@@ -26,6 +28,7 @@ use sim::truth::TruthRaster;
 use crate::error::{EvalError, Result};
 use crate::mapping::Mapping;
 use crate::progress::Progress;
+pub use builtin::planner_options;
 pub use closed_loop::navigate;
 pub use contact::APPROACH_WINDOW_M;
 use contact::ContactWatch;
@@ -212,15 +215,20 @@ fn clamped_cell(window: &oeg::GridWindow, (x, y): (f64, f64)) -> Option<CellInde
     inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
 }
 
-/// Plans on the run's map from the estimated pose.
-fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
+/// Plans on the run's map from the estimated pose; the built-in planner plans on the decisions as the cells
+/// the robot `looked_at` decide them.
+fn replan(
+    mapping: &Mapping,
+    inputs: &NavigationInputs<'_>,
+    from: Pose2,
+    looked_at: &mut looked_at::LookedAt,
+) -> Result<Replan> {
     let s = inputs.scenario;
     let map = &mapping.maps[0];
     // The map's cells over the scenario's window (the truth's, which the robot never reads).
     let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
-    let (geometry, region) = (*window.geometry(), *window.region());
+    let region = *window.region();
     let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
-    let options = planner_options(inputs);
     let decisions = map
         .traversability_layer(region, &inputs.truth.profile, s.map.traversability)?
         .values;
@@ -238,12 +246,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
                     timed_out: false,
                 });
             };
-            oeg::plan(&window, &decisions, a, b, &options)
-                .map_err(|e| EvalError::Input {
-                    path: s.name.clone().into(),
-                    message: format!("planner: {e}"),
-                })?
-                .map(|p| path_points(&p, &geometry, goal))
+            builtin::plan(inputs, &window, &decisions, (a, b), goal, looked_at)?
         }
         PlannerSource::External(planner) => {
             let mut files = oeg::planner_files(
@@ -251,7 +254,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
                 region,
                 &inputs.truth.profile,
                 s.map.traversability,
-                options.uncertain,
+                planner_options(inputs).uncertain,
             )?;
             // The map itself too, for planners that read this project's format (`oeg plan`).
             files.push(("map.oeg".into(), oeg::map_to_bytes(map)));
@@ -308,35 +311,6 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
             closed_by: diagnosis::closed_by(&decisions, inputs, &window, from, goal)?,
         },
     })
-}
-
-/// The planner's options while navigating: the scenario's `[planner]` options, with `[navigation]`'s
-/// `unknown`, and by default an inflation of the footprint's circumscribed radius (nav2's rule: less lets a
-/// turning robot's corners reach what the planner kept its centre away from) and half a cell's diagonal.
-/// The inflation is measured between cell centres, but the footprint meets a cell's square, which reaches
-/// half a diagonal beyond its centre: without that half diagonal, a path whose centre keeps out of every
-/// inflation still runs the footprint's corners into the squares of the cells it inflates, and the
-/// collision guard, which watches the footprint against the squares, stops the robot on its own plan.
-pub fn planner_options(inputs: &NavigationInputs<'_>) -> oeg::PlannerOptions {
-    let planner = &inputs.scenario.planner;
-    let half_diagonal = inputs.truth.window.resolution_m() * std::f64::consts::FRAC_1_SQRT_2;
-    oeg::PlannerOptions {
-        unknown: inputs.settings.unknown,
-        optimistic_beyond_m: Some(inputs.settings.decide_within()),
-        inflation_radius_m: planner.inflation_radius_m.unwrap_or_else(|| {
-            oeg::DEFAULT_INFLATION_RADIUS_M.max(inputs.footprint.circumscribed_radius_m()) + half_diagonal
-        }),
-        ..planner.options()
-    }
-}
-
-/// The path through a plan's cell centres, ending at the goal itself.
-fn path_points(plan: &Plan, geometry: &oeg::GridGeometry, goal: (f64, f64)) -> Vec<(f64, f64)> {
-    let mut points: Vec<(f64, f64)> = plan.cells.iter().map(|c| geometry.cell_center(*c)).collect();
-    if let Some(last) = points.last_mut() {
-        *last = goal;
-    }
-    points
 }
 
 /// The length of the built-in planner's path on the truth from `from` to the goal, metres.
