@@ -1,25 +1,21 @@
-//! The built-in planner while navigating: its options, and a plan on the map as the robot's memory of the cells
-//! it looked at decides them.
+//! The built-in planner while navigating: its options, and a plan on the map.
 
 use oeg::{CellIndex, Plan, Traversability};
 
 use super::NavigationInputs;
-use super::looked_at::LookedAt;
 use crate::error::{EvalError, Result};
 
-/// The built-in planner's path from cell `a` to cell `b` on `decisions` as the cells the robot `looked_at`
-/// decide them, ending at `goal` itself (`None`: no path).
+/// The built-in planner's path from cell `a` to cell `b` on `decisions`, ending at `goal` itself (`None`: no
+/// path).
 pub(super) fn plan(
     inputs: &NavigationInputs<'_>,
     window: &oeg::GridWindow,
     decisions: &[Traversability],
     (a, b): (CellIndex, CellIndex),
     goal: (f64, f64),
-    looked_at: &mut LookedAt,
 ) -> Result<Option<Vec<(f64, f64)>>> {
     let options = planner_options(inputs);
-    let decided = looked_at.decide(window.region(), window.resolution_m(), decisions, a, &options);
-    let plan = oeg::plan(window, &decided, a, b, &options).map_err(|e| EvalError::Input {
+    let plan = oeg::plan(window, decisions, a, b, &options).map_err(|e| EvalError::Input {
         path: inputs.scenario.name.clone().into(),
         message: format!("planner: {e}"),
     })?;

@@ -7,7 +7,6 @@ use oeg::{Pose2, Traversability};
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
 use super::guard::{Guard, guard_command};
-use super::looked_at::LookedAt;
 use super::record::{Event, EventKind, NavigationSummary, Outcome, PlannedPath};
 use super::recovery::{Recovery, describe_sequence, recovery_sequence};
 use super::{
@@ -129,8 +128,6 @@ struct ClosedLoop<'i, 'a> {
     sequence: Vec<Recovery>,
     recovering: Option<(Recovery, f64)>,
     tried: usize,
-    /// The uncertain cells the robot came near and could not decide (the built-in planner's memory).
-    looked_at: LookedAt,
 }
 
 impl<'i, 'a> ClosedLoop<'i, 'a> {
@@ -177,7 +174,6 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             sequence: recovery_sequence(n),
             recovering: None,
             tried: 0,
-            looked_at: LookedAt::new(inputs.truth.window.region().num_cells() as usize),
         }
     }
 
@@ -253,7 +249,6 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
                 return Ok(Some(Outcome::Stuck));
             };
             self.tried += 1;
-            self.looked_at.clear();
             let e = log.event(mapping, EventKind::Recovery, &behaviour.describe());
             log.snapshot(mapping, self.inputs, e)?;
             let turn_rate = s.robot.max_turn_rate_deg_s.to_radians();
@@ -276,7 +271,7 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
         self.next_replan += self.inputs.settings.replan_period_s;
         self.replans += 1;
         let wall = std::time::Instant::now();
-        let result = replan(mapping, self.inputs, estimated, &mut self.looked_at)?;
+        let result = replan(mapping, self.inputs, estimated)?;
         self.planner_wall_time_s += wall.elapsed().as_secs_f64();
         match result {
             Replan::Path(points) => {

@@ -15,7 +15,6 @@ pub(crate) mod controller;
 mod diagnosis;
 pub mod external;
 mod guard;
-mod looked_at;
 pub(crate) mod record;
 mod recovery;
 
@@ -215,14 +214,8 @@ fn clamped_cell(window: &oeg::GridWindow, (x, y): (f64, f64)) -> Option<CellInde
     inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
 }
 
-/// Plans on the run's map from the estimated pose; the built-in planner plans on the decisions as the cells
-/// the robot `looked_at` decide them.
-fn replan(
-    mapping: &Mapping,
-    inputs: &NavigationInputs<'_>,
-    from: Pose2,
-    looked_at: &mut looked_at::LookedAt,
-) -> Result<Replan> {
+/// Plans on the run's map from the estimated pose.
+fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
     let s = inputs.scenario;
     let map = &mapping.maps[0];
     // The map's cells over the scenario's window (the truth's, which the robot never reads).
@@ -246,7 +239,7 @@ fn replan(
                     timed_out: false,
                 });
             };
-            builtin::plan(inputs, &window, &decisions, (a, b), goal, looked_at)?
+            builtin::plan(inputs, &window, &decisions, (a, b), goal)?
         }
         PlannerSource::External(planner) => {
             let mut files = oeg::planner_files(

@@ -69,9 +69,9 @@ fn heading_error(pose: Pose2, goal: [f64; 2]) -> f64 {
     sim::drive::wrap_angle(bearing - pose.yaw_rad)
 }
 
-/// The recovery sequence, nav2's default behaviour tree where it applies: its `ClearEntireCostmap` clears the
-/// navigator's memory of the cells it looked at (`looked_at`; the map itself keeps no transient layer: every
-/// cell is evidence, forgotten only by new evidence), at the start of every behaviour; its `Spin` becomes a turn to face the goal, since the sensors look ahead and the way is what must be seen
+/// The recovery sequence, nav2's default behaviour tree where it applies: its `ClearEntireCostmap` has nothing
+/// to clear (the map keeps no transient layer: every cell is evidence, forgotten only by new evidence); its
+/// `Spin` becomes a turn to face the goal, since the sensors look ahead and the way is what must be seen
 /// again; then its `Wait` and its `BackUp`, each followed by a plan. The robot is stuck only when it still
 /// makes no progress after the last.
 pub(super) fn recovery_sequence(n: &Navigation) -> Vec<Recovery> {
