@@ -364,8 +364,8 @@ pub fn plan_or_why(
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
     clear_footprint(region, &mut decisions, start, r, true);
     clear_footprint(region, &mut decisions, goal, r, false);
-    let mut extra = optimistic_beyond(region, resolution_m, &mut decisions, start, options)
-        .unwrap_or_else(|| vec![0; decisions.len()]);
+    let mut extra = vec![0; decisions.len()];
+    optimistic_beyond(region, resolution_m, &mut decisions, &mut extra, start, options);
     let inflation = Inflation::of(window, &decisions, options);
     let mut forbidden = inflation.forbidden(options.inflation_radius_m);
     if forbidden[s]
@@ -407,19 +407,20 @@ pub fn plan_or_why(
 }
 
 /// [`PlannerOptions::optimistic_beyond_m`]: the cells the map cannot decide beyond that distance from `start`
-/// become drivable in `decisions`, and the extra cost of entering each cell (in A*'s units) is returned;
-/// `None` when the option is off.
+/// become drivable in `decisions`, each with its doubt added to `extra` (A*'s cost of entering it), if it is on.
 fn optimistic_beyond(
     region: &CellRegion,
     resolution_m: f64,
     decisions: &mut [Traversability],
+    extra: &mut [u64],
     start: CellIndex,
     options: &PlannerOptions,
-) -> Option<Vec<u64>> {
-    let beyond = options.optimistic_beyond_m? / resolution_m;
+) {
+    let Some(beyond) = options.optimistic_beyond_m.map(|m| m / resolution_m) else {
+        return;
+    };
     let doubt = (options.doubt_cost * SIDE_COST as f64).round() as u64;
-    let mut extra = vec![0; decisions.len()];
-    for (k, (t, e)) in decisions.iter_mut().zip(&mut extra).enumerate() {
+    for (k, (t, e)) in decisions.iter_mut().zip(extra).enumerate() {
         if !matches!(t, Traversability::Uncertain | Traversability::Unknown) {
             continue;
         }
@@ -430,10 +431,9 @@ fn optimistic_beyond(
         let (di, dj) = (f64::from(c.i - start.i), f64::from(c.j - start.j));
         if di * di + dj * dj > beyond * beyond {
             *t = Traversability::Free;
-            *e = doubt;
+            *e += doubt;
         }
     }
-    Some(extra)
 }
 
 /// The memory [`plan`] takes per cell of its region, bytes, at most in practice: the decisions' copy and the
