@@ -441,13 +441,12 @@ fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
         let (summary, out, _) = plan_with_reason(to, name);
         (summary, out)
     };
-    // Along the corridor between the 3 cm and the 5 cm curb (0.8 m apart): the straight 5.5 m.
+    // Along the corridor between the 3 cm and the 5 cm curb (0.8 m apart): the straight 5.5 m, but for the few
+    // cells the path steps aside to keep to the corridor's middle, away from the curbs (the inflation cost).
     let (open, out) = plan("6,0", "open");
     assert_eq!(open["plan_found"], true);
-    assert!(
-        (open["plan_length_m"].as_f64().expect("length") - 5.5).abs() < 1e-9,
-        "{open}"
-    );
+    let length_m = open["plan_length_m"].as_f64().expect("length");
+    assert!((5.5..5.7).contains(&length_m), "{open}");
     let path = std::fs::read_to_string(out.join("path.csv")).expect("path.csv");
     assert!(path.starts_with("step,x_m,y_m\n0,0.525,0.025\n"), "{path}");
     assert_eq!(
