@@ -16,6 +16,7 @@ mod integrate;
 pub use batch::BatchError;
 pub use integrate::RAYS_BETWEEN_STOP_CHECKS;
 mod layers;
+mod rule_evidence;
 mod sample;
 mod scratch;
 mod update;
@@ -36,6 +37,10 @@ use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
 /// Default memory limit of a map, bytes (4 GiB): far above any sensible map, low enough that a corrupt point
 /// a million kilometres away gives an error instead of exhausting the machine.
 pub const DEFAULT_MEMORY_LIMIT_BYTES: u64 = 4 << 30;
+
+/// Bytes of the map's own structure, beside its tiles: part of [`Map::memory_bytes`], so every limit check
+/// leaves room for it.
+const OWN_BYTES: u64 = size_of::<Map>() as u64;
 
 /// Everything needed to create a map.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -187,19 +192,21 @@ impl Map {
     /// Bytes the map holds: the cells' tiles, the ceiling layer's, their indices and the map itself. The
     /// per-scan scratch is apart ([`Map::scratch_bytes`]); the figure is the same on any number of threads.
     pub fn memory_bytes(&self) -> u64 {
-        self.cells.memory_bytes() + self.ceilings.memory_bytes() + size_of::<Self>() as u64
+        self.cells.memory_bytes() + self.ceilings.memory_bytes() + OWN_BYTES
     }
 
     /// Bytes of the per-scan scratch that [`Map::integrate`] keeps for reuse: for every tile the largest scan
-    /// touched, 20 bytes a cell under the paper's rules or 72 under rules that judge samples against the
-    /// surface or the ceiling, once per thread that gathered a long scan's rays. The memory limit counts it
-    /// with [`Map::memory_bytes`].
+    /// touched, 20 bytes a cell under the paper's rules or 32 under rules that judge samples against the
+    /// surface or the ceiling (with 48 more for each cell the largest scan's hits reached, kept in a list beside
+    /// the grid), once per thread that gathered a long scan's rays. The memory limit counts it with
+    /// [`Map::memory_bytes`].
     pub fn scratch_bytes(&self) -> u64 {
         self.scratch.memory_bytes()
     }
 
-    /// Bytes of one cell's evidence in the per-scan scratch: 20 under the paper's rules, 72 under the rules
-    /// that judge samples against the cell's surface or ceiling or read the spread of its hits.
+    /// Bytes of one cell's evidence in the per-scan scratch's grid: 20 under the paper's rules, 32 under the
+    /// rules that judge samples against the cell's surface or ceiling or read the spread of its hits (a cell a
+    /// hit reached keeps 48 more beside the grid).
     pub fn scratch_cell_bytes(&self) -> usize {
         self.scratch.cell_bytes()
     }
@@ -266,8 +273,9 @@ impl Map {
 
     pub(crate) fn insert_tile(&mut self, tile: TileIndex, cells: Box<[Cell; TILE_CELLS]>) -> Result<()> {
         let limit = self.config.memory_limit_bytes;
+        let others = self.ceilings.memory_bytes() + OWN_BYTES;
         self.cells
-            .insert_tile(tile, cells, limit.saturating_sub(self.ceilings.memory_bytes()))
+            .insert_tile(tile, cells, limit.saturating_sub(others))
             .map_err(|e| Error::MemoryLimit {
                 requested_bytes: e.requested_bytes,
                 limit_bytes: limit,
@@ -287,10 +295,11 @@ impl Map {
         ceilings: Box<[Ceiling; TILE_CELLS]>,
     ) -> Result<()> {
         let limit = self.config.memory_limit_bytes;
+        let others = self.cells.memory_bytes() + OWN_BYTES;
         self.ceilings
-            .insert_tile(tile, ceilings, limit.saturating_sub(self.cells.memory_bytes()))
+            .insert_tile(tile, ceilings, limit.saturating_sub(others))
             .map_err(|e| Error::MemoryLimit {
-                requested_bytes: e.requested_bytes.saturating_add(self.cells.memory_bytes()),
+                requested_bytes: e.requested_bytes.saturating_add(others),
                 limit_bytes: limit,
             })
     }

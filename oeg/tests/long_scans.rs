@@ -65,3 +65,52 @@ fn far_stereo_hits_whose_bands_together_pass_the_limit_are_refused_before_the_se
         "{held} bytes held after the refusal, of a limit of {limit}"
     );
 }
+
+#[test]
+fn under_every_rule_s_evidence_the_hits_kept_beside_the_grid_count_against_the_limit() {
+    // A far stereo hit under the recommended model: its band's cells each keep 32 bytes in the scratch grid
+    // and, within 3 sigma of the hit, 48 more in the scan's hit log (thousands of cells here). Whatever the
+    // limit, the map either takes the ray and holds no more than the limit, log included, or refuses it with
+    // a memory error and holds no more than the limit either. The least limit that takes it is found by
+    // bisection.
+    let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.3), SensorModel::stereo());
+    scan.rays = vec![Ray::hit(Vector3::new(40.0, 0.0, -0.3))];
+    let try_under = |limit: u64| {
+        let mut map = Map::new(MapConfig {
+            memory_limit_bytes: limit,
+            model: oeg::MapPreset::Robust.model(&oeg::RobotProfile::default()),
+            ..MapConfig::new(0.05)
+        })
+        .expect("map");
+        let done = map.integrate(&scan);
+        let held = map.memory_bytes() + map.scratch_bytes();
+        assert!(held <= limit, "{held} bytes held under a limit of {limit}");
+        if let Err(e) = &done {
+            assert!(matches!(e, Error::MemoryLimit { .. }), "{e}");
+        }
+        (done.is_ok(), held)
+    };
+    let (mut refused, mut taken) = (1u64 << 20, 64u64 << 20);
+    assert!(!try_under(refused).0 && try_under(taken).0);
+    while taken - refused > 1 {
+        let mid = refused + (taken - refused) / 2;
+        if try_under(mid).0 {
+            taken = mid;
+        } else {
+            refused = mid;
+        }
+    }
+    // Below it, every limit down to past the map's own cells (a few megabytes) is refused within itself: the
+    // grid fits some of these without the log.
+    for k in 1..=160 {
+        assert!(!try_under(taken - k * 32 * 1024).0);
+    }
+    // Where it is taken, the log is part of what is held: thousands of cells of 48 bytes.
+    let (_, held) = try_under(taken);
+    let mut paper = Map::new(MapConfig::new(0.05)).expect("map");
+    paper.integrate(&scan).expect("fits");
+    assert!(
+        held > paper.memory_bytes() + 1000 * 48,
+        "{held} bytes held at the least limit"
+    );
+}

@@ -281,7 +281,7 @@ fn a_raster_counts_against_the_same_budget_as_the_map() {
 #[test]
 fn the_per_scan_scratch_is_counted_apart_sized_by_the_rules_and_can_be_given_back() {
     // The scratch a map keeps for the next scan (every tile a scan touched) is not part of the map's memory,
-    // and costs 20 bytes a cell under the paper's rules, 72 under rules that judge samples against the surface.
+    // and costs 20 bytes a cell under the paper's rules, 32 (and 48 a cell hit) under rules that judge samples.
     let scan = scan_of(
         Point3::new(0.0, 0.0, 0.3),
         &[(3.0, 0.0, 0.0), (0.0, 3.0, 0.0), (2.0, 2.0, 0.1)],
@@ -307,8 +307,8 @@ fn the_per_scan_scratch_is_counted_apart_sized_by_the_rules_and_can_be_given_bac
 
     let mut robust = map_with(0.01, oeg::MapPreset::Robust.model(&RobotProfile::default()));
     robust.integrate(&scan).expect("ok");
-    assert_eq!(robust.scratch_cell_bytes(), 72);
-    assert!(robust.scratch_bytes() > robust.cell_bytes() * 72 / 12);
+    assert_eq!(robust.scratch_cell_bytes(), 32);
+    assert!(robust.scratch_bytes() > robust.cell_bytes() * 32 / 12 + 3 * 48);
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::IntegrationStats;
-use super::scratch::Evidence;
+use super::scratch::{Evidence, HitStore};
 use super::update::update_cell;
 use crate::cell::Cell;
 use crate::error::{Error, Result};
@@ -28,15 +28,18 @@ const MIN_CELLS_IN_PARALLEL: usize = 4096;
 pub(super) fn apply<E: Evidence>(
     cells: &mut TileGrid<Cell>,
     ceilings: &mut TileGrid<Ceiling>,
-    scratch: &TileGrid<E>,
+    (scratch, hits): (&TileGrid<E>, &E::Hits),
     config: &super::MapConfig,
     levels: LogOddsLevels,
     stats: &mut IntegrationStats,
 ) -> Result<()> {
     let opts = &config.model;
     let ceiling_rule = opts.overhead_hits == OverheadHits::Ceiling;
-    let scratch_bytes = scratch.memory_bytes();
-    let limit = config.memory_limit_bytes.saturating_sub(scratch_bytes);
+    let scratch_bytes = scratch.memory_bytes() + hits.memory_bytes();
+    // The map's own structure counts too ([`super::Map::memory_bytes`]).
+    let limit = config
+        .memory_limit_bytes
+        .saturating_sub(scratch_bytes + super::OWN_BYTES);
     let memory_error = |e: crate::storage::CapacityExceeded| Error::MemoryLimit {
         requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
         limit_bytes: config.memory_limit_bytes,
@@ -48,7 +51,11 @@ pub(super) fn apply<E: Evidence>(
         // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
         if ceiling_rule && {
             let mut hit = false;
-            marks.for_each(|k| hit |= evidence[k].full().is_some_and(|f| f.ceiling_p > 0.0));
+            marks.for_each(|k| {
+                hit |= evidence[k]
+                    .full(hits)
+                    .is_some_and(|(_, h)| h.is_some_and(|h| h.ceiling_p > 0.0));
+            });
             hit
         } {
             let room = limit.saturating_sub(cells.memory_bytes());
@@ -65,7 +72,7 @@ pub(super) fn apply<E: Evidence>(
         })
         .collect();
     let update = |(cells, evidence, marks): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], Marked<'_>)| {
-        update_marked(cells, evidence, marks, opts, levels)
+        update_marked(cells, (evidence, hits), marks, opts, levels)
     };
     // Cells to update: below a few thousand, handing tiles to threads costs more than it saves.
     let touched: usize = work.iter().map(|(_, _, marks)| marks.num_cells()).sum();
@@ -75,7 +82,7 @@ pub(super) fn apply<E: Evidence>(
         work.into_iter().map(update).sum::<u64>()
     };
     if ceiling_rule {
-        update_ceilings(ceilings, scratch, opts, levels);
+        update_ceilings(ceilings, (scratch, hits), opts, levels);
     }
     Ok(())
 }
@@ -83,7 +90,7 @@ pub(super) fn apply<E: Evidence>(
 /// The ceiling layer's update ([`OverheadHits::Ceiling`]), where the scan said something about a ceiling.
 fn update_ceilings<E: Evidence>(
     ceilings: &mut TileGrid<Ceiling>,
-    scratch: &TileGrid<E>,
+    (scratch, hits): (&TileGrid<E>, &E::Hits),
     opts: &crate::model::ModelOptions,
     levels: LogOddsLevels,
 ) {
@@ -92,13 +99,14 @@ fn update_ceilings<E: Evidence>(
             continue;
         };
         marks.for_each(|k| {
-            let Some(ev) = evidence[k].full().filter(|f| f.touches_ceiling()) else {
+            let Some((ev, cell_hits)) = evidence[k].full(hits).filter(|(ev, h)| ev.touches_ceiling(*h))
+            else {
                 return;
             };
             let ceiling = &mut ceilings[k];
             *ceiling = update_ceiling(
                 *ceiling,
-                ev.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas),
+                cell_hits.and_then(|h| h.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas)),
                 ev.ceiling_contradicted,
                 ev.ceiling_clear_m,
                 opts,
@@ -112,7 +120,7 @@ fn update_ceilings<E: Evidence>(
 /// reads its own evidence alone). Returns the cells updated.
 pub(super) fn update_marked<E: Evidence>(
     cells: &mut [Cell; TILE_CELLS],
-    evidence: &[E; TILE_CELLS],
+    (evidence, hits): (&[E; TILE_CELLS], &E::Hits),
     marks: Marked<'_>,
     opts: &crate::model::ModelOptions,
     levels: LogOddsLevels,
@@ -122,7 +130,7 @@ pub(super) fn update_marked<E: Evidence>(
         let ev = &evidence[k];
         if !ev.paper().is_untouched() {
             updated += 1;
-            update_cell(&mut cells[k], ev, opts, levels.occupied, levels.free);
+            update_cell(&mut cells[k], (ev, hits), opts, levels.occupied, levels.free);
         }
     });
     updated

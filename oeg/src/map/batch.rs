@@ -133,7 +133,7 @@ impl Map {
         // The cells' tiles, under the budget: the map's tile index grows with them, which the gathering's check
         // could not count. Near the budget the scans go one by one, as the caller does with `None` (tiles placed
         // here stay, empty, as a failed scan's do in `Map::integrate`).
-        let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes());
+        let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes() + super::OWN_BYTES);
         if !place_tiles(cells, scratch, scans.len(), room) {
             scratch.recycle();
             return None;
@@ -149,7 +149,7 @@ impl Map {
 /// Gathers scan `k` into the scratch's grid `k` (the main grid, then the workers'), all in parallel, under
 /// `budget` bytes for the map and every grid together (each grid under an equal share); `None`, the scratch
 /// recycled, if a ray fails or the budget is exceeded.
-fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
+fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     before: &Before,
     scans: &[S],
     scratch: &mut Scratch<E>,
@@ -158,7 +158,7 @@ fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
     if E::READS_MAP {
         return None;
     }
-    let map_bytes = before.cells.memory_bytes() + before.ceilings.memory_bytes();
+    let map_bytes = before.map_bytes();
     // Each grid under an equal share of what the budget leaves, and at most a sixteenth of it: a window is for
     // scans of ordinary rays (a few megabytes of scratch each); a scan whose rays need more goes alone, under
     // the whole limit, rather than leave a window's grids holding (and the allocator keeping) large pools.
@@ -181,9 +181,15 @@ fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
                 num_rays: scan.rays.len() as u64,
                 ..IntegrationStats::default()
             };
-            gather_rays(before, scan, 0..scan.rays.len(), grid, share, &mut stats, &|| {
-                false
-            })
+            gather_rays(
+                before,
+                scan,
+                0..scan.rays.len(),
+                (grid, &mut ()),
+                share,
+                &mut stats,
+                &|| false,
+            )
             .map(|()| stats)
         })
         .collect::<crate::error::Result<Vec<_>>>();
@@ -213,7 +219,7 @@ fn gather_side_by_side<E: Sampling, S: Borrow<Scan> + Sync>(
 
 /// Places the cells' tiles that the first `num_scans` grids of the scratch touched, scan by scan in the order
 /// [`Map::integrate`] places them, the cells' grid under `limit_bytes`; false if one does not fit.
-fn place_tiles<E: Sampling>(
+fn place_tiles<E: Sampling<Hits = ()>>(
     cells: &mut TileGrid<crate::cell::Cell>,
     scratch: &Scratch<E>,
     num_scans: usize,
@@ -230,14 +236,14 @@ fn place_tiles<E: Sampling>(
 /// order, tile by tile in parallel, and resets that evidence where it was read, on the same thread (while it is
 /// in that core's cache), before the grids take their tiles back; the cells' tiles are placed ([`place_tiles`]).
 /// Returns the cell updates.
-fn apply_in_order<E: Sampling>(
+fn apply_in_order<E: Sampling<Hits = ()>>(
     cells: &mut TileGrid<crate::cell::Cell>,
     scratch: &mut Scratch<E>,
     num_scans: usize,
     opts: &crate::model::ModelOptions,
     levels: LogOddsLevels,
 ) -> u64 {
-    let Scratch { main, workers } = scratch;
+    let Scratch { main, workers, .. } = scratch;
     let mut grids: Vec<&mut TileGrid<E>> = std::iter::once(main)
         .chain(workers.iter_mut())
         .take(num_scans)
@@ -250,7 +256,7 @@ fn apply_in_order<E: Sampling>(
             let mut updated = 0;
             for (evidence, marks) in evidence {
                 if let Some(cells) = cells.as_deref_mut() {
-                    updated += update_marked(cells, evidence, marks, opts, levels);
+                    updated += update_marked(cells, (evidence, &()), marks, opts, levels);
                 }
                 marks.reset(evidence, fill);
             }

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::apply::apply;
 use super::sample::{Before, Here, RaySpan, Sampling};
-use super::scratch::{Evidence, ScanScratch, Scratch};
+use super::scratch::{Evidence, HitStore, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
@@ -78,9 +78,9 @@ impl Map {
         };
         let done = match scratch {
             ScanScratch::Paper(s) => gather(&before, scan, s, &mut stats, &stop)
-                .and_then(|()| apply(cells, ceilings, &s.main, config, levels, &mut stats)),
+                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, levels, &mut stats)),
             ScanScratch::Full(s) => gather(&before, scan, s, &mut stats, &stop)
-                .and_then(|()| apply(cells, ceilings, &s.main, config, levels, &mut stats)),
+                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, levels, &mut stats)),
         };
         scratch.recycle();
         done?;
@@ -112,9 +112,7 @@ fn gather<E: Sampling>(
 ) -> Result<()> {
     let num_rays = scan.rays.len();
     let runs = rayon::current_num_threads().min(num_rays / MIN_RAYS_PER_THREAD);
-    let scratch_limit = before
-        .memory_limit_bytes
-        .saturating_sub(before.cells.memory_bytes());
+    let scratch_limit = before.memory_limit_bytes.saturating_sub(before.map_bytes());
     if runs > 1
         && let Some(merge) = E::exact_merge(before.opts)
     {
@@ -126,6 +124,7 @@ fn gather<E: Sampling>(
             Err(Error::Cancelled) => return Err(Error::Cancelled),
             Err(_) => {
                 scratch.main.recycle_marked();
+                scratch.hits.clear();
                 scratch.workers.clear();
             }
         }
@@ -139,19 +138,20 @@ fn gather<E: Sampling>(
         before,
         scan,
         0..num_rays,
-        &mut scratch.main,
+        (&mut scratch.main, &mut scratch.hits),
         limit,
         &mut run_stats,
         stop,
     ) {
         Err(Error::MemoryLimit { .. }) if workers_bytes > 0 => {
             scratch.main.recycle_marked();
+            scratch.hits.clear();
             scratch.workers.clear();
             gather_rays(
                 before,
                 scan,
                 0..num_rays,
-                &mut scratch.main,
+                (&mut scratch.main, &mut scratch.hits),
                 scratch_limit,
                 stats,
                 stop,
@@ -193,7 +193,9 @@ fn gather_in_parallel<E: Sampling>(
         .map(|(k, grid)| {
             let rays = bounds[k]..bounds[k + 1];
             let mut stats = IntegrationStats::default();
-            gather_rays(before, scan, rays, grid, share, &mut stats, stop).map(|()| stats)
+            // Evidence that merges keeps nothing beside its grid ([`Evidence::exact_merge`]).
+            let mut hits = E::Hits::default();
+            gather_rays(before, scan, rays, (grid, &mut hits), share, &mut stats, stop).map(|()| stats)
         })
         .collect::<Result<Vec<_>>>()?;
     merge_runs(
@@ -274,14 +276,14 @@ fn balanced_runs(scan: &Scan, runs: usize, resolution_m: f64) -> Vec<usize> {
     bounds
 }
 
-/// Casts the scan's rays `rays` into `grid` (at most `limit_bytes` of it): each ray's span ([`RaySpan::of`]),
-/// checked against the grid and the limit ([`walk_of`]), then what each crossed cell learns from it
-/// ([`Sampling`]).
+/// Casts the scan's rays `rays` into `grid` and what its evidence keeps beside it (at most `limit_bytes` of
+/// both): each ray's span ([`RaySpan::of`]), checked against the grid and the limit ([`walk_of`]), then what
+/// each crossed cell learns from it ([`Sampling`]).
 pub(super) fn gather_rays<E: Sampling>(
     before: &Before,
     scan: &Scan,
     rays: Range<usize>,
-    grid: &mut TileGrid<E>,
+    (grid, hits): (&mut TileGrid<E>, &mut E::Hits),
     limit_bytes: u64,
     stats: &mut IntegrationStats,
     stop: &impl Fn() -> bool,
@@ -295,13 +297,27 @@ pub(super) fn gather_rays<E: Sampling>(
             stats.num_rays_skipped += 1;
             continue;
         };
-        let walk = walk_of(before, grid, index, &span, limit_bytes)?;
+        let walk_limit = limit_bytes.saturating_sub(hits.memory_bytes());
+        let walk = walk_of(before, grid, index, &span, walk_limit)?;
         stats.num_cell_visits += walk.len() as u64;
+        if span.hit.is_some() {
+            let room = limit_bytes.saturating_sub(grid.memory_bytes());
+            hits.reserve(span.near_hit_cells(before.geometry.resolution_m()), room)
+                .map_err(|e| Error::MemoryLimit {
+                    requested_bytes: e
+                        .requested_bytes
+                        .saturating_add(grid.memory_bytes())
+                        .saturating_add(before.map_bytes()),
+                    limit_bytes: before.memory_limit_bytes,
+                })?;
+        }
+        let walk_limit = limit_bytes.saturating_sub(hits.memory_bytes());
+        let scratch = (&mut *grid, &mut *hits);
         match (span.hit.is_some(), by_cell) {
-            (true, true) => sample_walk::<E, true, true>(before, &span, walk, grid, limit_bytes)?,
-            (true, false) => sample_walk::<E, true, false>(before, &span, walk, grid, limit_bytes)?,
-            (false, true) => sample_walk::<E, false, true>(before, &span, walk, grid, limit_bytes)?,
-            (false, false) => sample_walk::<E, false, false>(before, &span, walk, grid, limit_bytes)?,
+            (true, true) => sample_walk::<E, true, true>(before, &span, walk, scratch, walk_limit)?,
+            (true, false) => sample_walk::<E, true, false>(before, &span, walk, scratch, walk_limit)?,
+            (false, true) => sample_walk::<E, false, true>(before, &span, walk, scratch, walk_limit)?,
+            (false, false) => sample_walk::<E, false, false>(before, &span, walk, scratch, walk_limit)?,
         }
     }
     Ok(())
@@ -317,7 +333,7 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
     before: &Before,
     span: &RaySpan,
     mut walk: GroundTraversal,
-    grid: &mut TileGrid<E>,
+    (grid, hits): (&mut TileGrid<E>, &mut E::Hits),
     limit_bytes: u64,
 ) -> Result<()> {
     let mut z_enter_m = span.height_at(span.l_lo);
@@ -355,7 +371,7 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
                 } else if crossing.l_exit < span.free_until {
                     ev.free(before, span, crossing, &here);
                 } else {
-                    ev.near_hit(before, span, crossing, &here);
+                    ev.near_hit(hits, before, span, crossing, &here);
                 }
             },
         );
@@ -401,7 +417,7 @@ fn walk_of<E: Evidence>(
             ))
         },
     )?;
-    let map_bytes = before.cells.memory_bytes() + before.ceilings.memory_bytes();
+    let map_bytes = before.map_bytes();
     // Fail fast: the walk touches at least one tile per tile edge it spans, so a ray that must exceed the
     // memory limit is refused before a single tile of it is allocated.
     let (ta, tb) = (TileIndex::of(walk.first_cell()), TileIndex::of(walk.last_cell()));

@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 
-use super::scratch::{Evidence, PaperEvidence, ScanEvidence};
+use super::scratch::{Evidence, HitLog, PaperEvidence, ScanEvidence};
 use crate::cell::Cell;
 use crate::geometry::GridGeometry;
 use crate::model::{Ceiling, SeenFrom};
@@ -25,6 +25,13 @@ pub(super) struct Before<'a> {
     pub(super) ceilings: &'a TileGrid<Ceiling>,
     pub(super) opts: &'a ModelOptions,
     pub(super) memory_limit_bytes: u64,
+}
+
+impl Before<'_> {
+    /// Bytes the map holds ([`crate::Map::memory_bytes`]): what the scratch's share of the limit leaves out.
+    pub(super) fn map_bytes(&self) -> u64 {
+        self.cells.memory_bytes() + self.ceilings.memory_bytes() + super::OWN_BYTES
+    }
 }
 
 /// The map's tiles (cells and ceilings) under the tile a walk is in, looked up once per tile for the rules
@@ -83,8 +90,15 @@ pub(super) trait Sampling: Evidence {
     fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
     /// A cell the beam passes through before its hit.
     fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
-    /// A cell within 3 sigma of the hit.
-    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
+    /// A cell within 3 sigma of the hit, its hits kept in `log`.
+    fn near_hit(
+        &mut self,
+        log: &mut Self::Hits,
+        before: &Before,
+        span: &RaySpan,
+        crossing: &CellCrossing,
+        here: &Here,
+    );
 }
 
 /// The paper's samples: the probability, the beam's height in a cell it passed through on its way to a hit,
@@ -104,7 +118,14 @@ impl Sampling for PaperEvidence {
     }
 
     #[inline(always)]
-    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, _here: &Here) {
+    fn near_hit(
+        &mut self,
+        _log: &mut (),
+        before: &Before,
+        span: &RaySpan,
+        crossing: &CellCrossing,
+        _here: &Here,
+    ) {
         match span.hit_probability_and_height(before.opts, crossing) {
             (p, Some(z)) => self.add_hit(p, z, span.s2, before.opts.scan_hit_elevation),
             (p, None) => self.raise_p(p),
@@ -126,8 +147,15 @@ impl Sampling for ScanEvidence {
     }
 
     #[inline(always)]
-    fn near_hit(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
-        hit_sample(before, span, crossing, here, self);
+    fn near_hit(
+        &mut self,
+        log: &mut HitLog,
+        before: &Before,
+        span: &RaySpan,
+        crossing: &CellCrossing,
+        here: &Here,
+    ) {
+        hit_sample(before, span, crossing, here, self, log);
     }
 }
 
@@ -220,6 +248,17 @@ impl RaySpan {
             s2,
             free_until,
         })
+    }
+
+    /// The most cells the samples within 3 sigma of the hit can cross, at `resolution_m`: a straight segment
+    /// crosses one cell more than the cell boundaries it passes, at most `|dx| / resolution_m + 1` of each
+    /// axis (and one more for rounding).
+    #[inline]
+    pub(super) fn near_hit_cells(&self, resolution_m: f64) -> usize {
+        let length = (self.l_hi - self.free_until.max(self.l_lo)).max(0.0);
+        let across = (self.dir.x.abs() + self.dir.y.abs()) * length / resolution_m;
+        // A finite ray's span is bounded by the grid's index range ([`super::integrate`]'s walk check).
+        across as usize + 4
     }
 
     /// The beam's height at `l` along it.
@@ -331,6 +370,7 @@ fn hit_sample(
     crossing: &CellCrossing,
     here: &Here,
     evidence: &mut ScanEvidence,
+    log: &mut HitLog,
 ) {
     let opts = before.opts;
     let (p, z) = span.hit_probability_and_height(opts, crossing);
@@ -350,9 +390,9 @@ fn hit_sample(
         });
     match z {
         Some(z) if let Some(score) = overhead_score => {
-            evidence.add_overhead(p, z, s2, SeenFrom::of_beam(dir.z), score);
+            evidence.add_overhead(log, p, z, s2, SeenFrom::of_beam(dir.z), score);
         }
-        Some(z) => evidence.add_hit(p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
+        Some(z) => evidence.add_hit(log, p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
         None => evidence.paper.raise_p(p),
     }
 }

@@ -12,7 +12,7 @@ use crate::model::{
 /// the free-space rule) for the elevation.
 pub(super) fn update_cell<E: Evidence>(
     cell: &mut Cell,
-    evidence: &E,
+    (evidence, hits): (&E, &E::Hits),
     opts: &ModelOptions,
     occupied_log_odds: f32,
     free_log_odds: f32,
@@ -36,7 +36,7 @@ pub(super) fn update_cell<E: Evidence>(
     let posterior = if ev.hit_z_m > f32::NEG_INFINITY {
         let s2 = match opts.scan_hit_elevation {
             ScanHitElevation::MeanWithSpread | ScanHitElevation::HighestLevel => {
-                let hits = evidence.hits();
+                let hits = evidence.hits(hits);
                 spread_variance(
                     // The hits of one scan share its errors too: their mean is no better than `rho` of one hit.
                     ev.hit_var_m2
