@@ -44,20 +44,15 @@ pub(super) fn apply<E: Evidence>(
         requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
         limit_bytes: config.memory_limit_bytes,
     };
-    for (tile, evidence, marks) in scratch.marked_tiles() {
+    // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
+    let mut overhead_tiles = E::overhead_tiles(hits).to_vec();
+    overhead_tiles.sort_unstable();
+    overhead_tiles.dedup();
+    for (tile, _, _) in scratch.marked_tiles() {
         cells
             .tile_or_insert(tile, limit.saturating_sub(ceilings.memory_bytes()))
             .map_err(memory_error)?;
-        // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
-        if ceiling_rule && {
-            let mut hit = false;
-            marks.for_each(|k| {
-                hit |= evidence[k]
-                    .full(hits)
-                    .is_some_and(|(_, h)| h.is_some_and(|h| h.ceiling_p > 0.0));
-            });
-            hit
-        } {
+        if ceiling_rule && overhead_tiles.binary_search(&tile).is_ok() {
             let room = limit.saturating_sub(cells.memory_bytes());
             ceilings.tile_or_insert(tile, room).map_err(memory_error)?;
         }

@@ -6,7 +6,7 @@ use crate::model::SeenFrom;
 use crate::model::{
     CeilingHit, Elevation, Level, ScanHitElevation, overhead_significant, spread_variance, surface_level,
 };
-use crate::storage::CapacityExceeded;
+use crate::storage::{CapacityExceeded, TileIndex};
 
 /// What one scan says about one cell under every rule of [`ModelOptions`](crate::model::ModelOptions), the part every sample reads or
 /// writes: the paper's evidence, what a free sample judges against the cell's surface and ceiling, and where
@@ -54,9 +54,22 @@ pub(crate) struct HitEvidence {
 
 const _: () = assert!(size_of::<HitEvidence>() == 48);
 
-/// The [`HitEvidence`] of the cells a scan's hits reached, in the order they were first hit, cleared after
-/// each scan with the grid it belongs to.
-pub(crate) type HitLog = Vec<HitEvidence>;
+/// The [`HitEvidence`] of the cells a scan's hits reached, in the order they were first hit, and the tiles of
+/// those with a hit above their surface band (the ceiling layer needs a tile there), cleared after each scan
+/// with the grid it belongs to.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct HitLog {
+    entries: Vec<HitEvidence>,
+    /// The tile of each cell at its scan's first overhead hit: at most one per entry.
+    overhead_tiles: Vec<TileIndex>,
+}
+
+impl HitLog {
+    /// The tiles with a hit above a cell's surface band, each as often as it has such cells.
+    pub(super) fn overhead_tiles(&self) -> &[TileIndex] {
+        &self.overhead_tiles
+    }
+}
 
 impl HitEvidence {
     const NONE: Self = Self {
@@ -118,7 +131,7 @@ impl ScanEvidence {
     /// The cell's hit evidence in `log`, if the scan hit it.
     #[inline(always)]
     pub(super) fn hit_evidence<'a>(&self, log: &'a HitLog) -> Option<&'a HitEvidence> {
-        (self.hit_entry > 0).then(|| &log[self.hit_entry as usize - 1])
+        (self.hit_entry > 0).then(|| &log.entries[self.hit_entry as usize - 1])
     }
 
     /// The cell's hit evidence in `log`, added on the scan's first hit in the cell. `log` has room for it
@@ -126,14 +139,15 @@ impl ScanEvidence {
     #[inline(always)]
     fn hit_evidence_mut<'a>(&mut self, log: &'a mut HitLog) -> &'a mut HitEvidence {
         if self.hit_entry == 0 {
+            let entries = &mut log.entries;
             debug_assert!(
-                log.len() < log.capacity(),
+                entries.len() < entries.capacity(),
                 "the hit log was not reserved for this ray"
             );
-            log.push(HitEvidence::NONE);
-            self.hit_entry = log.len() as u32;
+            entries.push(HitEvidence::NONE);
+            self.hit_entry = entries.len() as u32;
         }
-        &mut log[self.hit_entry as usize - 1]
+        &mut log.entries[self.hit_entry as usize - 1]
     }
 
     /// Whether the scan said something about the cell's ceiling.
@@ -143,18 +157,22 @@ impl ScanEvidence {
             || self.ceiling_clear_m > f32::NEG_INFINITY
     }
 
-    /// A hit above the cell's surface band ([`OverheadHits::Ceiling`](crate::model::OverheadHits::Ceiling)), by a beam from `side`, `score` standard
-    /// deviations above the surface.
+    /// A hit above the cell's surface band ([`OverheadHits::Ceiling`](crate::model::OverheadHits::Ceiling)),
+    /// in `tile`, by a beam from `side`, `score` standard deviations above the surface.
     #[inline(always)]
     pub(super) fn add_overhead(
         &mut self,
-        log: &mut HitLog,
+        (log, tile): (&mut HitLog, TileIndex),
         p: f32,
         z_m: f32,
         var_m2: f32,
         side: SeenFrom,
         score: f32,
     ) {
+        if self.hit_evidence_mut(log).ceiling_p == 0.0 {
+            // Room was reserved with the entry's ([`HitStore::reserve`]).
+            log.overhead_tiles.push(tile);
+        }
         self.hit_evidence_mut(log)
             .add_overhead(p, z_m, var_m2, side, score);
     }
@@ -241,17 +259,23 @@ impl HitSample {
     }
 }
 
+impl HitLog {
+    /// Bytes an entry reserves: its evidence, and room for its tile in `overhead_tiles`.
+    const ENTRY_BYTES: u64 = (size_of::<HitEvidence>() + size_of::<TileIndex>()) as u64;
+}
+
 impl HitStore for HitLog {
     /// Grows as a `Vec` does (at least doubling), or to exactly what is needed when doubling would pass the
     /// limit.
     #[inline]
     fn reserve(&mut self, entries: usize, limit_bytes: u64) -> Result<(), CapacityExceeded> {
-        let needed = self.len().saturating_add(entries);
-        if needed <= self.capacity() {
+        let (len, capacity) = (self.entries.len(), self.entries.capacity());
+        let needed = len.saturating_add(entries);
+        if needed <= capacity && needed <= self.overhead_tiles.capacity() {
             return Ok(());
         }
-        let bytes = |n: usize| (n as u64).saturating_mul(size_of::<HitEvidence>() as u64);
-        let doubled = needed.max(self.capacity().saturating_mul(2));
+        let bytes = |n: usize| (n as u64).saturating_mul(Self::ENTRY_BYTES);
+        let doubled = needed.max(capacity.saturating_mul(2));
         let target = if bytes(doubled) <= limit_bytes {
             doubled
         } else if bytes(needed) <= limit_bytes {
@@ -261,16 +285,20 @@ impl HitStore for HitLog {
                 requested_bytes: bytes(needed),
             });
         };
-        self.reserve_exact(target - self.len());
+        self.entries.reserve_exact(target - len);
+        let tiles = &mut self.overhead_tiles;
+        tiles.reserve_exact(target - tiles.len());
         Ok(())
     }
 
     fn clear(&mut self) {
-        Vec::clear(self);
+        self.entries.clear();
+        self.overhead_tiles.clear();
     }
 
     fn memory_bytes(&self) -> u64 {
-        (self.capacity() * size_of::<HitEvidence>()) as u64
+        (self.entries.capacity() * size_of::<HitEvidence>()
+            + self.overhead_tiles.capacity() * size_of::<TileIndex>()) as u64
     }
 }
 
@@ -298,5 +326,9 @@ impl Evidence for ScanEvidence {
 
     fn full<'a>(&'a self, log: &'a HitLog) -> Option<(&'a ScanEvidence, Option<&'a HitEvidence>)> {
         Some((self, self.hit_evidence(log)))
+    }
+
+    fn overhead_tiles(log: &HitLog) -> &[TileIndex] {
+        log.overhead_tiles()
     }
 }

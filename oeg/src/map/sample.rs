@@ -40,6 +40,8 @@ impl Before<'_> {
 pub(super) struct Here<'a> {
     cells: Option<&'a [Cell; TILE_CELLS]>,
     ceilings: Option<&'a [Ceiling; TILE_CELLS]>,
+    /// The tile the walk is in.
+    pub(super) tile: TileIndex,
     /// The crossed cell's [`crate::storage::offset_in_tile`].
     pub(super) offset: usize,
     /// The beam's highest and lowest heights inside the crossed cell ([`RaySpan::top_and_bottom`]).
@@ -55,6 +57,7 @@ impl<'a> Here<'a> {
             Self {
                 cells: before.cells.tile(tile),
                 ceilings: before.ceilings.tile(tile),
+                tile,
                 offset: 0,
                 beam_top_m: 0.0,
                 beam_bottom_m: 0.0,
@@ -63,6 +66,7 @@ impl<'a> Here<'a> {
             Self {
                 cells: None,
                 ceilings: None,
+                tile,
                 offset: 0,
                 beam_top_m: 0.0,
                 beam_bottom_m: 0.0,
@@ -390,7 +394,7 @@ fn hit_sample(
         });
     match z {
         Some(z) if let Some(score) = overhead_score => {
-            evidence.add_overhead(log, p, z, s2, SeenFrom::of_beam(dir.z), score);
+            evidence.add_overhead((log, here.tile), p, z, s2, SeenFrom::of_beam(dir.z), score);
         }
         Some(z) => evidence.add_hit(log, p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
         None => evidence.paper.raise_p(p),

@@ -4,7 +4,7 @@
 
 pub(crate) use super::rule_evidence::{HitEvidence, HitLog, HitSample, ScanEvidence};
 use crate::model::{FreeSpaceOccupancy, ModelOptions, OverheadHits, ScanHitElevation};
-use crate::storage::{CapacityExceeded, TileGrid};
+use crate::storage::{CapacityExceeded, TileGrid, TileIndex};
 
 /// What one scan says about one cell under the paper's rules (eq. 10-12), gathered over all its rays before
 /// the cell is updated once: all a model reads that judges no sample against the cell's surface or ceiling
@@ -109,6 +109,11 @@ pub(crate) trait Evidence: Copy + Send + Sync + 'static {
     /// Whether a free sample passed through the cell's surface band.
     fn band_contradicted(&self) -> bool {
         false
+    }
+    /// The tiles where the scan hit something above a cell's surface band, from `log` (none for evidence that
+    /// does not keep them), each at least once.
+    fn overhead_tiles(_log: &Self::Hits) -> &[TileIndex] {
+        &[]
     }
     /// The full evidence and the cell's hits, where they are kept (the ceiling layer reads them).
     fn full<'a>(&'a self, _log: &'a Self::Hits) -> Option<(&'a ScanEvidence, Option<&'a HitEvidence>)> {
