@@ -81,6 +81,7 @@ pub use io::pcd::{
 };
 pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
 pub use io::rosbag::{
-    Bag, BagOptions, BagRaster, BagScan, BagSkip, BagTransform, BagWriter, CloudPrecision, GridMapLayers,
-    MAX_GRID_MAP_CELLS, parse_bag, parse_grid_map, read_bag, read_bag_within, read_grid_map,
+    Bag, BagOptions, BagRaster, BagScan, BagSkip, BagTransform, BagWriter, CLOUD_CLEAR_FIELDS,
+    CLOUD_RANGE_SIGMA_FIELD, CloudPrecision, GridMapLayers, MAX_GRID_MAP_CELLS, parse_bag, parse_grid_map,
+    read_bag, read_bag_within, read_grid_map,
 };

@@ -17,8 +17,9 @@ pub(crate) struct RecordArgs {
     out: PathBuf,
     /// log: the testbed's sensor log (both poses, no-returns, range errors); graph: OctoMap's scan graph
     /// (estimated pose, hits only) for other mappers; mcap: a recording for Foxglove (both poses, each
-    /// sensor's returns, the truth's grid; docs/mcap.md); rosbag2: a ROS 2 bag (each sensor's hits as
-    /// PointCloud2, the poses as /tf and /tf_static; docs/guide.md#from-your-robots-logs); dynamicmap: the
+    /// sensor's returns, the truth's grid; docs/mcap.md); rosbag2: a ROS 2 bag (each sensor's scans as
+    /// PointCloud2 with range errors and no-returns, the poses as /tf and /tf_static;
+    /// docs/guide.md#from-your-robots-logs); dynamicmap: the
     /// DynamicMap benchmark's unified format (a folder: pcd/ frames in the world frame with each point's label,
     /// 1 for a moving actor, and gt_cloud.pcd).
     #[arg(long, value_enum, default_value_t = FormatArg::Log)]
@@ -58,7 +59,7 @@ pub(crate) fn run(args: &RecordArgs) -> anyhow::Result<()> {
         r.rays_per_s / 1e6,
         if r.num_rays_left_out > 0 {
             format!(
-                ", {} no-return rays left out (a graph or a cloud holds hits only)",
+                ", {} no-return rays left out (a graph or a DynamicMap frame holds hits only)",
                 r.num_rays_left_out
             )
         } else {

@@ -23,11 +23,13 @@ pub enum RecordFormat {
     /// An MCAP recording (`.mcap`, `docs/mcap.md`): the true and estimated poses, each sensor's scans and
     /// the truth's grid; no map (`oeg run --mcap` adds the map's layers, the plans and the events).
     Mcap,
-    /// A ROS 2 bag (a folder with an MCAP file and `metadata.yaml`): each sensor's hits as
+    /// A ROS 2 bag (a folder with an MCAP file and `metadata.yaml`): each sensor's scans as
     /// `sensor_msgs/PointCloud2` on `/<sensor>/points` in the sensor's frame, and the poses as `/tf`
     /// (`map` -> `odom`: the true pose's correction of the estimated one; `odom` -> `base_link`: the estimated
     /// pose) and `/tf_static` (`base_link` -> each sensor); at the end, the truth as `/truth/grid_map` and
-    /// `/truth/occupancy`. No-return rays are not written: a cloud holds points.
+    /// `/truth/occupancy`. Every ray is written: a hit as its end point, a ray that returned nothing as NaN
+    /// coordinates (which other readers drop) with its cleared end in [`oeg::CLOUD_CLEAR_FIELDS`], and each
+    /// reading's range error in [`oeg::CLOUD_RANGE_SIGMA_FIELD`].
     Rosbag2,
     /// The DynamicMap benchmark's unified format (a folder): `pcd/NNNNNN.pcd` a scan, its hits in the world
     /// frame at the estimated pose, `VIEWPOINT` the sensor's pose, and each point's label in `intensity` (1: the
@@ -45,7 +47,7 @@ pub struct RecordReport {
     pub num_scans: u64,
     /// Rays simulated.
     pub num_rays: u64,
-    /// No-return rays left out (graph format only).
+    /// No-return rays left out (the graph and DynamicMap formats, which hold hits only).
     pub num_rays_left_out: u64,
     /// Wall time of the simulation, seconds.
     pub wall_time_s: f64,
@@ -99,14 +101,14 @@ fn record_mcap(
 }
 
 /// Records every scan of `sim` into a ROS 2 bag folder at `out` ([`RecordFormat::Rosbag2`]); returns the scans
-/// written and the no-return rays left out.
+/// written.
 fn record_rosbag2(
     loaded: &scenario::LoadedScenario,
     sim: &mut Simulation,
     header: &LogHeader,
     out: &Path,
     progress: &Progress,
-) -> Result<(u64, u64)> {
+) -> Result<u64> {
     let mut bag = oeg::BagWriter::new(out)?;
     // base_link -> each sensor, fixed on the robot (the URDF's fixed joints and the mount).
     let mounts: Vec<Isometry3<f64>> = sim
@@ -130,7 +132,7 @@ fn record_rosbag2(
         .map(|(s, m)| transform(BASE_FRAME, &s.name, 0, *m))
         .collect();
     bag.transforms("/tf_static", 0, &statics)?;
-    let (mut num_scans, mut left_out) = (0, 0);
+    let mut num_scans = 0;
     while let Some(scan) = sim.next_scan() {
         let sensor = &header.sensors[scan.sensor_index];
         let stamp_ns = (scan.stamp_s * 1e9).round() as i64;
@@ -145,20 +147,14 @@ fn record_rosbag2(
                 transform("odom", BASE_FRAME, stamp_ns, estimated),
             ],
         )?;
-        let points: Vec<Vector3<f64>> = scan
-            .rays
-            .iter()
-            .filter(|r| r.kind == oeg::RayKind::Hit)
-            .map(|r| r.vector_in_sensor.cast())
-            .collect();
-        left_out += (scan.rays.len() - points.len()) as u64;
+        let cloud = BagCloud::of(&scan, &sensor.map_model, &loaded.scenario.map.model);
         let topic = format!("/{}/points", sensor.name);
-        bag.cloud(
+        bag.cloud_with_fields(
             &topic,
             &sensor.name,
             stamp_ns,
-            &points,
-            oeg::CloudPrecision::Float32,
+            (&cloud.points, oeg::CloudPrecision::Float32),
+            &cloud.fields(),
         )?;
         num_scans += 1;
         progress.inc(1);
@@ -169,7 +165,64 @@ fn record_rosbag2(
         sim.world().time_s(),
     )?;
     bag.finish()?;
-    Ok((num_scans, left_out))
+    Ok(num_scans)
+}
+
+/// One scan as a PointCloud2's columns, in the sensor's frame: each hit's end point and range error, and for a
+/// ray that returned nothing, NaN coordinates and its cleared ray's end ([`oeg::CLOUD_CLEAR_FIELDS`]: its
+/// direction times the sensor's range) with the range error the map gives it there under the scenario's model
+/// ([`oeg::CLOUD_RANGE_SIGMA_FIELD`]), so that the bag maps as the run does.
+struct BagCloud {
+    points: Vec<Vector3<f64>>,
+    range_sigma_m: Vec<f32>,
+    clear: [Vec<f32>; 3],
+}
+
+impl BagCloud {
+    fn of(scan: &sim::sensors::SensorScan, sensor: &oeg::SensorModel, model: &oeg::ModelOptions) -> Self {
+        // Where the map ends a ray that returned nothing ([`oeg::ModelOptions::no_return_clear_range_m`]).
+        let cleared_m = model
+            .no_return_clear_range_m
+            .unwrap_or(sensor.max_range_m)
+            .min(model.max_range_m.unwrap_or(f32::INFINITY));
+        let n = scan.rays.len();
+        let mut cloud = Self {
+            points: Vec::with_capacity(n),
+            range_sigma_m: Vec::with_capacity(n),
+            clear: std::array::from_fn(|_| Vec::with_capacity(n)),
+        };
+        for r in &scan.rays {
+            let (point, sigma, clear) = if r.kind == oeg::RayKind::Hit {
+                (
+                    r.vector_in_sensor.cast(),
+                    r.range_sigma_m,
+                    Vector3::repeat(f32::NAN),
+                )
+            } else {
+                let end = r.vector_in_sensor.normalize() * sensor.max_range_m;
+                (Vector3::repeat(f64::NAN), sensor.sigma_m(cleared_m), end)
+            };
+            cloud.points.push(point);
+            cloud.range_sigma_m.push(sigma);
+            for (axis, column) in cloud.clear.iter_mut().enumerate() {
+                column.push(clear[axis]);
+            }
+        }
+        cloud
+    }
+
+    /// The extra fields: the range errors, and the cleared rays' ends where the scan has any.
+    fn fields(&self) -> Vec<(&'static str, &[f32])> {
+        let mut fields = vec![(oeg::CLOUD_RANGE_SIGMA_FIELD, self.range_sigma_m.as_slice())];
+        if self.points.iter().any(|p| p.x.is_nan()) {
+            fields.extend(
+                oeg::CLOUD_CLEAR_FIELDS
+                    .into_iter()
+                    .zip(self.clear.iter().map(Vec::as_slice)),
+            );
+        }
+        fields
+    }
 }
 
 /// The static world's truth (people left out, as a run's recording has it) at the end of a bag, in the `map`
@@ -316,7 +369,7 @@ pub fn record(
             (scans.len() as u64, left_out)
         }
         RecordFormat::Mcap => (record_mcap(&loaded, &mut sim, &header, out, progress)?, 0),
-        RecordFormat::Rosbag2 => record_rosbag2(&loaded, &mut sim, &header, out, progress)?,
+        RecordFormat::Rosbag2 => (record_rosbag2(&loaded, &mut sim, &header, out, progress)?, 0),
         RecordFormat::DynamicMap => record_dynamicmap(&mut sim, &header, out, progress)?,
     };
     progress.finish();

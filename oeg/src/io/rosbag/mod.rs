@@ -21,6 +21,7 @@
 //! message's counts against its bytes, a cloud's `width * height * point_step` against its data.
 
 mod cdr;
+mod cloud;
 mod container;
 mod grid_map;
 mod msgs;
@@ -34,6 +35,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+pub use self::cloud::{CLOUD_CLEAR_FIELDS, CLOUD_RANGE_SIGMA_FIELD};
 use self::container::{Channel, Channels, for_each_message, read_bag_files, topic_list};
 pub use self::grid_map::{GridMapLayers, MAX_GRID_MAP_CELLS, parse_grid_map, read_grid_map};
 use self::msgs::{ODOMETRY, TF_MESSAGE, is_type};

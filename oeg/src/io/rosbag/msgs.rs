@@ -2,7 +2,7 @@
 //! (no ROS installation), and those the writer needs encoded, with the message definitions a bag's schemas
 //! carry (`ros2msg`, as `ros2 bag record` writes them).
 
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
 use super::cdr::{CdrError, CdrReader, CdrResult, CdrWriter};
 use crate::io::unit_quaternion;
@@ -33,7 +33,7 @@ pub(crate) struct Header {
 }
 
 impl Header {
-    fn read(r: &mut CdrReader) -> CdrResult<Self> {
+    pub(super) fn read(r: &mut CdrReader) -> CdrResult<Self> {
         let sec = r.i32("header.stamp.sec")?;
         let nanosec = r.u32("header.stamp.nanosec")?;
         Ok(Self {
@@ -57,200 +57,6 @@ impl Header {
 /// A frame's name as tf2 uses it: without a leading `/` (ROS 1 wrote one).
 pub(crate) fn frame_name(name: &str) -> String {
     name.trim_start_matches('/').to_string()
-}
-
-/// `sensor_msgs/PointField`'s `FLOAT32` and `FLOAT64`: the coordinates' types this reader takes.
-const FLOAT32: u8 = 7;
-const FLOAT64: u8 = 8;
-
-/// `sensor_msgs/PointField`.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct PointField {
-    pub(crate) name: String,
-    pub(crate) offset: u32,
-    pub(crate) datatype: u8,
-}
-
-/// `sensor_msgs/PointCloud2`, its `data` borrowed from the message.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct PointCloud2<'a> {
-    pub(crate) header: Header,
-    pub(crate) height: u32,
-    pub(crate) width: u32,
-    pub(crate) fields: Vec<PointField>,
-    pub(crate) is_bigendian: bool,
-    pub(crate) point_step: u32,
-    pub(crate) row_step: u32,
-    pub(crate) data: &'a [u8],
-}
-
-impl<'a> PointCloud2<'a> {
-    pub(crate) fn decode(data: &'a [u8]) -> CdrResult<Self> {
-        let mut r = CdrReader::new(data)?;
-        let header = Header::read(&mut r)?;
-        let height = r.u32("height")?;
-        let width = r.u32("width")?;
-        // A field is at least a 4-byte name length, its offset, type and count.
-        let n = r.sequence_len("fields", 13)?;
-        let fields = (0..n)
-            .map(|k| {
-                let field = PointField {
-                    name: r.string(&format!("fields[{k}].name"))?,
-                    offset: r.u32(&format!("fields[{k}].offset"))?,
-                    datatype: r.u8(&format!("fields[{k}].datatype"))?,
-                };
-                r.u32(&format!("fields[{k}].count"))?;
-                Ok(field)
-            })
-            .collect::<CdrResult<Vec<_>>>()?;
-        let cloud = Self {
-            header,
-            height,
-            width,
-            fields,
-            is_bigendian: r.bool("is_bigendian")?,
-            point_step: r.u32("point_step")?,
-            row_step: r.u32("row_step")?,
-            data: r.bytes("data")?,
-        };
-        r.bool("is_dense")?;
-        Ok(cloud)
-    }
-
-    /// The offset and type of the coordinate field `axis`, checked to lie within a point.
-    fn coordinate(&self, axis: &str) -> CdrResult<(usize, u8)> {
-        let f = self
-            .fields
-            .iter()
-            .find(|f| f.name == axis)
-            .ok_or_else(|| CdrError {
-                field: "fields".into(),
-                message: format!(
-                    "no field `{axis}` (the cloud has {})",
-                    self.fields
-                        .iter()
-                        .map(|f| f.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            })?;
-        let size = match f.datatype {
-            FLOAT32 => 4,
-            FLOAT64 => 8,
-            t => {
-                return Err(CdrError {
-                    field: format!("fields[{axis}].datatype"),
-                    message: format!("{t}, where FLOAT32 (7) or FLOAT64 (8) is expected"),
-                });
-            }
-        };
-        if f.offset as usize + size > self.point_step as usize {
-            return Err(CdrError {
-                field: format!("fields[{axis}].offset"),
-                message: format!(
-                    "{} + {size} bytes runs past point_step {}",
-                    f.offset, self.point_step
-                ),
-            });
-        }
-        Ok((f.offset as usize, f.datatype))
-    }
-
-    /// The points in the cloud's frame, row by row; points with a NaN or infinite coordinate (`is_dense =
-    /// false`) left out. The fields `x`, `y` and `z` are found by name (FLOAT32 or FLOAT64); any other field
-    /// (intensity, ring, time) and padding are skipped.
-    pub(crate) fn points(&self) -> CdrResult<Vec<Vector3<f64>>> {
-        let axes = [
-            self.coordinate("x")?,
-            self.coordinate("y")?,
-            self.coordinate("z")?,
-        ];
-        let step = self.point_step as usize;
-        let (w, h) = (self.width as usize, self.height as usize);
-        if w == 0 || h == 0 {
-            return Ok(Vec::new());
-        }
-        let row_step = self.row_step as usize;
-        // The last row needs its points only; the rows before it, `row_step` bytes each.
-        let fits = w
-            .checked_mul(step)
-            .filter(|&row| h == 1 || row <= row_step)
-            .and_then(|row| row_step.checked_mul(h - 1)?.checked_add(row))
-            .is_some_and(|n| n <= self.data.len());
-        if !fits {
-            return Err(CdrError {
-                field: "data".into(),
-                message: format!(
-                    "{} bytes cannot hold {h} rows of {w} points of {step} bytes, {row_step} bytes a row",
-                    self.data.len()
-                ),
-            });
-        }
-        let big = self.is_bigendian;
-        let read = |p: &[u8], (offset, datatype): (usize, u8)| -> f64 {
-            if datatype == FLOAT32 {
-                let mut b = [0u8; 4];
-                b.copy_from_slice(&p[offset..offset + 4]);
-                f64::from(if big {
-                    f32::from_be_bytes(b)
-                } else {
-                    f32::from_le_bytes(b)
-                })
-            } else {
-                let mut b = [0u8; 8];
-                b.copy_from_slice(&p[offset..offset + 8]);
-                if big {
-                    f64::from_be_bytes(b)
-                } else {
-                    f64::from_le_bytes(b)
-                }
-            }
-        };
-        let mut points = Vec::with_capacity(w * h);
-        for row in 0..h {
-            let start = row * row_step;
-            for k in 0..w {
-                let p = &self.data[start + k * step..start + (k + 1) * step];
-                let v = Vector3::new(read(p, axes[0]), read(p, axes[1]), read(p, axes[2]));
-                if v.iter().all(|c| c.is_finite()) {
-                    points.push(v);
-                }
-            }
-        }
-        Ok(points)
-    }
-
-    /// A cloud of `points` (x, y, z, FLOAT64 or FLOAT32, unorganized), little-endian.
-    pub(crate) fn encode(header: &Header, points: &[Vector3<f64>], float64: bool) -> Vec<u8> {
-        let size: u32 = if float64 { 8 } else { 4 };
-        let mut w = CdrWriter::new();
-        header.write(&mut w);
-        w.u32(1);
-        w.len(points.len());
-        w.len(3);
-        for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
-            w.string(name);
-            w.u32(size * k as u32);
-            w.u8(if float64 { FLOAT64 } else { FLOAT32 });
-            w.u32(1);
-        }
-        w.bool(false);
-        w.u32(3 * size);
-        w.len(3 * size as usize * points.len());
-        let mut data = Vec::with_capacity(3 * size as usize * points.len());
-        for p in points {
-            for c in p.iter() {
-                if float64 {
-                    data.extend_from_slice(&c.to_le_bytes());
-                } else {
-                    data.extend_from_slice(&(*c as f32).to_le_bytes());
-                }
-            }
-        }
-        w.bytes(&data);
-        w.bool(points.iter().all(|p| p.iter().all(|c| c.is_finite())));
-        w.finish()
-    }
 }
 
 /// `sensor_msgs/LaserScan`.
@@ -398,6 +204,9 @@ pub(crate) fn decode_odometry(data: &[u8]) -> CdrResult<TransformStamped> {
 
 #[cfg(test)]
 mod tests {
+    use nalgebra::Vector3;
+
+    use super::super::cloud::PointCloud2;
     use super::*;
 
     fn lidar_header() -> Header {
@@ -411,7 +220,7 @@ mod tests {
     fn a_cloud_and_a_transform_read_back_as_written() {
         let points = [Vector3::new(1.0, 2.0, 3.0), Vector3::new(-1.0, 0.5, f64::NAN)];
         for float64 in [false, true] {
-            let data = PointCloud2::encode(&lidar_header(), &points, float64);
+            let data = PointCloud2::encode(&lidar_header(), &points, float64, &[]);
             let cloud = PointCloud2::decode(&data).expect("decodes");
             assert_eq!(cloud.header, lidar_header());
             assert_eq!(cloud.points().expect("points"), vec![Vector3::new(1.0, 2.0, 3.0)]);
@@ -428,26 +237,5 @@ mod tests {
         assert_eq!(back.len(), 1);
         assert_eq!(back[0].header, t.header);
         assert!((back[0].transform.to_homogeneous() - t.transform.to_homogeneous()).norm() < 1e-12);
-    }
-
-    #[test]
-    fn a_cloud_whose_sizes_lie_is_refused_by_field() {
-        let data = PointCloud2::encode(&lidar_header(), &[Vector3::new(1.0, 2.0, 3.0)], true);
-        let mut cloud = PointCloud2::decode(&data).expect("decodes");
-        cloud.width = u32::MAX;
-        cloud.height = u32::MAX;
-        assert_eq!(cloud.points().expect_err("refused").field, "data");
-        cloud.width = 1;
-        cloud.height = 1;
-        cloud.fields[2].offset = 20;
-        assert_eq!(cloud.points().expect_err("refused").field, "fields[z].offset");
-        cloud.fields[2].name = "intensity".into();
-        assert!(
-            cloud
-                .points()
-                .expect_err("refused")
-                .message
-                .contains("no field `z`")
-        );
     }
 }

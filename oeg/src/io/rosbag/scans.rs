@@ -4,8 +4,9 @@ use std::path::Path;
 
 use nalgebra::{Point3, Vector3};
 
+use super::cloud::{CloudReading, PointCloud2};
 use super::container::{Channel, Channels};
-use super::msgs::{LASER_SCAN, LaserScan, POINT_CLOUD2, PointCloud2, is_type};
+use super::msgs::{LASER_SCAN, LaserScan, POINT_CLOUD2, is_type};
 use super::tf::TfTree;
 use super::{Bag, BagOptions, BagScan, BagSkip};
 use crate::error::{Error, Result};
@@ -110,8 +111,8 @@ impl ScanReader<'_> {
         }
         let (header, scan) = if is_type(&c.kind, POINT_CLOUD2) {
             let cloud = PointCloud2::decode(data).map_err(|e| e.to_string())?;
-            let points = cloud.points().map_err(|e| e.to_string())?;
-            (cloud.header, Readings::Points(points))
+            let readings = cloud.readings().map_err(|e| e.to_string())?;
+            (cloud.header, Readings::Cloud(readings))
         } else {
             let laser = LaserScan::decode(data).map_err(|e| e.to_string())?;
             let readings = laser_readings(&laser);
@@ -139,10 +140,27 @@ impl ScanReader<'_> {
         let mut out = Scan::new(origin, o.cloud_sensor);
         out.stamp_s = stamp_ns as f64 * 1e-9;
         match scan {
-            Readings::Points(points) => {
-                out.rays.reserve(points.len());
-                for p in points {
-                    out.push_hit(pose * Point3::from(p));
+            Readings::Cloud(readings) => {
+                // A cloud's rays that returned nothing clear to their own length, the sensor's range.
+                if let Some(range_m) = readings
+                    .iter()
+                    .filter(|r| !r.hit)
+                    .map(|r| r.point.norm() as f32)
+                    .reduce(f32::max)
+                {
+                    out.sensor.max_range_m = range_m;
+                }
+                out.rays.reserve(readings.len());
+                for r in readings {
+                    if r.hit {
+                        out.push_hit(pose * Point3::from(r.point));
+                    } else {
+                        out.rays
+                            .push(Ray::no_return((pose.rotation * r.point).cast::<f32>()));
+                    }
+                    if let (Some(sigma), Some(ray)) = (r.range_sigma_m, out.rays.last_mut()) {
+                        ray.range_sigma_m = Some(sigma);
+                    }
                 }
             }
             Readings::Laser { range_max, rays } => {
@@ -193,7 +211,7 @@ impl ScanReader<'_> {
 
 /// A range message's readings in its own frame.
 enum Readings {
-    Points(Vec<Vector3<f64>>),
+    Cloud(Vec<CloudReading>),
     /// Each beam's vector (its reading, or its unit direction for a no-return) and whether it hit.
     Laser {
         range_max: f32,

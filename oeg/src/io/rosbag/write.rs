@@ -8,9 +8,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Vector3};
 
 use super::cdr::CdrWriter;
-use super::msgs::{
-    self, GRID_MAP, Header, OCCUPANCY_GRID, POINT_CLOUD2, PointCloud2, TF_MESSAGE, TransformStamped,
-};
+use super::cloud::PointCloud2;
+use super::msgs::{self, GRID_MAP, Header, OCCUPANCY_GRID, POINT_CLOUD2, TF_MESSAGE, TransformStamped};
 use super::schemas;
 use crate::error::{Error, Result};
 use crate::io::write_atomically;
@@ -173,11 +172,38 @@ impl BagWriter {
         points: &[Vector3<f64>],
         precision: CloudPrecision,
     ) -> Result<()> {
+        self.cloud_with_fields(topic, frame, stamp_ns, (points, precision), &[])
+    }
+
+    /// [`BagWriter::cloud`] with FLOAT32 fields after x y z, one value a point each, such as
+    /// [`crate::CLOUD_RANGE_SIGMA_FIELD`] and [`crate::CLOUD_CLEAR_FIELDS`].
+    ///
+    /// # Errors
+    /// [`Error::Parse`] if `topic` already carries another type, or a field has not one value a point.
+    pub fn cloud_with_fields(
+        &mut self,
+        topic: &str,
+        frame: &str,
+        stamp_ns: i64,
+        (points, precision): (&[Vector3<f64>], CloudPrecision),
+        fields: &[(&str, &[f32])],
+    ) -> Result<()> {
+        if let Some((name, values)) = fields.iter().find(|(_, v)| v.len() != points.len()) {
+            return Err(Error::parse(
+                &self.folder,
+                format!(
+                    "field `{name}` of a cloud on {topic} has {} values for {} points",
+                    values.len(),
+                    points.len()
+                ),
+            ));
+        }
         let header = Header {
             stamp_ns,
             frame_id: frame.to_string(),
         };
-        let data = PointCloud2::encode(&header, points, precision == CloudPrecision::Float64);
+        let float64 = precision == CloudPrecision::Float64;
+        let data = PointCloud2::encode(&header, points, float64, fields);
         self.write(topic, POINT_CLOUD2, stamp_ns, &data)
     }
 
