@@ -241,9 +241,9 @@ fn a_dynamicmap_sequence_labels_the_points_people_returned_and_maps_back() {
 fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
     // `oeg record --format rosbag2` writes every ray (a ray that returned nothing as NaN coordinates and its
     // cleared end) with its range error, so `oeg map` of the bag in the `odom` frame (the estimated pose), with
-    // the scenario's model, integrates what `oeg run` integrates. Only the rounding differs: the run rotates
-    // each ray in f32, the bag's reader composes float64 transforms with float32 points, a few micrometres
-    // apart, which moves a beam across a cell's edge now and then.
+    // the scenario's model, integrates what `oeg run` integrates: the same float32 vectors in the sensor's
+    // frame, rotated in float64 by the same pose (the bag's `odom -> base_link -> sensor` composes back to the
+    // run's pose within the last bits of a float64), stored in float32. The same map, byte for byte.
     let dir = temp_dir("rec", "rosbag2_round_trip");
     let scenario = short_scenario(&dir);
     let (bag, run, mapped, in_map) = (
@@ -292,32 +292,12 @@ fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
             String::from_utf8_lossy(&o.stderr)
         );
     }
-    let load = |d: &std::path::Path| oeg::load_map(&d.join("map.oeg")).expect("map");
-    let (from_run, from_bag) = (load(&run), load(&mapped));
-    assert_eq!(from_run.totals().num_rays, from_bag.totals().num_rays);
-    assert_eq!(from_run.num_scans(), from_bag.num_scans());
-    let cells = |m: &Map| m.observed_cells().collect::<std::collections::BTreeMap<_, _>>();
-    let (a, b) = (cells(&from_run), cells(&from_bag));
-    let same = |x: &oeg::Cell, y: &oeg::Cell| {
-        (x.log_odds - y.log_odds).abs() <= 1e-4
-            && match (x.elevation(), y.elevation()) {
-                (Some(e), Some(f)) => {
-                    (e.mean_m - f.mean_m).abs() <= 1e-4 && (e.var_m2 - f.var_m2).abs() <= 1e-6
-                }
-                (None, None) => true,
-                _ => false,
-            }
-    };
-    let differ = a
-        .iter()
-        .filter(|(k, x)| b.get(k).is_none_or(|y| !same(x, y)))
-        .count()
-        + b.keys().filter(|k| !a.contains_key(k)).count();
-    // 71 of 1,592,736 cells differ in this scene.
-    assert!(a.len() > 100_000, "{} cells", a.len());
-    assert!(differ * 10_000 <= a.len(), "{differ} of {} cells differ", a.len());
-    // In the `map` frame (the true pose), the same scans land elsewhere: the drift is in the bag's transforms.
     let bytes = |d: &std::path::Path| std::fs::read(d.join("map.oeg")).expect("map");
+    assert!(
+        bytes(&run) == bytes(&mapped),
+        "the bag's map differs from the run's"
+    );
+    // In the `map` frame (the true pose), the same scans land elsewhere: the drift is in the bag's transforms.
     assert!(
         bytes(&in_map) != bytes(&mapped),
         "the true and the estimated pose gave the same map"

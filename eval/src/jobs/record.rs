@@ -199,7 +199,7 @@ impl BagCloud {
                     Vector3::repeat(f32::NAN),
                 )
             } else {
-                let end = r.vector_in_sensor.normalize() * sensor.max_range_m;
+                let end = sim::sensors::SensorScan::cleared_in_sensor(r, sensor);
                 (Vector3::repeat(f64::NAN), sensor.sigma_m(cleared_m), end)
             };
             cloud.points.push(point);

@@ -145,15 +145,27 @@ impl SensorScan {
             PoseSource::Estimated => self.estimated_world_from_sensor,
             PoseSource::True => self.world_from_sensor,
         };
-        let rotation = world_from_sensor.rotation.cast::<f32>();
+        let rotation = world_from_sensor.rotation;
         let mut scan = Scan::new(Point3::from(world_from_sensor.translation.vector), sensor);
         scan.stamp_s = self.stamp_s;
+        // Rotated in float64 and stored in float32, as a bag's reader places a cloud's float32 points; a ray
+        // that returned nothing reaches the sensor's range ([`SensorScan::cleared_in_sensor`]).
         scan.rays.extend(self.rays.iter().map(|r| Ray {
             kind: r.kind,
-            offset_in_world: rotation * r.vector_in_sensor,
+            offset_in_world: (rotation * Self::cleared_in_sensor(r, &sensor).cast::<f64>()).cast::<f32>(),
             range_sigma_m: (r.kind == RayKind::Hit).then_some(r.range_sigma_m),
         }));
         scan
+    }
+
+    /// A reading's vector in the sensor's frame: a hit's, or for a ray that returned nothing, its direction
+    /// times the range of `sensor` (the map's model of the sensor), the segment it clears.
+    pub fn cleared_in_sensor(ray: &SensorRay, sensor: &oeg::SensorModel) -> Vector3<f32> {
+        if ray.kind == RayKind::Hit {
+            ray.vector_in_sensor
+        } else {
+            ray.vector_in_sensor * sensor.max_range_m
+        }
     }
 
     /// Number of hits.

@@ -152,12 +152,13 @@ impl ScanReader<'_> {
                 }
                 out.rays.reserve(readings.len());
                 for r in readings {
-                    if r.hit {
-                        out.push_hit(pose * Point3::from(r.point));
+                    // Rotated in float64 and stored in float32, as `oeg run` places a simulated scan's rays.
+                    let offset = (pose.rotation * r.point).cast::<f32>();
+                    out.rays.push(if r.hit {
+                        Ray::hit(offset)
                     } else {
-                        out.rays
-                            .push(Ray::no_return((pose.rotation * r.point).cast::<f32>()));
-                    }
+                        Ray::no_return(offset)
+                    });
                     if let (Some(sigma), Some(ray)) = (r.range_sigma_m, out.rays.last_mut()) {
                         ray.range_sigma_m = Some(sigma);
                     }
