@@ -49,6 +49,12 @@ def test_a_recorded_bag_reads_in_rosbags_with_its_clouds_and_transforms(tmp_path
         topics = {c.topic: c.msgtype for c in reader.connections}
         assert topics["/laser_left/points"] == "sensor_msgs/msg/PointCloud2"
         assert topics["/tf"] == topics["/tf_static"] == "tf2_msgs/msg/TFMessage"
+        # The offered QoS, as rosbags parses rosbag2's metadata: the static transforms transient local (what
+        # tf2's static listener asks for when the bag is played back), the rest reliable and volatile.
+        qos = {c.topic: c.ext.offered_qos_profiles[0] for c in reader.connections}
+        assert qos["/tf_static"].durability.name == "TRANSIENT_LOCAL"
+        assert {q.durability.name for t, q in qos.items() if t != "/tf_static"} == {"VOLATILE"}
+        assert {q.reliability.name for q in qos.values()} == {"RELIABLE"}
         for conn, _, raw in reader.messages(connections=[c for c in reader.connections if not c.topic.startswith("/truth")]):
             msg = TS.deserialize_cdr(raw, conn.msgtype)
             if conn.msgtype.endswith("PointCloud2"):

@@ -131,9 +131,12 @@ impl BagWriter {
                 id
             }
         };
+        // The ROS 2 profile's channel metadata: the QoS the topic was offered with, which `ros2 bag play`
+        // offers again.
+        let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), offered_qos(topic))]);
         let id = self
             .writer
-            .add_channel(schema, topic, "cdr", &BTreeMap::new())
+            .add_channel(schema, topic, "cdr", &metadata)
             .map_err(|e| mcap_error(&self.folder, &e))?;
         self.channels.insert(topic.to_string(), (id, kind, 0));
         Ok(id)
@@ -340,9 +343,11 @@ impl BagWriter {
         let total: u64 = self.channels.values().map(|c| c.2).sum();
         let mut topics = String::new();
         for (topic, (_, kind, n)) in &self.channels {
+            // The profile as one double-quoted YAML string, as rosbag2 writes it.
+            let qos = offered_qos(topic).replace('\n', "\\n");
             topics.push_str(&format!(
                 "    - topic_metadata:\n        name: {topic}\n        type: {kind}\n        serialization_format: cdr\n        \
-                 offered_qos_profiles: \"\"\n      message_count: {n}\n"
+                 offered_qos_profiles: \"{qos}\"\n      message_count: {n}\n"
             ));
         }
         format!(
@@ -354,6 +359,20 @@ impl BagWriter {
              message_count: {total}\n"
         )
     }
+}
+
+/// The QoS a topic is offered with, as rosbag2's list of profiles in YAML (its `rmw_qos_profile_t` numbers):
+/// reliable, keeping the last 10 messages, and volatile, except `/tf_static`, which is transient local with a
+/// depth of 1, as tf2's static broadcaster offers it (tf2's static listener asks for transient local, which a
+/// volatile offer cannot give: played back so, a bag's static transforms would reach nobody). Deadline,
+/// lifespan and lease are 0, the middleware's default (none).
+fn offered_qos(topic: &str) -> String {
+    let (depth, durability) = if topic == "/tf_static" { (1, 1) } else { (10, 2) };
+    format!(
+        "- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n  deadline:\n    sec: 0\n    \
+         nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 0\n    \
+         nsec: 0\n  avoid_ros_namespace_conventions: false"
+    )
 }
 
 fn mcap_error(folder: &Path, e: &mcap::McapError) -> Error {
