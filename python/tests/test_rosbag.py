@@ -320,3 +320,59 @@ def test_a_grid_map_in_a_bag_scores_as_its_layers_given_as_npy(tmp_path: Path) -
     # A topic that is not there is named.
     err = _fails("score", scenario, "--grid-map", str(bag), "--topic", "/grid", "--out", str(tmp_path / "x"), *common)
     assert "no topic /grid" in err, err
+
+
+def _rotation(q: Any) -> Any:
+    """A geometry_msgs/Quaternion as a rotation matrix."""
+    x, y, z, w = q.x, q.y, q.z, q.w
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _pcd_points(path: Path) -> Any:
+    """The x, y, z of a binary PCD of four float32 fields, as `oeg record --format dynamicmap` writes it."""
+    data = path.read_bytes()
+    body = data.index(b"DATA binary\n") + len(b"DATA binary\n")
+    return np.frombuffer(data[body:], dtype="<f4").reshape(-1, 4)[:, :3].astype(np.float64)
+
+
+def test_rosbags_reads_the_points_of_the_recorded_scans(tmp_path: Path) -> None:
+    # The same scans written as a bag and as DynamicMap frames (world-frame hits at the estimated pose, a
+    # frame a scan, in order): rosbags' clouds, placed by the bag's odom -> base_link -> sensor transforms in
+    # numpy, are the frames' points, to float32's rounding.
+    bag, frames = tmp_path / "bag", tmp_path / "frames"
+    run_cli("record", "scenarios/corridor_lasers.toml", "--format", "rosbag2", "--out", str(bag))
+    run_cli("record", "scenarios/corridor_lasers.toml", "--format", "dynamicmap", "--out", str(frames))
+    mounts, odom, clouds = {}, {}, []
+    with rosbag2.Reader(bag) as reader:
+        wanted = [c for c in reader.connections if not c.topic.startswith("/truth")]
+        for conn, _, raw in reader.messages(connections=wanted):
+            msg = TS.deserialize_cdr(raw, conn.msgtype)
+            if conn.msgtype.endswith("TFMessage"):
+                for t in msg.transforms:
+                    v = t.transform.translation
+                    pose = (_rotation(t.transform.rotation), np.array([v.x, v.y, v.z]))
+                    stamp = t.header.stamp.sec * 10**9 + t.header.stamp.nanosec
+                    if conn.topic == "/tf_static":
+                        mounts[t.child_frame_id] = pose
+                    elif t.header.frame_id == "odom":
+                        odom[stamp] = pose
+            else:
+                names = [f.name for f in msg.fields]
+                columns = np.frombuffer(bytes(msg.data), dtype="<f4").reshape(-1, len(names))
+                xyz = columns[:, :3].astype(np.float64)
+                stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+                clouds.append((stamp, msg.header.frame_id, xyz[np.all(np.isfinite(xyz), axis=1)]))
+    pcds = sorted((frames / "pcd").glob("*.pcd"))
+    assert len(pcds) == len(clouds) > 100
+    for (stamp, frame, points), pcd in zip(clouds, pcds):
+        (r_base, t_base), (r_mount, t_mount) = odom[stamp], mounts[frame]
+        world = (points @ r_mount.T + t_mount) @ r_base.T + t_base
+        expected = _pcd_points(pcd)
+        assert world.shape == expected.shape, pcd.name
+        assert np.max(np.abs(world - expected), initial=0.0) < 1e-4, pcd.name
