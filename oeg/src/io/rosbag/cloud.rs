@@ -140,7 +140,7 @@ impl<'a> PointCloud2<'a> {
 
     /// The readings in the cloud's frame, row by row: every point with finite coordinates is a hit; a point
     /// with a NaN coordinate is a ray that returned nothing when the cloud has the fields
-    /// [`CLOUD_CLEAR_FIELDS`] and they hold its cleared ray's end, and is left out otherwise. A finite, positive
+    /// [`CLOUD_CLEAR_FIELDS`] and they hold its cleared ray's end (finite, not zero), and is left out otherwise. A finite, positive
     /// [`CLOUD_RANGE_SIGMA_FIELD`] is the reading's range error. Any other field is skipped.
     pub(crate) fn readings(&self) -> CdrResult<Vec<CloudReading>> {
         let axes = [
@@ -216,7 +216,10 @@ impl<'a> PointCloud2<'a> {
                         hit: true,
                         range_sigma_m,
                     });
-                } else if let Some(end) = clear.map(|c| vector(p, c)).filter(finite) {
+                } else if let Some(end) = clear
+                    .map(|c| vector(p, c))
+                    .filter(|v| finite(v) && v.norm() > 0.0)
+                {
                     readings.push(CloudReading {
                         point: end,
                         hit: false,
@@ -298,7 +301,7 @@ mod tests {
             Vector3::repeat(f64::NAN),
         ];
         let sigma = [0.02, 0.5, -1.0];
-        let clear = [[nan, 10.0, nan], [nan, 0.0, 0.0], [nan, 0.0, 0.0]];
+        let clear = [[nan, 10.0, 0.0], [nan, 0.0, 0.0], [nan, 0.0, 0.0]];
         let fields = [
             (CLOUD_RANGE_SIGMA_FIELD, &sigma[..]),
             (CLOUD_CLEAR_FIELDS[0], &clear[0][..]),
@@ -307,8 +310,8 @@ mod tests {
         ];
         let data = PointCloud2::encode(&lidar_header(), &points, false, &fields);
         let cloud = PointCloud2::decode(&data).expect("decodes");
-        // The third point has neither coordinates nor a cleared end: left out. A range error that is not a
-        // positive number is none.
+        // The third point has neither coordinates nor a cleared end (a zero one is none): left out. A range
+        // error that is not a positive number is none.
         assert_eq!(
             cloud.readings().expect("readings"),
             vec![
