@@ -252,6 +252,21 @@ fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
         dir.join("mapped"),
         dir.join("in_map"),
     );
+    // The bag mapped with the scenario's model (curbs_and_boards' `[map.model]`).
+    fn map_bag<'a>(bag: &'a std::path::Path, out: &'a std::path::Path, extra: &[&'a str]) -> Vec<&'a str> {
+        let mut args = vec![
+            "map",
+            common::s(bag),
+            "--resolution",
+            "0.05",
+            "--set",
+            "map.model.max_height_m=0.5",
+            "--out",
+            common::s(out),
+        ];
+        args.extend(extra);
+        args
+    }
     for args in [
         vec![
             "record",
@@ -262,28 +277,8 @@ fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
             common::s(&bag),
         ],
         vec!["run", common::s(&scenario), "--out", common::s(&run)],
-        vec![
-            "map",
-            common::s(&bag),
-            "--resolution",
-            "0.05",
-            "--set",
-            "input.bag.map_frame=odom",
-            "--set",
-            "map.model.max_height_m=0.5",
-            "--out",
-            common::s(&mapped),
-        ],
-        vec![
-            "map",
-            common::s(&bag),
-            "--resolution",
-            "0.05",
-            "--set",
-            "map.model.max_height_m=0.5",
-            "--out",
-            common::s(&in_map),
-        ],
+        map_bag(&bag, &mapped, &["--set", "input.bag.map_frame=odom"]),
+        map_bag(&bag, &in_map, &[]),
     ] {
         let o = common::oeg(&args);
         assert!(

@@ -293,6 +293,17 @@ mod tests {
     }
 
     #[test]
+    fn a_cloud_reads_back_as_written() {
+        let points = [Vector3::new(1.0, 2.0, 3.0), Vector3::new(-1.0, 0.5, f64::NAN)];
+        for float64 in [false, true] {
+            let data = PointCloud2::encode(&lidar_header(), &points, float64, &[]);
+            let cloud = PointCloud2::decode(&data).expect("decodes");
+            assert_eq!(cloud.header, lidar_header());
+            assert_eq!(cloud.points().expect("points"), vec![Vector3::new(1.0, 2.0, 3.0)]);
+        }
+    }
+
+    #[test]
     fn a_cloud_s_rays_that_returned_nothing_and_range_errors_read_back_from_their_fields() {
         let nan = f32::NAN;
         let points = [
