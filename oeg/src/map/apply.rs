@@ -40,21 +40,31 @@ pub(super) fn apply<E: Evidence>(
     let limit = config
         .memory_limit_bytes
         .saturating_sub(scratch_bytes + super::OWN_BYTES);
-    let memory_error = |e: crate::storage::CapacityExceeded| Error::MemoryLimit {
-        requested_bytes: e.requested_bytes.saturating_add(scratch_bytes),
-        limit_bytes: config.memory_limit_bytes,
+    // A refusal reports what the map and its scratch would have held: the refusing layer's request, the other
+    // layer's bytes, the scratch and the map's own structure.
+    let memory_error = |other_layer_bytes: u64| {
+        move |e: crate::storage::CapacityExceeded| Error::MemoryLimit {
+            requested_bytes: e
+                .requested_bytes
+                .saturating_add(other_layer_bytes)
+                .saturating_add(scratch_bytes + super::OWN_BYTES),
+            limit_bytes: config.memory_limit_bytes,
+        }
     };
     // The ceiling layer: allocated where a ceiling is hit, updated where one exists.
     let mut overhead_tiles = E::overhead_tiles(hits).to_vec();
     overhead_tiles.sort_unstable();
     overhead_tiles.dedup();
     for (tile, _, _) in scratch.marked_tiles() {
+        let ceilings_bytes = ceilings.memory_bytes();
         cells
-            .tile_or_insert(tile, limit.saturating_sub(ceilings.memory_bytes()))
-            .map_err(memory_error)?;
+            .tile_or_insert(tile, limit.saturating_sub(ceilings_bytes))
+            .map_err(memory_error(ceilings_bytes))?;
         if ceiling_rule && overhead_tiles.binary_search(&tile).is_ok() {
-            let room = limit.saturating_sub(cells.memory_bytes());
-            ceilings.tile_or_insert(tile, room).map_err(memory_error)?;
+            let cells_bytes = cells.memory_bytes();
+            ceilings
+                .tile_or_insert(tile, limit.saturating_sub(cells_bytes))
+                .map_err(memory_error(cells_bytes))?;
         }
     }
     // The marked tiles come row by row over the tile index, the order the cells' grid lends them in.

@@ -341,8 +341,11 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
         let slot = grid
             .slot_or_insert(tile, limit_bytes)
             .map_err(|e| Error::MemoryLimit {
-                requested_bytes: e.requested_bytes,
-                limit_bytes,
+                requested_bytes: e
+                    .requested_bytes
+                    .saturating_add(hits.memory_bytes())
+                    .saturating_add(before.map_bytes()),
+                limit_bytes: before.memory_limit_bytes,
             })?;
         let (evidence, mut marks) = if BY_CELL {
             let (evidence, marks) = grid.slot_tile_and_marks_mut(slot);
