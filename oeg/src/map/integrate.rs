@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::apply::apply;
 use super::sample::{Before, Here, RaySpan, Sampling};
-use super::scratch::{Evidence, HitStore, ScanScratch, Scratch};
+use super::scratch::{Evidence, ExactMerge, HitStore, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
@@ -173,7 +173,7 @@ fn gather_in_parallel<E: Sampling>(
     scratch: &mut Scratch<E>,
     runs: usize,
     scratch_limit: u64,
-    merge: fn(&mut E, &E),
+    merge: ExactMerge<E>,
     stop: &(impl Fn() -> bool + Sync),
 ) -> Result<IntegrationStats> {
     // Workers' grids are kept, with their pooled tiles, for the next scan that needs them (here or in
@@ -193,7 +193,7 @@ fn gather_in_parallel<E: Sampling>(
         .map(|(k, grid)| {
             let rays = bounds[k]..bounds[k + 1];
             let mut stats = IntegrationStats::default();
-            // Evidence that merges keeps nothing beside its grid ([`Evidence::exact_merge`]).
+            // Evidence that merges keeps nothing beside its grid ([`ExactMerge`]).
             let mut hits = E::Hits::default();
             gather_rays(before, scan, rays, (grid, &mut hits), share, &mut stats, stop).map(|()| stats)
         })
@@ -225,7 +225,7 @@ fn merge_runs<E: Evidence>(
     main: &mut TileGrid<E>,
     workers: &mut [TileGrid<E>],
     limit_bytes: u64,
-    merge: fn(&mut E, &E),
+    merge: ExactMerge<E>,
 ) -> std::result::Result<(), crate::storage::CapacityExceeded> {
     for worker in workers.iter() {
         for (tile, _, marked) in worker.marked_tiles() {
@@ -242,7 +242,7 @@ fn merge_runs<E: Evidence>(
                 marked.for_each(|k| {
                     // An untouched cell's evidence merges as nothing.
                     if !evidence[k].paper().is_untouched() {
-                        merge(&mut merged[k], &evidence[k]);
+                        merge.merge(&mut merged[k], &evidence[k]);
                     }
                 });
             }

@@ -121,9 +121,29 @@ pub(crate) trait Evidence: Copy + Send + Sync + 'static {
     }
     /// How evidence gathered from a later run of a scan's rays merges into an earlier run's to give exactly
     /// the evidence of one run under `opts` ([`PaperEvidence::merge_later`]), if it can: then the rays may be
-    /// gathered in parallel. Only evidence that keeps nothing beside its grid merges.
-    fn exact_merge(_opts: &ModelOptions) -> Option<fn(&mut Self, &Self)> {
+    /// gathered in parallel. Only evidence that keeps nothing beside its grid merges ([`ExactMerge`]).
+    fn exact_merge(_opts: &ModelOptions) -> Option<ExactMerge<Self>> {
         None
+    }
+}
+
+/// [`Evidence::exact_merge`]'s merge of a later run's evidence into an earlier run's. Only evidence that keeps
+/// nothing beside its grid (`Hits = ()`) can make one: the runs' grids are all that is merged, so the workers
+/// that gather side by side need no hit log of their own.
+#[derive(Clone, Copy)]
+pub(crate) struct ExactMerge<E>(fn(&mut E, &E));
+
+impl<E: Evidence<Hits = ()>> ExactMerge<E> {
+    pub(crate) fn new(merge: fn(&mut E, &E)) -> Self {
+        Self(merge)
+    }
+}
+
+impl<E> ExactMerge<E> {
+    /// Merges `later` into `earlier`.
+    #[inline(always)]
+    pub(crate) fn merge(self, earlier: &mut E, later: &E) {
+        (self.0)(earlier, later);
     }
 }
 
@@ -163,8 +183,9 @@ impl Evidence for PaperEvidence {
         self.is_untouched()
     }
 
-    fn exact_merge(opts: &ModelOptions) -> Option<fn(&mut Self, &Self)> {
-        (opts.scan_hit_elevation == ScanHitElevation::Highest).then_some(PaperEvidence::merge_later)
+    fn exact_merge(opts: &ModelOptions) -> Option<ExactMerge<Self>> {
+        (opts.scan_hit_elevation == ScanHitElevation::Highest)
+            .then(|| ExactMerge::new(PaperEvidence::merge_later))
     }
 }
 
