@@ -154,14 +154,15 @@ impl ScanReader<'_> {
                 for r in readings {
                     // Rotated in float64 and stored in float32, as `oeg run` places a simulated scan's rays.
                     let offset = (pose.rotation * r.point).cast::<f32>();
-                    out.rays.push(if r.hit {
+                    let ray = if r.hit {
                         Ray::hit(offset)
                     } else {
                         Ray::no_return(offset)
+                    };
+                    out.rays.push(Ray {
+                        range_sigma_m: r.range_sigma_m,
+                        ..ray
                     });
-                    if let (Some(sigma), Some(ray)) = (r.range_sigma_m, out.rays.last_mut()) {
-                        ray.range_sigma_m = Some(sigma);
-                    }
                 }
             }
             Readings::Laser { range_max, rays } => {
