@@ -297,19 +297,12 @@ pub(super) fn gather_rays<E: Sampling>(
             stats.num_rays_skipped += 1;
             continue;
         };
-        let walk_limit = limit_bytes.saturating_sub(hits.memory_bytes());
-        let walk = walk_of(before, grid, index, &span, walk_limit)?;
+        let walk = walk_of(before, grid, index, &span, (limit_bytes, hits.memory_bytes()))?;
         stats.num_cell_visits += walk.len() as u64;
         if span.hit.is_some() {
             let room = limit_bytes.saturating_sub(grid.memory_bytes());
             hits.reserve(span.near_hit_cells(before.geometry.resolution_m()), room)
-                .map_err(|e| Error::MemoryLimit {
-                    requested_bytes: e
-                        .requested_bytes
-                        .saturating_add(grid.memory_bytes())
-                        .saturating_add(before.map_bytes()),
-                    limit_bytes: before.memory_limit_bytes,
-                })?;
+                .map_err(|e| before.refusal(e.requested_bytes.saturating_add(grid.memory_bytes())))?;
         }
         let walk_limit = limit_bytes.saturating_sub(hits.memory_bytes());
         let scratch = (&mut *grid, &mut *hits);
@@ -340,13 +333,7 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
     while let Some(tile) = walk.tile() {
         let slot = grid
             .slot_or_insert(tile, limit_bytes)
-            .map_err(|e| Error::MemoryLimit {
-                requested_bytes: e
-                    .requested_bytes
-                    .saturating_add(hits.memory_bytes())
-                    .saturating_add(before.map_bytes()),
-                limit_bytes: before.memory_limit_bytes,
-            })?;
+            .map_err(|e| before.refusal(e.requested_bytes.saturating_add(hits.memory_bytes())))?;
         let (evidence, mut marks) = if BY_CELL {
             let (evidence, marks) = grid.slot_tile_and_marks_mut(slot);
             (evidence, Some(marks))
@@ -395,15 +382,16 @@ fn rows_between(a: usize, b: usize) -> u64 {
 }
 
 /// The cells under a ray's span, refused when the span leaves the grid's index range or must take `grid` past
-/// `limit_bytes` (checked before a single tile of it is allocated).
+/// `limit_bytes` beside the scan's hit log of `log_bytes` (checked before a single tile of it is allocated).
 #[inline(always)]
 fn walk_of<E: Evidence>(
     before: &Before,
     grid: &TileGrid<E>,
     index: usize,
     span: &RaySpan,
-    limit_bytes: u64,
+    (limit_bytes, log_bytes): (u64, u64),
 ) -> Result<GroundTraversal> {
+    let limit_bytes = limit_bytes.saturating_sub(log_bytes);
     let geometry = before.geometry;
     let (o, dir) = (span.origin, span.dir);
     let (start, end) = (o + dir * span.l_lo, o + dir * span.l_hi);
@@ -420,7 +408,6 @@ fn walk_of<E: Evidence>(
             ))
         },
     )?;
-    let map_bytes = before.map_bytes();
     // Fail fast: the walk touches at least one tile per tile edge it spans, so a ray that must exceed the
     // memory limit is refused before a single tile of it is allocated.
     let (ta, tb) = (TileIndex::of(walk.first_cell()), TileIndex::of(walk.last_cell()));
@@ -428,10 +415,7 @@ fn walk_of<E: Evidence>(
     let tile_bytes = TileGrid::<E>::tile_bytes() as u64;
     let least_bytes = tiles_spanned.saturating_mul(tile_bytes);
     if least_bytes > limit_bytes {
-        return Err(Error::MemoryLimit {
-            requested_bytes: least_bytes.saturating_add(map_bytes),
-            limit_bytes: before.memory_limit_bytes,
-        });
+        return Err(before.refusal(least_bytes.saturating_add(log_bytes)));
     }
     // The scan's rays together: when this ray may need more than the scratch has left (long rays, such as a
     // stereo hit's error band far away, add up), count the tiles it needs that the scratch lacks, before one
@@ -450,10 +434,7 @@ fn walk_of<E: Evidence>(
         }
         let needed = new_tiles.saturating_sub(pooled).saturating_mul(tile_bytes);
         if needed > left {
-            return Err(Error::MemoryLimit {
-                requested_bytes: needed.saturating_add(in_use).saturating_add(map_bytes),
-                limit_bytes: before.memory_limit_bytes,
-            });
+            return Err(before.refusal(needed.saturating_add(in_use).saturating_add(log_bytes)));
         }
     }
     Ok(walk)

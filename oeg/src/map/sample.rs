@@ -5,6 +5,7 @@ use nalgebra::Vector3;
 
 use super::scratch::{Evidence, HitLog, PaperEvidence, ScanEvidence};
 use crate::cell::Cell;
+use crate::error::Error;
 use crate::geometry::GridGeometry;
 use crate::model::{Ceiling, SeenFrom};
 use crate::model::{
@@ -31,6 +32,15 @@ impl Before<'_> {
     /// Bytes the map holds ([`crate::Map::memory_bytes`]): what the scratch's share of the limit leaves out.
     pub(super) fn map_bytes(&self) -> u64 {
         self.cells.memory_bytes() + self.ceilings.memory_bytes() + super::OWN_BYTES
+    }
+
+    /// The error of a scan refused for its memory: the map would have held its bytes and `scratch_bytes`,
+    /// against the map's limit.
+    pub(super) fn refusal(&self, scratch_bytes: u64) -> Error {
+        Error::MemoryLimit {
+            requested_bytes: scratch_bytes.saturating_add(self.map_bytes()),
+            limit_bytes: self.memory_limit_bytes,
+        }
     }
 }
 
