@@ -20,6 +20,7 @@ mod rule_evidence;
 mod sample;
 mod scratch;
 mod update;
+mod views;
 
 pub use layers::{Layer, LayerKind, Raster};
 
@@ -27,6 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use self::apply::LogOddsLevels;
 use self::scratch::ScanScratch;
+use self::views::RecentViews;
 use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
@@ -38,8 +40,8 @@ use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
 /// a million kilometres away gives an error instead of exhausting the machine.
 pub const DEFAULT_MEMORY_LIMIT_BYTES: u64 = 4 << 30;
 
-/// Bytes of the map's own structure, beside its tiles: part of [`Map::memory_bytes`], so every limit check
-/// leaves room for it.
+/// Bytes of the map's own structure, beside its tiles and its recent views: part of [`Map::memory_bytes`], so
+/// every limit check leaves room for it.
 const OWN_BYTES: u64 = size_of::<Map>() as u64;
 
 /// Everything needed to create a map.
@@ -118,6 +120,9 @@ pub struct Map {
     pub(crate) levels: LogOddsLevels,
     pub(crate) totals: IntegrationStats,
     pub(crate) num_scans: u64,
+    /// Where the last scans were taken from ([`ModelOptions::measurement_correlation`]); not saved in a map
+    /// file, so a map read back takes its next scan as a new view.
+    pub(crate) views: RecentViews,
 }
 
 impl Map {
@@ -139,6 +144,7 @@ impl Map {
             },
             totals: IntegrationStats::default(),
             num_scans: 0,
+            views: RecentViews::default(),
             config,
         })
     }
@@ -192,7 +198,13 @@ impl Map {
     /// Bytes the map holds: the cells' tiles, the ceiling layer's, their indices and the map itself. The
     /// per-scan scratch is apart ([`Map::scratch_bytes`]); the figure is the same on any number of threads.
     pub fn memory_bytes(&self) -> u64 {
-        self.cells.memory_bytes() + self.ceilings.memory_bytes() + OWN_BYTES
+        self.cells.memory_bytes() + self.ceilings.memory_bytes() + self.own_bytes()
+    }
+
+    /// Bytes of the map's own structure and its recent views: the part of [`Map::memory_bytes`] beside the
+    /// tiles.
+    fn own_bytes(&self) -> u64 {
+        OWN_BYTES + self.views.memory_bytes()
     }
 
     /// Bytes of the per-scan scratch that [`Map::integrate`] keeps for reuse: for every tile the largest scan
@@ -273,7 +285,7 @@ impl Map {
 
     pub(crate) fn insert_tile(&mut self, tile: TileIndex, cells: Box<[Cell; TILE_CELLS]>) -> Result<()> {
         let limit = self.config.memory_limit_bytes;
-        let others = self.ceilings.memory_bytes() + OWN_BYTES;
+        let others = self.ceilings.memory_bytes() + self.own_bytes();
         self.cells
             .insert_tile(tile, cells, limit.saturating_sub(others))
             .map_err(|e| Error::MemoryLimit {
@@ -295,7 +307,7 @@ impl Map {
         ceilings: Box<[Ceiling; TILE_CELLS]>,
     ) -> Result<()> {
         let limit = self.config.memory_limit_bytes;
-        let others = self.cells.memory_bytes() + OWN_BYTES;
+        let others = self.cells.memory_bytes() + self.own_bytes();
         self.ceilings
             .insert_tile(tile, ceilings, limit.saturating_sub(others))
             .map_err(|e| Error::MemoryLimit {

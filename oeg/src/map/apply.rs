@@ -20,6 +20,19 @@ pub(crate) struct LogOddsLevels {
     pub(crate) free: f32,
 }
 
+/// What a scan's update reads beside the model: the log-odds levels, how the scan's measurements correlate with
+/// the map's estimates ([`super::views::RecentViews::correlation`]), and the map's own bytes for the memory
+/// checks.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ScanUpdate {
+    pub(crate) levels: LogOddsLevels,
+    /// The correlation `rho` of this scan's measurements with the estimates before it, in [0, 1].
+    pub(crate) correlation: f32,
+    /// Bytes of the map's own structure and recent views (the part of [`super::Map::memory_bytes`] beside the
+    /// tiles).
+    pub(crate) own_bytes: u64,
+}
+
 /// Cells a scan touched from which its tiles are updated in parallel.
 const MIN_CELLS_IN_PARALLEL: usize = 4096;
 /// Updates every cell the scan touched, once: first the tiles the update needs are placed, in a fixed order
@@ -30,7 +43,7 @@ pub(super) fn apply<E: Evidence>(
     ceilings: &mut TileGrid<Ceiling>,
     (scratch, hits): (&TileGrid<E>, &E::Hits),
     config: &super::MapConfig,
-    levels: LogOddsLevels,
+    update: ScanUpdate,
     stats: &mut IntegrationStats,
 ) -> Result<()> {
     let opts = &config.model;
@@ -39,7 +52,7 @@ pub(super) fn apply<E: Evidence>(
     // The map's own structure counts too ([`super::Map::memory_bytes`]).
     let limit = config
         .memory_limit_bytes
-        .saturating_sub(scratch_bytes + super::OWN_BYTES);
+        .saturating_sub(scratch_bytes + update.own_bytes);
     // A refusal reports what the map and its scratch would have held: the refusing layer's request, the other
     // layer's bytes, the scratch and the map's own structure.
     let memory_error = |other_layer_bytes: u64| {
@@ -47,7 +60,7 @@ pub(super) fn apply<E: Evidence>(
             requested_bytes: e
                 .requested_bytes
                 .saturating_add(other_layer_bytes)
-                .saturating_add(scratch_bytes + super::OWN_BYTES),
+                .saturating_add(scratch_bytes + update.own_bytes),
             limit_bytes: config.memory_limit_bytes,
         }
     };
@@ -76,33 +89,35 @@ pub(super) fn apply<E: Evidence>(
             Some((cells, evidence, marks))
         })
         .collect();
-    let update = |(cells, evidence, marks): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], Marked<'_>)| {
-        update_marked(cells, (evidence, hits), marks, opts, levels)
+    let update_tile = |(cells, evidence, marks): (&mut [Cell; TILE_CELLS], &[E; TILE_CELLS], Marked<'_>)| {
+        update_marked(cells, (evidence, hits), marks, opts, update)
     };
     // Cells to update: below a few thousand, handing tiles to threads costs more than it saves.
     let touched: usize = work.iter().map(|(_, _, marks)| marks.num_cells()).sum();
     stats.num_cells_updated += if touched >= MIN_CELLS_IN_PARALLEL && rayon::current_num_threads() > 1 {
-        work.into_par_iter().map(update).sum::<u64>()
+        work.into_par_iter().map(update_tile).sum::<u64>()
     } else {
-        work.into_iter().map(update).sum::<u64>()
+        work.into_iter().map(update_tile).sum::<u64>()
     };
     if ceiling_rule {
-        update_ceilings(ceilings, (scratch, hits), opts, levels);
+        update_ceilings((ceilings, cells), (scratch, hits), opts, update);
     }
     Ok(())
 }
 
-/// The ceiling layer's update ([`OverheadHits::Ceiling`]), where the scan said something about a ceiling.
+/// The ceiling layer's update ([`OverheadHits::Ceiling`]), where the scan said something about a ceiling, over
+/// the cells' surfaces as the scan left them.
 fn update_ceilings<E: Evidence>(
-    ceilings: &mut TileGrid<Ceiling>,
+    (ceilings, cells): (&mut TileGrid<Ceiling>, &TileGrid<Cell>),
     (scratch, hits): (&TileGrid<E>, &E::Hits),
     opts: &crate::model::ModelOptions,
-    levels: LogOddsLevels,
+    update: ScanUpdate,
 ) {
     for (tile, evidence, marks) in scratch.marked_tiles() {
         let Some(ceilings) = ceilings.tile_mut(tile) else {
             continue;
         };
+        let surfaces = cells.tile(tile);
         marks.for_each(|k| {
             let Some((ev, cell_hits)) = evidence[k].full(hits).filter(|(ev, h)| ev.touches_ceiling(*h))
             else {
@@ -111,11 +126,19 @@ fn update_ceilings<E: Evidence>(
             let ceiling = &mut ceilings[k];
             *ceiling = update_ceiling(
                 *ceiling,
-                cell_hits.and_then(|h| h.ceiling_hit(opts.measurement_correlation, opts.surface_band_sigmas)),
+                cell_hits.and_then(|h| {
+                    let surface_var_m2 = surfaces.and_then(|s| s[k].elevation()).map(|e| e.var_m2);
+                    h.ceiling_hit(
+                        opts.measurement_correlation,
+                        opts.surface_band_sigmas,
+                        surface_var_m2,
+                    )
+                }),
                 ev.ceiling_contradicted,
                 ev.ceiling_clear_m,
                 opts,
-                levels.occupied,
+                update.correlation,
+                update.levels.occupied,
             );
         });
     }
@@ -128,14 +151,14 @@ pub(super) fn update_marked<E: Evidence>(
     (evidence, hits): (&[E; TILE_CELLS], &E::Hits),
     marks: Marked<'_>,
     opts: &crate::model::ModelOptions,
-    levels: LogOddsLevels,
+    update: ScanUpdate,
 ) -> u64 {
     let mut updated = 0u64;
     marks.for_each(|k| {
         let ev = &evidence[k];
         if !ev.paper().is_untouched() {
             updated += 1;
-            update_cell(&mut cells[k], (ev, hits), opts, levels.occupied, levels.free);
+            update_cell(&mut cells[k], (ev, hits), opts, update);
         }
     });
     updated

@@ -8,7 +8,7 @@ use std::borrow::Borrow;
 
 use rayon::prelude::*;
 
-use super::apply::{LogOddsLevels, update_marked};
+use super::apply::{ScanUpdate, update_marked};
 use super::integrate::{SHORT_SCAN_RAYS, gather_rays};
 use super::sample::{Before, Sampling};
 use super::scratch::{ScanScratch, Scratch};
@@ -56,7 +56,11 @@ impl Map {
         &mut self,
         scans: &[S],
     ) -> Result<IntegrationStats, BatchError> {
-        if rayon::current_num_threads() < 2 || !matches!(self.scratch, ScanScratch::Paper(_)) {
+        // A model whose measurements correlate takes each scan's correlation from the views before it.
+        if rayon::current_num_threads() < 2
+            || !matches!(self.scratch, ScanScratch::Paper(_))
+            || self.config.model.measurement_correlation > 0.0
+        {
             let mut total = IntegrationStats::default();
             for (index, scan) in scans.iter().enumerate() {
                 total += self
@@ -116,6 +120,7 @@ impl Map {
             ceilings,
             scratch,
             levels,
+            views,
             ..
         } = self;
         let ScanScratch::Paper(scratch) = scratch else {
@@ -127,19 +132,27 @@ impl Map {
             ceilings,
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
+            own_bytes: super::OWN_BYTES + views.memory_bytes(),
         };
         let budget = config.memory_limit_bytes / 2;
         let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
         // The cells' tiles, under the budget: the map's tile index grows with them, which the gathering's check
         // could not count. Near the budget the scans go one by one, as the caller does with `None` (tiles placed
         // here stay, empty, as a failed scan's do in `Map::integrate`).
-        let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes() + super::OWN_BYTES);
+        let own_bytes = before.own_bytes;
+        let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes() + own_bytes);
         if !place_tiles(cells, scratch, scans.len(), room) {
             scratch.recycle();
             return None;
         }
         // The evidence is reset as it is read: the scratch is empty again.
-        stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, *levels);
+        // Side by side only under independent measurements (the caller's check): no scan correlates with another.
+        let update = ScanUpdate {
+            levels: *levels,
+            correlation: 0.0,
+            own_bytes,
+        };
+        stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, update);
         self.num_scans += scans.len() as u64;
         self.totals += stats;
         Some(stats)
@@ -241,7 +254,7 @@ fn apply_in_order<E: Sampling<Hits = ()>>(
     scratch: &mut Scratch<E>,
     num_scans: usize,
     opts: &crate::model::ModelOptions,
-    levels: LogOddsLevels,
+    update: ScanUpdate,
 ) -> u64 {
     let Scratch { main, workers, .. } = scratch;
     let mut grids: Vec<&mut TileGrid<E>> = std::iter::once(main)
@@ -256,7 +269,7 @@ fn apply_in_order<E: Sampling<Hits = ()>>(
             let mut updated = 0;
             for (evidence, marks) in evidence {
                 if let Some(cells) = cells.as_deref_mut() {
-                    updated += update_marked(cells, (evidence, &()), marks, opts, levels);
+                    updated += update_marked(cells, (evidence, &()), marks, opts, update);
                 }
                 marks.reset(evidence, fill);
             }

@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::apply::apply;
+use super::apply::{ScanUpdate, apply};
 use super::sample::{Before, Here, RaySpan, Sampling};
 use super::scratch::{Evidence, ExactMerge, HitStore, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
@@ -66,24 +66,36 @@ impl Map {
             ceilings,
             scratch,
             levels,
+            views,
             ..
         } = self;
-        let levels = *levels;
+        let update = ScanUpdate {
+            levels: *levels,
+            correlation: views.correlation(
+                &scan.origin_in_world,
+                &scan.sensor.noise,
+                &config.model,
+                geometry.resolution_m(),
+            ),
+            own_bytes: super::OWN_BYTES + views.memory_bytes_after_push(&config.model),
+        };
         let before = Before {
             geometry,
             cells,
             ceilings,
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
+            own_bytes: update.own_bytes,
         };
         let done = match scratch {
             ScanScratch::Paper(s) => gather(&before, scan, s, &mut stats, &stop)
-                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, levels, &mut stats)),
+                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, update, &mut stats)),
             ScanScratch::Full(s) => gather(&before, scan, s, &mut stats, &stop)
-                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, levels, &mut stats)),
+                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, update, &mut stats)),
         };
         scratch.recycle();
         done?;
+        views.push(scan.origin_in_world, scan.sensor.noise, &config.model);
         self.num_scans += 1;
         self.totals += stats;
         Ok(stats)

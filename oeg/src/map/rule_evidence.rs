@@ -84,12 +84,22 @@ impl HitEvidence {
     /// The scan's measurement of the cell's ceiling, if it hit one: the mean of its overhead hits, with the
     /// variance of [`ScanHitElevation::MeanWithSpread`] (the hits' spread over their noise is the structure's
     /// extent in the cell), the hits no better than `rho` of one ([`ModelOptions::measurement_correlation`](crate::model::ModelOptions::measurement_correlation)).
-    /// None when the overhead hits are the tail of the surface's noise among the scan's samples of the cell
-    /// ([`overhead_significant`], with the band `band_sigmas` wide).
-    pub(super) fn ceiling_hit(&self, rho: f32, band_sigmas: f32) -> Option<CeilingHit> {
+    /// None when the overhead hits are the tail of the surface's noise ([`overhead_significant`], with the band
+    /// `band_sigmas` wide) among the hits the surface stands on: the scan's samples of the cell, times the
+    /// hits like these that the surface's variance `surface_var_m2` is worth (`s^2 / var`, at least 1). A
+    /// surface measured by many views has given noise as many chances to put one hit past the band.
+    pub(super) fn ceiling_hit(
+        &self,
+        rho: f32,
+        band_sigmas: f32,
+        surface_var_m2: Option<f32>,
+    ) -> Option<CeilingHit> {
         let hits = &self.overhead;
-        let structure =
-            self.ceiling_p > 0.0 && overhead_significant(self.overhead_score, self.num_heights, band_sigmas);
+        let views = surface_var_m2
+            .filter(|v| *v > 0.0)
+            .map_or(1.0, |v| (hits.mean_variance() / v).max(1.0));
+        let structure = self.ceiling_p > 0.0
+            && overhead_significant(self.overhead_score, self.num_heights * views, band_sigmas);
         structure.then(|| CeilingHit {
             z_m: hits.mean_m,
             var_m2: spread_variance(

@@ -14,7 +14,7 @@ use crate::model::{
     inverse_sensor_model, surface_level, vertical_variance,
 };
 use crate::scan::{Ray, RayKind, Scan};
-use crate::sensor::MIN_RANGE_SIGMA_M;
+use crate::sensor::{MIN_RANGE_SIGMA_M, RangeNoiseModel};
 use crate::storage::{TILE_CELLS, TileGrid, TileIndex};
 use crate::traversal::CellCrossing;
 
@@ -26,12 +26,15 @@ pub(super) struct Before<'a> {
     pub(super) ceilings: &'a TileGrid<Ceiling>,
     pub(super) opts: &'a ModelOptions,
     pub(super) memory_limit_bytes: u64,
+    /// Bytes of the map's own structure and recent views (the part of [`crate::Map::memory_bytes`] beside the
+    /// tiles).
+    pub(super) own_bytes: u64,
 }
 
 impl Before<'_> {
     /// Bytes the map holds ([`crate::Map::memory_bytes`]): what the scratch's share of the limit leaves out.
     pub(super) fn map_bytes(&self) -> u64 {
-        self.cells.memory_bytes() + self.ceilings.memory_bytes() + super::OWN_BYTES
+        self.cells.memory_bytes() + self.ceilings.memory_bytes() + self.own_bytes
     }
 
     /// The error of a scan refused for its memory: the map would have held its bytes and `scratch_bytes`,
@@ -190,6 +193,9 @@ pub(super) struct RaySpan {
     /// Samples that end before this are plain free samples (`p = p_min`, no exponential); only the few cells
     /// within 3 sigma of the hit evaluate eq. 10.
     pub(super) free_until: f64,
+    /// The sensor's range error model and range.
+    pub(super) noise: RangeNoiseModel,
+    pub(super) max_range_m: f64,
 }
 
 impl RaySpan {
@@ -261,7 +267,37 @@ impl RaySpan {
             l_hi,
             s2,
             free_until,
+            noise: scan.sensor.noise,
+            max_range_m: f64::from(scan.sensor.max_range_m),
         })
+    }
+
+    /// The variance of the hit's height had its beam met a surface at `surface_m`, where a descending beam
+    /// crosses that height: the sensor's range error there, in proportion to the hit's own
+    /// ([`RangeNoiseModel::sigma_m`]). A sensor reports the error of the range it measured, so a reading
+    /// that fell short of the surface reports less error than the beam has there, and one that went long
+    /// more: weighted by what they report, the short ones would pull the surface up, and one far short would
+    /// look like a structure over it. The hit's own variance for a level or rising beam, or a surface not
+    /// below the sensor.
+    pub(super) fn s2_meeting(&self, surface_m: f32, opts: &ModelOptions) -> f32 {
+        let Some((l_p, sigma)) = self.hit else {
+            return self.s2;
+        };
+        let r0 = (f64::from(surface_m) - self.origin.z) / self.dir.z;
+        if self.dir.z >= 0.0 || !(r0 > 0.0) {
+            return self.s2;
+        }
+        let r0 = r0.min(self.max_range_m);
+        let (at_hit, at_surface) = (self.noise.sigma_m(l_p as f32), self.noise.sigma_m(r0 as f32));
+        if !(at_hit > 0.0) || !at_surface.is_finite() {
+            return self.s2;
+        }
+        let sigma0 = (sigma * f64::from(at_surface / at_hit)).max(f64::from(MIN_RANGE_SIGMA_M));
+        if opts.vertical_variance {
+            vertical_variance(sigma0, self.dir.z, r0)
+        } else {
+            (sigma0 * sigma0) as f32
+        }
     }
 
     /// The most cells the samples within 3 sigma of the hit can cross, at `resolution_m`: a straight segment
@@ -399,6 +435,8 @@ fn hit_sample(
                 var_m2: e.var_m2 + opts.process_noise_var_m2,
                 ..e
             };
+            // Whether the hit is the surface's noise is asked of the noise the beam has where it meets it.
+            let s2 = span.s2_meeting(e.mean_m, opts);
             (surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above)
                 .then(|| (z - grown.mean_m) / (grown.var_m2 + s2).sqrt())
         });

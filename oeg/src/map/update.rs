@@ -1,6 +1,7 @@
 //! One cell's update from one scan's gathered evidence: eq. 5-7 for the occupancy, then eq. 12 with eq. 8-9
 //! (or the free-space rule) for the elevation.
 
+use super::apply::ScanUpdate;
 use super::scratch::Evidence;
 use crate::cell::Cell;
 use crate::model::{
@@ -14,9 +15,9 @@ pub(super) fn update_cell<E: Evidence>(
     cell: &mut Cell,
     (evidence, hits): (&E, &E::Hits),
     opts: &ModelOptions,
-    occupied_log_odds: f32,
-    free_log_odds: f32,
+    update: ScanUpdate,
 ) {
+    let (occupied_log_odds, free_log_odds) = (update.levels.occupied, update.levels.free);
     let ev = evidence.paper();
     if ev.hit_z_m == f32::NEG_INFINITY
         && !free_sample_informs(opts.free_space_occupancy, cell.elevation(), ev.free_z_m)
@@ -60,8 +61,8 @@ pub(super) fn update_cell<E: Evidence>(
             opts.surface_band_sigmas,
         );
         Some(match prior {
-            Some(e) if opts.measurement_correlation > 0.0 => Elevation {
-                var_m2: correlated_variance(fused.var_m2, e.var_m2 + q, s2, opts.measurement_correlation),
+            Some(e) if update.correlation > 0.0 => Elevation {
+                var_m2: correlated_variance(fused.var_m2, e.var_m2 + q, s2, update.correlation),
                 ..fused
             },
             _ => fused,

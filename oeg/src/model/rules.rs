@@ -240,7 +240,8 @@ pub struct CeilingHit {
 /// whether a beam passed through the structure's side of its band (`contradicted`, [`ceiling_contradicts`]).
 ///
 /// * A hit within the band of the ceiling is the same structure: its height is fused by eq. 8-9 (with
-///   [`correlated_variance`]) and its evidence raised by the hit's log-odds (eq. 5-7).
+///   [`correlated_variance`] for the scan's `correlation` with the estimate) and its evidence raised by the
+///   hit's log-odds (eq. 5-7).
 /// * A hit below the band is a lower structure, and the robot's clearance is set by the lowest: it replaces the
 ///   ceiling. So does a hit above the band in a scan whose beams contradicted the ceiling (the structure's lower
 ///   part has gone).
@@ -264,6 +265,7 @@ pub fn update_ceiling(
     contradicted: bool,
     clear_m: f32,
     opts: &ModelOptions,
+    correlation: f32,
     occupied_log_odds: f32,
 ) -> Ceiling {
     let evidence = |l: f32, p: f32| update_log_odds(l, log_odds(p), opts.log_odds_min, opts.log_odds_max);
@@ -283,12 +285,7 @@ pub fn update_ceiling(
                 let fused = kalman_fuse(Some(c), h.z_m, h.var_m2, q);
                 Ceiling {
                     z_m: fused.mean_m,
-                    var_m2: correlated_variance(
-                        fused.var_m2,
-                        c.var_m2 + q,
-                        h.var_m2,
-                        opts.measurement_correlation,
-                    ),
+                    var_m2: correlated_variance(fused.var_m2, c.var_m2 + q, h.var_m2, correlation),
                     log_odds: evidence(prior.log_odds, h.p),
                     seen_from: prior.seen_from.and(h.seen_from),
                     clear_m,
@@ -367,13 +364,24 @@ pub fn spread_variance(mean_var_m2: f32, sample_var_m2: f32, noise_var_m2: f32) 
     mean_var_m2 + (sample_var_m2 - noise_var_m2).max(0.0)
 }
 
-/// [`crate::ModelOptions::measurement_correlation`]: the variance of a fused estimate when the measurements'
-/// errors are correlated with coefficient `rho`. The mean of `n` measurements of variance `s^2` with pairwise
-/// correlation `rho` has variance `s^2 (rho + (1 - rho) / n)`, which tends to `rho s^2`, not 0. So eq. 9's
-/// `fused_var_m2` is kept at or above `rho s^2` of this measurement, but never raised above the prior's
-/// variance (a worse measurement does not spoil a good estimate).
+/// [`crate::ModelOptions::measurement_correlation`]: the variance of a fused estimate when a measurement of
+/// variance `s^2` shares its errors with the estimate before it (variance `prior_var_m2`) with correlation
+/// `rho`. A series of measurements each correlated `rho` with the one before (a first-order autoregression)
+/// carries the information of `(1 - rho) / (1 + rho)` independent ones each: eq. 9 with the measurement's
+/// information scaled so. At `rho = 1` a measurement adds nothing, and the estimate is as certain as its best
+/// measurement; at 0 this is eq. 9's `fused_var_m2` itself. Never above the prior's variance (a worse
+/// measurement does not spoil a good estimate), nor above the measurement's (a better one improves it).
 pub fn correlated_variance(fused_var_m2: f32, prior_var_m2: f32, measurement_var_m2: f32, rho: f32) -> f32 {
-    fused_var_m2.max(prior_var_m2.min(rho * measurement_var_m2))
+    if rho <= 0.0 {
+        return fused_var_m2;
+    }
+    let information = (1.0 - rho) / (1.0 + rho);
+    let scaled = if information > 0.0 {
+        prior_var_m2 * measurement_var_m2 / (measurement_var_m2 + information * prior_var_m2)
+    } else {
+        prior_var_m2
+    };
+    fused_var_m2.max(prior_var_m2.min(measurement_var_m2).min(scaled))
 }
 
 /// [`crate::ModelOptions::vertical_variance`]: the variance of a hit's height when its range has standard
@@ -542,7 +550,7 @@ mod tests {
     }
 
     #[test]
-    fn correlated_measurements_stop_the_variance_from_shrinking() {
+    fn correlated_measurements_shrink_the_variance_by_their_independent_part() {
         // Independent (the paper): eq. 9 as is.
         assert_eq!(correlated_variance(0.5e-4, 1e-4, 1e-4, 0.0), 0.5e-4);
         // Fully correlated: two equal measurements are as certain as one.
@@ -550,14 +558,19 @@ mod tests {
         // A better measurement still improves the estimate; a worse one does not spoil it.
         assert_eq!(correlated_variance(0.2e-4, 1e-4, 0.25e-4, 1.0), 0.25e-4);
         assert_eq!(correlated_variance(0.9e-4, 1e-4, 9e-4, 1.0), 1e-4);
-        // The n-measurement limit: s^2 (rho + (1 - rho) / n) -> rho s^2.
-        let (s2, rho) = (1e-4_f32, 0.25_f32);
+        // n measurements each correlated `rho` with the last carry the information of
+        // 1 + (n - 1) (1 - rho) / (1 + rho) independent ones.
+        let (s2, rho, n) = (1e-4_f32, 1.0 / 3.0_f32, 101);
         let mut var = s2;
-        for _ in 0..1000 {
+        for _ in 1..n {
             let fused = var * s2 / (var + s2);
             var = correlated_variance(fused, var, s2, rho);
         }
-        assert!((var - rho * s2).abs() < 1e-9, "{var}");
+        let expected = s2 / (1.0 + (n - 1) as f32 * 0.5);
+        assert!(
+            (var - expected).abs() < 1e-4 * expected,
+            "{var} against {expected}"
+        );
     }
 
     #[test]
@@ -655,12 +668,21 @@ mod tests {
             false,
             f32::NEG_INFINITY,
             &opts,
+            0.0,
             occupied,
         );
         assert_eq!((board.z_m, board.var_m2), (0.34, 1e-4));
         assert!((board.log_odds - log_odds(0.9)).abs() < 1e-6);
         // The same structure again: fused, and its evidence grows to the clamp.
-        let again = update_ceiling(board, Some(hit(0.35)), false, f32::NEG_INFINITY, &opts, occupied);
+        let again = update_ceiling(
+            board,
+            Some(hit(0.35)),
+            false,
+            f32::NEG_INFINITY,
+            &opts,
+            0.0,
+            occupied,
+        );
         assert_eq!(
             Elevation {
                 mean_m: again.z_m,
@@ -670,20 +692,54 @@ mod tests {
         );
         assert_eq!(again.log_odds, opts.log_odds_max);
         // A lower structure sets the clearance: it replaces the ceiling.
-        let lower = update_ceiling(again, Some(hit(0.20)), false, f32::NEG_INFINITY, &opts, occupied);
+        let lower = update_ceiling(
+            again,
+            Some(hit(0.20)),
+            false,
+            f32::NEG_INFINITY,
+            &opts,
+            0.0,
+            occupied,
+        );
         assert_eq!(lower.z_m, 0.20);
         // A higher hit alone is a higher part of the structure; with a contradiction, the lower part has gone.
         assert_eq!(
-            update_ceiling(lower, Some(hit(0.40)), false, f32::NEG_INFINITY, &opts, occupied),
+            update_ceiling(
+                lower,
+                Some(hit(0.40)),
+                false,
+                f32::NEG_INFINITY,
+                &opts,
+                0.0,
+                occupied
+            ),
             lower
         );
         assert_eq!(
-            update_ceiling(lower, Some(hit(0.40)), true, f32::NEG_INFINITY, &opts, occupied).z_m,
+            update_ceiling(
+                lower,
+                Some(hit(0.40)),
+                true,
+                f32::NEG_INFINITY,
+                &opts,
+                0.0,
+                occupied
+            )
+            .z_m,
             0.40
         );
         // A hit wins over a contradiction in the same scan.
         assert_eq!(
-            update_ceiling(board, Some(hit(0.345)), true, f32::NEG_INFINITY, &opts, occupied).log_odds,
+            update_ceiling(
+                board,
+                Some(hit(0.345)),
+                true,
+                f32::NEG_INFINITY,
+                &opts,
+                0.0,
+                occupied
+            )
+            .log_odds,
             opts.log_odds_max
         );
         // One sure hit confirms a structure, one weak hit (a far stereo pixel) does not.
@@ -694,35 +750,38 @@ mod tests {
             false,
             f32::NEG_INFINITY,
             &opts,
+            0.0,
             occupied,
         );
         assert!(weak.is_some() && !ceiling_confirmed(weak.log_odds, opts.p_max));
         // Nothing said: unchanged.
         assert_eq!(
-            update_ceiling(board, None, false, f32::NEG_INFINITY, &opts, occupied),
+            update_ceiling(board, None, false, f32::NEG_INFINITY, &opts, 0.0, occupied),
             board
         );
-        assert!(!update_ceiling(Ceiling::NONE, None, true, f32::NEG_INFINITY, &opts, occupied).is_some());
+        assert!(
+            !update_ceiling(Ceiling::NONE, None, true, f32::NEG_INFINITY, &opts, 0.0, occupied).is_some()
+        );
         // Contradictions alone, each as strong as the surest hit (logit of 1 - p_max = -2.2): from the clamp's
         // top (3.5), gone after exactly 2 scans; from one hit, after 1.
-        let once = update_ceiling(again, None, true, f32::NEG_INFINITY, &opts, occupied);
+        let once = update_ceiling(again, None, true, f32::NEG_INFINITY, &opts, 0.0, occupied);
         assert!((once.log_odds - (3.5 - log_odds(0.9))).abs() < 1e-5, "{once:?}");
-        assert!(!update_ceiling(once, None, true, f32::NEG_INFINITY, &opts, occupied).is_some());
-        assert!(!update_ceiling(board, None, true, f32::NEG_INFINITY, &opts, occupied).is_some());
+        assert!(!update_ceiling(once, None, true, f32::NEG_INFINITY, &opts, 0.0, occupied).is_some());
+        assert!(!update_ceiling(board, None, true, f32::NEG_INFINITY, &opts, 0.0, occupied).is_some());
         // The highest beam under it is kept across scans, whatever else the scans say; a structure seen afresh
         // (a lower hit) starts with none.
-        let passed = update_ceiling(board, None, false, 0.25, &opts, occupied);
+        let passed = update_ceiling(board, None, false, 0.25, &opts, 0.0, occupied);
         assert_eq!(passed.clear_m, 0.25);
         assert_eq!(
-            update_ceiling(passed, Some(hit(0.345)), false, 0.20, &opts, occupied).clear_m,
+            update_ceiling(passed, Some(hit(0.345)), false, 0.20, &opts, 0.0, occupied).clear_m,
             0.25
         );
         assert_eq!(
-            update_ceiling(passed, Some(hit(0.345)), false, 0.30, &opts, occupied).clear_m,
+            update_ceiling(passed, Some(hit(0.345)), false, 0.30, &opts, 0.0, occupied).clear_m,
             0.30
         );
         assert_eq!(
-            update_ceiling(passed, Some(hit(0.20)), false, 0.30, &opts, occupied).clear_m,
+            update_ceiling(passed, Some(hit(0.20)), false, 0.30, &opts, 0.0, occupied).clear_m,
             f32::NEG_INFINITY
         );
     }
