@@ -3,6 +3,7 @@
 //! runs them; and the summary of the run when the loop ends.
 
 use oeg::{Pose2, Traversability};
+use sim::scenario::Replanning;
 
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
@@ -269,6 +270,13 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
     /// last replanning had one), or the planner's failure.
     fn replan(&mut self, mapping: &Mapping, log: &mut Recorder, t: f64, estimated: Pose2) -> Result<()> {
         self.next_replan += self.inputs.settings.replan_period_s;
+        if self.inputs.settings.replan == Replanning::WhenInvalid
+            && self.state == "following"
+            && !self.path.is_empty()
+            && super::path_still_valid(mapping, self.inputs, estimated, &self.path[self.progress_index..])?
+        {
+            return Ok(());
+        }
         self.replans += 1;
         let wall = std::time::Instant::now();
         let result = replan(mapping, self.inputs, estimated)?;

@@ -214,6 +214,22 @@ fn clamped_cell(window: &oeg::GridWindow, (x, y): (f64, f64)) -> Option<CellInde
     inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
 }
 
+/// Whether the rest of `path` is still one the built-in planner allows from `from` on the run's map now
+/// ([`builtin::path_still_valid`]).
+fn path_still_valid(
+    mapping: &Mapping,
+    inputs: &NavigationInputs<'_>,
+    from: Pose2,
+    path: &[(f64, f64)],
+) -> Result<bool> {
+    let map = &mapping.maps[0];
+    let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
+    let decisions = map
+        .traversability_layer(*window.region(), &inputs.truth.profile, inputs.scenario.map.traversability)?
+        .values;
+    builtin::path_still_valid(inputs, &window, &decisions, (from.x_m, from.y_m), path)
+}
+
 /// Plans on the run's map from the estimated pose.
 fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
     let s = inputs.scenario;

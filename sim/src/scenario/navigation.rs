@@ -42,6 +42,21 @@ pub enum PlannerKind {
     External,
 }
 
+/// When the navigator plans again, at each replanning time (nav2's navigation behaviour trees).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Replanning {
+    /// Every replanning time, whatever the path ahead (nav2's default tree,
+    /// `navigate_to_pose_w_replanning_and_recovery`).
+    Periodic,
+    /// Only when the path ahead is no longer one the planner allows on the map, or there is none (nav2's
+    /// `navigate_w_replanning_only_if_path_becomes_invalid`, its `IsPathValid` condition): a robot committed to
+    /// a path does not swing between two near-equal ones as its map firms up, and turns off it as soon as the
+    /// map blocks it.
+    #[default]
+    WhenInvalid,
+}
+
 /// A closed-loop run.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -55,6 +70,9 @@ pub struct Navigation {
     /// Seconds between plans, simulated time.
     #[serde(default = "default_replan")]
     pub replan_period_s: f64,
+    /// Whether a replanning time plans again always or only when the path ahead became invalid.
+    #[serde(default)]
+    pub replan: Replanning,
     /// The goal counts as reached when the estimated position is this close, metres.
     #[serde(default = "default_goal_tolerance")]
     pub goal_tolerance_m: f64,
