@@ -38,9 +38,15 @@ fn variance_after(model: ModelOptions, origins: &[Point3<f64>]) -> f32 {
 fn views_from_one_place_repeat_their_errors_and_views_a_cell_apart_add_information() {
     let standing: Vec<_> = (0..10).map(|_| Point3::new(0.0, 0.025, 0.5)).collect();
     // Backing away a cell's width (5 cm) between scans: each view correlates exp(-1) with the last.
-    let moving: Vec<_> = (0..10).map(|k| Point3::new(-0.05 * k as f64, 0.025, 0.5)).collect();
+    let moving: Vec<_> = (0..10)
+        .map(|k| Point3::new(-0.05 * k as f64, 0.025, 0.5))
+        .collect();
     let one = variance_after(robust(), &standing[..1]);
-    assert_eq!(variance_after(robust(), &standing), one, "ten views from one place are one view");
+    assert_eq!(
+        variance_after(robust(), &standing),
+        one,
+        "ten views from one place are one view"
+    );
     let moved = variance_after(robust(), &moving);
     let independent = variance_after(
         ModelOptions {

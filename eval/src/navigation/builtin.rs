@@ -35,12 +35,11 @@ pub(super) fn path_still_valid(
     from: (f64, f64),
     path: &[(f64, f64)],
 ) -> Result<bool> {
-    let forbidden = oeg::forbidden_mask(window, decisions, &planner_options(inputs)).map_err(|e| {
-        EvalError::Input {
+    let forbidden =
+        oeg::forbidden_mask(window, decisions, &planner_options(inputs)).map_err(|e| EvalError::Input {
             path: inputs.scenario.name.clone().into(),
             message: format!("planner: {e}"),
-        }
-    })?;
+        })?;
     let near = Reach {
         decide_within_m: inputs.settings.decide_within(),
         footprint_m: inputs.footprint.circumscribed_radius_m(),
@@ -139,19 +138,47 @@ mod tests {
         let (window, mut decisions) = strip();
         let path = along(0.0, 4.0);
         let free = vec![false; 40];
-        assert!(path_allowed(&window, &decisions, &free, (0.05, 0.05), &path, REACH));
+        assert!(path_allowed(
+            &window,
+            &decisions,
+            &free,
+            (0.05, 0.05),
+            &path,
+            REACH
+        ));
         // Near: a point where the planner keeps the centre out (here an undecided cell it avoids) invalidates.
         let mut forbidden = free.clone();
         forbidden[7] = true;
-        assert!(!path_allowed(&window, &decisions, &forbidden, (0.05, 0.05), &path, REACH));
+        assert!(!path_allowed(
+            &window,
+            &decisions,
+            &forbidden,
+            (0.05, 0.05),
+            &path,
+            REACH
+        ));
         // Beyond `decide_within_m` the planner plans through what it cannot decide: still valid.
         let mut forbidden = free.clone();
         forbidden[25] = true;
         decisions[25] = Traversability::Uncertain;
-        assert!(path_allowed(&window, &decisions, &forbidden, (0.05, 0.05), &path, REACH));
+        assert!(path_allowed(
+            &window,
+            &decisions,
+            &forbidden,
+            (0.05, 0.05),
+            &path,
+            REACH
+        ));
         // A cell the map now calls blocked invalidates wherever it lies ahead.
         decisions[25] = Traversability::Blocked;
-        assert!(!path_allowed(&window, &decisions, &forbidden, (0.05, 0.05), &path, REACH));
+        assert!(!path_allowed(
+            &window,
+            &decisions,
+            &forbidden,
+            (0.05, 0.05),
+            &path,
+            REACH
+        ));
     }
 
     #[test]
@@ -163,10 +190,24 @@ mod tests {
         forbidden[11] = true;
         decisions[2] = Traversability::Blocked;
         let ahead = along(1.0, 4.0);
-        assert!(path_allowed(&window, &decisions, &forbidden, (1.05, 0.05), &ahead, REACH));
+        assert!(path_allowed(
+            &window,
+            &decisions,
+            &forbidden,
+            (1.05, 0.05),
+            &ahead,
+            REACH
+        ));
         // A point outside the window is not a path the planner could have made.
         let mut outside = ahead.clone();
         outside.push((9.0, 0.05));
-        assert!(!path_allowed(&window, &decisions, &forbidden, (1.05, 0.05), &outside, REACH));
+        assert!(!path_allowed(
+            &window,
+            &decisions,
+            &forbidden,
+            (1.05, 0.05),
+            &outside,
+            REACH
+        ));
     }
 }

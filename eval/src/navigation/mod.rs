@@ -225,7 +225,11 @@ fn path_still_valid(
     let map = &mapping.maps[0];
     let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
     let decisions = map
-        .traversability_layer(*window.region(), &inputs.truth.profile, inputs.scenario.map.traversability)?
+        .traversability_layer(
+            *window.region(),
+            &inputs.truth.profile,
+            inputs.scenario.map.traversability,
+        )?
         .values;
     builtin::path_still_valid(inputs, &window, &decisions, (from.x_m, from.y_m), path)
 }

@@ -444,7 +444,16 @@ fn hit_sample(
         Some(z) if let Some(score) = overhead_score => {
             evidence.add_overhead((log, here.tile), p, z, s2, SeenFrom::of_beam(dir.z), score);
         }
-        Some(z) => evidence.add_hit(log, p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas),
+        Some(z) => {
+            // Under the vertical-variance rule a hit is weighted by the noise its beam has where it meets the
+            // surface, not by the error its range reported: short readings report less and would pull it up.
+            let s2 = here
+                .cell()
+                .and_then(Cell::elevation)
+                .filter(|_| opts.vertical_variance)
+                .map_or(s2, |e| span.s2_meeting(e.mean_m, opts));
+            evidence.add_hit(log, p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas)
+        }
         None => evidence.paper.raise_p(p),
     }
 }

@@ -237,17 +237,23 @@ pub struct ModelOptions {
     /// update, not per second, because a cell stores no time stamp (three f32 per cell).
     pub process_noise_var_m2: f32,
     /// Whether a hit's elevation variance is its range variance projected onto the vertical
-    /// ([`crate::model::vertical_variance`]) rather than the range variance itself (the paper, `false`).
+    /// ([`crate::model::vertical_variance`]) rather than the range variance itself (the paper, `false`). Under
+    /// it, a hit in a cell that holds a surface is weighted by the range error its beam has where it meets that
+    /// surface: a sensor whose error grows with range (stereo) reports less error for a reading that fell short
+    /// and more for one that went long, and weighted by what they report the short readings pull the surface up.
     pub vertical_variance: bool,
     /// Half the width of a cell's surface band, in standard deviations of its elevation
     /// ([`FreeSpaceOccupancy::SurfaceBand`]).
     pub surface_band_sigmas: f32,
-    /// Correlation `rho` between the errors of the measurements of one cell, in [0, 1]. Repeated measurements
-    /// of one surface share their errors (the pose, the beam geometry, the surface's texture), so their
-    /// fusion is less certain than eq. 9 says: repeating a measurement of variance `s^2` brings the variance
-    /// down to `rho s^2`, not to 0 ([`crate::model::correlated_variance`]). 0 (the paper): independent, eq. 9's
-    /// variance shrinks with every measurement. 1: fully correlated, a cell is as certain as its best
-    /// measurement.
+    /// Correlation `rho` between the errors of a scan's measurements of a cell and the estimate before them,
+    /// for scans taken from the same place, in [0, 1]. A sensor that measures a cell again from where it stood
+    /// repeats its errors (which cells a beam's noisy end points land in, where it crosses the cell, the
+    /// surface's texture), so fusing them is less certain than eq. 9 says. The correlation decays with the
+    /// distance `d` to the nearest of the map's last 256 views by a sensor of the same range-error model,
+    /// `rho exp(-d / resolution)` (a view a cell away sees the cell through other beams), and a measurement
+    /// carries the information of `(1 - rho) / (1 + rho)` independent ones
+    /// ([`crate::model::correlated_variance`]). 0 (the paper): independent, eq. 9's variance shrinks with
+    /// every measurement. 1: a standing sensor's cell is as certain as its best measurement.
     pub measurement_correlation: f32,
     /// Height thresholding (paper section 6.2, Fig. 12): the parts of a beam higher than this, in world z
     /// metres, are ignored entirely, so overhangs the robot passes under never enter the map. `None` (the
