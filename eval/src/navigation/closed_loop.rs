@@ -3,7 +3,7 @@
 //! runs them; and the summary of the run when the loop ends.
 
 use oeg::{Pose2, Traversability};
-use sim::scenario::Replanning;
+use sim::scenario::{Replanning, SWITCH_SHORTER_FRACTION};
 
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
@@ -270,17 +270,29 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
     /// last replanning had one), or the planner's failure.
     fn replan(&mut self, mapping: &Mapping, log: &mut Recorder, t: f64, estimated: Pose2) -> Result<()> {
         self.next_replan += self.inputs.settings.replan_period_s;
-        if self.inputs.settings.replan == Replanning::WhenInvalid
+        let mode = self.inputs.settings.replan;
+        let ahead = &self.path[self.progress_index.min(self.path.len())..];
+        let committed = mode != Replanning::Periodic
             && self.state == "following"
-            && !self.path.is_empty()
-            && super::path_still_valid(mapping, self.inputs, estimated, &self.path[self.progress_index..])?
-        {
+            && !ahead.is_empty()
+            && super::path_still_valid(mapping, self.inputs, estimated, ahead)?;
+        if committed && mode == Replanning::WhenInvalid {
             return Ok(());
         }
         self.replans += 1;
         let wall = std::time::Instant::now();
         let result = replan(mapping, self.inputs, estimated)?;
         self.planner_wall_time_s += wall.elapsed().as_secs_f64();
+        if committed {
+            // `when_shorter`: the path ahead is still allowed; a new one replaces it only if clearly shorter.
+            let from = (estimated.x_m, estimated.y_m);
+            let rest = super::path_length_m(from, ahead);
+            let shorter = matches!(&result, Replan::Path(points)
+                if clearly_shorter(super::path_length_m(from, points), rest));
+            if !shorter {
+                return Ok(());
+            }
+        }
         match result {
             Replan::Path(points) => {
                 self.plan_index = Some(log.plans.len() as u64);
@@ -479,5 +491,25 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             snapshots: log.snapshots,
             planner_wall_time_s: self.planner_wall_time_s,
         })
+    }
+}
+
+/// Whether a new path of `new_m` metres is worth leaving a still valid one of `rest_m` for
+/// ([`Replanning::WhenShorter`]).
+fn clearly_shorter(new_m: f64, rest_m: f64) -> bool {
+    new_m < (1.0 - SWITCH_SHORTER_FRACTION) * rest_m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::clearly_shorter;
+
+    #[test]
+    fn a_valid_path_is_left_only_for_one_a_tenth_shorter() {
+        // Two ways round an obstacle that take turns being a little shorter: the robot keeps its own.
+        assert!(!clearly_shorter(9.8, 10.0));
+        assert!(!clearly_shorter(9.05, 10.0), "less than a tenth is not enough");
+        assert!(clearly_shorter(8.9, 10.0));
+        assert!(!clearly_shorter(12.0, 10.0));
     }
 }

@@ -234,6 +234,17 @@ fn path_still_valid(
     builtin::path_still_valid(inputs, &window, &decisions, (from.x_m, from.y_m), path)
 }
 
+/// The length of a path from `from` through its points, metres.
+fn path_length_m(from: (f64, f64), path: &[(f64, f64)]) -> f64 {
+    path.iter()
+        .scan(from, |last, &p| {
+            let step = (p.0 - last.0).hypot(p.1 - last.1);
+            *last = p;
+            Some(step)
+        })
+        .sum()
+}
+
 /// Plans on the run's map from the estimated pose.
 fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
     let s = inputs.scenario;
@@ -451,7 +462,14 @@ impl Recorder {
 
 #[cfg(test)]
 mod tests {
-    use super::PlanBudget;
+    use super::{PlanBudget, path_length_m};
+
+    #[test]
+    fn a_path_is_as_long_as_the_way_from_the_robot_through_its_points() {
+        assert_eq!(path_length_m((0.0, 0.0), &[]), 0.0);
+        assert_eq!(path_length_m((0.0, 0.0), &[(3.0, 4.0)]), 5.0);
+        assert_eq!(path_length_m((1.0, 0.0), &[(1.0, 2.0), (4.0, 6.0)]), 7.0);
+    }
 
     #[test]
     fn plans_past_the_budget_keep_their_time_not_their_points() {

@@ -42,19 +42,27 @@ pub enum PlannerKind {
     External,
 }
 
-/// When the navigator plans again, at each replanning time (nav2's navigation behaviour trees).
+/// How much shorter a new path must be than the rest of the path being followed for
+/// [`Replanning::WhenShorter`] to switch to it: a tenth.
+pub const SWITCH_SHORTER_FRACTION: f64 = 0.1;
+
+/// When the navigator takes a new path, at each replanning time (nav2's navigation behaviour trees).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Replanning {
-    /// Every replanning time, whatever the path ahead (nav2's default tree,
-    /// `navigate_to_pose_w_replanning_and_recovery`).
+    /// It plans and takes the new path every time (nav2's default tree,
+    /// `navigate_to_pose_w_replanning_and_recovery`). As the map firms up, two near-equal ways round an
+    /// obstacle can take turns being the shorter, and the robot swings between them.
     Periodic,
-    /// Only when the path ahead is no longer one the planner allows on the map, or there is none (nav2's
-    /// `navigate_w_replanning_only_if_path_becomes_invalid`, its `IsPathValid` condition): a robot committed to
-    /// a path does not swing between two near-equal ones as its map firms up, and turns off it as soon as the
-    /// map blocks it.
-    #[default]
+    /// It plans only when the path ahead is no longer one the planner allows on the map, or there is none
+    /// (nav2's `navigate_w_replanning_only_if_path_becomes_invalid`, its `IsPathValid` condition). A first path
+    /// planned through unseen space is kept even once a much shorter one shows.
     WhenInvalid,
+    /// It plans every time, and keeps the path ahead while it stays valid unless the new one is shorter than
+    /// its rest by more than [`SWITCH_SHORTER_FRACTION`]: committed to its way, yet taking a clearly better
+    /// one.
+    #[default]
+    WhenShorter,
 }
 
 /// A closed-loop run.
@@ -70,7 +78,7 @@ pub struct Navigation {
     /// Seconds between plans, simulated time.
     #[serde(default = "default_replan")]
     pub replan_period_s: f64,
-    /// Whether a replanning time plans again always or only when the path ahead became invalid.
+    /// When a replanning time's path replaces the one being followed.
     #[serde(default)]
     pub replan: Replanning,
     /// The goal counts as reached when the estimated position is this close, metres.
