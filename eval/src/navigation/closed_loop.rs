@@ -3,8 +3,9 @@
 //! runs them; and the summary of the run when the loop ends.
 
 use oeg::{Pose2, Traversability};
-use sim::scenario::{Replanning, SWITCH_SHORTER_FRACTION};
+use sim::scenario::Replanning;
 
+use super::commitment;
 use super::contact::ContactWatch;
 use super::controller::{Command, PurePursuit};
 use super::guard::{Guard, guard_command};
@@ -275,7 +276,7 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
         let committed = mode != Replanning::Periodic
             && self.state == "following"
             && !ahead.is_empty()
-            && super::path_still_valid(mapping, self.inputs, estimated, ahead)?;
+            && commitment::path_still_valid(mapping, self.inputs, estimated, ahead)?;
         if committed && mode == Replanning::WhenInvalid {
             return Ok(());
         }
@@ -286,9 +287,9 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
         if committed {
             // `when_shorter`: the path ahead is still allowed; a new one replaces it only if clearly shorter.
             let from = (estimated.x_m, estimated.y_m);
-            let rest = super::path_length_m(from, ahead);
+            let rest = commitment::path_length_m(from, ahead);
             let shorter = matches!(&result, Replan::Path(points)
-                if clearly_shorter(super::path_length_m(from, points), rest));
+                if commitment::clearly_shorter(commitment::path_length_m(from, points), rest));
             if !shorter {
                 return Ok(());
             }
@@ -491,25 +492,5 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
             snapshots: log.snapshots,
             planner_wall_time_s: self.planner_wall_time_s,
         })
-    }
-}
-
-/// Whether a new path of `new_m` metres is worth leaving a still valid one of `rest_m` for
-/// ([`Replanning::WhenShorter`]).
-fn clearly_shorter(new_m: f64, rest_m: f64) -> bool {
-    new_m < (1.0 - SWITCH_SHORTER_FRACTION) * rest_m
-}
-
-#[cfg(test)]
-mod tests {
-    use super::clearly_shorter;
-
-    #[test]
-    fn a_valid_path_is_left_only_for_one_a_tenth_shorter() {
-        // Two ways round an obstacle that take turns being a little shorter: the robot keeps its own.
-        assert!(!clearly_shorter(9.8, 10.0));
-        assert!(!clearly_shorter(9.05, 10.0), "less than a tenth is not enough");
-        assert!(clearly_shorter(8.9, 10.0));
-        assert!(!clearly_shorter(12.0, 10.0));
     }
 }

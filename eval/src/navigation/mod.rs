@@ -10,6 +10,7 @@
 
 mod builtin;
 mod closed_loop;
+mod commitment;
 pub(crate) mod contact;
 pub(crate) mod controller;
 mod diagnosis;
@@ -212,37 +213,6 @@ fn clamped_cell(window: &oeg::GridWindow, (x, y): (f64, f64)) -> Option<CellInde
     let c = window.geometry().cell_of(x, y)?;
     let inside = c.i >= lo.i - 1 && c.i <= hi.i + 1 && c.j >= lo.j - 1 && c.j <= hi.j + 1;
     inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
-}
-
-/// Whether the rest of `path` is still one the built-in planner allows from `from` on the run's map now
-/// ([`builtin::path_still_valid`]).
-fn path_still_valid(
-    mapping: &Mapping,
-    inputs: &NavigationInputs<'_>,
-    from: Pose2,
-    path: &[(f64, f64)],
-) -> Result<bool> {
-    let map = &mapping.maps[0];
-    let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
-    let decisions = map
-        .traversability_layer(
-            *window.region(),
-            &inputs.truth.profile,
-            inputs.scenario.map.traversability,
-        )?
-        .values;
-    builtin::path_still_valid(inputs, &window, &decisions, (from.x_m, from.y_m), path)
-}
-
-/// The length of a path from `from` through its points, metres.
-fn path_length_m(from: (f64, f64), path: &[(f64, f64)]) -> f64 {
-    path.iter()
-        .scan(from, |last, &p| {
-            let step = (p.0 - last.0).hypot(p.1 - last.1);
-            *last = p;
-            Some(step)
-        })
-        .sum()
 }
 
 /// Plans on the run's map from the estimated pose.
@@ -462,14 +432,7 @@ impl Recorder {
 
 #[cfg(test)]
 mod tests {
-    use super::{PlanBudget, path_length_m};
-
-    #[test]
-    fn a_path_is_as_long_as_the_way_from_the_robot_through_its_points() {
-        assert_eq!(path_length_m((0.0, 0.0), &[]), 0.0);
-        assert_eq!(path_length_m((0.0, 0.0), &[(3.0, 4.0)]), 5.0);
-        assert_eq!(path_length_m((1.0, 0.0), &[(1.0, 2.0), (4.0, 6.0)]), 7.0);
-    }
+    use super::PlanBudget;
 
     #[test]
     fn plans_past_the_budget_keep_their_time_not_their_points() {

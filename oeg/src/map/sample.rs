@@ -284,12 +284,12 @@ impl RaySpan {
             return self.s2;
         };
         let r0 = (f64::from(surface_m) - self.origin.z) / self.dir.z;
-        if self.dir.z >= 0.0 || !(r0 > 0.0) {
+        if self.dir.z >= 0.0 || r0.is_nan() || r0 <= 0.0 {
             return self.s2;
         }
         let r0 = r0.min(self.max_range_m);
         let (at_hit, at_surface) = (self.noise.sigma_m(l_p as f32), self.noise.sigma_m(r0 as f32));
-        if !(at_hit > 0.0) || !at_surface.is_finite() {
+        if at_hit.is_nan() || at_hit <= 0.0 || !at_surface.is_finite() {
             return self.s2;
         }
         let sigma0 = (sigma * f64::from(at_surface / at_hit)).max(f64::from(MIN_RANGE_SIGMA_M));
