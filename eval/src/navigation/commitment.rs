@@ -131,79 +131,43 @@ mod tests {
     #[test]
     fn a_path_stays_valid_until_the_map_forbids_a_point_ahead() {
         let (window, mut decisions) = strip();
+        let valid = |d: &[Traversability], f: &[bool], from, p: &[(f64, f64)]| {
+            path_allowed(&window, d, f, from, p, REACH)
+        };
         let path = along(0.0, 4.0);
         let free = vec![false; 40];
-        assert!(path_allowed(
-            &window,
-            &decisions,
-            &free,
-            (0.05, 0.05),
-            &path,
-            REACH
-        ));
+        assert!(valid(&decisions, &free, (0.05, 0.05), &path));
         // Near: a point where the planner keeps the centre out (here an undecided cell it avoids) invalidates.
         let mut forbidden = free.clone();
         forbidden[7] = true;
-        assert!(!path_allowed(
-            &window,
-            &decisions,
-            &forbidden,
-            (0.05, 0.05),
-            &path,
-            REACH
-        ));
+        assert!(!valid(&decisions, &forbidden, (0.05, 0.05), &path));
         // Beyond `decide_within_m` the planner plans through what it cannot decide: still valid.
         let mut forbidden = free.clone();
         forbidden[25] = true;
         decisions[25] = Traversability::Uncertain;
-        assert!(path_allowed(
-            &window,
-            &decisions,
-            &forbidden,
-            (0.05, 0.05),
-            &path,
-            REACH
-        ));
+        assert!(valid(&decisions, &forbidden, (0.05, 0.05), &path));
         // A cell the map now calls blocked invalidates wherever it lies ahead.
         decisions[25] = Traversability::Blocked;
-        assert!(!path_allowed(
-            &window,
-            &decisions,
-            &forbidden,
-            (0.05, 0.05),
-            &path,
-            REACH
-        ));
+        assert!(!valid(&decisions, &forbidden, (0.05, 0.05), &path));
     }
 
     #[test]
     fn what_lies_under_the_robot_or_behind_the_path_is_not_asked() {
         let (window, mut decisions) = strip();
+        let valid = |d: &[Traversability], f: &[bool], from, p: &[(f64, f64)]| {
+            path_allowed(&window, d, f, from, p, REACH)
+        };
         let mut forbidden = vec![false; 40];
         // The robot at 1.05 m stands in an inflation (cell 11, under its footprint) and the path behind it is
         // not the path ahead.
         forbidden[11] = true;
         decisions[2] = Traversability::Blocked;
         let ahead = along(1.0, 4.0);
-        assert!(path_allowed(
-            &window,
-            &decisions,
-            &forbidden,
-            (1.05, 0.05),
-            &ahead,
-            REACH
-        ));
+        assert!(valid(&decisions, &forbidden, (1.05, 0.05), &ahead));
         // A point outside the window is not a path the planner could have made.
         let mut outside = ahead.clone();
         outside.push((9.0, 0.05));
-        assert!(!path_allowed(
-            &window,
-            &decisions,
-            &forbidden,
-            (1.05, 0.05),
-            &outside,
-            REACH
-        ));
+        assert!(!valid(&decisions, &forbidden, (1.05, 0.05), &outside));
     }
 
     #[test]
