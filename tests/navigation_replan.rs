@@ -25,8 +25,8 @@ fn each_replanning_mode_reaches_the_goal_and_plans_as_often_as_it_promises() {
         assert_eq!(nav["contacts"], 0, "{nav:#}");
     }
     let replans = |nav: &serde_json::Value| nav["replans"].as_u64().expect("replans");
-    // `periodic` and `when_shorter` plan at every replanning time (the second may keep its path); `when_invalid`
-    // plans once, and again only when the wall closes the straight path.
+    // `periodic` and `when_shorter` plan at every replanning time (the second may keep its path); `when_invalid`,
+    // the default, plans once, and again only when the wall closes the straight path.
     assert!(replans(&periodic) > 3, "{periodic:#}");
     assert!(replans(&shorter) > 3, "{shorter:#}");
     assert!((2..replans(&shorter)).contains(&replans(&invalid)), "{invalid:#}");
