@@ -273,20 +273,21 @@ impl<'i, 'a> ClosedLoop<'i, 'a> {
         self.next_replan += self.inputs.settings.replan_period_s;
         let mode = self.inputs.settings.replan;
         let ahead = &self.path[self.progress_index.min(self.path.len())..];
+        let (window, decisions) = super::map_decisions(mapping, self.inputs)?;
+        let from = (estimated.x_m, estimated.y_m);
         let committed = mode != Replanning::Periodic
             && self.state == "following"
             && !ahead.is_empty()
-            && commitment::path_still_valid(mapping, self.inputs, estimated, ahead)?;
+            && commitment::path_still_valid(self.inputs, &window, &decisions, from, ahead)?;
         if committed && mode == Replanning::WhenInvalid {
             return Ok(());
         }
         self.replans += 1;
         let wall = std::time::Instant::now();
-        let result = replan(mapping, self.inputs, estimated)?;
+        let result = replan(mapping, self.inputs, estimated, (&window, &decisions))?;
         self.planner_wall_time_s += wall.elapsed().as_secs_f64();
         if committed {
             // `when_shorter`: the path ahead is still allowed; a new one replaces it only if clearly shorter.
-            let from = (estimated.x_m, estimated.y_m);
             let rest = commitment::path_length_m(from, ahead);
             let shorter = matches!(&result, Replan::Path(points)
                 if commitment::clearly_shorter(commitment::path_length_m(from, points), rest));

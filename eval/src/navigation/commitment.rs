@@ -1,33 +1,12 @@
 //! When the navigator keeps the path it follows: whether the path ahead is still valid on the map (nav2's
 //! `IsPathValid`), and whether a new one is worth switching to ([`sim::scenario::Replanning`]).
 
-use oeg::{Pose2, Traversability};
+use oeg::Traversability;
 use sim::scenario::SWITCH_SHORTER_FRACTION;
 
 use super::NavigationInputs;
 use super::builtin::planner_options;
 use crate::error::{EvalError, Result};
-use crate::mapping::Mapping;
-
-/// Whether the rest of `path` is still one the built-in planner allows from `from` on the run's map now
-/// ([`path_valid_on`]).
-pub(super) fn path_still_valid(
-    mapping: &Mapping,
-    inputs: &NavigationInputs<'_>,
-    from: Pose2,
-    path: &[(f64, f64)],
-) -> Result<bool> {
-    let map = &mapping.maps[0];
-    let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
-    let decisions = map
-        .traversability_layer(
-            *window.region(),
-            &inputs.truth.profile,
-            inputs.scenario.map.traversability,
-        )?
-        .values;
-    path_valid_on(inputs, &window, &decisions, (from.x_m, from.y_m), path)
-}
 
 /// Whether the rest of a path, from the robot at `from`, is still one the planner allows on `decisions` (nav2's
 /// `IsPathValid`, which its tree `navigate_w_replanning_only_if_path_becomes_invalid` asks before it plans
@@ -35,7 +14,7 @@ pub(super) fn path_still_valid(
 /// centre out (a blocked cell's inflation, or an undecided cell the options avoid); beyond it no point lies on a
 /// cell the map calls blocked (the planner plans through what it cannot decide there). Points under the
 /// robot's own footprint are not asked: the robot is already there.
-fn path_valid_on(
+pub(super) fn path_still_valid(
     inputs: &NavigationInputs<'_>,
     window: &oeg::GridWindow,
     decisions: &[Traversability],
@@ -54,14 +33,14 @@ fn path_valid_on(
     Ok(path_allowed(window, decisions, &forbidden, from, path, near))
 }
 
-/// How far from the robot a path's points are asked what (see [`path_valid_on`]).
+/// How far from the robot a path's points are asked what (see [`path_still_valid`]).
 #[derive(Debug, Clone, Copy)]
 struct Reach {
     decide_within_m: f64,
     footprint_m: f64,
 }
 
-/// [`path_valid_on`] on a computed forbidden mask. A point outside the window makes the path invalid.
+/// [`path_still_valid`] on a computed forbidden mask. A point outside the window makes the path invalid.
 fn path_allowed(
     window: &oeg::GridWindow,
     decisions: &[Traversability],

@@ -215,22 +215,40 @@ fn clamped_cell(window: &oeg::GridWindow, (x, y): (f64, f64)) -> Option<CellInde
     inside.then(|| CellIndex::new(c.i.clamp(lo.i, hi.i), c.j.clamp(lo.j, hi.j)))
 }
 
-/// Plans on the run's map from the estimated pose.
-fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Result<Replan> {
+/// The run's map decided over the scenario's window (the truth's window, whose cells the robot never reads):
+/// what a replanning time plans on and checks the path ahead against.
+fn map_decisions(
+    mapping: &Mapping,
+    inputs: &NavigationInputs<'_>,
+) -> Result<(oeg::GridWindow, Vec<Traversability>)> {
+    let map = &mapping.maps[0];
+    let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
+    let decisions = map
+        .traversability_layer(
+            *window.region(),
+            &inputs.truth.profile,
+            inputs.scenario.map.traversability,
+        )?
+        .values;
+    Ok((window, decisions))
+}
+
+/// Plans on the run's map, decided as `decisions` over `window`, from the estimated pose.
+fn replan(
+    mapping: &Mapping,
+    inputs: &NavigationInputs<'_>,
+    from: Pose2,
+    (window, decisions): (&oeg::GridWindow, &[Traversability]),
+) -> Result<Replan> {
     let s = inputs.scenario;
     let map = &mapping.maps[0];
-    // The map's cells over the scenario's window (the truth's, which the robot never reads).
-    let window = oeg::GridWindow::new(*map.geometry(), *inputs.truth.window.region());
     let region = *window.region();
     let goal = (inputs.settings.goal_xy_m[0], inputs.settings.goal_xy_m[1]);
-    let decisions = map
-        .traversability_layer(region, &inputs.truth.profile, s.map.traversability)?
-        .values;
     let result = match inputs.planner {
         PlannerSource::Builtin => {
             let (Some(a), Some(b)) = (
-                clamped_cell(&window, (from.x_m, from.y_m)),
-                clamped_cell(&window, goal),
+                clamped_cell(window, (from.x_m, from.y_m)),
+                clamped_cell(window, goal),
             ) else {
                 return Ok(Replan::Failed {
                     message: format!(
@@ -240,7 +258,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
                     timed_out: false,
                 });
             };
-            builtin::plan(inputs, &window, &decisions, (a, b), goal)?
+            builtin::plan(inputs, window, decisions, (a, b), goal)?
         }
         PlannerSource::External(planner) => {
             let mut files = oeg::planner_files(
@@ -252,7 +270,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
             )?;
             // The map itself too, for planners that read this project's format (`oeg plan`).
             files.push(("map.oeg".into(), oeg::map_to_bytes(map)));
-            let extent = external::extent_of(&window);
+            let extent = external::extent_of(window);
             match planner.call(&files, (from.x_m, from.y_m), goal, extent)? {
                 Ok(points) => Some(points),
                 Err(f)
@@ -270,11 +288,11 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
             }
         }
         PlannerSource::Callback(planner) => {
-            let extent = external::extent_of(&window);
+            let extent = external::extent_of(window);
             let request = PlanRequest {
                 map,
                 region,
-                decisions: &decisions,
+                decisions,
                 start: (from.x_m, from.y_m),
                 goal,
                 extent,
@@ -302,7 +320,7 @@ fn replan(mapping: &Mapping, inputs: &NavigationInputs<'_>, from: Pose2) -> Resu
     Ok(match result {
         Some(points) => Replan::Path(points),
         None => Replan::NoPath {
-            closed_by: diagnosis::closed_by(&decisions, inputs, &window, from, goal)?,
+            closed_by: diagnosis::closed_by(decisions, inputs, window, from, goal)?,
         },
     })
 }
