@@ -148,7 +148,18 @@ fn the_recording_reads_back_validates_against_its_schemas_and_is_the_same_bytes_
     let mut bytes = Vec::new();
     for threads in ["2", "1"] {
         let out = dir.join(format!("threads{threads}"));
-        let o = oeg_with_threads(&["run", s(&scene), "--mcap", "--out", s(&out)], Some(threads));
+        // Planning at every replanning time, so that the recording holds many paths.
+        let periodic = ["--set", "navigation.replan=periodic"];
+        let args = [
+            "run",
+            s(&scene),
+            "--mcap",
+            "--out",
+            s(&out),
+            periodic[0],
+            periodic[1],
+        ];
+        let o = oeg_with_threads(&args, Some(threads));
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         bytes.push(std::fs::read(out.join("recording.mcap")).expect("recording.mcap"));
         assert!(
@@ -214,7 +225,7 @@ fn the_recording_reads_back_validates_against_its_schemas_and_is_the_same_bytes_
         assert!(per_topic.contains_key(topic), "{topic} missing: {per_topic:?}");
     }
     assert_eq!(per_topic["/truth/elevation"], 1);
-    // The layers once a simulated second and at the end; every replan's path.
+    // The layers once a simulated second and at the end; every replanning time's path.
     assert!(per_topic["/map/decisions"] >= 10, "{per_topic:?}");
     assert!(per_topic["/plan"] >= 5, "{per_topic:?}");
     assert_eq!(
