@@ -203,7 +203,9 @@ def test_a_python_planner_drives_a_closed_loop_and_its_exceptions_are_events(tmp
         calls.append(start)
         return np.array([start, goal])
 
-    result = oeg.run_scenario(scene, {"duration_s": 6.0}, out=tmp_path / "ok", planner=straight)
+    # Planning at every replanning time ("when_invalid" asks the planner again only once the path is blocked).
+    settings = {"duration_s": 6.0, "navigation.replan": "periodic"}
+    result = oeg.run_scenario(scene, settings, out=tmp_path / "ok", planner=straight)
     assert len(calls) >= 2, "replanned on the way"
     navigation = json.loads((tmp_path / "ok" / "navigation.json").read_text())
     assert navigation["planner"] == "callback"

@@ -40,7 +40,9 @@ struct Reach {
     footprint_m: f64,
 }
 
-/// [`path_still_valid`] on a computed forbidden mask. A point outside the window makes the path invalid.
+/// [`path_still_valid`] on a computed forbidden mask. A point outside the window makes the path invalid. A
+/// segment longer than [`SPARSE_SEGMENT_CELLS`] cells (an external planner's waypoints) is asked every half
+/// cell along it; the built-in planner's paths step from cell to cell and are asked at their points.
 fn path_allowed(
     window: &oeg::GridWindow,
     decisions: &[Traversability],
@@ -49,7 +51,7 @@ fn path_allowed(
     path: &[(f64, f64)],
     reach: Reach,
 ) -> bool {
-    path.iter().all(|&(x, y)| {
+    let allowed = |(x, y): (f64, f64)| {
         let Some(k) = super::clamped_cell(window, (x, y)).and_then(|c| window.region().offset(c)) else {
             return false;
         };
@@ -61,8 +63,25 @@ fn path_allowed(
         } else {
             decisions[k] != Traversability::Blocked
         }
-    })
+    };
+    let cell = window.geometry().resolution_m();
+    let along = |(a, b): ((f64, f64), (f64, f64))| {
+        let length = (b.0 - a.0).hypot(b.1 - a.1);
+        let steps = if length > SPARSE_SEGMENT_CELLS * cell {
+            (2.0 * length / cell).ceil() as usize
+        } else {
+            1
+        };
+        (1..=steps).all(|k| {
+            let t = k as f64 / steps as f64;
+            allowed((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)))
+        })
+    };
+    path.first().is_none_or(|&p| allowed(p)) && path.windows(2).map(|w| (w[0], w[1])).all(along)
 }
+
+/// Segments longer than this many cells are asked along their length ([`path_allowed`]).
+const SPARSE_SEGMENT_CELLS: f64 = 3.0;
 
 /// The length of a path from `from` through its points, metres.
 pub(super) fn path_length_m(from: (f64, f64), path: &[(f64, f64)]) -> f64 {
@@ -143,6 +162,21 @@ mod tests {
         decisions[2] = Traversability::Blocked;
         let ahead = along(1.0, 4.0);
         assert!(valid(&decisions, &forbidden, (1.05, 0.05), &ahead));
+        // An external planner's two waypoints are asked along the segment between them.
+        let mut blocked = decisions.clone();
+        blocked[30] = Traversability::Blocked;
+        assert!(!valid(
+            &blocked,
+            &forbidden,
+            (1.05, 0.05),
+            &[(1.05, 0.05), (3.95, 0.05)]
+        ));
+        assert!(valid(
+            &decisions,
+            &forbidden,
+            (1.05, 0.05),
+            &[(1.05, 0.05), (3.95, 0.05)]
+        ));
         // A point outside the window is not a path the planner could have made.
         let mut outside = ahead.clone();
         outside.push((9.0, 0.05));
