@@ -321,8 +321,8 @@ def run_scenario(
         out: The output folder; by default a temporary folder, removed before returning.
         seed: Replaces the scenario's seed.
         compare: Also map with this preset, as ``--compare``.
-        planner: A closed-loop run's planner, replacing the scenario's: at every replanning time it is called
-            as ``planner(layers, start, goal)``. ``layers`` holds the map over the scenario's region as
+        planner: A closed-loop run's planner, replacing the scenario's: whenever the run plans
+            (``[navigation] replan``) it is called as ``planner(layers, start, goal)``. ``layers`` holds the map over the scenario's region as
             ``(num_y, num_x)`` arrays (row 0 the minimum y): ``decisions`` (``uint8``, :data:`DECISIONS`),
             ``elevation_m``, ``variance_m2`` and ``occupancy_probability`` (``float32``), and ``extent``
             ``(x_min, x_max, y_min, y_max)``; ``start`` and ``goal`` are ``(x, y)`` in metres. It returns the
