@@ -54,8 +54,8 @@ pub use footprint::{Footprint, Pose2};
 pub use planner::{
     DEFAULT_COST_SCALING_FACTOR, DEFAULT_DOUBT_COST, DEFAULT_FOOTPRINT_RADIUS_M,
     DEFAULT_INFLATION_COST_WIDTH_M, DEFAULT_INFLATION_RADIUS_M, INFLATED_CELL_COST, NoPath,
-    PLANNER_BYTES_PER_CELL, Plan, PlannerOptions, UncertainCells, UnknownCells, forbidden_mask, plan,
-    plan_or_why,
+    PLANNER_BYTES_PER_CELL, Plan, PlannerOptions, UncertainCells, UnknownCells, closing_cells,
+    forbidden_mask, plan, plan_or_why,
 };
 pub use traversability::{
     DEFAULT_MAX_GRADE, DEFAULT_MAX_STEP_M, DEFAULT_REACH_M, DEFAULT_ROBOT_HEIGHT_M, DEFAULT_UNCERTAIN_KAPPA,

@@ -40,10 +40,15 @@ use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridWindow};
 use crate::traversability::Traversability;
 
+mod closing;
 mod distance;
 mod inflation;
+mod read;
+
+pub use closing::closing_cells;
 
 use inflation::{Inflation, start_clearance};
+use read::as_planned;
 
 /// Default inflation radius, metres: half the Pioneer 3-AT's 0.50 m width (its inscribed radius).
 pub const DEFAULT_INFLATION_RADIUS_M: f64 = 0.25;
@@ -240,36 +245,6 @@ fn validate_inputs(
     Ok(())
 }
 
-/// Marks drivable the cells within `radius_cells` (centre to centre) of `centre` that are unknown, or also
-/// blocked when `clear_blocked`: the robot's own footprint.
-fn clear_footprint(
-    region: &CellRegion,
-    decisions: &mut [Traversability],
-    centre: CellIndex,
-    radius_cells: f64,
-    clear_blocked: bool,
-) {
-    let rc = radius_cells
-        .floor()
-        .min(f64::from(region.num_x.max(region.num_y))) as i64;
-    for dj in -rc..=rc {
-        for di in -rc..=rc {
-            let c = CellIndex::new(
-                (i64::from(centre.i) + di) as i32,
-                (i64::from(centre.j) + dj) as i32,
-            );
-            let Some(k) = region.offset(c) else { continue };
-            let inside = ((di * di + dj * dj) as f64) <= radius_cells * radius_cells;
-            let clearable = decisions[k] == Traversability::Unknown
-                || (clear_blocked
-                    && matches!(decisions[k], Traversability::Blocked | Traversability::Uncertain));
-            if inside && clearable {
-                decisions[k] = Traversability::Free;
-            }
-        }
-    }
-}
-
 /// The shortest path from `start` to `goal` through `window` on `decisions` (one per cell, row-major),
 /// or `None` if there is none.
 ///
@@ -360,12 +335,7 @@ pub fn plan_or_why(
     let (s, g) = (offset_of("start", start)?, offset_of("goal", goal)?);
     validate_inputs(region, decisions, options)?;
     let original = decisions;
-    let mut decisions = decisions.to_vec();
-    let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
-    clear_footprint(region, &mut decisions, start, r, true);
-    clear_footprint(region, &mut decisions, goal, r, false);
-    let mut extra = vec![0; decisions.len()];
-    optimistic_beyond(region, resolution_m, &mut decisions, &mut extra, start, options);
+    let (decisions, mut extra) = as_planned(window, decisions, start, goal, options);
     let inflation = Inflation::of(window, &decisions, options);
     let mut forbidden = inflation.forbidden(options.inflation_radius_m);
     if forbidden[s]
@@ -404,36 +374,6 @@ pub fn plan_or_why(
         let length_m = (num_side as f64 + num_diagonal as f64 * std::f64::consts::SQRT_2) * resolution_m;
         Plan { cells, length_m }
     }))
-}
-
-/// [`PlannerOptions::optimistic_beyond_m`]: the cells the map cannot decide beyond that distance from `start`
-/// become drivable in `decisions`, each with its doubt added to `extra` (A*'s cost of entering it), if it is on.
-fn optimistic_beyond(
-    region: &CellRegion,
-    resolution_m: f64,
-    decisions: &mut [Traversability],
-    extra: &mut [u64],
-    start: CellIndex,
-    options: &PlannerOptions,
-) {
-    let Some(beyond) = options.optimistic_beyond_m.map(|m| m / resolution_m) else {
-        return;
-    };
-    let doubt = (options.doubt_cost * SIDE_COST as f64).round() as u64;
-    for (k, (t, e)) in decisions.iter_mut().zip(extra).enumerate() {
-        if !matches!(t, Traversability::Uncertain | Traversability::Unknown) {
-            continue;
-        }
-        let c = region.cell_at(
-            (k % region.num_x as usize) as u32,
-            (k / region.num_x as usize) as u32,
-        );
-        let (di, dj) = (f64::from(c.i - start.i), f64::from(c.j - start.j));
-        if di * di + dj * dj > beyond * beyond {
-            *t = Traversability::Free;
-            *e += doubt;
-        }
-    }
 }
 
 /// The memory [`plan`] takes per cell of its region, bytes, at most in practice: the decisions' copy and the

@@ -1,6 +1,7 @@
 //! `oeg plan`: a path on a saved map (real data or a run's `map.oeg`), written as `plan.json`, `path.csv` and
 //! `plan.png`.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use oeg::{CellIndex, CellRegion, RobotProfile, TraversabilityRule};
@@ -57,6 +58,11 @@ pub struct PlanSummary {
     /// Why there is no path (null when there is one): the start or goal cell blocked, uncertain, never
     /// observed or within the inflation radius of a blocked cell, or no connection between them.
     pub no_path_reason: Option<String>,
+    /// With no connection, the cells the map cannot decide that closed the way ([`oeg::closing_cells`]), by
+    /// reason: the doubt of an uncertain or unknown cell (`frontier`, `imprecise`, ...,
+    /// [`oeg::Doubt::name`]) or `never_observed`; listed one by one in `closing.csv`. Empty otherwise, and
+    /// when the map's blocked cells alone close the way.
+    pub closed_by: BTreeMap<&'static str, u64>,
 }
 
 /// A plan on a map, with the decisions it was planned on.
@@ -66,6 +72,8 @@ pub struct MapPlan {
     pub classes: oeg::Raster<oeg::Traversability>,
     /// The path, or why the goal cannot be reached.
     pub plan: std::result::Result<oeg::Plan, oeg::NoPath>,
+    /// With no connection, the cells that closed the way ([`oeg::closing_cells`]); empty otherwise.
+    pub closing: Vec<CellIndex>,
 }
 
 /// Plans on `map` from `from` to `to` (world x and y, metres) over its observed region, grown to hold both;
@@ -129,7 +137,61 @@ pub fn plan_on_map(
             message: format!("planner: {e}"),
         }
     })?;
-    Ok(MapPlan { classes, plan })
+    let closing = match plan {
+        Err(oeg::NoPath::NoConnection) => {
+            oeg::closing_cells(&classes.window, &classes.values, start, goal, options)
+                .map_err(|e| EvalError::Input {
+                    path: name.to_path_buf(),
+                    message: format!("planner: {e}"),
+                })?
+                .unwrap_or_default()
+        }
+        _ => Vec::new(),
+    };
+    Ok(MapPlan {
+        classes,
+        plan,
+        closing,
+    })
+}
+
+/// A cell that closed the way, as `closing.csv` lists it.
+#[derive(Serialize)]
+struct ClosingRow {
+    x_m: f64,
+    y_m: f64,
+    class: &'static str,
+    reason: &'static str,
+}
+
+/// Why each of `closing` closed the way: the doubt of the map's decision, or `never_observed`.
+fn closing_rows(map: &oeg::Map, closing: &[CellIndex], job: &PlanJob) -> Vec<ClosingRow> {
+    closing
+        .iter()
+        .map(|&cell| {
+            let (x_m, y_m) = map.geometry().cell_center(cell);
+            let class = map.traversability(cell, &job.profile, job.rule);
+            let reason = map
+                .doubt(cell, &job.profile, job.rule)
+                .map_or("never_observed", oeg::Doubt::name);
+            ClosingRow {
+                x_m: crate::output::round_m(x_m),
+                y_m: crate::output::round_m(y_m),
+                class: class.name(),
+                reason,
+            }
+        })
+        .collect()
+}
+
+/// `no connection ...; closed by 5 cells the map cannot decide: 3 frontier, 2 never_observed (closing.csv)`.
+fn closed_by_text(closed_by: &BTreeMap<&'static str, u64>) -> String {
+    let total: u64 = closed_by.values().sum();
+    let parts: Vec<String> = closed_by.iter().map(|(why, n)| format!("{n} {why}")).collect();
+    format!(
+        "; closed by {total} cells the map cannot decide: {} (closing.csv)",
+        parts.join(", ")
+    )
 }
 
 /// Plans on a saved map and writes `plan.json`, `path.csv` (one row per path cell: `step,x_m,y_m`) and
@@ -142,7 +204,11 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
     let staged = crate::output::Staged::begin(&job.out_dir, &[&job.map])?;
     let map = oeg::load_map(&job.map)?;
     let geometry = *map.geometry();
-    let MapPlan { classes, plan } = plan_on_map(
+    let MapPlan {
+        classes,
+        plan,
+        closing,
+    } = plan_on_map(
         &map,
         &job.map,
         (job.from_xy_m, job.to_xy_m),
@@ -150,7 +216,19 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         &job.profile,
         job.rule,
     )?;
-    let no_path_reason = plan.as_ref().err().map(|why| why.describe(&job.options));
+    let closing = closing_rows(&map, &closing, job);
+    let mut closed_by = BTreeMap::new();
+    for row in &closing {
+        *closed_by.entry(row.reason).or_insert(0) += 1;
+    }
+    let no_path_reason = plan.as_ref().err().map(|why| {
+        let why = why.describe(&job.options);
+        if closed_by.is_empty() {
+            why
+        } else {
+            why + &closed_by_text(&closed_by)
+        }
+    });
     let plan = plan.ok();
     let summary = PlanSummary {
         plan_found: plan.is_some(),
@@ -164,6 +242,7 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         unknown: job.options.unknown,
         max_step_m: job.profile.max_step_m,
         no_path_reason,
+        closed_by,
     };
     let work = || -> Result<_> {
         let mut files = Vec::new();
@@ -177,6 +256,11 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
                 .map(|(step, (x, y))| (step, x, y)),
         )?;
         files.push(path_csv);
+        if !closing.is_empty() {
+            let closing_csv = staged.dir().join("closing.csv");
+            crate::output::write_csv(&closing_csv, &["x_m", "y_m", "class", "reason"], &closing)?;
+            files.push(closing_csv);
+        }
         let title = match &plan {
             Some(p) => format!("Path planned on the map: {:.2} m", p.length_m),
             None => "No path on the map (plan.json says why)".to_string(),

@@ -1,18 +1,14 @@
 //! Why a closed loop stopped or touched: the cells that closed the map's paths at a stop, and what the map
 //! called the cells a contact entered.
 
-use oeg::{
-    CellIndex, Map, Pose2, RobotProfile, Traversability, TraversabilityRule, UncertainCells, UnknownCells,
-};
+use oeg::{CellIndex, Map, Pose2, RobotProfile, Traversability, TraversabilityRule};
 
 use super::{NavigationInputs, clamped_cell, planner_options, truth_plan};
 use crate::error::{EvalError, Result};
 use crate::judge::verdict::TruthClass;
 
-/// Which cells closed the way: on the path that taking every uncertain and never-observed cell as drivable
-/// gives, the uncertain and never-observed cells the planner's rules forbid (on the path, or within the
-/// inflation radius of it when those cells are inflated), by class; `blocked` when even that path does not
-/// exist.
+/// Which cells closed the way ([`oeg::closing_cells`]), by class, with what the truth says of them; `blocked`
+/// when even the path through every cell the map cannot decide does not exist.
 pub(super) fn closed_by(
     decisions: &[Traversability],
     inputs: &NavigationInputs<'_>,
@@ -26,18 +22,13 @@ pub(super) fn closed_by(
     ) else {
         return Ok("outside the map region".into());
     };
-    let strict = planner_options(inputs);
-    let relaxed = oeg::PlannerOptions {
-        unknown: UnknownCells::Drivable,
-        uncertain: UncertainCells::Drivable,
-        ..strict
-    };
-    let (region, res) = (*window.region(), window.resolution_m());
-    let plan = oeg::plan(window, decisions, a, b, &relaxed).map_err(|e| EvalError::Input {
+    let options = planner_options(inputs);
+    let region = *window.region();
+    let closing = oeg::closing_cells(window, decisions, a, b, &options).map_err(|e| EvalError::Input {
         path: inputs.scenario.name.clone().into(),
         message: format!("planner: {e}"),
     })?;
-    let Some(plan) = plan else {
+    let Some(closing) = closing else {
         // Closed by the map's blocked cells: which of them lie on the truth's own path from here.
         return Ok(match truth_plan(inputs, (from.x_m, from.y_m))? {
             None => "blocked; the truth has no path either".into(),
@@ -58,34 +49,7 @@ pub(super) fn closed_by(
             }
         });
     };
-    let reach = (strict.inflation_radius_m / res).ceil() as i32;
-    let r2 = (strict.inflation_radius_m / res).powi(2) + 1e-9;
-    let mut closing: Vec<usize> = Vec::new();
-    for c in &plan.cells {
-        for dj in -reach..=reach {
-            for di in -reach..=reach {
-                let Some(k) = region.offset(CellIndex::new(c.i + di, c.j + dj)) else {
-                    continue;
-                };
-                let on_path = di == 0 && dj == 0;
-                let within = f64::from(di * di + dj * dj) <= r2;
-                let forbids = match decisions[k] {
-                    Traversability::Uncertain => strict.uncertain == UncertainCells::Blocked && within,
-                    Traversability::Unknown => match strict.unknown {
-                        UnknownCells::Avoid => on_path,
-                        UnknownCells::Inflate => within,
-                        UnknownCells::Drivable => false,
-                    },
-                    _ => false,
-                };
-                if forbids {
-                    closing.push(k);
-                }
-            }
-        }
-    }
-    closing.sort_unstable();
-    closing.dedup();
+    let closing: Vec<usize> = closing.iter().filter_map(|c| region.offset(*c)).collect();
     let count = |class: Traversability| closing.iter().filter(|k| decisions[**k] == class).count();
     let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
     let truly_blocked = closing

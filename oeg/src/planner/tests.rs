@@ -431,3 +431,85 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn the_cells_that_closed_the_way_are_the_undecided_ones_on_the_relaxed_path_and_none_when_blocked_cells_close_it()
+ {
+    // A 10 x 5 room at 0.1 m with a wall across column 5: uncertain, unknown, or blocked.
+    let r = region(10, 5);
+    let w = on(&r, 0.1);
+    let (start, goal) = (CellIndex::new(0, 2), CellIndex::new(9, 2));
+    let wall = |class| marked(&r, class, |c| c.i == 5);
+    let strict = no_inflation(UnknownCells::Avoid);
+    for class in [Traversability::Uncertain, Traversability::Unknown] {
+        let decisions = wall(class);
+        assert_eq!(plan(&w, &decisions, start, goal, &strict).expect("plan"), None);
+        let closing = closing_cells(&w, &decisions, start, goal, &strict)
+            .expect("valid")
+            .expect("the relaxed path exists");
+        // Without inflation, the one wall cell the relaxed path crosses.
+        assert_eq!(closing.len(), 1, "{class:?}: {closing:?}");
+        assert_eq!(closing[0].i, 5);
+    }
+    // Inflated, the wall's cells within the radius of the path close it too; unknown cells under `Avoid` are
+    // not inflated, so only the one on the path counts.
+    let inflated = |unknown| PlannerOptions {
+        inflation_radius_m: 0.15,
+        ..no_inflation(unknown)
+    };
+    let uncertain = closing_cells(
+        &w,
+        &wall(Traversability::Uncertain),
+        start,
+        goal,
+        &inflated(UnknownCells::Avoid),
+    );
+    assert!(uncertain.expect("valid").expect("relaxed path").len() >= 3);
+    let avoided = closing_cells(
+        &w,
+        &wall(Traversability::Unknown),
+        start,
+        goal,
+        &inflated(UnknownCells::Avoid),
+    );
+    assert_eq!(avoided.expect("valid").expect("relaxed path").len(), 1);
+    let inflate = closing_cells(
+        &w,
+        &wall(Traversability::Unknown),
+        start,
+        goal,
+        &inflated(UnknownCells::Inflate),
+    );
+    assert!(inflate.expect("valid").expect("relaxed path").len() >= 3);
+    // A blocked wall closes the way whatever the planner makes of undecided cells.
+    let blocked = closing_cells(&w, &wall(Traversability::Blocked), start, goal, &strict).expect("valid");
+    assert_eq!(blocked, None);
+}
+
+#[test]
+fn the_cells_under_the_robot_at_the_start_never_close_the_way() {
+    // Unknown cells all round the start, within its footprint radius, and an uncertain wall farther on: the
+    // planner clears the footprint, so only the wall closes the way.
+    let r = region(12, 5);
+    let w = on(&r, 0.1);
+    let (start, goal) = (CellIndex::new(2, 2), CellIndex::new(11, 2));
+    let decisions: Vec<Traversability> = r
+        .cells()
+        .map(|c| match c {
+            c if c.i == 8 => Traversability::Uncertain,
+            c if (c.i - start.i).abs() <= 1 && (c.j - start.j).abs() <= 1 => Traversability::Unknown,
+            _ => Traversability::Free,
+        })
+        .collect();
+    let options = PlannerOptions {
+        footprint_radius_m: 0.15,
+        inflation_radius_m: 0.15,
+        ..no_inflation(UnknownCells::Avoid)
+    };
+    assert_eq!(plan(&w, &decisions, start, goal, &options).expect("plan"), None);
+    let closing = closing_cells(&w, &decisions, start, goal, &options)
+        .expect("valid")
+        .expect("the relaxed path exists");
+    assert!(!closing.is_empty());
+    assert!(closing.iter().all(|c| c.i == 8), "{closing:?}");
+}

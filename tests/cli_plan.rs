@@ -1,0 +1,135 @@
+//! `oeg plan` through the built binary: a path on a saved map, and why there is none.
+
+#![allow(
+    clippy::disallowed_methods,
+    reason = "tests and tools write their inputs directly"
+)]
+
+mod common;
+
+use common::{oeg, temp_dir};
+use std::path::PathBuf;
+use std::process::Output;
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
+    let dir = temp_dir("map", "plan");
+    let demo = dir.join("demo");
+    let o = oeg(&["demo", "--out", demo.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let map = demo.join("map.oeg");
+    let plan_with_reason = |to: &str, name: &str| -> (serde_json::Value, PathBuf, String) {
+        let out = dir.join(name);
+        let o = oeg(&[
+            "plan",
+            map.to_str().expect("utf8"),
+            "--from",
+            "0.5,0",
+            "--to",
+            to,
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("plan.json")).expect("plan.json")).expect("json");
+        // A path exits 0; no path exits 3 (documented in `oeg plan --help`), with its reason.
+        let expected = if summary["plan_found"] == true { 0 } else { 3 };
+        assert_eq!(o.status.code(), Some(expected), "{}", stderr(&o));
+        (summary, out, stderr(&o))
+    };
+    let plan = |to: &str, name: &str| -> (serde_json::Value, PathBuf) {
+        let (summary, out, _) = plan_with_reason(to, name);
+        (summary, out)
+    };
+    // Along the corridor between the 3 cm and the 5 cm curb (0.8 m apart): the straight 5.5 m, but for the few
+    // cells the path steps aside to keep to the corridor's middle, away from the curbs (the inflation cost).
+    let (open, out) = plan("6,0", "open");
+    assert_eq!(open["plan_found"], true);
+    let length_m = open["plan_length_m"].as_f64().expect("length");
+    assert!((5.5..5.7).contains(&length_m), "{open}");
+    let path = std::fs::read_to_string(out.join("path.csv")).expect("path.csv");
+    assert!(path.starts_with("step,x_m,y_m\n0,0.525,0.025\n"), "{path}");
+    assert_eq!(
+        path.lines().count() as u64 - 1,
+        open["num_path_cells"].as_u64().expect("cells")
+    );
+    assert!(out.join("plan.png").is_file());
+    // Onto the 5 cm curb: no path (and an empty path.csv), and the reason.
+    let (blocked, out, said) = plan_with_reason("3.15,1.2", "blocked");
+    assert_eq!(blocked["plan_found"], false);
+    // The curb's top is level; its edges are steps, and the goal lies closer to one than the robot's radius.
+    let reason = "the goal cell lies within the inflation radius (0.25 m) of a blocked or uncertain cell";
+    assert_eq!(blocked["no_path_reason"], reason);
+    assert!(said.contains(reason), "{said}");
+    // Far into what the scans never saw: both ends may be stood on, but nothing joins them.
+    let (far, far_out, said) = plan_with_reason("30,0", "unobserved");
+    assert_eq!(far["plan_found"], false);
+    assert!(said.contains("no connection"), "{said}");
+    // The room's walls close that way, whatever the planner made of the cells it cannot decide: nothing listed.
+    assert_eq!(far["closed_by"], serde_json::json!({}));
+    assert!(!far_out.join("closing.csv").exists());
+    // Into the room's corner the sensor never saw: the never-observed cells on the path through every undecided
+    // cell closed the way, counted by reason in plan.json and listed in closing.csv.
+    let (corner, corner_out, said) = plan_with_reason("0.5,2.5", "corner");
+    assert_eq!(corner["plan_found"], false);
+    let closed_by = corner["closed_by"].as_object().expect("closed_by");
+    let never_observed = closed_by["never_observed"].as_u64().expect("count");
+    assert!(never_observed > 0, "{corner}");
+    let total: u64 = closed_by.values().map(|n| n.as_u64().expect("count")).sum();
+    assert!(
+        said.contains(&format!("closed by {total} cells the map cannot decide")),
+        "{said}"
+    );
+    let closing = std::fs::read_to_string(corner_out.join("closing.csv")).expect("closing.csv");
+    assert!(closing.starts_with("x_m,y_m,class,reason\n"), "{closing}");
+    assert_eq!(closing.lines().count() as u64 - 1, total);
+    let listed = closing
+        .lines()
+        .filter(|l| l.ends_with(",unknown,never_observed"))
+        .count() as u64;
+    assert_eq!(listed, never_observed, "{closing}");
+    // A goal the robot may not stand on is closed by the goal itself: nothing to list.
+    assert_eq!(blocked["closed_by"], serde_json::json!({}));
+    assert!(!out.join("closing.csv").exists());
+    assert!(open["no_path_reason"].is_null(), "{open}");
+    assert!(blocked["plan_length_m"].is_null());
+    assert_eq!(
+        std::fs::read_to_string(out.join("path.csv")).expect("path.csv"),
+        "step,x_m,y_m\n"
+    );
+    // A malformed point is a clear error.
+    let o = oeg(&[
+        "plan",
+        map.to_str().expect("utf8"),
+        "--from",
+        "0.5",
+        "--to",
+        "6,0",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("expected X,Y in metres"), "{}", stderr(&o));
+    // Far points: the search's arrays over 100 km x 100 km at 0.05 m would pass the memory limit, so the
+    // plan is refused before it allocates them (it used to abort).
+    let o = oeg(&[
+        "plan",
+        map.to_str().expect("utf8"),
+        "--from",
+        "0.5,0",
+        "--to",
+        "100000,100000",
+        "--out",
+        dir.join("far").to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("over the memory limit")
+            && stderr(&o).contains("plan between points nearer the map"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.join("far").exists(), "nothing written");
+}
