@@ -96,6 +96,25 @@ fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
     assert_eq!(blocked["closed_by"], serde_json::json!({}));
     assert!(!out.join("closing.csv").exists());
     assert!(open["no_path_reason"].is_null(), "{open}");
+    // The step rule the cells were judged by: the paper's unless given, or a preset's.
+    assert_eq!(open["traversability"]["kind"], "absolute", "{open}");
+    let robust = dir.join("robust");
+    let o = oeg(&[
+        "plan",
+        map.to_str().expect("utf8"),
+        "--from",
+        "0.5,0",
+        "--to",
+        "6,0",
+        "--out",
+        robust.to_str().expect("utf8"),
+        "--set",
+        "map.preset=robust",
+    ]);
+    assert!(matches!(o.status.code(), Some(0 | 3)), "{}", stderr(&o));
+    let judged: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(robust.join("plan.json")).expect("plan.json")).expect("json");
+    assert_eq!(judged["traversability"]["kind"], "contact", "{judged}");
     assert!(blocked["plan_length_m"].is_null());
     assert_eq!(
         std::fs::read_to_string(out.join("path.csv")).expect("path.csv"),

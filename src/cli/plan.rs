@@ -21,7 +21,9 @@ pub(crate) struct PlanArgs {
     /// A setting by its scenario key (repeatable): planner.inflation_radius_m (0.25, the Pioneer 3-AT's
     /// inscribed radius), planner.inflation_cost_width_m (0.30) and planner.cost_scaling_factor (10, per
     /// metre: the cost of cells near the inflation), planner.unknown (avoid, inflate or drivable),
-    /// robot.max_step_m (0.035), robot.height_m (0.46), map.traversability.
+    /// planner.uncertain (blocked or drivable), robot.max_step_m (0.035), robot.height_m (0.46),
+    /// map.traversability (the paper's absolute step rule unless given), map.preset (its step rule: `robust`
+    /// judges a map as `oeg run --set map.preset=robust` does).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
     /// Also write each figure as SVG beside its PNG, for papers.

@@ -32,7 +32,8 @@ pub struct PlanJob {
     pub figures: crate::figures::ImageFormats,
 }
 
-/// `plan.json` of `oeg plan`: one flat object.
+/// `plan.json` of `oeg plan`: one object, flat but for `traversability` (the rule, as a scenario writes it) and
+/// `closed_by` (counts by reason).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PlanSummary {
     /// Whether a path was found.
@@ -55,6 +56,8 @@ pub struct PlanSummary {
     pub unknown: UnknownCells,
     /// The robot's step limit, metres.
     pub max_step_m: f32,
+    /// The step rule the map's cells were judged by (`map.traversability`, or the preset's).
+    pub traversability: TraversabilityRule,
     /// Why there is no path (null when there is one): the start or goal cell blocked, uncertain, never
     /// observed or within the inflation radius of a blocked cell, or no connection between them.
     pub no_path_reason: Option<String>,
@@ -241,6 +244,7 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         inflation_radius_m: job.options.inflation_radius_m,
         unknown: job.options.unknown,
         max_step_m: job.profile.max_step_m,
+        traversability: job.rule,
         no_path_reason,
         closed_by,
     };
