@@ -118,6 +118,17 @@ mod tests {
         (window, vec![Traversability::Traversable; 40])
     }
 
+    /// [`path_allowed`] on `window` with [`REACH`].
+    fn allowed(
+        window: &GridWindow,
+        decisions: &[Traversability],
+        forbidden: &[bool],
+        from: (f64, f64),
+        path: &[(f64, f64)],
+    ) -> bool {
+        path_allowed(window, decisions, forbidden, from, path, REACH)
+    }
+
     fn along(from_m: f64, to_m: f64) -> Vec<(f64, f64)> {
         (0..)
             .map(|k| from_m + 0.05 + 0.1 * f64::from(k))
@@ -129,49 +140,45 @@ mod tests {
     #[test]
     fn a_path_stays_valid_until_the_map_forbids_a_point_ahead() {
         let (window, mut decisions) = strip();
-        let valid = |d: &[Traversability], f: &[bool], from, p: &[(f64, f64)]| {
-            path_allowed(&window, d, f, from, p, REACH)
-        };
         let path = along(0.0, 4.0);
         let free = vec![false; 40];
-        assert!(valid(&decisions, &free, (0.05, 0.05), &path));
+        assert!(allowed(&window, &decisions, &free, (0.05, 0.05), &path));
         // Near: a point where the planner keeps the centre out (here an undecided cell it avoids) invalidates.
         let mut forbidden = free.clone();
         forbidden[7] = true;
-        assert!(!valid(&decisions, &forbidden, (0.05, 0.05), &path));
+        assert!(!allowed(&window, &decisions, &forbidden, (0.05, 0.05), &path));
         // Beyond `decide_within_m` the planner plans through what it cannot decide: still valid.
         let mut forbidden = free.clone();
         forbidden[25] = true;
         decisions[25] = Traversability::Uncertain;
-        assert!(valid(&decisions, &forbidden, (0.05, 0.05), &path));
+        assert!(allowed(&window, &decisions, &forbidden, (0.05, 0.05), &path));
         // A cell the map now calls blocked invalidates wherever it lies ahead.
         decisions[25] = Traversability::Blocked;
-        assert!(!valid(&decisions, &forbidden, (0.05, 0.05), &path));
+        assert!(!allowed(&window, &decisions, &forbidden, (0.05, 0.05), &path));
     }
 
     #[test]
     fn what_lies_under_the_robot_or_behind_the_path_is_not_asked() {
         let (window, mut decisions) = strip();
-        let valid = |d: &[Traversability], f: &[bool], from, p: &[(f64, f64)]| {
-            path_allowed(&window, d, f, from, p, REACH)
-        };
         let mut forbidden = vec![false; 40];
         // The robot at 1.05 m stands in an inflation (cell 11, under its footprint) and the path behind it is
         // not the path ahead.
         forbidden[11] = true;
         decisions[2] = Traversability::Blocked;
         let ahead = along(1.0, 4.0);
-        assert!(valid(&decisions, &forbidden, (1.05, 0.05), &ahead));
+        assert!(allowed(&window, &decisions, &forbidden, (1.05, 0.05), &ahead));
         // An external planner's two waypoints are asked along the segment between them.
         let mut blocked = decisions.clone();
         blocked[30] = Traversability::Blocked;
-        assert!(!valid(
+        assert!(!allowed(
+            &window,
             &blocked,
             &forbidden,
             (1.05, 0.05),
             &[(1.05, 0.05), (3.95, 0.05)]
         ));
-        assert!(valid(
+        assert!(allowed(
+            &window,
             &decisions,
             &forbidden,
             (1.05, 0.05),
@@ -180,7 +187,7 @@ mod tests {
         // A point outside the window is not a path the planner could have made.
         let mut outside = ahead.clone();
         outside.push((9.0, 0.05));
-        assert!(!valid(&decisions, &forbidden, (1.05, 0.05), &outside));
+        assert!(!allowed(&window, &decisions, &forbidden, (1.05, 0.05), &outside));
     }
 
     #[test]

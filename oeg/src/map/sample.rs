@@ -422,19 +422,22 @@ fn hit_sample(
     let (dir, s2) = (span.dir, span.s2);
     // How far above the band of the cell's surface the hit lies, in standard deviations: above it, a structure
     // over the surface (if it stands out of the scan's hits: `ceiling_hit`).
-    let overhead_score = z
-        .filter(|_| opts.overhead_hits == OverheadHits::Ceiling)
-        .and_then(|z| {
-            let e = here.cell().and_then(Cell::elevation)?;
-            let grown = Elevation {
-                var_m2: e.var_m2 + opts.process_noise_var_m2,
-                ..e
-            };
-            // Whether the hit is the surface's noise is asked of the noise the beam has where it meets it.
-            let s2 = span.s2_meeting(e.mean_m, opts);
-            (surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above)
-                .then(|| (z - grown.mean_m) / (grown.var_m2 + s2).sqrt())
-        });
+    let ceiling_rule = opts.overhead_hits == OverheadHits::Ceiling;
+    // The cell's surface, and the noise the beam has where it meets it, for the rules that ask.
+    let surface = z
+        .filter(|_| ceiling_rule || opts.vertical_variance)
+        .and_then(|_| here.cell().and_then(Cell::elevation))
+        .map(|e| (e, span.s2_meeting(e.mean_m, opts)));
+    let overhead_score = z.filter(|_| ceiling_rule).and_then(|z| {
+        let (e, s2) = surface?;
+        let grown = Elevation {
+            var_m2: e.var_m2 + opts.process_noise_var_m2,
+            ..e
+        };
+        // Whether the hit is the surface's noise is asked of the noise the beam has where it meets it.
+        (surface_level(grown, z, s2, opts.surface_band_sigmas) == Level::Above)
+            .then(|| (z - grown.mean_m) / (grown.var_m2 + s2).sqrt())
+    });
     match z {
         Some(z) if let Some(score) = overhead_score => {
             evidence.add_overhead((log, here.tile), p, z, s2, SeenFrom::of_beam(dir.z), score);
@@ -442,11 +445,9 @@ fn hit_sample(
         Some(z) => {
             // Under the vertical-variance rule a hit is weighted by the noise its beam has where it meets the
             // surface, not by the error its range reported: short readings report less and would pull it up.
-            let s2 = here
-                .cell()
-                .and_then(Cell::elevation)
+            let s2 = surface
                 .filter(|_| opts.vertical_variance)
-                .map_or(s2, |e| span.s2_meeting(e.mean_m, opts));
+                .map_or(s2, |(_, meeting)| meeting);
             evidence.add_hit(log, p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas)
         }
         None => evidence.paper.raise_p(p),
