@@ -284,7 +284,9 @@ def plan(
         start, goal: World x and y, metres.
         settings: ``oeg plan``'s keys: ``planner.inflation_radius_m``,
             ``planner.inflation_cost_width_m``, ``planner.cost_scaling_factor``, ``planner.unknown``,
-            ``robot.max_step_m``, ``robot.height_m``, ``map.traversability``.
+            ``planner.uncertain``, ``robot.max_step_m``, ``robot.height_m``, ``map.traversability`` (the
+            paper's absolute step rule unless given) and ``map.preset`` (its step rule: ``"robust"`` judges a
+            map as ``oeg run`` judges that preset's maps).
 
     Returns:
         The path through the cell centres, shape ``(k, 2)``, or ``None`` when the goal cannot be reached.

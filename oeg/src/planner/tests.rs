@@ -433,23 +433,22 @@ proptest! {
 }
 
 #[test]
-fn the_cells_that_closed_the_way_are_the_undecided_ones_on_the_relaxed_path_and_none_when_blocked_cells_close_it()
- {
+fn the_undecided_cells_on_the_relaxed_path_closed_the_way_and_none_did_behind_a_blocked_wall() {
     // A 10 x 5 room at 0.1 m with a wall across column 5: uncertain, unknown, or blocked.
     let r = region(10, 5);
     let w = on(&r, 0.1);
     let (start, goal) = (CellIndex::new(0, 2), CellIndex::new(9, 2));
-    let wall = |class| marked(&r, class, |c| c.i == 5);
+    let closing = |class, options: PlannerOptions| {
+        let decisions = marked(&r, class, |c| c.i == 5);
+        assert_eq!(plan(&w, &decisions, start, goal, &options).expect("plan"), None);
+        closing_cells(&w, &decisions, start, goal, &options).expect("valid")
+    };
     let strict = no_inflation(UnknownCells::Avoid);
     for class in [Traversability::Uncertain, Traversability::Unknown] {
-        let decisions = wall(class);
-        assert_eq!(plan(&w, &decisions, start, goal, &strict).expect("plan"), None);
-        let closing = closing_cells(&w, &decisions, start, goal, &strict)
-            .expect("valid")
-            .expect("the relaxed path exists");
         // Without inflation, the one wall cell the relaxed path crosses.
-        assert_eq!(closing.len(), 1, "{class:?}: {closing:?}");
-        assert_eq!(closing[0].i, 5);
+        let cells = closing(class, strict).expect("the relaxed path exists");
+        assert_eq!(cells.len(), 1, "{class:?}: {cells:?}");
+        assert_eq!(cells[0].i, 5);
     }
     // Inflated, the wall's cells within the radius of the path close it too; unknown cells under `Avoid` are
     // not inflated, so only the one on the path counts.
@@ -457,33 +456,16 @@ fn the_cells_that_closed_the_way_are_the_undecided_ones_on_the_relaxed_path_and_
         inflation_radius_m: 0.15,
         ..no_inflation(unknown)
     };
-    let uncertain = closing_cells(
-        &w,
-        &wall(Traversability::Uncertain),
-        start,
-        goal,
-        &inflated(UnknownCells::Avoid),
-    );
-    assert!(uncertain.expect("valid").expect("relaxed path").len() >= 3);
-    let avoided = closing_cells(
-        &w,
-        &wall(Traversability::Unknown),
-        start,
-        goal,
-        &inflated(UnknownCells::Avoid),
-    );
-    assert_eq!(avoided.expect("valid").expect("relaxed path").len(), 1);
-    let inflate = closing_cells(
-        &w,
-        &wall(Traversability::Unknown),
-        start,
-        goal,
-        &inflated(UnknownCells::Inflate),
-    );
-    assert!(inflate.expect("valid").expect("relaxed path").len() >= 3);
+    let count = |class, unknown| {
+        closing(class, inflated(unknown))
+            .expect("the relaxed path exists")
+            .len()
+    };
+    assert!(count(Traversability::Uncertain, UnknownCells::Avoid) >= 3);
+    assert_eq!(count(Traversability::Unknown, UnknownCells::Avoid), 1);
+    assert!(count(Traversability::Unknown, UnknownCells::Inflate) >= 3);
     // A blocked wall closes the way whatever the planner makes of undecided cells.
-    let blocked = closing_cells(&w, &wall(Traversability::Blocked), start, goal, &strict).expect("valid");
-    assert_eq!(blocked, None);
+    assert_eq!(closing(Traversability::Blocked, strict), None);
 }
 
 #[test]
