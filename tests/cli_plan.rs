@@ -8,49 +8,59 @@
 mod common;
 
 use common::{oeg, temp_dir};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-#[test]
-fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
-    let dir = temp_dir("map", "plan");
+/// The demo's map in a fresh folder named `name`: the folder and the map file.
+fn demo_map(name: &str) -> (PathBuf, PathBuf) {
+    let dir = temp_dir("map", name);
     let demo = dir.join("demo");
     let o = oeg(&["demo", "--out", demo.to_str().expect("utf8")]);
     assert!(o.status.success(), "{}", stderr(&o));
     let map = demo.join("map.oeg");
-    let plan_with = |to: &str, name: &str, extra: &[&str]| -> (serde_json::Value, PathBuf, String) {
-        let out = dir.join(name);
-        let mut args = vec![
-            "plan",
-            map.to_str().expect("utf8"),
-            "--from",
-            "0.5,0",
-            "--to",
-            to,
-            "--out",
-            out.to_str().expect("utf8"),
-        ];
-        args.extend_from_slice(extra);
-        let o = oeg(&args);
-        let summary: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join("plan.json")).expect("plan.json")).expect("json");
-        // A path exits 0; no path exits 3 (documented in `oeg plan --help`), with its reason.
-        let expected = if summary["plan_found"] == true { 0 } else { 3 };
-        assert_eq!(o.status.code(), Some(expected), "{}", stderr(&o));
-        (summary, out, stderr(&o))
-    };
-    let plan_with_reason = |to: &str, name: &str| plan_with(to, name, &[]);
-    let plan = |to: &str, name: &str| -> (serde_json::Value, PathBuf) {
-        let (summary, out, _) = plan_with_reason(to, name);
-        (summary, out)
-    };
+    (dir, map)
+}
+
+/// `oeg plan MAP --from 0.5,0 --to TO --out DIR/NAME EXTRA...`: its `plan.json`, its folder and what it said,
+/// after checking its exit status (0 with a path, 3 without, as `oeg plan --help` documents).
+fn plan_with(
+    map: &Path,
+    dir: &Path,
+    to: &str,
+    name: &str,
+    extra: &[&str],
+) -> (serde_json::Value, PathBuf, String) {
+    let out = dir.join(name);
+    let mut args = vec![
+        "plan",
+        map.to_str().expect("utf8"),
+        "--from",
+        "0.5,0",
+        "--to",
+        to,
+        "--out",
+        out.to_str().expect("utf8"),
+    ];
+    args.extend_from_slice(extra);
+    let o = oeg(&args);
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("plan.json")).expect("plan.json")).expect("json");
+    let expected = if summary["plan_found"] == true { 0 } else { 3 };
+    assert_eq!(o.status.code(), Some(expected), "{}", stderr(&o));
+    (summary, out, stderr(&o))
+}
+
+#[test]
+fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
+    let (dir, map) = demo_map("plan");
+    let plan = |to: &str, name: &str| plan_with(&map, &dir, to, name, &[]);
     // Along the corridor between the 3 cm and the 5 cm curb (0.8 m apart): the straight 5.5 m, but for the few
     // cells the path steps aside to keep to the corridor's middle, away from the curbs (the inflation cost).
-    let (open, out) = plan("6,0", "open");
+    let (open, out, _) = plan("6,0", "open");
     assert_eq!(open["plan_found"], true);
     let length_m = open["plan_length_m"].as_f64().expect("length");
     assert!((5.5..5.7).contains(&length_m), "{open}");
@@ -61,48 +71,14 @@ fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
         open["num_path_cells"].as_u64().expect("cells")
     );
     assert!(out.join("plan.png").is_file());
+    assert!(open["no_path_reason"].is_null(), "{open}");
     // Onto the 5 cm curb: no path (and an empty path.csv), and the reason.
-    let (blocked, out, said) = plan_with_reason("3.15,1.2", "blocked");
+    let (blocked, out, said) = plan("3.15,1.2", "blocked");
     assert_eq!(blocked["plan_found"], false);
     // The curb's top is level; its edges are steps, and the goal lies closer to one than the robot's radius.
     let reason = "the goal cell lies within the inflation radius (0.25 m) of a blocked or uncertain cell";
     assert_eq!(blocked["no_path_reason"], reason);
     assert!(said.contains(reason), "{said}");
-    // Far into what the scans never saw: both ends may be stood on, but nothing joins them.
-    let (far, far_out, said) = plan_with_reason("30,0", "unobserved");
-    assert_eq!(far["plan_found"], false);
-    assert!(said.contains("no connection"), "{said}");
-    // The room's walls close that way, whatever the planner made of the cells it cannot decide: nothing listed.
-    assert_eq!(far["closed_by"], serde_json::json!({}));
-    assert!(!far_out.join("closing.csv").exists());
-    // Into the room's corner the sensor never saw: the never-observed cells on the path through every undecided
-    // cell closed the way, counted by reason in plan.json and listed in closing.csv.
-    let (corner, corner_out, said) = plan_with_reason("0.5,2.5", "corner");
-    assert_eq!(corner["plan_found"], false);
-    let closed_by = corner["closed_by"].as_object().expect("closed_by");
-    let never_observed = closed_by["never_observed"].as_u64().expect("count");
-    assert!(never_observed > 0, "{corner}");
-    let total: u64 = closed_by.values().map(|n| n.as_u64().expect("count")).sum();
-    assert!(
-        said.contains(&format!("closed by {total} cells the map cannot decide")),
-        "{said}"
-    );
-    let closing = std::fs::read_to_string(corner_out.join("closing.csv")).expect("closing.csv");
-    assert!(closing.starts_with("x_m,y_m,class,reason\n"), "{closing}");
-    assert_eq!(closing.lines().count() as u64 - 1, total);
-    let listed = closing
-        .lines()
-        .filter(|l| l.ends_with(",unknown,never_observed"))
-        .count() as u64;
-    assert_eq!(listed, never_observed, "{closing}");
-    // A goal the robot may not stand on is closed by the goal itself: nothing to list.
-    assert_eq!(blocked["closed_by"], serde_json::json!({}));
-    assert!(!out.join("closing.csv").exists());
-    assert!(open["no_path_reason"].is_null(), "{open}");
-    // The step rule the cells were judged by: the paper's unless given, or a preset's.
-    assert_eq!(open["traversability"]["kind"], "absolute", "{open}");
-    let (judged, _, _) = plan_with("6,0", "robust", &["--set", "map.preset=robust"]);
-    assert_eq!(judged["traversability"]["kind"], "contact", "{judged}");
     assert!(blocked["plan_length_m"].is_null());
     assert_eq!(
         std::fs::read_to_string(out.join("path.csv")).expect("path.csv"),
@@ -139,4 +115,51 @@ fn plan_finds_the_way_between_the_demo_curbs_and_none_onto_the_5_cm_curb() {
         stderr(&o)
     );
     assert!(!dir.join("far").exists(), "nothing written");
+}
+
+#[test]
+fn with_no_connection_plan_lists_the_cells_that_closed_the_way() {
+    let (dir, map) = demo_map("closing");
+    let plan = |to: &str, name: &str| plan_with(&map, &dir, to, name, &[]);
+    // A goal the robot may not stand on (beside the 5 cm curb) is closed by the goal itself: nothing to list.
+    let (blocked, out, _) = plan("3.15,1.2", "blocked");
+    assert_eq!(blocked["closed_by"], serde_json::json!({}));
+    assert!(!out.join("closing.csv").exists());
+    // Far beyond the room: both ends may be stood on, but the room's walls close every way, whatever the planner
+    // made of the cells it cannot decide: nothing to list.
+    let (far, out, said) = plan("30,0", "walled");
+    assert_eq!(far["plan_found"], false);
+    assert!(said.contains("no connection"), "{said}");
+    assert_eq!(far["closed_by"], serde_json::json!({}));
+    assert!(!out.join("closing.csv").exists());
+    // Into the room's corner the sensor never saw: the never-observed cells on the path through every undecided
+    // cell closed the way, counted by reason in plan.json and listed in closing.csv.
+    let (corner, out, said) = plan("0.5,2.5", "corner");
+    assert_eq!(corner["plan_found"], false);
+    let closed_by = corner["closed_by"].as_object().expect("closed_by");
+    let never_observed = closed_by["never_observed"].as_u64().expect("count");
+    assert!(never_observed > 0, "{corner}");
+    let total: u64 = closed_by.values().map(|n| n.as_u64().expect("count")).sum();
+    assert!(
+        said.contains(&format!("closed by {total} cells the map cannot decide")),
+        "{said}"
+    );
+    let closing = std::fs::read_to_string(out.join("closing.csv")).expect("closing.csv");
+    assert!(closing.starts_with("x_m,y_m,class,reason\n"), "{closing}");
+    assert_eq!(closing.lines().count() as u64 - 1, total);
+    let listed = closing
+        .lines()
+        .filter(|l| l.ends_with(",unknown,never_observed"))
+        .count() as u64;
+    assert_eq!(listed, never_observed, "{closing}");
+}
+
+#[test]
+fn plan_json_names_the_step_rule_the_cells_were_judged_by() {
+    let (dir, map) = demo_map("rule");
+    // The paper's absolute rule unless given; a preset's rule with `map.preset`.
+    let (paper, _, _) = plan_with(&map, &dir, "6,0", "paper", &[]);
+    assert_eq!(paper["traversability"]["kind"], "absolute", "{paper}");
+    let (robust, _, _) = plan_with(&map, &dir, "6,0", "robust", &["--set", "map.preset=robust"]);
+    assert_eq!(robust["traversability"]["kind"], "contact", "{robust}");
 }
