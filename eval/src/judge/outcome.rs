@@ -58,6 +58,8 @@ pub struct Outcome {
     /// Every bound of the scenario's expectations against this model's metrics.
     pub bounds: Vec<ExpectationResult>,
     metrics: Metrics,
+    /// With no path on the map, the cells that closed the way, in words ([`crate::judge::plan_check::PlanCheck::closed_by`]).
+    closed_by: Option<String>,
 }
 
 impl Outcome {
@@ -72,7 +74,14 @@ impl Outcome {
             safety: Safety::of(metrics),
             bounds: expectation_results(metrics, expectations),
             metrics: metrics.clone(),
+            closed_by: None,
         }
+    }
+
+    /// The outcome with the cells that closed the way when there is no path ([`crate::judge::plan_check::PlanCheck::closed_by`]), which
+    /// [`Outcome::path_text`] then names.
+    pub fn with_closed_by(self, closed_by: Option<String>) -> Self {
+        Self { closed_by, ..self }
     }
 
     /// The bounds that do not hold.
@@ -85,10 +94,14 @@ impl Outcome {
     pub fn path_text(&self) -> String {
         let m = &self.metrics;
         if !m.plan_found {
-            return if m.truth_plan_found {
-                "no path on the map (the truth has one)".into()
+            let text = if m.truth_plan_found {
+                "no path on the map (the truth has one)"
             } else {
-                "no path on the map, nor on the truth".into()
+                "no path on the map, nor on the truth"
+            };
+            return match &self.closed_by {
+                Some(closed_by) => format!("{text}: {closed_by}"),
+                None => text.into(),
             };
         }
         let ratio = if m.plan_length_ratio.is_finite() {
@@ -235,5 +248,26 @@ mod tests {
         m.nav.contacts = Some(0);
         assert_eq!(Safety::of(&m), Safety::NoPath);
         assert_eq!(Safety::of(&test_metrics()), Safety::Safe);
+    }
+
+    #[test]
+    fn no_path_names_the_cells_that_closed_the_way_and_a_path_ignores_them() {
+        let closed_by =
+            "closed by 1 cell the map cannot decide (1 frontier); the truth: 1 drivable, 0 blocked";
+        let mut m = test_metrics();
+        m.plan_found = false;
+        m.truth_plan_found = true;
+        let o = Outcome::new("robust", &m, &bound(10.0)).with_closed_by(Some(closed_by.into()));
+        assert_eq!(
+            o.path_text(),
+            format!("no path on the map (the truth has one): {closed_by}")
+        );
+        assert_eq!(
+            Outcome::new("robust", &m, &bound(10.0)).path_text(),
+            "no path on the map (the truth has one)"
+        );
+        let found =
+            Outcome::new("robust", &test_metrics(), &bound(10.0)).with_closed_by(Some(closed_by.into()));
+        assert!(!found.path_text().contains("closed by"), "{}", found.path_text());
     }
 }

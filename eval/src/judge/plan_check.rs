@@ -10,6 +10,7 @@ use serde::Serialize;
 use sim::scenario::Scenario;
 
 use crate::error::{EvalError, Result};
+use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
 
 /// The outcome of the planner check.
@@ -25,6 +26,53 @@ pub struct PlanCheck {
     /// Of the unsafe cells, those whose truly blocked cells within the inflation radius no ray could have
     /// told about ([`Verdicts::unobservable`]): blind, not the map's fault.
     pub blind_cells: Vec<CellIndex>,
+    /// With no path on the map, the cells the map could not decide that closed the way
+    /// ([`oeg::closing_cells`]); empty otherwise, and when the map's blocked cells alone close it.
+    pub closing: Vec<CellIndex>,
+}
+
+impl PlanCheck {
+    /// With no path on the map and cells that closed the way ([`PlanCheck::closing`]), those cells in words: by
+    /// why the map could not decide them (`estimate`'s doubts, or `never_observed`) and by what the truth calls
+    /// them, as in `closed by 1 cell the map cannot decide (1 step_band); the truth: 1 drivable, 0
+    /// blocked`. `None` otherwise.
+    pub fn closed_by(&self, verdicts: &Verdicts, estimate: &Estimate) -> Option<String> {
+        if self.map_plan.is_some() || self.closing.is_empty() {
+            return None;
+        }
+        closing_words(self.closing.iter().filter_map(|c| verdicts.offset(*c)).map(|k| {
+            let reason = match estimate.doubts.get(k).copied().flatten() {
+                Some(doubt) => doubt.name(),
+                None if estimate.observed.get(k) == Some(&false) => "never_observed",
+                // Another mapper's arrays say no reason: the class.
+                None => verdicts.mapped[k].name(),
+            };
+            (reason, verdicts.truth[k].is_blocked())
+        }))
+    }
+}
+
+/// Cells that closed the way, each with why the map could not decide it and whether the truth blocks it, in
+/// words; `None` for none.
+fn closing_words(cells: impl Iterator<Item = (&'static str, bool)>) -> Option<String> {
+    let mut reasons: std::collections::BTreeMap<&'static str, usize> = Default::default();
+    let mut truly_blocked = 0;
+    for (reason, blocked) in cells {
+        *reasons.entry(reason).or_insert(0) += 1;
+        truly_blocked += usize::from(blocked);
+    }
+    let total: usize = reasons.values().sum();
+    let cells = match total {
+        0 => return None,
+        1 => "cell",
+        _ => "cells",
+    };
+    let reasons: Vec<String> = reasons.iter().map(|(why, n)| format!("{n} {why}")).collect();
+    Some(format!(
+        "closed by {total} {cells} the map cannot decide ({}); the truth: {} drivable, {truly_blocked} blocked",
+        reasons.join(", "),
+        total - truly_blocked
+    ))
 }
 
 /// Plans on the map and on the truth from the drive's first waypoint to its last.
@@ -70,11 +118,18 @@ pub fn check(s: &Scenario, verdicts: &Verdicts) -> Result<PlanCheck> {
         None => Vec::new(),
     };
     let blind_cells = blind_path_cells(&unsafe_cells, verdicts, options.inflation_radius_m);
+    let closing = match &map_plan {
+        Some(_) => Vec::new(),
+        None => oeg::closing_cells(window, &verdicts.mapped, start, goal, &options)
+            .map_err(planner_error)?
+            .unwrap_or_default(),
+    };
     Ok(PlanCheck {
         map_plan,
         truth_plan,
         unsafe_cells,
         blind_cells,
+        closing,
     })
 }
 
@@ -239,6 +294,7 @@ mod tests {
             truth_plan: Some(truth_plan),
             unsafe_cells,
             blind_cells: Vec::new(),
+            closing: Vec::new(),
         };
         let geometry = oeg::GridGeometry::new(1.0).expect("geometry");
         let csv = String::from_utf8(crate::output::csv_table(&rows(&check, &geometry)).expect("csv"))
@@ -248,5 +304,21 @@ mod tests {
         assert_eq!(lines.next(), Some("map,0,0.5,0.5,false,false"));
         assert!(csv.contains("map,3,3.5,0.5,true,false\n"), "{csv}");
         assert!(csv.lines().any(|l| l.starts_with("truth,0,")));
+    }
+
+    #[test]
+    fn the_cells_that_closed_the_way_are_counted_by_reason_and_by_the_truth() {
+        assert_eq!(closing_words(std::iter::empty()), None);
+        assert_eq!(
+            closing_words([("step_band", false)].into_iter()).as_deref(),
+            Some("closed by 1 cell the map cannot decide (1 step_band); the truth: 1 drivable, 0 blocked")
+        );
+        let cells = [("frontier", false), ("step_band", true), ("frontier", false)];
+        assert_eq!(
+            closing_words(cells.into_iter()).as_deref(),
+            Some(
+                "closed by 3 cells the map cannot decide (2 frontier, 1 step_band); the truth: 2 drivable, 1 blocked"
+            )
+        );
     }
 }

@@ -61,7 +61,9 @@ impl ModelRun<'_> {
 
     /// What this model's map made the robot do, and its regression bounds.
     pub(crate) fn outcome(&self) -> Outcome {
-        Outcome::new(self.name(), &self.evaluation.metrics, &self.scenario.expectations)
+        let e = self.evaluation;
+        Outcome::new(self.name(), &e.metrics, &self.scenario.expectations)
+            .with_closed_by(e.plan.closed_by(&e.verdicts, &e.estimate))
     }
 
     fn file(&self, name: &str) -> String {
