@@ -58,7 +58,8 @@ pub struct Outcome {
     /// Every bound of the scenario's expectations against this model's metrics.
     pub bounds: Vec<ExpectationResult>,
     metrics: Metrics,
-    /// With no path on the map, the cells that closed the way, in words ([`crate::judge::plan_check::PlanCheck::closed_by`]).
+    /// With no path on the map, the cells that closed the way, in words
+    /// ([`crate::judge::plan_check::PlanCheck::closed_by`]).
     closed_by: Option<String>,
 }
 
@@ -78,8 +79,8 @@ impl Outcome {
         }
     }
 
-    /// The outcome with the cells that closed the way when there is no path ([`crate::judge::plan_check::PlanCheck::closed_by`]), which
-    /// [`Outcome::path_text`] then names.
+    /// The outcome with the cells that closed the way when there is no path
+    /// ([`crate::judge::plan_check::PlanCheck::closed_by`]), which [`Outcome::path_text`] then names.
     pub fn with_closed_by(self, closed_by: Option<String>) -> Self {
         Self { closed_by, ..self }
     }

@@ -9,8 +9,8 @@ use crate::traversability::Traversability;
 /// it takes every uncertain and unknown cell as drivable, the uncertain and unknown cells that `options`
 /// forbid (on the path, or within the inflation radius of it where `options` inflate them), in row-major
 /// order; not those the planner takes as drivable (under the robot at the start, beyond
-/// [`PlannerOptions::optimistic_beyond_m`]). Observing them again, or planning through them, opens that path. `None` when even that path does not
-/// exist: the map's blocked cells, with their inflation, close the way.
+/// [`PlannerOptions::optimistic_beyond_m`]). Observing them again, or planning through them, opens that path.
+/// `None` when even that path does not exist: the map's blocked cells, with their inflation, close the way.
 ///
 /// ```
 /// use oeg::{CellIndex, CellRegion, GridGeometry, GridWindow, PlannerOptions, Traversability, closing_cells};
@@ -45,8 +45,8 @@ pub fn closing_cells(
     let Some(path) = plan(window, decisions, start, goal, &relaxed)? else {
         return Ok(None);
     };
-    // What the planner reads: the cells under the robot at the start cleared, those it plans through optimistically
-    // drivable.
+    // What the planner reads: the cells under the robot at the start cleared, those it plans through
+    // optimistically drivable.
     let (decisions, _) = as_planned(window, decisions, start, goal, options);
     let (region, resolution_m) = (window.region(), window.resolution_m());
     let reach = (options.inflation_radius_m / resolution_m).ceil() as i32;
