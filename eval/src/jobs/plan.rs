@@ -9,7 +9,7 @@ use oeg::{PlannerOptions, UnknownCells};
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
-use crate::judge::plan_check::polyline;
+use crate::judge::plan_check::{closing_words, count_reasons, polyline};
 
 /// `oeg plan`: a path on a saved map (real data or a run's `map.oeg`).
 #[derive(Debug, Clone)]
@@ -187,16 +187,6 @@ fn closing_rows(map: &oeg::Map, closing: &[CellIndex], job: &PlanJob) -> Vec<Clo
         .collect()
 }
 
-/// `no connection ...; closed by 5 cells the map cannot decide: 3 frontier, 2 never_observed (closing.csv)`.
-fn closed_by_text(closed_by: &BTreeMap<&'static str, u64>) -> String {
-    let total: u64 = closed_by.values().sum();
-    let parts: Vec<String> = closed_by.iter().map(|(why, n)| format!("{n} {why}")).collect();
-    format!(
-        "; closed by {total} cells the map cannot decide: {} (closing.csv)",
-        parts.join(", ")
-    )
-}
-
 /// Plans on a saved map and writes `plan.json`, `path.csv` (one row per path cell: `step,x_m,y_m`) and
 /// `plan.png` (the traversability classes with the path, the start and the goal) into the output folder. The
 /// planning region is the map's observed region, grown to hold the start and the goal.
@@ -220,16 +210,12 @@ pub fn run_job(job: &PlanJob) -> Result<(PlanSummary, Vec<PathBuf>)> {
         job.rule,
     )?;
     let closing = closing_rows(&map, &closing, job);
-    let mut closed_by = BTreeMap::new();
-    for row in &closing {
-        *closed_by.entry(row.reason).or_insert(0) += 1;
-    }
+    let closed_by = count_reasons(closing.iter().map(|row| row.reason));
     let no_path_reason = plan.as_ref().err().map(|why| {
         let why = why.describe(&job.options);
-        if closed_by.is_empty() {
-            why
-        } else {
-            why + &closed_by_text(&closed_by)
+        match closing_words(&closed_by) {
+            Some(words) => format!("{why}; {words}, listed in closing.csv"),
+            None => why,
         }
     });
     let plan = plan.ok();

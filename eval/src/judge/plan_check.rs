@@ -9,6 +9,8 @@ use oeg::{CellIndex, GridWindow, Traversability};
 use serde::Serialize;
 use sim::scenario::Scenario;
 
+use std::collections::BTreeMap;
+
 use crate::error::{EvalError, Result};
 use crate::judge::estimate::Estimate;
 use crate::judge::verdict::Verdicts;
@@ -37,31 +39,44 @@ impl PlanCheck {
     /// them, as in `closed by 1 cell the map cannot decide (1 step_band); the truth: 1 drivable, 0
     /// blocked`. `None` otherwise.
     pub fn closed_by(&self, verdicts: &Verdicts, estimate: &Estimate) -> Option<String> {
-        if self.map_plan.is_some() || self.closing.is_empty() {
+        if self.map_plan.is_some() {
             return None;
         }
-        closing_words(self.closing.iter().filter_map(|c| verdicts.offset(*c)).map(|k| {
-            let reason = match estimate.doubts.get(k).copied().flatten() {
+        let mut truly_blocked = 0;
+        let cells = self.closing.iter().filter_map(|c| verdicts.offset(*c));
+        let reasons = count_reasons(cells.map(|k| {
+            truly_blocked += usize::from(verdicts.truth[k].is_blocked());
+            match estimate.doubts.get(k).copied().flatten() {
                 Some(doubt) => doubt.name(),
                 None if estimate.observed.get(k) == Some(&false) => "never_observed",
                 // Another mapper's arrays say no reason: the class.
                 None => verdicts.mapped[k].name(),
-            };
-            (reason, verdicts.truth[k].is_blocked())
-        }))
+            }
+        }));
+        let total: u64 = reasons.values().sum();
+        closing_words(&reasons).map(|words| {
+            format!(
+                "{words}; the truth: {} drivable, {truly_blocked} blocked",
+                total - truly_blocked as u64
+            )
+        })
     }
 }
 
-/// Cells that closed the way, each with why the map could not decide it and whether the truth blocks it, in
-/// words; `None` for none.
-fn closing_words(cells: impl Iterator<Item = (&'static str, bool)>) -> Option<String> {
-    let mut reasons: std::collections::BTreeMap<&'static str, usize> = Default::default();
-    let mut truly_blocked = 0;
-    for (reason, blocked) in cells {
-        *reasons.entry(reason).or_insert(0) += 1;
-        truly_blocked += usize::from(blocked);
+/// How many of the cells that closed the way the map left undecided for each reason ([`oeg::Doubt::name`], or
+/// `never_observed`), in the reasons' order.
+pub(crate) fn count_reasons(reasons: impl Iterator<Item = &'static str>) -> BTreeMap<&'static str, u64> {
+    let mut counts = BTreeMap::new();
+    for reason in reasons {
+        *counts.entry(reason).or_insert(0) += 1;
     }
-    let total: usize = reasons.values().sum();
+    counts
+}
+
+/// The cells that closed the way, counted by reason ([`count_reasons`]), in words: `closed by 3 cells the map
+/// cannot decide (2 frontier, 1 step_band)`; `None` for none.
+pub(crate) fn closing_words(reasons: &BTreeMap<&'static str, u64>) -> Option<String> {
+    let total: u64 = reasons.values().sum();
     let cells = match total {
         0 => return None,
         1 => "cell",
@@ -69,9 +84,8 @@ fn closing_words(cells: impl Iterator<Item = (&'static str, bool)>) -> Option<St
     };
     let reasons: Vec<String> = reasons.iter().map(|(why, n)| format!("{n} {why}")).collect();
     Some(format!(
-        "closed by {total} {cells} the map cannot decide ({}); the truth: {} drivable, {truly_blocked} blocked",
-        reasons.join(", "),
-        total - truly_blocked
+        "closed by {total} {cells} the map cannot decide ({})",
+        reasons.join(", ")
     ))
 }
 
@@ -307,18 +321,17 @@ mod tests {
     }
 
     #[test]
-    fn the_cells_that_closed_the_way_are_counted_by_reason_and_by_the_truth() {
-        assert_eq!(closing_words(std::iter::empty()), None);
+    fn the_cells_that_closed_the_way_are_counted_by_reason() {
+        assert_eq!(closing_words(&count_reasons(std::iter::empty())), None);
         assert_eq!(
-            closing_words([("step_band", false)].into_iter()).as_deref(),
-            Some("closed by 1 cell the map cannot decide (1 step_band); the truth: 1 drivable, 0 blocked")
+            closing_words(&count_reasons(["step_band"].into_iter())).as_deref(),
+            Some("closed by 1 cell the map cannot decide (1 step_band)")
         );
-        let cells = [("frontier", false), ("step_band", true), ("frontier", false)];
+        let reasons = count_reasons(["frontier", "step_band", "frontier"].into_iter());
+        assert_eq!(reasons, BTreeMap::from([("frontier", 2), ("step_band", 1)]));
         assert_eq!(
-            closing_words(cells.into_iter()).as_deref(),
-            Some(
-                "closed by 3 cells the map cannot decide (2 frontier, 1 step_band); the truth: 2 drivable, 1 blocked"
-            )
+            closing_words(&reasons).as_deref(),
+            Some("closed by 3 cells the map cannot decide (2 frontier, 1 step_band)")
         );
     }
 }
