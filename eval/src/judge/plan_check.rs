@@ -45,7 +45,7 @@ impl PlanCheck {
         let mut truly_blocked = 0;
         let cells = self.closing.iter().filter_map(|c| verdicts.offset(*c));
         let reasons = count_reasons(cells.map(|k| {
-            truly_blocked += usize::from(verdicts.truth[k].is_blocked());
+            truly_blocked += u64::from(verdicts.truth[k].is_blocked());
             match estimate.doubts.get(k).copied().flatten() {
                 Some(doubt) => doubt.name(),
                 None if estimate.observed.get(k) == Some(&false) => "never_observed",
@@ -57,7 +57,7 @@ impl PlanCheck {
         closing_words(&reasons).map(|words| {
             format!(
                 "{words}; the truth: {} drivable, {truly_blocked} blocked",
-                total - truly_blocked as u64
+                total - truly_blocked
             )
         })
     }

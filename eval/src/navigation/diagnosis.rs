@@ -5,6 +5,7 @@ use oeg::{CellIndex, Map, Pose2, RobotProfile, Traversability, TraversabilityRul
 
 use super::{NavigationInputs, clamped_cell, planner_options, truth_plan};
 use crate::error::{EvalError, Result};
+use crate::judge::plan_check::{closing_words, count_reasons};
 use crate::judge::verdict::TruthClass;
 
 /// Which cells closed the way ([`oeg::closing_cells`]), by class, with what the truth says of them; `blocked`
@@ -49,22 +50,18 @@ pub(super) fn closed_by(
             }
         });
     };
-    let closing: Vec<usize> = closing.iter().filter_map(|c| region.offset(*c)).collect();
-    let count = |class: Traversability| closing.iter().filter(|k| decisions[**k] == class).count();
-    let (uncertain, unknown) = (count(Traversability::Uncertain), count(Traversability::Unknown));
-    let truly_blocked = closing
-        .iter()
-        .filter(|k| TruthClass::of(inputs.truth, **k).is_blocked())
-        .count();
-    let truth = format!(
-        "; the truth: {} drivable, {truly_blocked} blocked",
-        closing.len() - truly_blocked
-    );
-    Ok(match (uncertain, unknown) {
-        (0, 0) => "blocked (the inflation around blocked cells)".into(),
-        (u, 0) => format!("{u} uncertain cells{truth}"),
-        (0, n) => format!("{n} never-observed cells{truth}"),
-        (u, n) => format!("{u} uncertain and {n} never-observed cells{truth}"),
+    let mut truly_blocked = 0;
+    let reasons = count_reasons(closing.iter().filter_map(|c| region.offset(*c)).map(|k| {
+        truly_blocked += u64::from(TruthClass::of(inputs.truth, k).is_blocked());
+        decisions[k].name()
+    }));
+    let total: u64 = reasons.values().sum();
+    Ok(match closing_words(&reasons) {
+        Some(words) => format!(
+            "{words}; the truth: {} drivable, {truly_blocked} blocked",
+            total - truly_blocked
+        ),
+        None => "blocked (the inflation around blocked cells)".into(),
     })
 }
 
