@@ -152,6 +152,23 @@ fn with_no_connection_plan_lists_the_cells_that_closed_the_way() {
         .filter(|l| l.ends_with(",unknown,never_observed"))
         .count() as u64;
     assert_eq!(listed, never_observed, "{closing}");
+    // Judged by the contact rule, observed cells beside the never-observed ones are the frontier: the reason is
+    // the decision's doubt.
+    let (judged, out, _) = plan_with(
+        &map,
+        &dir,
+        "0.5,2.5",
+        "corner_contact",
+        &["--set", "map.preset=robust"],
+    );
+    let frontier = judged["closed_by"]["frontier"].as_u64().expect("frontier cells");
+    assert!(frontier > 0, "{judged}");
+    let closing = std::fs::read_to_string(out.join("closing.csv")).expect("closing.csv");
+    let listed = closing
+        .lines()
+        .filter(|l| l.ends_with(",unknown,frontier"))
+        .count() as u64;
+    assert_eq!(listed, frontier, "{closing}");
 }
 
 #[test]

@@ -9,7 +9,7 @@ use oeg::{PlannerOptions, UnknownCells};
 use serde::Serialize;
 
 use crate::error::{EvalError, Result};
-use crate::judge::plan_check::{closing_words, count_reasons, polyline};
+use crate::judge::plan_check::{closing_words, count_reasons, map_reason, polyline};
 
 /// `oeg plan`: a path on a saved map (real data or a run's `map.oeg`).
 #[derive(Debug, Clone)]
@@ -167,21 +167,17 @@ struct ClosingRow {
     reason: &'static str,
 }
 
-/// Why each of `closing` closed the way: the doubt of the map's decision, or `never_observed`.
+/// The cells of `closing` with why the map could not decide each ([`map_reason`]).
 fn closing_rows(map: &oeg::Map, closing: &[CellIndex], job: &PlanJob) -> Vec<ClosingRow> {
     closing
         .iter()
         .map(|&cell| {
             let (x_m, y_m) = map.geometry().cell_center(cell);
-            let class = map.traversability(cell, &job.profile, job.rule);
-            let reason = map
-                .doubt(cell, &job.profile, job.rule)
-                .map_or("never_observed", oeg::Doubt::name);
             ClosingRow {
                 x_m: crate::output::round_m(x_m),
                 y_m: crate::output::round_m(y_m),
-                class: class.name(),
-                reason,
+                class: map.traversability(cell, &job.profile, job.rule).name(),
+                reason: map_reason(map, cell, &job.profile, job.rule),
             }
         })
         .collect()

@@ -63,6 +63,23 @@ impl PlanCheck {
     }
 }
 
+/// Why `map` could not decide `cell`, one that closed the way: its doubt ([`oeg::Doubt::name`]), or
+/// `never_observed` (the class's name for a cell with neither, which a closing cell is not).
+pub(crate) fn map_reason(
+    map: &oeg::Map,
+    cell: CellIndex,
+    profile: &oeg::RobotProfile,
+    rule: oeg::TraversabilityRule,
+) -> &'static str {
+    match map.doubt(cell, profile, rule) {
+        Some(doubt) => doubt.name(),
+        None => match map.traversability(cell, profile, rule) {
+            Traversability::Unknown => "never_observed",
+            class => class.name(),
+        },
+    }
+}
+
 /// How many of the cells that closed the way the map left undecided for each reason ([`oeg::Doubt::name`], or
 /// `never_observed`), in the reasons' order.
 pub(crate) fn count_reasons(reasons: impl Iterator<Item = &'static str>) -> BTreeMap<&'static str, u64> {

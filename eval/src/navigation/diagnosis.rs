@@ -5,12 +5,14 @@ use oeg::{CellIndex, Map, Pose2, RobotProfile, Traversability, TraversabilityRul
 
 use super::{NavigationInputs, clamped_cell, planner_options, truth_plan};
 use crate::error::{EvalError, Result};
-use crate::judge::plan_check::{closing_words, count_reasons};
+use crate::judge::plan_check::{closing_words, count_reasons, map_reason};
 use crate::judge::verdict::TruthClass;
 
-/// Which cells closed the way ([`oeg::closing_cells`]), by class, with what the truth says of them; `blocked`
-/// when even the path through every cell the map cannot decide does not exist.
+/// Which cells closed the way ([`oeg::closing_cells`]), by why `map` could not decide them ([`map_reason`]),
+/// with what the truth says of them; `blocked` when even the path through every cell the map cannot decide does
+/// not exist.
 pub(super) fn closed_by(
+    map: &Map,
     decisions: &[Traversability],
     inputs: &NavigationInputs<'_>,
     window: &oeg::GridWindow,
@@ -51,9 +53,11 @@ pub(super) fn closed_by(
         });
     };
     let mut truly_blocked = 0;
-    let reasons = count_reasons(closing.iter().filter_map(|c| region.offset(*c)).map(|k| {
+    let (profile, rule) = (&inputs.truth.profile, inputs.scenario.map.traversability);
+    let on_map = closing.iter().filter_map(|&c| region.offset(c).map(|k| (c, k)));
+    let reasons = count_reasons(on_map.map(|(c, k)| {
         truly_blocked += u64::from(TruthClass::of(inputs.truth, k).is_blocked());
-        decisions[k].name()
+        map_reason(map, c, profile, rule)
     }));
     let total: u64 = reasons.values().sum();
     Ok(match closing_words(&reasons) {

@@ -320,7 +320,7 @@ fn replan(
     Ok(match result {
         Some(points) => Replan::Path(points),
         None => Replan::NoPath {
-            closed_by: diagnosis::closed_by(decisions, inputs, window, from, goal)?,
+            closed_by: diagnosis::closed_by(map, decisions, inputs, window, from, goal)?,
         },
     })
 }
