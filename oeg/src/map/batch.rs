@@ -113,8 +113,6 @@ impl Map {
         {
             return None;
         }
-        let map_bytes = self.memory_bytes();
-        let own_bytes = self.own_bytes();
         let Self {
             config,
             geometry,
@@ -122,6 +120,7 @@ impl Map {
             ceilings,
             scratch,
             levels,
+            views,
             ..
         } = self;
         let ScanScratch::Paper(scratch) = scratch else {
@@ -133,13 +132,14 @@ impl Map {
             ceilings,
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
-            map_bytes,
+            own_bytes: super::OWN_BYTES + views.memory_bytes(),
         };
         let budget = config.memory_limit_bytes / 2;
         let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
         // The cells' tiles, under the budget: the map's tile index grows with them, which the gathering's check
         // could not count. Near the budget the scans go one by one, as the caller does with `None` (tiles placed
         // here stay, empty, as a failed scan's do in `Map::integrate`).
+        let own_bytes = before.own_bytes;
         let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes() + own_bytes);
         if !place_tiles(cells, scratch, scans.len(), room) {
             scratch.recycle();
@@ -171,7 +171,7 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     if E::READS_MAP {
         return None;
     }
-    let map_bytes = before.map_bytes;
+    let map_bytes = before.map_bytes();
     // Each grid under an equal share of what the budget leaves, and at most a sixteenth of it: a window is for
     // scans of ordinary rays (a few megabytes of scratch each); a scan whose rays need more goes alone, under
     // the whole limit, rather than leave a window's grids holding (and the allocator keeping) large pools.

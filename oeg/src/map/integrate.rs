@@ -85,7 +85,7 @@ impl Map {
             ceilings,
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
-            map_bytes: cells.memory_bytes() + ceilings.memory_bytes() + update.own_bytes,
+            own_bytes: update.own_bytes,
         };
         let done = match scratch {
             ScanScratch::Paper(s) => gather(&before, scan, s, &mut stats, &stop)
@@ -124,7 +124,7 @@ fn gather<E: Sampling>(
 ) -> Result<()> {
     let num_rays = scan.rays.len();
     let runs = rayon::current_num_threads().min(num_rays / MIN_RAYS_PER_THREAD);
-    let scratch_limit = before.memory_limit_bytes.saturating_sub(before.map_bytes);
+    let scratch_limit = before.memory_limit_bytes.saturating_sub(before.map_bytes());
     if runs > 1
         && let Some(merge) = E::exact_merge(before.opts)
     {

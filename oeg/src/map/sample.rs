@@ -26,17 +26,22 @@ pub(super) struct Before<'a> {
     pub(super) ceilings: &'a TileGrid<Ceiling>,
     pub(super) opts: &'a ModelOptions,
     pub(super) memory_limit_bytes: u64,
-    /// Bytes the map holds ([`crate::Map::memory_bytes`]), which no sample changes: what the scratch's share
-    /// of the limit leaves out.
-    pub(super) map_bytes: u64,
+    /// Bytes of the map's own structure and recent views (the part of [`crate::Map::memory_bytes`] beside the
+    /// tiles).
+    pub(super) own_bytes: u64,
 }
 
 impl Before<'_> {
+    /// Bytes the map holds ([`crate::Map::memory_bytes`]): what the scratch's share of the limit leaves out.
+    pub(super) fn map_bytes(&self) -> u64 {
+        self.cells.memory_bytes() + self.ceilings.memory_bytes() + self.own_bytes
+    }
+
     /// The error of a scan refused for its memory: the map would have held its bytes and `scratch_bytes`,
     /// against the map's limit.
     pub(super) fn refusal(&self, scratch_bytes: u64) -> Error {
         Error::MemoryLimit {
-            requested_bytes: scratch_bytes.saturating_add(self.map_bytes),
+            requested_bytes: scratch_bytes.saturating_add(self.map_bytes()),
             limit_bytes: self.memory_limit_bytes,
         }
     }
