@@ -10,7 +10,7 @@ mod common;
 use common::{oeg_with_threads, temp_dir};
 use std::path::PathBuf;
 
-use oeg::{Map, MapConfig};
+use oeg::{Map, MapConfig, MapPreset, RobotProfile};
 use sim::sensors::PoseSource;
 
 /// A short run of the curbs scenario with a noisy laser and drift, written beside a copy of the robot.
@@ -73,39 +73,68 @@ fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("M simulated rays/s"));
-    let out = dir.join("map");
-    let o = oeg_with_threads(
-        &[
-            "map",
-            log.to_str().expect("utf8"),
-            "--resolution",
-            "0.05",
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        None,
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let replayed = oeg::load_map(&out.join("map.oeg")).expect("map");
-
-    // The live run: the same simulation, integrated as it goes.
-    let loaded = sim::scenario::load(&scenario).expect("valid");
-    let mut simulation = sim::Simulation::new(&loaded).expect("simulation");
-    let mut live = Map::new(MapConfig::new(0.05)).expect("map");
-    while let Some(scan) = simulation.next_scan() {
-        let model = simulation.sensors()[scan.sensor_index].map_model();
-        live.integrate(&scan.to_scan(PoseSource::Estimated, model))
-            .expect("integrated");
-    }
-    assert_eq!(live.num_scans(), replayed.num_scans());
-    assert_eq!(live.num_observed_cells(), replayed.num_observed_cells());
-    for (c, cell) in live.observed_cells() {
-        let r = replayed.cell(c);
-        assert_eq!(
-            [cell.log_odds, cell.mean_m, cell.var_m2].map(f32::to_bits),
-            [r.log_odds, r.mean_m, r.var_m2].map(f32::to_bits),
-            "{c:?}"
+    // The paper's model, and `robust`, whose contact rule takes the ground under the robot's start from the
+    // log's header as `oeg run` takes it from the simulation.
+    for preset in [MapPreset::Paper, MapPreset::Robust] {
+        let out = dir.join(format!("map-{}", preset.name()));
+        let set = format!("map.preset={}", preset.name());
+        let o = oeg_with_threads(
+            &[
+                "map",
+                log.to_str().expect("utf8"),
+                "--resolution",
+                "0.05",
+                "--set",
+                &set,
+                "--out",
+                out.to_str().expect("utf8"),
+            ],
+            None,
         );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let replayed = oeg::load_map(&out.join("map.oeg")).expect("map");
+
+        // The live run: the same simulation, integrated as it goes.
+        let loaded = sim::scenario::load(&scenario).expect("valid");
+        let mut simulation = sim::Simulation::new(&loaded).expect("simulation");
+        let robot = RobotProfile::default();
+        let mut live = Map::new(MapConfig {
+            model: preset.model(&robot),
+            ..MapConfig::new(0.05)
+        })
+        .expect("map");
+        let stance = simulation.world().estimated_stance().expect("a robot on wheels");
+        let start = live
+            .geometry()
+            .cell_of(stance.pose.x_m, stance.pose.y_m)
+            .expect("cell");
+        if preset.traversability().needs_stance() {
+            live.integrate_stance(&stance).expect("stance");
+        }
+        while let Some(scan) = simulation.next_scan() {
+            let model = simulation.sensors()[scan.sensor_index].map_model();
+            live.integrate(&scan.to_scan(PoseSource::Estimated, model))
+                .expect("integrated");
+        }
+        assert_eq!(live.num_scans(), replayed.num_scans());
+        assert_eq!(live.num_observed_cells(), replayed.num_observed_cells());
+        for (c, cell) in live.observed_cells() {
+            let r = replayed.cell(c);
+            assert_eq!(
+                [cell.log_odds, cell.mean_m, cell.var_m2].map(f32::to_bits),
+                [r.log_odds, r.mean_m, r.var_m2].map(f32::to_bits),
+                "{c:?}"
+            );
+        }
+        // The lasers look ahead: only the stance observes the ground under the start, at the wheels' height.
+        let under = replayed.cell(start);
+        match preset {
+            MapPreset::Robust => {
+                let z = stance.contacts.iter().map(|p| p.z).sum::<f64>() / stance.contacts.len() as f64;
+                assert!((f64::from(under.mean_m) - z).abs() < 0.01, "{under:?} {z}");
+            }
+            _ => assert!(!under.is_observed(), "{under:?}"),
+        }
     }
 }
 
@@ -297,4 +326,57 @@ fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
         bytes(&in_map) != bytes(&mapped),
         "the true and the estimated pose gave the same map"
     );
+}
+
+#[test]
+fn a_log_whose_stance_is_not_finite_is_refused_naming_the_file() {
+    let dir = temp_dir("rec", "bad_stance");
+    let robot = sim::log::LogStance {
+        wheel_contacts_m: vec![[0.1, 0.2, -0.19], [0.1, -0.2, -0.19], [-0.1, 0.2, -0.19]],
+        footprint_m: [-0.25, 0.25, -0.25, 0.25],
+        true_world_from_base: [0.0, 0.0, 0.19, 1.0, 0.0, 0.0, 0.0],
+        estimated_world_from_base: [0.0, 0.0, 0.19, 1.0, 0.0, 0.0, 0.0],
+    };
+    let zero_rotation = sim::log::LogStance {
+        estimated_world_from_base: [0.0; 7],
+        ..robot.clone()
+    };
+    let huge_contact = sim::log::LogStance {
+        wheel_contacts_m: vec![[0.1, 0.2, f64::MAX], [0.1, -0.2, f64::MAX]],
+        ..robot
+    };
+    for (name, stance, words) in [
+        ("zero_rotation", zero_rotation, "zero rotation"),
+        ("huge_contact", huge_contact, "no finite plane"),
+    ] {
+        let log = dir.join(format!("{name}.oeglog"));
+        let header = sim::log::LogHeader {
+            scenario: name.into(),
+            seed: 1,
+            duration_s: 1.0,
+            sensors: Vec::new(),
+            stance: Some(stance),
+        };
+        let writer = sim::log::LogWriter::create(&log, &header).expect("log");
+        writer.finish().expect("finished");
+        let out = dir.join(name);
+        let o = oeg_with_threads(
+            &[
+                "map",
+                log.to_str().expect("utf8"),
+                "--resolution",
+                "0.05",
+                "--out",
+                out.to_str().expect("utf8"),
+            ],
+            None,
+        );
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name}: mapped");
+        assert!(
+            stderr.contains(&format!("{name}.oeglog")) && stderr.contains("stance") && stderr.contains(words),
+            "{name}: {stderr}"
+        );
+        assert!(!out.exists(), "{name}: an output folder was left");
+    }
 }

@@ -71,16 +71,22 @@ impl Mapping {
     /// A world or map that cannot be built.
     pub fn new(loaded: &scenario::LoadedScenario, maps: &[&scenario::MapSettings]) -> Result<Self> {
         let simulation = Simulation::new(loaded)?;
+        // The ground the robot stands on at the start, for the rules whose frontier needs it.
+        let stance = simulation.world().estimated_stance();
         let maps = maps
             .iter()
             .map(|m| {
-                Map::new(MapConfig {
+                let mut map = Map::new(MapConfig {
                     resolution_m: m.resolution_m,
                     model: m.model,
                     memory_limit_bytes: oeg::DEFAULT_MEMORY_LIMIT_BYTES,
-                })
+                })?;
+                if let Some(s) = stance.as_ref().filter(|_| m.traversability.needs_stance()) {
+                    map.integrate_stance(s)?;
+                }
+                Ok(map)
             })
-            .collect::<std::result::Result<Vec<_>, _>>()?;
+            .collect::<std::result::Result<Vec<_>, oeg::Error>>()?;
         let models = simulation.sensors().iter().map(|x| x.map_model()).collect();
         let s = &loaded.scenario;
         // What the sensors could see, on the scenario's own window (the first map's: the others share the

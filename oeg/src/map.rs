@@ -5,6 +5,8 @@
 //!   are given: each ray's samples (`map/sample.rs`) gathered into the scan scratch (`map/scratch.rs`), then
 //!   each touched cell updated once (`map/apply.rs`, one cell's update in `map/update.rs`); [`Map::integrate_batch`] (`map/batch.rs`): many short
 //!   scans side by side, one per thread;
+//! * `stance` (`map/stance.rs`): the ground a standing robot's wheels touch, as a measurement
+//!   ([`Map::integrate_stance`]);
 //! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);
 //! * the decisions ([`Map::traversability`], [`Map::traversability_layer`], [`Map::traversability_counts`]):
 //!   `traversability/decide.rs`, beside the pure rules they apply;
@@ -19,10 +21,12 @@ mod layers;
 mod rule_evidence;
 mod sample;
 mod scratch;
+mod stance;
 mod update;
 mod views;
 
 pub use layers::{Layer, LayerKind, Raster};
+pub use stance::{DEFAULT_STANCE_SIGMA_M, Stance};
 
 use serde::{Deserialize, Serialize};
 

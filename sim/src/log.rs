@@ -5,7 +5,8 @@
 //! 8    magic "OEGLOG\r\n"
 //! 4    u32 format version (1)
 //! 4    u32 header length H
-//! H    header, UTF-8 JSON (LogHeader: scenario, seed, duration, sensors with their map models)
+//! H    header, UTF-8 JSON (LogHeader: scenario, seed, duration, sensors with their map models, and where the
+//!      robot stood at the start)
 //! then records, each starting with a u8 tag:
 //!   1 = scan:  u32 sensor index, u64 scan index, f64 stamp_s,
 //!              7 f64 true world_from_sensor (tx ty tz qw qx qy qz), 7 f64 estimated world_from_sensor,
@@ -16,14 +17,14 @@
 
 use std::path::{Path, PathBuf};
 
-use nalgebra::{Isometry3, Translation3, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use oeg::RayKind;
 use oeg_files::unit_quaternion;
 use oeg_files::{FramedWriter, check_container_checksum, read_container_prefix};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
-use crate::sensors::{SensorRay, SensorScan};
+use crate::sensors::{PoseSource, SensorRay, SensorScan};
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"OEGLOG\r\n";
@@ -60,6 +61,78 @@ pub struct LogHeader {
     pub duration_s: f64,
     /// Sensors, by index.
     pub sensors: Vec<LogSensor>,
+    /// Where the robot stood at the start, for the maps that take the ground under it as a measurement
+    /// (`oeg::Map::integrate_stance`); absent from a log of a robot without wheels, and from logs written
+    /// before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stance: Option<LogStance>,
+}
+
+/// The robot at the start of a run as the log records it: its wheels and footprint in its base frame, and its
+/// base's pose, true and estimated (`tx ty tz qw qx qy qz`, as a scan's).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LogStance {
+    /// The wheels' ground contact points in the base frame, metres.
+    pub wheel_contacts_m: Vec<[f64; 3]>,
+    /// The footprint in the base frame: min x, max x, min y, max y, metres.
+    pub footprint_m: [f64; 4],
+    /// The true `world_from_base` at the start.
+    pub true_world_from_base: [f64; 7],
+    /// The estimated `world_from_base` at the start.
+    pub estimated_world_from_base: [f64; 7],
+}
+
+impl LogStance {
+    /// The record of a robot with `wheel_contacts` and `footprint` whose base starts at `true_pose`, believed
+    /// at `estimated_pose`.
+    pub fn new(
+        wheel_contacts: &[Point3<f64>],
+        footprint: oeg::Footprint,
+        true_pose: &Isometry3<f64>,
+        estimated_pose: &Isometry3<f64>,
+    ) -> Self {
+        let seven = |p: &Isometry3<f64>| {
+            let (t, q) = (p.translation.vector, p.rotation.quaternion());
+            [t.x, t.y, t.z, q.w, q.i, q.j, q.k]
+        };
+        Self {
+            wheel_contacts_m: wheel_contacts.iter().map(|c| [c.x, c.y, c.z]).collect(),
+            footprint_m: [
+                footprint.min_x_m,
+                footprint.max_x_m,
+                footprint.min_y_m,
+                footprint.max_y_m,
+            ],
+            true_world_from_base: seven(true_pose),
+            estimated_world_from_base: seven(estimated_pose),
+        }
+    }
+
+    /// The stance at the pose `source` chooses ([`crate::robot::stance_at`]); `None` for a robot without
+    /// wheels or with an empty footprint.
+    ///
+    /// # Errors
+    /// A message for a pose that is not finite or has a zero rotation.
+    pub fn stance(&self, source: PoseSource) -> std::result::Result<Option<oeg::Stance>, &'static str> {
+        let v = match source {
+            PoseSource::True => self.true_world_from_base,
+            PoseSource::Estimated => self.estimated_world_from_base,
+        };
+        let rotation = unit_quaternion(v[3], v[4], v[5], v[6])
+            .filter(|_| v.iter().all(|x| x.is_finite()))
+            .ok_or("the stance's pose is not finite or has a zero rotation")?;
+        let pose = Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), rotation);
+        let contacts: Vec<Point3<f64>> = self.wheel_contacts_m.iter().map(|c| Point3::from(*c)).collect();
+        let [min_x_m, max_x_m, min_y_m, max_y_m] = self.footprint_m;
+        let footprint = oeg::Footprint {
+            min_x_m,
+            max_x_m,
+            min_y_m,
+            max_y_m,
+        };
+        Ok(crate::robot::stance_at(&contacts, footprint, &pose))
+    }
 }
 
 /// A whole log read back.

@@ -354,6 +354,30 @@ impl RobotModel {
     }
 }
 
+/// Where a robot stands at `world_from_base`: its wheels' contact points (`wheel_contacts`, base frame) in the
+/// world, and its footprint there, with a contact's height error [`oeg::DEFAULT_STANCE_SIGMA_M`]. `None` for a
+/// robot without wheels or with an empty footprint.
+pub fn stance_at(
+    wheel_contacts: &[Point3<f64>],
+    footprint: oeg::Footprint,
+    world_from_base: &Isometry3<f64>,
+) -> Option<oeg::Stance> {
+    if wheel_contacts.is_empty() || footprint.length_m() <= 0.0 || footprint.width_m() <= 0.0 {
+        return None;
+    }
+    let (_, _, yaw_rad) = world_from_base.rotation.euler_angles();
+    Some(oeg::Stance {
+        contacts: wheel_contacts.iter().map(|c| world_from_base * c).collect(),
+        footprint,
+        pose: oeg::Pose2 {
+            x_m: world_from_base.translation.x,
+            y_m: world_from_base.translation.y,
+            yaw_rad,
+        },
+        sigma_m: oeg::DEFAULT_STANCE_SIGMA_M,
+    })
+}
+
 #[cfg(test)]
 #[allow(clippy::disallowed_methods, reason = "tests write their inputs directly")]
 mod tests {

@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 use oeg::RayKind;
 use sim::Simulation;
 use sim::scenario::sensors::BeamPattern;
-use sim::sensors::{SensorScan, beam_directions};
+use sim::sensors::{PoseSource, SensorScan, beam_directions};
 
 /// A scenario with one sensor entry (`sensor` is the body of a `[[sensors]]` table) facing a wall 5 m ahead
 /// (the robot at the origin looking along +x).
@@ -304,6 +304,12 @@ fn logs_read_back_exactly_and_reject_damage() {
             rate_hz: 75.0,
             map_model: sim.sensors()[0].map_model(),
         }],
+        stance: Some(sim::log::LogStance::new(
+            &sim.world().robot().wheel_contacts(),
+            sim.world().robot().footprint(),
+            &sim.world().world_from_base(),
+            &sim.world().estimated_world_from_base(),
+        )),
     };
     let dir = common::temp_dir("logfile");
     let path = dir.join("run.oeglog");
@@ -314,6 +320,19 @@ fn logs_read_back_exactly_and_reject_damage() {
     assert_eq!(w.finish().expect("finish"), 5);
     let back = sim::log::read_log(&path).expect("read");
     assert_eq!(back.header, header);
+    // The stance reads back as the world's own (the poses' rotations renormalised, the same to rounding).
+    let stance = back.header.stance.as_ref().expect("stance");
+    let (read, world) = (
+        stance
+            .stance(PoseSource::Estimated)
+            .expect("pose")
+            .expect("wheels"),
+        sim.world().estimated_stance().expect("wheels"),
+    );
+    assert_eq!(read.contacts.len(), world.contacts.len());
+    for (a, b) in read.contacts.iter().zip(&world.contacts) {
+        assert!((a - b).norm() < 1e-12, "{a} {b}");
+    }
     // A log holds what the sensors measured; the noise-free range is the simulation's own and reads back NaN.
     let measured: Vec<_> = scans
         .iter()

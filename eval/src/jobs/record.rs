@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use nalgebra::{Isometry3, Vector3};
-use sim::log::{LogHeader, LogSensor, LogWriter};
+use sim::log::{LogHeader, LogSensor, LogStance, LogWriter};
 use sim::sensors::{PoseSource, ReturnSource};
 use sim::{Simulation, scenario};
 
@@ -72,7 +72,23 @@ pub fn log_header(loaded: &scenario::LoadedScenario, sim: &Simulation) -> LogHea
                 map_model: s.map_model(),
             })
             .collect(),
+        stance: log_stance(sim.world()),
     }
+}
+
+/// Where the robot stands at the start of the run, as the log records it.
+fn log_stance(world: &sim::World) -> Option<LogStance> {
+    let robot = world.robot();
+    let contacts = robot.wheel_contacts();
+    let footprint = robot.footprint();
+    (!contacts.is_empty()).then(|| {
+        LogStance::new(
+            &contacts,
+            footprint,
+            &world.world_from_base(),
+            &world.estimated_world_from_base(),
+        )
+    })
 }
 
 /// Records every scan of `sim` into an MCAP file at `out`, then the truth's grid over the scenario's map

@@ -166,6 +166,16 @@ impl World {
         self.robot.base_from_link(link).map(|b| self.world_from_base * b)
     }
 
+    /// Where the robot stands now as odometry believes ([`crate::robot::stance_at`] at the estimated pose), for
+    /// the map's [`oeg::Map::integrate_stance`]. `None` for a robot without wheels or collision shapes.
+    pub fn estimated_stance(&self) -> Option<oeg::Stance> {
+        crate::robot::stance_at(
+            &self.wheel_contacts,
+            self.robot.footprint(),
+            &self.estimated_world_from_base,
+        )
+    }
+
     /// `world_from_link` from the estimated pose.
     pub fn estimated_world_from_link(&self, link: &str) -> Option<Isometry3<f64>> {
         self.robot

@@ -114,6 +114,8 @@ pub struct Inputs {
     pub scans: Vec<(ScanSource, Scan)>,
     /// Range messages of a bag skipped for a missing transform or no valid reading, with their bag.
     pub skipped: Vec<(PathBuf, oeg::BagSkip)>,
+    /// Where the robot stood at the start of each sensor log that records it, at the job's pose, with its log.
+    pub stances: Vec<(PathBuf, oeg::Stance)>,
 }
 
 /// The bytes `path` holds: a file's size, or the regular files of a folder input's data folder together (a bag's
@@ -202,6 +204,17 @@ pub fn read_inputs(job: &MapJob) -> Result<Inputs> {
             )),
             InputFormat::Log => {
                 let log = sim::log::read_log(path)?;
+                if let Some(record) = &log.header.stance {
+                    let fail = |message: String| EvalError::Input {
+                        path: path.clone(),
+                        message: format!("the header's stance: {message}"),
+                    };
+                    let stance = record.stance(job.log_pose).map_err(|m| fail(m.to_string()))?;
+                    if let Some(s) = &stance {
+                        s.validate().map_err(|e| fail(e.to_string()))?;
+                    }
+                    inputs.stances.extend(stance.map(|s| (path.clone(), s)));
+                }
                 scans.extend(log.scans.iter().map(|s| {
                     let sensor = &log.header.sensors[s.sensor_index];
                     (

@@ -144,8 +144,21 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let staged = Staged::begin(&job.out_dir, &inputs)?;
     let mut map = Map::new(job.config)?;
     let read_start = Instant::now();
-    let Inputs { scans, skipped } = read_inputs(job)?;
+    let Inputs {
+        scans,
+        skipped,
+        stances,
+    } = read_inputs(job)?;
     let read_wall_time_s = read_start.elapsed().as_secs_f64();
+    // The ground the robot of a sensor log stood on, before the first scan, as `oeg run` gives it.
+    if job.rule.needs_stance() {
+        for (path, stance) in &stances {
+            map.integrate_stance(stance).map_err(|e| EvalError::Input {
+                path: path.clone(),
+                message: format!("the header's stance: {e}"),
+            })?;
+        }
+    }
 
     let start = Instant::now();
     // In batches, so that a log of many short scans uses every core (`Map::integrate_batch`); a batch is a

@@ -1,0 +1,402 @@
+//! The ground a robot stands on, as a measurement: elevation_mapping_cupy's initializer at start (its
+//! `use_initializer_at_start`, which lays a plane through the robot's footprint frames into the map before the
+//! first point cloud). The sensors of a robot rarely see under it, so without it the cells under its start are
+//! never observed, and every cell within a wheel's contact distance of them is a frontier cell
+//! ([`crate::Doubt::Frontier`]): the robot is sealed in by the ground it stands on.
+
+use nalgebra::Point3;
+
+use super::Map;
+use crate::cell::Cell;
+use crate::error::{Error, Result};
+use crate::footprint::{Footprint, Pose2};
+use crate::geometry::{CellIndex, CellRegion, GridWindow};
+use crate::model::{log_odds, update_log_odds};
+use crate::storage::{TileIndex, offset_in_tile};
+use crate::traversability::TraversabilityRule;
+
+/// Default standard deviation of a wheel's contact height, metres: a tyre's deflection under the robot's
+/// weight, and the pose's height error at the start (5 mm).
+pub const DEFAULT_STANCE_SIGMA_M: f32 = 0.005;
+
+/// How far outside its footprint's circumscribed circle a contact point may lie, metres: a wheel's contact is
+/// under the robot.
+const CONTACT_TOLERANCE_M: f64 = 0.1;
+
+/// Where a robot stands: the world points where its wheels (or feet) touch the ground, and its footprint at
+/// its planar pose. [`Map::integrate_stance`] takes it as a measurement of the ground under the footprint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stance {
+    /// The contact points, world metres: at least one. Three or more not on one line give the ground's plane
+    /// (least squares); fewer give a level plane at their mean height.
+    pub contacts: Vec<Point3<f64>>,
+    /// The robot's footprint in its base frame.
+    pub footprint: Footprint,
+    /// The robot's planar pose: where the footprint lies.
+    pub pose: Pose2,
+    /// Standard deviation of a contact's height, metres ([`DEFAULT_STANCE_SIGMA_M`]).
+    pub sigma_m: f32,
+}
+
+/// The ground's plane through the contacts: `z = z0 + gx (x - x0) + gy (y - y0)`, and the root mean square of
+/// the contacts' distances from it (a twist of the ground between the wheels).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct GroundPlane {
+    centre: Point3<f64>,
+    gradient: (f64, f64),
+    residual_m: f64,
+}
+
+impl GroundPlane {
+    fn fit(contacts: &[Point3<f64>]) -> Self {
+        let n = contacts.len() as f64;
+        let centre = Point3::from(contacts.iter().map(|p| p.coords).sum::<nalgebra::Vector3<f64>>() / n);
+        let (mut sxx, mut sxy, mut syy, mut sxz, mut syz) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for p in contacts {
+            let d = p - centre;
+            (sxx, sxy, syy) = (sxx + d.x * d.x, sxy + d.x * d.y, syy + d.y * d.y);
+            (sxz, syz) = (sxz + d.x * d.z, syz + d.y * d.z);
+        }
+        // Contacts on one line (or fewer than three) leave the slope across it unknown: level.
+        let det = sxx * syy - sxy * sxy;
+        let gradient = if contacts.len() >= 3 && det > 1e-12 * (sxx + syy).powi(2).max(f64::MIN_POSITIVE) {
+            ((syy * sxz - sxy * syz) / det, (sxx * syz - sxy * sxz) / det)
+        } else {
+            (0.0, 0.0)
+        };
+        let mut plane = Self {
+            centre,
+            gradient,
+            residual_m: 0.0,
+        };
+        let squares: f64 = contacts
+            .iter()
+            .map(|p| (p.z - plane.z_at(p.x, p.y)).powi(2))
+            .sum();
+        plane.residual_m = (squares / n).sqrt();
+        plane
+    }
+
+    fn z_at(&self, x: f64, y: f64) -> f64 {
+        self.centre.z + self.gradient.0 * (x - self.centre.x) + self.gradient.1 * (y - self.centre.y)
+    }
+}
+
+impl Stance {
+    /// Checks the stance for sense ([`Map::integrate_stance`] does too).
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for a stance with no contact point, or with a value that is not finite, a
+    /// footprint that is no rectangle, or a standard deviation that is not positive.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |message: String| Error::setting("stance", message);
+        if self.contacts.is_empty() {
+            return Err(bad("needs at least one contact point".into()));
+        }
+        if let Some(p) = self
+            .contacts
+            .iter()
+            .find(|p| !p.coords.iter().all(|v| v.is_finite()))
+        {
+            return Err(bad(format!("contact point {p:?} is not finite")));
+        }
+        let f = &self.footprint;
+        if ![f.min_x_m, f.max_x_m, f.min_y_m, f.max_y_m]
+            .iter()
+            .all(|v| v.is_finite())
+            || f.length_m() <= 0.0
+            || f.width_m() <= 0.0
+        {
+            return Err(bad(format!("footprint {f:?} is not a finite rectangle")));
+        }
+        if ![self.pose.x_m, self.pose.y_m, self.pose.yaw_rad]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return Err(bad(format!("pose {:?} is not finite", self.pose)));
+        }
+        if !(self.sigma_m.is_finite() && self.sigma_m > 0.0) {
+            return Err(bad(format!(
+                "sigma_m must be a positive number of metres, got {}",
+                self.sigma_m
+            )));
+        }
+        // The contacts lie under the robot: within its footprint's reach of its position.
+        let reach = self.footprint.circumscribed_radius_m() + CONTACT_TOLERANCE_M;
+        if let Some(p) = self
+            .contacts
+            .iter()
+            .find(|p| (p.x - self.pose.x_m).hypot(p.y - self.pose.y_m) > reach)
+        {
+            return Err(bad(format!(
+                "contact point {p:?} lies more than {reach} m from the robot at ({}, {})",
+                self.pose.x_m, self.pose.y_m
+            )));
+        }
+        self.ground().map(|_| ())
+    }
+
+    /// The ground's plane and the variance of a height on it, after the checks of the inputs it reads.
+    fn ground(&self) -> Result<(GroundPlane, f32)> {
+        let plane = GroundPlane::fit(&self.contacts);
+        let sigma = f64::from(self.sigma_m);
+        let var_m2 = (sigma * sigma + plane.residual_m * plane.residual_m) as f32;
+        let finite = [plane.gradient.0, plane.gradient.1, plane.centre.z]
+            .iter()
+            .all(|v| (*v as f32).is_finite());
+        if !(finite && var_m2.is_finite()) {
+            return Err(Error::setting(
+                "stance",
+                format!("the contact points {:?} give no finite plane", self.contacts),
+            ));
+        }
+        Ok((plane, var_m2))
+    }
+}
+
+impl TraversabilityRule {
+    /// Whether the rule's frontier test ([`crate::Doubt::Frontier`]) needs the ground a robot stands on as a
+    /// measurement ([`Map::integrate_stance`]): the contact rule's does, or the cells around a robot whose
+    /// sensors never see under it stay frontier cells. The other rules judge each cell by its own estimate.
+    pub fn needs_stance(&self) -> bool {
+        matches!(self, Self::Contact { .. })
+    }
+}
+
+impl Map {
+    /// Takes the ground under a standing robot as one measurement of the cells its footprint covers that no
+    /// scan has observed: each gets one hit's occupancy (`p_max`) and the height of the plane through the
+    /// contact points at its centre, with the contacts' variance plus the square of the plane's residual. A
+    /// cell a scan observed keeps what the scan measured. Returns the cells it set.
+    ///
+    /// The contact rule's frontier ([`crate::Doubt::Frontier`]) needs it: without it the cells under a robot
+    /// whose sensors look ahead are never observed, and those around them are frontier cells. `oeg run` gives
+    /// it at the start to maps judged by [`crate::TraversabilityRule::Contact`]; the paper's model, and a map
+    /// built from inputs that record no robot (scan graphs, point clouds, bags), never take one.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for a stance with no contact, or with a value that is not finite;
+    /// [`Error::MemoryLimit`] if the footprint's tiles would exceed the map's limit (nothing is set then).
+    pub fn integrate_stance(&mut self, stance: &Stance) -> Result<u64> {
+        stance.validate()?;
+        let (plane, var_m2) = stance.ground()?;
+        let cells = self.cells_under_footprint(&stance.footprint, stance.pose)?;
+        let tiles: Vec<TileIndex> = {
+            let mut t: Vec<TileIndex> = cells.iter().map(|c| TileIndex::of(*c)).collect();
+            t.sort_unstable();
+            t.dedup();
+            t
+        };
+        let limit = self
+            .config
+            .memory_limit_bytes
+            .saturating_sub(self.ceilings.memory_bytes() + self.own_bytes());
+        let new_tiles = tiles.iter().filter(|t| !self.cells.has_tile(**t)).count() as u64;
+        let requested =
+            self.cells.memory_bytes() + new_tiles * crate::storage::TileGrid::<Cell>::tile_bytes() as u64;
+        if requested > limit {
+            return Err(Error::MemoryLimit {
+                requested_bytes: requested + self.ceilings.memory_bytes() + self.own_bytes(),
+                limit_bytes: self.config.memory_limit_bytes,
+            });
+        }
+        let opts = &self.config.model;
+        let hit = update_log_odds(0.0, log_odds(opts.p_max), opts.log_odds_min, opts.log_odds_max);
+        let mut set = 0;
+        for cell in cells {
+            let tile = self
+                .cells
+                .tile_or_insert(TileIndex::of(cell), u64::MAX)
+                .map_err(|e| Error::MemoryLimit {
+                    requested_bytes: e.requested_bytes,
+                    limit_bytes: self.config.memory_limit_bytes,
+                })?;
+            let c = &mut tile[offset_in_tile(cell)];
+            if c.is_observed() {
+                continue;
+            }
+            let (x, y) = self.geometry.cell_center(cell);
+            *c = Cell {
+                log_odds: hit,
+                mean_m: plane.z_at(x, y) as f32,
+                var_m2,
+            };
+            set += 1;
+        }
+        Ok(set)
+    }
+
+    /// The cells the footprint at `pose` overlaps ([`Footprint::cells_under`]).
+    fn cells_under_footprint(&self, footprint: &Footprint, pose: Pose2) -> Result<Vec<CellIndex>> {
+        let corners = footprint.corners(pose);
+        let span = |k: fn(&(f64, f64)) -> f64| {
+            corners
+                .iter()
+                .map(k)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                })
+        };
+        let ((x0, x1), (y0, y1)) = (span(|p| p.0), span(|p| p.1));
+        let region: CellRegion = self.geometry.region_covering((x0, y0), (x1, y1))?;
+        Ok(footprint.cells_under(&GridWindow::new(self.geometry, region), pose))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::MapConfig;
+    use crate::preset::MapPreset;
+    use crate::traversability::{RobotProfile, Traversability};
+
+    fn pioneer() -> Footprint {
+        Footprint {
+            min_x_m: -0.3,
+            max_x_m: 0.3,
+            min_y_m: -0.25,
+            max_y_m: 0.25,
+        }
+    }
+
+    fn stance(contacts: Vec<Point3<f64>>) -> Stance {
+        Stance {
+            contacts,
+            footprint: pioneer(),
+            pose: Pose2 {
+                x_m: 1.0,
+                y_m: 2.0,
+                yaw_rad: 0.3,
+            },
+            sigma_m: DEFAULT_STANCE_SIGMA_M,
+        }
+    }
+
+    /// Four wheels at `(+-0.2, +-0.2)` about `(1, 2)` on the plane `z = 0.1 + 0.05 x`.
+    fn wheels_on_a_slope() -> Vec<Point3<f64>> {
+        [(-0.2, -0.2), (-0.2, 0.2), (0.2, -0.2), (0.2, 0.2)]
+            .map(|(dx, dy)| Point3::new(1.0 + dx, 2.0 + dy, 0.1 + 0.05 * (1.0 + dx)))
+            .to_vec()
+    }
+
+    #[test]
+    fn the_footprint_cells_take_the_plane_through_the_wheels_with_the_contacts_variance() {
+        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
+        let set = map
+            .integrate_stance(&stance(wheels_on_a_slope()))
+            .expect("stance");
+        // A 0.6 x 0.5 m rectangle, turned: about 120 cells of 25 cm^2, and a ring of partly covered ones.
+        assert!((120..=200).contains(&set), "{set}");
+        assert_eq!(map.num_observed_cells(), set);
+        assert_eq!(map.num_scans(), 0);
+        for (cell, c) in map.observed_cells() {
+            let (x, _) = map.geometry().cell_center(cell);
+            assert!((f64::from(c.mean_m) - (0.1 + 0.05 * x)).abs() < 1e-5, "{cell:?}");
+            assert!((c.var_m2 - DEFAULT_STANCE_SIGMA_M * DEFAULT_STANCE_SIGMA_M).abs() < 1e-9);
+            assert_eq!(map.is_occupied(cell), Some(true));
+        }
+    }
+
+    #[test]
+    fn a_twisted_stance_adds_its_residual_and_one_wheel_gives_a_level_plane() {
+        let mut twisted = wheels_on_a_slope();
+        twisted[0].z += 0.02;
+        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
+        map.integrate_stance(&stance(twisted)).expect("stance");
+        let (_, c) = map.observed_cells().next().expect("a cell");
+        // The plane misses each wheel by 5 mm: the residual's square adds to the contacts' variance.
+        let expected = DEFAULT_STANCE_SIGMA_M.powi(2) + 0.005_f32.powi(2);
+        assert!((c.var_m2 - expected).abs() < 1e-8, "{} {expected}", c.var_m2);
+
+        let mut level = Map::new(MapConfig::new(0.05)).expect("map");
+        level
+            .integrate_stance(&stance(vec![Point3::new(1.0, 2.0, 0.3)]))
+            .expect("stance");
+        assert!(level.observed_cells().all(|(_, c)| c.mean_m == 0.3));
+    }
+
+    #[test]
+    fn a_cell_a_scan_observed_keeps_its_measurement() {
+        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
+        let seen = map.geometry().cell_of(1.0, 2.0).expect("cell");
+        let measured = Cell {
+            log_odds: -1.0,
+            mean_m: 0.5,
+            var_m2: 1e-4,
+        };
+        map.cells
+            .tile_or_insert(TileIndex::of(seen), u64::MAX)
+            .expect("tile")[offset_in_tile(seen)] = measured;
+        let set = map
+            .integrate_stance(&stance(wheels_on_a_slope()))
+            .expect("stance");
+        assert_eq!(map.cell(seen), measured);
+        assert_eq!(map.num_observed_cells(), set + 1);
+    }
+
+    #[test]
+    fn under_the_contact_rule_the_ground_it_stands_on_is_drivable_and_no_frontier() {
+        let robot = RobotProfile::default();
+        let model = MapPreset::Robust.model(&robot);
+        let mut map = Map::new(MapConfig {
+            model,
+            ..MapConfig::new(0.05)
+        })
+        .expect("map");
+        map.integrate_stance(&stance(wheels_on_a_slope()))
+            .expect("stance");
+        let rule = MapPreset::Robust.traversability();
+        let centre = map.geometry().cell_of(1.0, 2.0).expect("cell");
+        assert_eq!(
+            map.traversability(centre, &robot, rule),
+            Traversability::Traversable
+        );
+    }
+
+    #[test]
+    fn a_stance_that_is_not_finite_or_has_no_contact_is_refused_and_sets_nothing() {
+        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
+        for (s, words) in [
+            (stance(Vec::new()), "at least one contact"),
+            (stance(vec![Point3::new(f64::NAN, 0.0, 0.0)]), "not finite"),
+            (stance(vec![Point3::new(9.0, 2.0, 0.0)]), "more than"),
+            (stance(vec![Point3::new(1.0, 2.0, f64::MAX)]), "no finite plane"),
+            (
+                Stance {
+                    sigma_m: 0.0,
+                    ..stance(wheels_on_a_slope())
+                },
+                "sigma_m",
+            ),
+            (
+                Stance {
+                    pose: Pose2 {
+                        x_m: f64::INFINITY,
+                        y_m: 0.0,
+                        yaw_rad: 0.0,
+                    },
+                    ..stance(wheels_on_a_slope())
+                },
+                "pose",
+            ),
+        ] {
+            let e = map.integrate_stance(&s).expect_err("refused").to_string();
+            assert!(e.contains(words), "{e}");
+        }
+        assert_eq!(map.num_observed_cells(), 0);
+    }
+
+    #[test]
+    fn a_stance_beyond_the_memory_limit_is_refused_whole() {
+        let mut map = Map::new(MapConfig {
+            memory_limit_bytes: 1000,
+            ..MapConfig::new(0.05)
+        })
+        .expect("map");
+        let e = map
+            .integrate_stance(&stance(wheels_on_a_slope()))
+            .expect_err("too big");
+        assert!(matches!(e, Error::MemoryLimit { .. }), "{e}");
+        assert_eq!(map.num_observed_cells(), 0);
+    }
+}
