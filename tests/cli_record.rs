@@ -57,6 +57,20 @@ fn logs_are_identical_on_one_and_two_threads_and_differ_with_the_seed() {
     assert!(one != other, "a different seed changes the noise");
 }
 
+/// `oeg map INPUT --resolution 0.05 --out OUT` with `extra` arguments.
+fn map_at(input: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "map",
+        input.to_str().expect("utf8"),
+        "--resolution",
+        "0.05",
+        "--out",
+        out.to_str().expect("utf8"),
+    ];
+    args.extend(extra);
+    oeg_with_threads(&args, None)
+}
+
 #[test]
 fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
     let dir = temp_dir("rec", "replay");
@@ -78,19 +92,7 @@ fn a_replayed_log_gives_the_same_map_as_the_live_simulation() {
     for preset in [MapPreset::Paper, MapPreset::Robust] {
         let out = dir.join(format!("map-{}", preset.name()));
         let set = format!("map.preset={}", preset.name());
-        let o = oeg_with_threads(
-            &[
-                "map",
-                log.to_str().expect("utf8"),
-                "--resolution",
-                "0.05",
-                "--set",
-                &set,
-                "--out",
-                out.to_str().expect("utf8"),
-            ],
-            None,
-        );
+        let o = map_at(&log, &out, &["--set", &set]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let replayed = oeg::load_map(&out.join("map.oeg")).expect("map");
 
@@ -360,17 +362,7 @@ fn a_log_whose_stance_is_not_finite_is_refused_naming_the_file() {
         let writer = sim::log::LogWriter::create(&log, &header).expect("log");
         writer.finish().expect("finished");
         let out = dir.join(name);
-        let o = oeg_with_threads(
-            &[
-                "map",
-                log.to_str().expect("utf8"),
-                "--resolution",
-                "0.05",
-                "--out",
-                out.to_str().expect("utf8"),
-            ],
-            None,
-        );
+        let o = map_at(&log, &out, &[]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{name}: mapped");
         assert!(
