@@ -7,25 +7,13 @@
 
 mod common;
 
-use common::{oeg, temp_dir};
+use common::{map_at, oeg, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use nalgebra::Point3;
 use oeg::write_graph;
 use oeg::{Scan, SensorModel};
-
-/// `oeg map INPUT --resolution 0.05 --out OUT`.
-fn map_at(input: &Path, out: &Path) -> Output {
-    oeg(&[
-        "map",
-        input.to_str().expect("utf8"),
-        "--resolution",
-        "0.05",
-        "--out",
-        out.to_str().expect("utf8"),
-    ])
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -264,7 +252,7 @@ fn a_far_point_or_pose_is_refused_at_once_naming_the_file_and_the_node() {
         write_graph(&input, &[near.clone(), scan, near.clone()]).expect("graph");
         let out = dir.join(format!("out_{name}"));
         let started = std::time::Instant::now();
-        let o = map_at(&input, &out);
+        let o = map_at(&input, &out, &[]);
         let err = stderr(&o);
         assert!(!o.status.success(), "{name}: {err}");
         let file = format!("{name}.graph");
@@ -299,7 +287,7 @@ fn images_follow_what_the_map_holds_and_dense_planner_files_fail_whole_naming_th
         .collect();
     write_graph(&input, &scans).expect("graph");
     let out = dir.join("out");
-    let o = map_at(&input, &out);
+    let o = map_at(&input, &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     for image in [
         "occupancy.png",

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{oeg_with_threads, temp_dir};
+use common::{map_at, oeg_with_threads, temp_dir};
 use std::path::PathBuf;
 
 use oeg::{Map, MapConfig, MapPreset, RobotProfile};
@@ -55,20 +55,6 @@ fn logs_are_identical_on_one_and_two_threads_and_differ_with_the_seed() {
     assert!(one == two, "the same seed gave different logs on 1 and 2 threads");
     let other = record("other.oeglog", "2", Some("99"));
     assert!(one != other, "a different seed changes the noise");
-}
-
-/// `oeg map INPUT --resolution 0.05 --out OUT` with `extra` arguments.
-fn map_at(input: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "map",
-        input.to_str().expect("utf8"),
-        "--resolution",
-        "0.05",
-        "--out",
-        out.to_str().expect("utf8"),
-    ];
-    args.extend(extra);
-    oeg_with_threads(&args, None)
 }
 
 #[test]

@@ -20,6 +20,13 @@ pub(crate) fn oeg_with_threads(args: &[&str], threads: Option<&str>) -> Output {
     c.output().expect("the oeg binary runs")
 }
 
+/// `oeg map INPUT --resolution 0.05 --out OUT`, with `extra` arguments after them.
+pub(crate) fn map_at(input: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["map", s(input), "--resolution", "0.05", "--out", s(out)];
+    args.extend(extra);
+    oeg(&args)
+}
+
 /// A fresh, empty temporary folder for one test (`group` keeps test files apart).
 pub(crate) fn temp_dir(group: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("oeg-{group}-{}-{name}", std::process::id()));
