@@ -61,13 +61,20 @@ impl Footprint {
         .map(|(x, y)| (pose.x_m + c * x - s * y, pose.y_m + s * x + c * y))
     }
 
+    /// The world rectangle that bounds the footprint at `pose`: its lowest and highest x and y, metres.
+    pub fn bounds(&self, pose: Pose2) -> ((f64, f64), (f64, f64)) {
+        let corners = self.corners(pose);
+        let (lo_x, hi_x) = span(corners.iter().map(|p| p.0));
+        let (lo_y, hi_y) = span(corners.iter().map(|p| p.1));
+        ((lo_x, lo_y), (hi_x, hi_y))
+    }
+
     /// The cells of `window` whose square overlaps the footprint at `pose` (touching edges do not count),
     /// in row-major order.
     pub fn cells_under(&self, window: &GridWindow, pose: Pose2) -> Vec<CellIndex> {
         let (geometry, region) = (window.geometry(), window.region());
         let corners = self.corners(pose);
-        let (lo_x, hi_x) = span(corners.iter().map(|p| p.0));
-        let (lo_y, hi_y) = span(corners.iter().map(|p| p.1));
+        let ((lo_x, lo_y), (hi_x, hi_y)) = self.bounds(pose);
         let (Some(a), Some(b)) = (geometry.cell_of(lo_x, lo_y), geometry.cell_of(hi_x, hi_y)) else {
             return Vec::new();
         };

@@ -87,7 +87,8 @@ impl Stance {
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] for a stance with no contact point, or with a value that is not finite, a
-    /// footprint that is no rectangle, or a standard deviation that is not positive.
+    /// footprint that is no rectangle, a standard deviation that is not positive, a contact point farther from
+    /// the robot than its footprint reaches (plus 0.1 m), or contact points that give no finite plane.
     pub fn validate(&self) -> Result<()> {
         let bad = |message: String| Error::setting("stance", message);
         if self.contacts.is_empty() {
@@ -175,8 +176,8 @@ impl Map {
     /// built from inputs that record no robot (scan graphs, point clouds, bags), never take one.
     ///
     /// # Errors
-    /// [`Error::InvalidSetting`] for a stance with no contact, or with a value that is not finite;
-    /// [`Error::MemoryLimit`] if the footprint's tiles would exceed the map's limit (nothing is set then).
+    /// [`Error::InvalidSetting`] for a stance [`Stance::validate`] refuses, or one whose footprint lies beyond the
+    /// grid; [`Error::MemoryLimit`] if the footprint's tiles would exceed the map's limit (nothing is set then).
     pub fn integrate_stance(&mut self, stance: &Stance) -> Result<u64> {
         stance.validate()?;
         let (plane, var_m2) = stance.ground()?;
@@ -228,17 +229,8 @@ impl Map {
 
     /// The cells the footprint at `pose` overlaps ([`Footprint::cells_under`]).
     fn cells_under_footprint(&self, footprint: &Footprint, pose: Pose2) -> Result<Vec<CellIndex>> {
-        let corners = footprint.corners(pose);
-        let span = |k: fn(&(f64, f64)) -> f64| {
-            corners
-                .iter()
-                .map(k)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                })
-        };
-        let ((x0, x1), (y0, y1)) = (span(|p| p.0), span(|p| p.1));
-        let region: CellRegion = self.geometry.region_covering((x0, y0), (x1, y1))?;
+        let (lo, hi) = footprint.bounds(pose);
+        let region: CellRegion = self.geometry.region_covering(lo, hi)?;
         Ok(footprint.cells_under(&GridWindow::new(self.geometry, region), pose))
     }
 }
