@@ -90,6 +90,12 @@ impl Stance {
     /// footprint that is no rectangle, a standard deviation that is not positive, a contact point farther from
     /// the robot than its footprint reaches (plus 0.1 m), or contact points that give no finite plane.
     pub fn validate(&self) -> Result<()> {
+        self.ground().map(|_| ())
+    }
+
+    /// The ground's plane and the variance of a height on it, after the checks [`Stance::validate`] names, all
+    /// made here: validating and integrating fit the plane once each.
+    fn ground(&self) -> Result<(GroundPlane, f32)> {
         let bad = |message: String| Error::setting("stance", message);
         if self.contacts.is_empty() {
             return Err(bad("needs at least one contact point".into()));
@@ -134,11 +140,6 @@ impl Stance {
                 self.pose.x_m, self.pose.y_m
             )));
         }
-        self.ground().map(|_| ())
-    }
-
-    /// The ground's plane and the variance of a height on it, after the checks of the inputs it reads.
-    fn ground(&self) -> Result<(GroundPlane, f32)> {
         let plane = GroundPlane::fit(&self.contacts);
         let sigma = f64::from(self.sigma_m);
         let var_m2 = (sigma * sigma + plane.residual_m * plane.residual_m) as f32;
@@ -146,10 +147,10 @@ impl Stance {
             .iter()
             .all(|v| (*v as f32).is_finite());
         if !(finite && var_m2.is_finite()) {
-            return Err(Error::setting(
-                "stance",
-                format!("the contact points {:?} give no finite plane", self.contacts),
-            ));
+            return Err(bad(format!(
+                "the contact points {:?} give no finite plane",
+                self.contacts
+            )));
         }
         Ok((plane, var_m2))
     }
@@ -179,7 +180,6 @@ impl Map {
     /// [`Error::InvalidSetting`] for a stance [`Stance::validate`] refuses, or one whose footprint lies beyond the
     /// grid; [`Error::MemoryLimit`] if the footprint's tiles would exceed the map's limit (nothing is set then).
     pub fn integrate_stance(&mut self, stance: &Stance) -> Result<u64> {
-        stance.validate()?;
         let (plane, var_m2) = stance.ground()?;
         let cells = self.cells_under_footprint(&stance.footprint, stance.pose)?;
         let tiles: Vec<TileIndex> = {
