@@ -4,7 +4,7 @@
 //! * `integrate` (`map/integrate.rs`): [`Map::integrate`], the paper's Algorithm 1, in parallel where threads
 //!   are given: each ray's samples (`map/sample.rs`) gathered into the scan scratch (`map/scratch.rs`), then
 //!   each touched cell updated once (`map/apply.rs`, one cell's update in `map/update.rs`); [`Map::integrate_batch`] (`map/batch.rs`): many short
-//!   scans side by side, one per thread;
+//!   scans side by side, a run of them per thread;
 //! * `stance` (`map/stance.rs`): the ground a standing robot's wheels touch, as a measurement
 //!   ([`Map::integrate_stance`]);
 //! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);

@@ -187,3 +187,54 @@ fn the_shared_real_scans_cut_into_short_scans_map_the_same_on_any_thread_count()
     let scans = oeg::read_graph_scans(&path, SensorModel::laser()).expect("readable");
     assert_same_on_any_thread_count(0.1, &cut(&scans, 900));
 }
+
+#[test]
+fn a_batch_near_its_memory_limit_maps_and_stops_where_one_thread_does() {
+    let scans = cut(&synthetic_scans(), 600);
+    // What the map of every scan holds, and the most its scratch held for one scan, on one thread.
+    let mut full = map_of(MapPreset::Paper, 0.05);
+    let mut scratch_bytes = 0;
+    for scan in &scans {
+        full.integrate(scan).expect("integrated");
+        scratch_bytes = scratch_bytes.max(full.scratch_bytes());
+    }
+    let full_bytes = full.memory_bytes() + scratch_bytes;
+    // From a limit the first scans already exceed to one whose half (the windows' budget) leaves each thread's
+    // share of it (a sixteenth) too small for some scans' lists, to one that leaves room.
+    for limit in [
+        full_bytes / 4,
+        full_bytes,
+        2 * full_bytes,
+        8 * full_bytes,
+        64 * full_bytes,
+    ] {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            pool.install(|| {
+                let mut config = MapConfig::new(0.05);
+                config.memory_limit_bytes = limit;
+                let mut map = Map::new(config).expect("valid");
+                let stopped = map.integrate_batch(&scans).err().map(|e| e.index);
+                (stopped, map_to_bytes(&map))
+            })
+        };
+        let (stopped, one) = run(1);
+        for threads in [2, 3] {
+            let (stopped_here, bytes) = run(threads);
+            assert_eq!(stopped_here, stopped, "limit {limit} B on {threads} threads");
+            assert!(
+                bytes == one,
+                "limit {limit} B: the map on {threads} threads differs"
+            );
+        }
+        if limit == full_bytes / 4 {
+            assert!(stopped.is_some(), "a quarter of the map's bytes stops the batch");
+        }
+        if limit == 64 * full_bytes {
+            assert_eq!(stopped, None, "64 times the map's bytes maps every scan");
+        }
+    }
+}

@@ -1,29 +1,35 @@
 //! Many scans at once: [`Map::integrate_batch`]. A scan of a few hundred rays is too short to split between
-//! threads, but consecutive short scans can be gathered side by side, one per thread, when a model's samples do
-//! not read the map (the paper's rules: [`Sampling::READS_MAP`]), so that what scan `k + 1` says does not
-//! depend on scan `k`'s update. The cells are then updated tile by tile in parallel, each cell from the scans'
-//! evidence in their order: the same map, bit for bit, as [`Map::integrate`] on each scan in turn.
+//! threads, but consecutive short scans can be gathered side by side, a run of them per thread, when a model's
+//! samples do not read the map (the paper's rules: [`Sampling::READS_MAP`]), so that what scan `k + 1` says
+//! does not depend on scan `k`'s update. Each scan's evidence is moved out of its thread's grid into a list of
+//! the cells it touched ([`TouchedCells`]); the cells are then updated tile by tile in parallel, each cell from
+//! the scans' evidence in their order: the same map, bit for bit, as [`Map::integrate`] on each scan in turn.
 
 use std::borrow::Borrow;
 
 use rayon::prelude::*;
 
-use super::apply::{ScanUpdate, update_marked};
+use super::apply::ScanUpdate;
 use super::integrate::{SHORT_SCAN_RAYS, gather_rays};
 use super::sample::{Before, Sampling};
-use super::scratch::{ScanScratch, Scratch};
+use super::scratch::{Evidence, ScanScratch, Scratch};
+use super::update::update_cell;
 use super::{IntegrationStats, Map};
 use crate::error::Error;
 use crate::scan::Scan;
-use crate::storage::{TileGrid, marked_by_tile};
+use crate::storage::{TileGrid, TileIndex};
 
-/// Scans of a window per thread. One: each scan of a window is gathered into a scratch grid of its own, and
-/// every grid more is a working set more that the cores' caches must hold between two uses of it. Measured on
-/// the default run's log on 2 threads, in a build with phase timers: 8 scans a thread took 1.4x the gathering
-/// time and 1.3x the update time of 1; the threads' meetings, twice a window, cost less than that.
-const SCANS_PER_THREAD: usize = 1;
+/// Scans of a window per thread. Each thread gathers its run of scans one after another into one grid, which
+/// stays in its core's cache, and moves each scan's evidence into a list ([`TouchedCells`]); no core reads a
+/// grid another wrote. A laser line's list is about 80 kB, so a thread's 8 stay within its core's second-level
+/// cache for the update that reads them. Measured on the default run's log on 2 threads, in a build with phase
+/// timers: 4, 8 and 16 scans a thread gathered and updated within a few per cent of each other. The design
+/// before the lists, one grid a scan, was slower with more scans a thread (8 took 1.4x the gathering time of
+/// 1), and with one its update read grids the other core had written: it gained nothing from the second
+/// thread on laser lines.
+const SCANS_PER_THREAD: usize = 8;
 
-/// The parts of the budget a window's grids are given at least: each grid may take at most this share.
+/// The parts of the budget a window's grids and lists are given at least: each may take at most this share.
 const MIN_WINDOW_SHARES: usize = 16;
 
 /// Why [`Map::integrate_batch`] stopped: the scan that failed and its error. The scans before it are in the
@@ -42,13 +48,13 @@ impl Map {
     /// of their statistics.
     ///
     /// Under a model whose samples do not read the map (one whose scratch is the paper's evidence), runs of
-    /// consecutive short scans (fewer than 8,192 rays) go in windows of one scan a thread: a window's scans
-    /// are gathered side by side, then its cells are updated tile by tile in parallel, where the evidence read
-    /// is reset. This is what makes a robot's log, thousands of scans of a few hundred rays each, use every
-    /// core; a long scan is split between the threads on its own ([`Map::integrate`]). Windows run only while
-    /// the map and its scratch hold less than half the memory limit, each scan's scratch under a sixteenth of
-    /// that half: near it, or for a scan of very long rays, scans go one at a time, so that a limit stops the
-    /// same scan at the same place.
+    /// consecutive short scans (fewer than 8,192 rays) go in windows of 8 scans a thread: each thread gathers
+    /// its scans one after another and keeps what each touched in a list, then the window's cells are updated
+    /// tile by tile in parallel, each from the scans' lists in their order. This is what makes a robot's log,
+    /// thousands of scans of a few hundred rays each, use every core; a long scan is split between the threads
+    /// on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold less than half the
+    /// memory limit, each thread's grid, and its lists, under a sixteenth of that half: near it, or for a scan
+    /// of very long rays, scans go one at a time, so that a limit stops the same scan at the same place.
     ///
     /// # Errors
     /// The first scan [`Map::integrate`] refuses, with its place in `scans`.
@@ -141,27 +147,105 @@ impl Map {
         // here stay, empty, as a failed scan's do in `Map::integrate`).
         let own_bytes = before.own_bytes;
         let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes() + own_bytes);
-        if !place_tiles(cells, scratch, scans.len(), room) {
+        let lists = &scratch.touched[..scans.len()];
+        if !place_tiles(cells, lists, room) {
             scratch.recycle();
             return None;
         }
-        // The evidence is reset as it is read: the scratch is empty again.
         // Side by side only under independent measurements (the caller's check): no scan correlates with another.
         let update = ScanUpdate {
             levels: *levels,
             correlation: 0.0,
             own_bytes,
         };
-        stats.num_cells_updated = apply_in_order(cells, scratch, scans.len(), &config.model, update);
+        stats.num_cells_updated = apply_in_order(cells, lists, &config.model, update);
         self.num_scans += scans.len() as u64;
         self.totals += stats;
         Some(stats)
     }
 }
 
-/// Gathers scan `k` into the scratch's grid `k` (the main grid, then the workers'), all in parallel, under
-/// `budget` bytes for the map and every grid together (each grid under an equal share); `None`, the scratch
-/// recycled, if a ray fails or the budget is exceeded.
+/// One scan's evidence for the cells its rays touched, moved out of the grid it was gathered in: tile by tile
+/// in the order the grid marked them, each cell's offset in its tile and its evidence. A window's scans are kept
+/// so, rather than each in a grid of its own, so that each thread gathers into one grid that stays in its
+/// core's cache, and no core reads a grid another core wrote.
+#[derive(Debug, Clone)]
+pub(super) struct TouchedCells<E> {
+    /// Each tile, and the end of its cells in `offsets` and `evidence`.
+    tiles: Vec<(TileIndex, u32)>,
+    /// Each cell's offset in its tile ([`crate::storage::offset_in_tile`]).
+    offsets: Vec<u16>,
+    /// Each cell's evidence, in a vector of its own: copied from the grid as it is, not through a pair.
+    evidence: Vec<E>,
+}
+
+impl<E> Default for TouchedCells<E> {
+    fn default() -> Self {
+        Self {
+            tiles: Vec::new(),
+            offsets: Vec::new(),
+            evidence: Vec::new(),
+        }
+    }
+}
+
+impl<E: Evidence> TouchedCells<E> {
+    /// Bytes held, spare capacity included.
+    pub(super) fn memory_bytes(&self) -> u64 {
+        (self.tiles.capacity() * size_of::<(TileIndex, u32)>()
+            + self.offsets.capacity() * size_of::<u16>()
+            + self.evidence.capacity() * size_of::<E>()) as u64
+    }
+
+    /// Moves what `grid` marked into the list, tile by tile, and leaves the grid empty, its tiles in its pool
+    /// ([`TileGrid::release_reset`]); false, with the grid emptied all the same, if the list would hold more
+    /// than `limit_bytes`.
+    fn take_from(&mut self, grid: &mut TileGrid<E>, limit_bytes: u64) -> bool {
+        self.clear();
+        let fill = grid.fill();
+        let mut fits = true;
+        for (tile, evidence, marked) in grid.marked_tiles_mut() {
+            if fits {
+                marked.for_each(|k| {
+                    if !evidence[k].paper().is_untouched() {
+                        self.offsets.push(k as u16);
+                        self.evidence.push(evidence[k]);
+                    }
+                });
+                self.tiles.push((tile, self.offsets.len() as u32));
+                fits = self.memory_bytes() <= limit_bytes;
+            }
+            marked.reset(evidence, fill);
+        }
+        grid.release_reset();
+        fits
+    }
+
+    /// Empties the list, keeping its memory.
+    pub(super) fn clear(&mut self) {
+        self.tiles.clear();
+        self.offsets.clear();
+        self.evidence.clear();
+    }
+
+    /// The cells of `tile`, if the scan touched it: their offsets and their evidence.
+    fn cells_in(&self, tile: TileIndex) -> (&[u16], &[E]) {
+        let mut start = 0;
+        for &(t, end) in &self.tiles {
+            if t == tile {
+                let cells = start as usize..end as usize;
+                return (&self.offsets[cells.clone()], &self.evidence[cells]);
+            }
+            start = end;
+        }
+        (&[], &[])
+    }
+}
+
+/// Gathers the scans in runs of consecutive scans, one run per thread, each scan into the run's grid (the main
+/// grid, then the workers') and then moved into its list ([`TouchedCells`]), all under `budget` bytes for the
+/// map and the scratch together (each grid under an equal share, each run's lists under another); `None`, the
+/// scratch recycled, if a ray fails or the budget is exceeded.
 fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     before: &Before,
     scans: &[S],
@@ -171,58 +255,68 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     if E::READS_MAP {
         return None;
     }
+    let runs = rayon::current_num_threads().clamp(1, scans.len());
+    let per_run = scans.len().div_ceil(runs);
     let map_bytes = before.map_bytes();
-    // Each grid under an equal share of what the budget leaves, and at most a sixteenth of it: a window is for
-    // scans of ordinary rays (a few megabytes of scratch each); a scan whose rays need more goes alone, under
-    // the whole limit, rather than leave a window's grids holding (and the allocator keeping) large pools.
-    let share = budget.checked_sub(map_bytes)? / scans.len().max(MIN_WINDOW_SHARES) as u64;
-    if scratch.workers.len() < scans.len() - 1 {
-        scratch
-            .workers
-            .resize_with(scans.len() - 1, || TileGrid::new(E::NONE));
+    // Each run's grid and each run's lists under an equal share of what the budget leaves, and at most a
+    // sixteenth of it: a window is for scans of ordinary rays (a few megabytes of scratch each); a scan whose
+    // rays need more goes alone, under the whole limit, rather than leave a window's grids holding (and the
+    // allocator keeping) large pools.
+    let share = budget.checked_sub(map_bytes)? / (2 * runs).max(MIN_WINDOW_SHARES) as u64;
+    let Scratch {
+        main,
+        workers,
+        touched,
+        ..
+    } = scratch;
+    if workers.len() < runs - 1 {
+        workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
     }
-    let grids: Vec<&mut TileGrid<E>> = std::iter::once(&mut scratch.main)
-        .chain(scratch.workers.iter_mut())
-        .take(scans.len())
+    if touched.len() < scans.len() {
+        touched.resize_with(scans.len(), TouchedCells::default);
+    }
+    let grids: Vec<&mut TileGrid<E>> = std::iter::once(main)
+        .chain(workers.iter_mut())
+        .take(runs)
         .collect();
     let gathered = grids
         .into_par_iter()
-        .zip(scans.par_iter())
-        .map(|(grid, scan)| {
-            let scan: &Scan = scan.borrow();
-            let mut stats = IntegrationStats {
-                num_rays: scan.rays.len() as u64,
-                ..IntegrationStats::default()
-            };
-            gather_rays(
-                before,
-                scan,
-                0..scan.rays.len(),
-                (grid, &mut ()),
-                share,
-                &mut stats,
-                &|| false,
-            )
-            .map(|()| stats)
+        .zip(scans.par_chunks(per_run))
+        .zip(touched[..scans.len()].par_chunks_mut(per_run))
+        .map(|((grid, scans), lists)| {
+            let mut stats = IntegrationStats::default();
+            let list_limit = share / scans.len() as u64;
+            for (scan, list) in scans.iter().zip(lists) {
+                let scan: &Scan = scan.borrow();
+                stats.num_rays += scan.rays.len() as u64;
+                let rays = 0..scan.rays.len();
+                if gather_rays(before, scan, rays, (grid, &mut ()), share, &mut stats, &|| false).is_err() {
+                    grid.recycle_marked();
+                    return None;
+                }
+                if !list.take_from(grid, list_limit) {
+                    return None;
+                }
+            }
+            Some(stats)
         })
-        .collect::<crate::error::Result<Vec<_>>>();
-    // The tiles the cells' grid will place, at most one per marked tile of each scan.
-    let new_tiles: usize = std::iter::once(&scratch.main)
-        .chain(scratch.workers.iter())
-        .map(|g| {
-            g.marked_tiles()
-                .filter(|(t, _, _)| !before.cells.has_tile(*t))
-                .count()
-        })
+        .collect::<Option<Vec<_>>>();
+    // The tiles the cells' grid will place, at most one per tile of each scan.
+    let lists = &touched[..scans.len()];
+    let new_tiles: usize = lists
+        .iter()
+        .map(|l| l.tiles.iter().filter(|(t, _)| !before.cells.has_tile(*t)).count())
         .sum();
     let needed = map_bytes
         .saturating_add(scratch.memory_bytes())
         .saturating_add((new_tiles * TileGrid::<crate::cell::Cell>::tile_bytes()) as u64);
     match gathered {
-        Ok(all) if needed <= budget => Some(all.into_iter().fold(IntegrationStats::default(), |mut a, s| {
-            a += s;
-            a
-        })),
+        Some(all) if needed <= budget => {
+            Some(all.into_iter().fold(IntegrationStats::default(), |mut a, s| {
+                a += s;
+                a
+            }))
+        }
         _ => {
             scratch.recycle();
             None
@@ -230,52 +324,47 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     }
 }
 
-/// Places the cells' tiles that the first `num_scans` grids of the scratch touched, scan by scan in the order
-/// [`Map::integrate`] places them, the cells' grid under `limit_bytes`; false if one does not fit.
-fn place_tiles<E: Sampling<Hits = ()>>(
+/// Places the cells' tiles that the scans of `lists` touched, scan by scan in the order [`Map::integrate`]
+/// places them, the cells' grid under `limit_bytes`; false if one does not fit.
+fn place_tiles<E>(
     cells: &mut TileGrid<crate::cell::Cell>,
-    scratch: &Scratch<E>,
-    num_scans: usize,
+    lists: &[TouchedCells<E>],
     limit_bytes: u64,
 ) -> bool {
-    std::iter::once(&scratch.main)
-        .chain(scratch.workers.iter())
-        .take(num_scans)
-        .flat_map(|grid| grid.marked_tiles())
-        .all(|(tile, _, _)| cells.tile_or_insert(tile, limit_bytes).is_ok())
+    lists
+        .iter()
+        .flat_map(|l| l.tiles.iter())
+        .all(|(tile, _)| cells.tile_or_insert(*tile, limit_bytes).is_ok())
 }
 
-/// Updates every cell the first `num_scans` grids of the scratch touched, from each grid's evidence in their
-/// order, tile by tile in parallel, and resets that evidence where it was read, on the same thread (while it is
-/// in that core's cache), before the grids take their tiles back; the cells' tiles are placed ([`place_tiles`]).
-/// Returns the cell updates.
+/// Updates every cell the scans of `lists` touched, from each scan's evidence in their order, tile by tile in
+/// parallel; the cells' tiles are placed ([`place_tiles`]). Returns the cell updates.
 fn apply_in_order<E: Sampling<Hits = ()>>(
     cells: &mut TileGrid<crate::cell::Cell>,
-    scratch: &mut Scratch<E>,
-    num_scans: usize,
+    lists: &[TouchedCells<E>],
     opts: &crate::model::ModelOptions,
     update: ScanUpdate,
 ) -> u64 {
-    let Scratch { main, workers, .. } = scratch;
-    let mut grids: Vec<&mut TileGrid<E>> = std::iter::once(main)
-        .chain(workers.iter_mut())
-        .take(num_scans)
+    let mut tiles: Vec<TileIndex> = lists
+        .iter()
+        .flat_map(|l| l.tiles.iter().map(|(t, _)| *t))
         .collect();
-    let fill = grids.first().map_or(E::NONE, |g| g.fill());
-    let work = marked_by_tile(cells, grids.iter_mut().map(|g| &mut **g));
-    let updated = work
+    // Row by row over the tile index, the order the cells' grid lends them in.
+    tiles.sort_unstable_by_key(|t| (t.tj, t.ti));
+    tiles.dedup();
+    cells
+        .tiles_mut_in_order(tiles)
         .into_par_iter()
-        .map(|(mut cells, evidence)| {
+        .map(|(tile, cells)| {
             let mut updated = 0;
-            for (evidence, marks) in evidence {
-                if let Some(cells) = cells.as_deref_mut() {
-                    updated += update_marked(cells, (evidence, &()), marks, opts, update);
+            for list in lists {
+                let (offsets, evidence) = list.cells_in(tile);
+                for (k, evidence) in offsets.iter().zip(evidence) {
+                    update_cell(&mut cells[usize::from(*k)], (evidence, &()), opts, update);
+                    updated += 1;
                 }
-                marks.reset(evidence, fill);
             }
             updated
         })
-        .sum();
-    grids.iter_mut().for_each(|g| g.release_reset());
-    updated
+        .sum()
 }
