@@ -192,19 +192,33 @@ impl<E> Default for TouchedCells<E> {
 impl<E: Evidence> TouchedCells<E> {
     /// Bytes held, spare capacity included.
     pub(super) fn memory_bytes(&self) -> u64 {
-        (self.tiles.capacity() * size_of::<(TileIndex, u32)>()
-            + self.offsets.capacity() * size_of::<u16>()
-            + self.evidence.capacity() * size_of::<E>()) as u64
+        self.bytes_with(0, 0)
+    }
+
+    /// Bytes held once room is made for `tiles` tiles and `cells` cells.
+    fn bytes_with(&self, tiles: usize, cells: usize) -> u64 {
+        (self.tiles.capacity().max(tiles) * size_of::<(TileIndex, u32)>()
+            + self.offsets.capacity().max(cells) * size_of::<u16>()
+            + self.evidence.capacity().max(cells) * size_of::<E>()) as u64
     }
 
     /// Moves what `grid` marked into the list, tile by tile, and leaves the grid empty, its tiles in its pool
-    /// ([`TileGrid::release_reset`]); false, with the grid emptied all the same, if the list would hold more
-    /// than `limit_bytes`.
+    /// ([`TileGrid::release_reset`]); false, with the grid emptied all the same and nothing allocated, if the
+    /// list would hold more than `limit_bytes`.
     fn take_from(&mut self, grid: &mut TileGrid<E>, limit_bytes: u64) -> bool {
         self.clear();
         let fill = grid.fill();
-        let mut fits = true;
-        for (tile, evidence, marked) in grid.marked_tiles_mut() {
+        let marked_tiles = grid.marked_tiles_mut();
+        // At most the marked cells (a short scan marks each cell it wrote: exactly those), counted before the
+        // list takes room for them.
+        let cells: usize = marked_tiles.iter().map(|(_, _, marked)| marked.num_cells()).sum();
+        let fits = self.bytes_with(marked_tiles.len(), cells) <= limit_bytes;
+        if fits {
+            self.tiles.reserve_exact(marked_tiles.len());
+            self.offsets.reserve_exact(cells);
+            self.evidence.reserve_exact(cells);
+        }
+        for (tile, evidence, marked) in marked_tiles {
             if fits {
                 marked.for_each(|k| {
                     if !evidence[k].paper().is_untouched() {
@@ -213,7 +227,6 @@ impl<E: Evidence> TouchedCells<E> {
                     }
                 });
                 self.tiles.push((tile, self.offsets.len() as u32));
-                fits = self.memory_bytes() <= limit_bytes;
             }
             marked.reset(evidence, fill);
         }
