@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use super::apply::ScanUpdate;
 use super::integrate::{SHORT_SCAN_RAYS, gather_rays};
 use super::sample::{Before, Sampling};
-use super::scratch::{Evidence, ScanScratch, Scratch};
+use super::scratch::{Evidence, PaperEvidence, ScanScratch, Scratch};
 use super::update::update_cell;
 use super::{IntegrationStats, Map};
 use crate::error::Error;
@@ -141,14 +141,19 @@ impl Map {
             own_bytes: super::OWN_BYTES + views.memory_bytes(),
         };
         let budget = config.memory_limit_bytes / 2;
-        let mut stats = gather_side_by_side(&before, scans, scratch, budget)?;
+        // The window's lists live as long as the window: the scratch kept between scans is the grids.
+        let mut lists: Vec<TouchedCells<PaperEvidence>> = std::iter::repeat_with(TouchedCells::default)
+            .take(scans.len())
+            .collect();
+        let mut stats = gather_side_by_side(&before, scans, (scratch, &mut lists), budget)?;
         // The cells' tiles, under the budget: the map's tile index grows with them, which the gathering's check
         // could not count. Near the budget the scans go one by one, as the caller does with `None` (tiles placed
         // here stay, empty, as a failed scan's do in `Map::integrate`).
         let own_bytes = before.own_bytes;
-        let room = budget.saturating_sub(scratch.memory_bytes() + ceilings.memory_bytes() + own_bytes);
-        let lists = &scratch.touched[..scans.len()];
-        if !place_tiles(cells, lists, room) {
+        let lists_bytes: u64 = lists.iter().map(TouchedCells::memory_bytes).sum();
+        let room =
+            budget.saturating_sub(scratch.memory_bytes() + lists_bytes + ceilings.memory_bytes() + own_bytes);
+        if !place_tiles(cells, &lists, room) {
             scratch.recycle();
             return None;
         }
@@ -158,7 +163,7 @@ impl Map {
             correlation: 0.0,
             own_bytes,
         };
-        stats.num_cells_updated = apply_in_order(cells, lists, &config.model, update);
+        stats.num_cells_updated = apply_in_order(cells, &lists, &config.model, update);
         self.num_scans += scans.len() as u64;
         self.totals += stats;
         Some(stats)
@@ -170,7 +175,7 @@ impl Map {
 /// so, rather than each in a grid of its own, so that each thread gathers into one grid that stays in its
 /// core's cache, and no core reads a grid another core wrote.
 #[derive(Debug, Clone)]
-pub(super) struct TouchedCells<E> {
+struct TouchedCells<E> {
     /// Each tile, and the end of its cells in `offsets` and `evidence`.
     tiles: Vec<(TileIndex, u32)>,
     /// Each cell's offset in its tile ([`crate::storage::offset_in_tile`]).
@@ -191,7 +196,7 @@ impl<E> Default for TouchedCells<E> {
 
 impl<E: Evidence> TouchedCells<E> {
     /// Bytes held, spare capacity included.
-    pub(super) fn memory_bytes(&self) -> u64 {
+    fn memory_bytes(&self) -> u64 {
         self.bytes_with(0, 0)
     }
 
@@ -235,7 +240,7 @@ impl<E: Evidence> TouchedCells<E> {
     }
 
     /// Empties the list, keeping its memory.
-    pub(super) fn clear(&mut self) {
+    fn clear(&mut self) {
         self.tiles.clear();
         self.offsets.clear();
         self.evidence.clear();
@@ -262,7 +267,7 @@ impl<E: Evidence> TouchedCells<E> {
 fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     before: &Before,
     scans: &[S],
-    scratch: &mut Scratch<E>,
+    (scratch, lists): (&mut Scratch<E>, &mut [TouchedCells<E>]),
     budget: u64,
 ) -> Option<IntegrationStats> {
     if E::READS_MAP {
@@ -276,17 +281,9 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     // rays need more goes alone, under the whole limit, rather than leave a window's grids holding (and the
     // allocator keeping) large pools.
     let share = budget.checked_sub(map_bytes)? / (2 * runs).max(MIN_WINDOW_SHARES) as u64;
-    let Scratch {
-        main,
-        workers,
-        touched,
-        ..
-    } = scratch;
+    let Scratch { main, workers, .. } = scratch;
     if workers.len() < runs - 1 {
         workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
-    }
-    if touched.len() < scans.len() {
-        touched.resize_with(scans.len(), TouchedCells::default);
     }
     let grids: Vec<&mut TileGrid<E>> = std::iter::once(main)
         .chain(workers.iter_mut())
@@ -295,7 +292,7 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     let gathered = grids
         .into_par_iter()
         .zip(scans.par_chunks(per_run))
-        .zip(touched[..scans.len()].par_chunks_mut(per_run))
+        .zip(lists.par_chunks_mut(per_run))
         .map(|((grid, scans), lists)| {
             let mut stats = IntegrationStats::default();
             let list_limit = share / scans.len() as u64;
@@ -315,13 +312,14 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
         })
         .collect::<Option<Vec<_>>>();
     // The tiles the cells' grid will place, at most one per tile of each scan.
-    let lists = &touched[..scans.len()];
     let new_tiles: usize = lists
         .iter()
         .map(|l| l.tiles.iter().filter(|(t, _)| !before.cells.has_tile(*t)).count())
         .sum();
+    let lists_bytes: u64 = lists.iter().map(TouchedCells::memory_bytes).sum();
     let needed = map_bytes
         .saturating_add(scratch.memory_bytes())
+        .saturating_add(lists_bytes)
         .saturating_add((new_tiles * TileGrid::<crate::cell::Cell>::tile_bytes()) as u64);
     match gathered {
         Some(all) if needed <= budget => {

@@ -2,7 +2,6 @@
 //! (Algorithm 1 reads the map as it was before the scan), kept in tiles beside the map and reused scan after
 //! scan.
 
-pub(super) use super::batch::TouchedCells;
 pub(crate) use super::rule_evidence::{HitEvidence, HitLog, HitSample, ScanEvidence};
 use crate::model::{FreeSpaceOccupancy, ModelOptions, OverheadHits, ScanHitElevation};
 use crate::storage::{CapacityExceeded, TileGrid, TileIndex};
@@ -198,9 +197,6 @@ pub(crate) struct Scratch<E: Evidence> {
     /// What `main`'s evidence keeps beside it.
     pub(super) hits: E::Hits,
     pub(super) workers: Vec<TileGrid<E>>,
-    /// The scans of a window of short scans, moved out of the grids they were gathered in
-    /// ([`crate::Map::integrate_batch`]).
-    pub(super) touched: Vec<TouchedCells<E>>,
 }
 
 impl<E: Evidence> Scratch<E> {
@@ -208,7 +204,6 @@ impl<E: Evidence> Scratch<E> {
         self.main.recycle_marked();
         self.hits.clear();
         self.workers.iter_mut().for_each(TileGrid::recycle_marked);
-        self.touched.iter_mut().for_each(TouchedCells::clear);
     }
 
     fn new() -> Self {
@@ -216,7 +211,6 @@ impl<E: Evidence> Scratch<E> {
             main: TileGrid::new(E::NONE),
             hits: E::Hits::default(),
             workers: Vec::new(),
-            touched: Vec::new(),
         }
     }
 
@@ -224,7 +218,6 @@ impl<E: Evidence> Scratch<E> {
         self.main.memory_bytes()
             + self.hits.memory_bytes()
             + self.workers.iter().map(TileGrid::memory_bytes).sum::<u64>()
-            + self.touched.iter().map(TouchedCells::memory_bytes).sum::<u64>()
     }
 }
 
