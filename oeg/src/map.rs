@@ -19,6 +19,7 @@ pub use batch::BatchError;
 pub use integrate::RAYS_BETWEEN_STOP_CHECKS;
 mod layers;
 mod rule_evidence;
+mod rule_set;
 mod sample;
 mod scratch;
 mod stance;

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use super::apply::ScanUpdate;
 use super::integrate::{SHORT_SCAN_RAYS, gather_rays};
+use super::rule_set::OptionRules;
 use super::sample::{Before, Sampling};
 use super::scratch::{Evidence, PaperEvidence, ScanScratch, Scratch};
 use super::update::update_cell;
@@ -139,6 +140,7 @@ impl Map {
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
             own_bytes: super::OWN_BYTES + views.memory_bytes(),
+            rules: OptionRules::of(&config.model),
         };
         let budget = config.memory_limit_bytes / 2;
         // The window's lists live as long as the window: the scratch kept between scans is the grids.

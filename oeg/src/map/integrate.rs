@@ -11,6 +11,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::apply::{ScanUpdate, apply};
+use super::rule_set::{BandCeilingRules, OptionRules, Rules};
 use super::sample::{Before, Here, RaySpan, Sampling};
 use super::scratch::{Evidence, ExactMerge, HitStore, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
@@ -86,12 +87,16 @@ impl Map {
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
             own_bytes: update.own_bytes,
+            rules: OptionRules::of(&config.model),
         };
         let done = match scratch {
             ScanScratch::Paper(s) => gather(&before, scan, s, &mut stats, &stop)
                 .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, update, &mut stats)),
-            ScanScratch::Full(s) => gather(&before, scan, s, &mut stats, &stop)
-                .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, update, &mut stats)),
+            ScanScratch::Full(s) => match BandCeilingRules::of(&config.model) {
+                Some(rules) => gather(&before.with_rules(rules), scan, s, &mut stats, &stop),
+                None => gather(&before, scan, s, &mut stats, &stop),
+            }
+            .and_then(|()| apply(cells, ceilings, (&s.main, &s.hits), config, update, &mut stats)),
         };
         scratch.recycle();
         done?;
@@ -115,8 +120,8 @@ const MIN_RAYS_PER_THREAD: usize = 512;
 /// Casts every ray of the scan into `scratch.main`: in one run, or, for a long scan whose evidence merges
 /// exactly, in one run per thread merged in order. A parallel gathering that fails (a memory limit, a corrupt
 /// ray) is done again in one run, which reports the failure as it always does.
-fn gather<E: Sampling>(
-    before: &Before,
+fn gather<E: Sampling, R: Rules>(
+    before: &Before<R>,
     scan: &Scan,
     scratch: &mut Scratch<E>,
     stats: &mut IntegrationStats,
@@ -179,8 +184,8 @@ fn gather<E: Sampling>(
 /// [`gather`] in `runs` runs of consecutive rays, the first into `scratch.main`, the others into the workers'
 /// grids, each under an equal share of the memory left; then the workers' evidence merged into the first's in
 /// the runs' order.
-fn gather_in_parallel<E: Sampling>(
-    before: &Before,
+fn gather_in_parallel<E: Sampling, R: Rules>(
+    before: &Before<R>,
     scan: &Scan,
     scratch: &mut Scratch<E>,
     runs: usize,
@@ -291,8 +296,8 @@ fn balanced_runs(scan: &Scan, runs: usize, resolution_m: f64) -> Vec<usize> {
 /// Casts the scan's rays `rays` into `grid` and what its evidence keeps beside it (at most `limit_bytes` of
 /// both): each ray's span ([`RaySpan::of`]), checked against the grid and the limit ([`walk_of`]), then what
 /// each crossed cell learns from it ([`Sampling`]).
-pub(super) fn gather_rays<E: Sampling>(
-    before: &Before,
+pub(super) fn gather_rays<E: Sampling, R: Rules>(
+    before: &Before<R>,
     scan: &Scan,
     rays: Range<usize>,
     (grid, hits): (&mut TileGrid<E>, &mut E::Hits),
@@ -319,10 +324,10 @@ pub(super) fn gather_rays<E: Sampling>(
         let walk_limit = limit_bytes.saturating_sub(hits.memory_bytes());
         let scratch = (&mut *grid, &mut *hits);
         match (span.hit.is_some(), by_cell) {
-            (true, true) => sample_walk::<E, true, true>(before, &span, walk, scratch, walk_limit)?,
-            (true, false) => sample_walk::<E, true, false>(before, &span, walk, scratch, walk_limit)?,
-            (false, true) => sample_walk::<E, false, true>(before, &span, walk, scratch, walk_limit)?,
-            (false, false) => sample_walk::<E, false, false>(before, &span, walk, scratch, walk_limit)?,
+            (true, true) => sample_walk::<E, R, true, true>(before, &span, walk, scratch, walk_limit)?,
+            (true, false) => sample_walk::<E, R, true, false>(before, &span, walk, scratch, walk_limit)?,
+            (false, true) => sample_walk::<E, R, false, true>(before, &span, walk, scratch, walk_limit)?,
+            (false, false) => sample_walk::<E, R, false, false>(before, &span, walk, scratch, walk_limit)?,
         }
     }
     Ok(())
@@ -334,8 +339,8 @@ pub(super) fn gather_rays<E: Sampling>(
 /// ([`TileGrid::slot_tile_and_marks_mut`], [`SHORT_SCAN_RAYS`]). `HIT`: whether the ray hit something
 /// (else every cell it crosses is cleared: [`Sampling::cleared`]).
 #[inline(always)]
-fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
-    before: &Before,
+fn sample_walk<E: Sampling, R: Rules, const HIT: bool, const BY_CELL: bool>(
+    before: &Before<R>,
     span: &RaySpan,
     mut walk: GroundTraversal,
     (grid, hits): (&mut TileGrid<E>, &mut E::Hits),
@@ -352,7 +357,7 @@ fn sample_walk<E: Sampling, const HIT: bool, const BY_CELL: bool>(
         } else {
             (grid.slot_tile_mut(slot), None)
         };
-        let mut here = Here::tile::<E>(before, tile);
+        let mut here = Here::tile::<E, R>(before, tile);
         let mut marked = marks.as_ref().map_or(0, |m| m.count());
         let (first_offset, mut last_offset) = (walk.offset_in_tile(), 0);
         walk.walk_tile(
@@ -396,8 +401,8 @@ fn rows_between(a: usize, b: usize) -> u64 {
 /// The cells under a ray's span, refused when the span leaves the grid's index range or must take `grid` past
 /// `limit_bytes` beside the scan's hit log of `log_bytes` (checked before a single tile of it is allocated).
 #[inline(always)]
-fn walk_of<E: Evidence>(
-    before: &Before,
+fn walk_of<E: Evidence, R: Rules>(
+    before: &Before<R>,
     grid: &TileGrid<E>,
     index: usize,
     span: &RaySpan,

@@ -3,24 +3,26 @@
 
 use nalgebra::Vector3;
 
+use super::rule_set::{OptionRules, Rules};
 use super::scratch::{Evidence, HitLog, PaperEvidence, ScanEvidence};
 use crate::cell::Cell;
 use crate::error::Error;
 use crate::geometry::GridGeometry;
 use crate::model::{Ceiling, SeenFrom};
 use crate::model::{
-    Elevation, FreeSpaceOccupancy, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits,
-    band_contradicts, ceiling_contradicts, ceiling_passed_under, clamp_probability, elevation_observation,
-    inverse_sensor_model, surface_level, vertical_variance,
+    Elevation, GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, band_contradicts, ceiling_contradicts,
+    ceiling_passed_under, clamp_probability, elevation_observation, inverse_sensor_model, surface_level,
+    vertical_variance,
 };
 use crate::scan::{Ray, RayKind, Scan};
 use crate::sensor::{MIN_RANGE_SIGMA_M, RangeNoiseModel};
 use crate::storage::{TILE_CELLS, TileGrid, TileIndex};
 use crate::traversal::CellCrossing;
 
-/// What the samples of a scan read: the map as it was before the scan (Algorithm 1), and its settings.
+/// What the samples of a scan read: the map as it was before the scan (Algorithm 1), its settings, and the
+/// rules they follow, read from the settings or fixed ([`Rules`]).
 #[derive(Clone, Copy)]
-pub(super) struct Before<'a> {
+pub(super) struct Before<'a, R: Rules = OptionRules> {
     pub(super) geometry: &'a GridGeometry,
     pub(super) cells: &'a TileGrid<Cell>,
     pub(super) ceilings: &'a TileGrid<Ceiling>,
@@ -29,9 +31,25 @@ pub(super) struct Before<'a> {
     /// Bytes of the map's own structure and recent views (the part of [`crate::Map::memory_bytes`] beside the
     /// tiles).
     pub(super) own_bytes: u64,
+    pub(super) rules: R,
 }
 
-impl Before<'_> {
+impl<'a> Before<'a> {
+    /// The same, with the rules fixed as `rules` (which the options must hold: [`super::rule_set`]).
+    pub(super) fn with_rules<R: Rules>(&self, rules: R) -> Before<'a, R> {
+        Before {
+            geometry: self.geometry,
+            cells: self.cells,
+            ceilings: self.ceilings,
+            opts: self.opts,
+            memory_limit_bytes: self.memory_limit_bytes,
+            own_bytes: self.own_bytes,
+            rules,
+        }
+    }
+}
+
+impl<R: Rules> Before<'_, R> {
     /// Bytes the map holds ([`crate::Map::memory_bytes`]): what the scratch's share of the limit leaves out.
     pub(super) fn map_bytes(&self) -> u64 {
         self.cells.memory_bytes() + self.ceilings.memory_bytes() + self.own_bytes
@@ -65,7 +83,7 @@ pub(super) struct Here<'a> {
 impl<'a> Here<'a> {
     /// The map's tiles at `tile`, where the rules read the map.
     #[inline]
-    pub(super) fn tile<E: Sampling>(before: &Before<'a>, tile: TileIndex) -> Self {
+    pub(super) fn tile<E: Sampling, R: Rules>(before: &Before<'a, R>, tile: TileIndex) -> Self {
         if E::READS_MAP {
             Self {
                 cells: before.cells.tile(tile),
@@ -104,14 +122,14 @@ pub(super) trait Sampling: Evidence {
     /// Whether the samples read the map's cells or ceilings ([`Here`]).
     const READS_MAP: bool;
     /// A cell crossed by a ray that returned nothing.
-    fn cleared(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
+    fn cleared<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, crossing: &CellCrossing, here: &Here);
     /// A cell the beam passes through before its hit.
-    fn free(&mut self, before: &Before, span: &RaySpan, crossing: &CellCrossing, here: &Here);
+    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, crossing: &CellCrossing, here: &Here);
     /// A cell within 3 sigma of the hit, its hits kept in `log`.
-    fn near_hit(
+    fn near_hit<R: Rules>(
         &mut self,
         log: &mut Self::Hits,
-        before: &Before,
+        before: &Before<R>,
         span: &RaySpan,
         crossing: &CellCrossing,
         here: &Here,
@@ -125,20 +143,26 @@ impl Sampling for PaperEvidence {
     const READS_MAP: bool = false;
 
     #[inline(always)]
-    fn cleared(&mut self, before: &Before, _span: &RaySpan, _crossing: &CellCrossing, _here: &Here) {
+    fn cleared<R: Rules>(
+        &mut self,
+        before: &Before<R>,
+        _span: &RaySpan,
+        _crossing: &CellCrossing,
+        _here: &Here,
+    ) {
         self.raise_p(before.opts.p_min);
     }
 
     #[inline(always)]
-    fn free(&mut self, before: &Before, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
         self.add_free(before.opts.p_min, here.beam_top_m, span.s2);
     }
 
     #[inline(always)]
-    fn near_hit(
+    fn near_hit<R: Rules>(
         &mut self,
         _log: &mut (),
-        before: &Before,
+        before: &Before<R>,
         span: &RaySpan,
         crossing: &CellCrossing,
         _here: &Here,
@@ -154,20 +178,26 @@ impl Sampling for ScanEvidence {
     const READS_MAP: bool = true;
 
     #[inline(always)]
-    fn cleared(&mut self, before: &Before, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+    fn cleared<R: Rules>(
+        &mut self,
+        before: &Before<R>,
+        span: &RaySpan,
+        _crossing: &CellCrossing,
+        here: &Here,
+    ) {
         free_sample(before, span, here, self);
     }
 
     #[inline(always)]
-    fn free(&mut self, before: &Before, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
         free_sample(before, span, here, self);
     }
 
     #[inline(always)]
-    fn near_hit(
+    fn near_hit<R: Rules>(
         &mut self,
         log: &mut HitLog,
-        before: &Before,
+        before: &Before<R>,
         span: &RaySpan,
         crossing: &CellCrossing,
         here: &Here,
@@ -278,8 +308,9 @@ impl RaySpan {
     /// that fell short of the surface reports less error than the beam has there, and one that went long
     /// more: weighted by what they report, the short ones would pull the surface up, and one far short would
     /// look like a structure over it. The hit's own variance for a level or rising beam, or a surface not
-    /// below the sensor.
-    pub(super) fn s2_meeting(&self, surface_m: f32, opts: &ModelOptions) -> f32 {
+    /// below the sensor. `vertical`: the variance projected on the vertical
+    /// ([`ModelOptions::vertical_variance`]).
+    pub(super) fn s2_meeting(&self, surface_m: f32, vertical: bool) -> f32 {
         let Some((l_p, sigma)) = self.hit else {
             return self.s2;
         };
@@ -293,7 +324,7 @@ impl RaySpan {
             return self.s2;
         }
         let sigma0 = (sigma * f64::from(at_surface / at_hit)).max(f64::from(MIN_RANGE_SIGMA_M));
-        if opts.vertical_variance {
+        if vertical {
             vertical_variance(sigma0, self.dir.z, r0)
         } else {
             (sigma0 * sigma0) as f32
@@ -365,10 +396,10 @@ impl RaySpan {
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
 /// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
 #[inline(always)]
-fn free_sample(before: &Before, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
-    let opts = before.opts;
-    let band_rule = opts.free_space_occupancy == FreeSpaceOccupancy::SurfaceBand;
-    let needs_surface = band_rule || opts.free_space_max_depth_m.is_some();
+fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
+    let (opts, rules) = (before.opts, before.rules);
+    let band_rule = rules.surface_band();
+    let needs_surface = band_rule || rules.max_depth_m().is_some();
     // The cell's surface, looked up once for the rules that judge a free sample against it.
     let surface = if needs_surface {
         here.cell().and_then(Cell::elevation)
@@ -385,7 +416,7 @@ fn free_sample(before: &Before, span: &RaySpan, here: &Here, evidence: &mut Scan
         }
         return;
     }
-    if opts.overhead_hits == OverheadHits::Ceiling
+    if rules.ceiling()
         && let Some(c) = here.ceiling().filter(|c| c.is_some())
     {
         if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas) {
@@ -394,7 +425,7 @@ fn free_sample(before: &Before, span: &RaySpan, here: &Here, evidence: &mut Scan
             evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
         }
     }
-    if let (Some(depth), Some(e)) = (opts.free_space_max_depth_m, surface)
+    if let (Some(depth), Some(e)) = (rules.max_depth_m(), surface)
         && e.mean_m - beam_top > depth
     {
         // Far below the cell's surface: perhaps under an overhang, so it says nothing.
@@ -414,25 +445,25 @@ fn free_sample(before: &Before, span: &RaySpan, here: &Here, evidence: &mut Scan
 /// measures one (every such cell, or only the end point's under [`HitHeight::Endpoint`]), as a hit on the
 /// surface or, above its band under [`OverheadHits::Ceiling`], on a structure over it.
 #[inline(always)]
-fn hit_sample(
-    before: &Before,
+fn hit_sample<R: Rules>(
+    before: &Before<R>,
     span: &RaySpan,
     crossing: &CellCrossing,
     here: &Here,
     evidence: &mut ScanEvidence,
     log: &mut HitLog,
 ) {
-    let opts = before.opts;
+    let (opts, rules) = (before.opts, before.rules);
     let (p, z) = span.hit_probability_and_height(opts, crossing);
     let (dir, s2) = (span.dir, span.s2);
     // How far above the band of the cell's surface the hit lies, in standard deviations: above it, a structure
     // over the surface (if it stands out of the scan's hits: `ceiling_hit`).
-    let ceiling_rule = opts.overhead_hits == OverheadHits::Ceiling;
+    let ceiling_rule = rules.ceiling();
     // The cell's surface, and the noise the beam has where it meets it, for the rules that ask.
     let surface = z
-        .filter(|_| ceiling_rule || opts.vertical_variance)
+        .filter(|_| ceiling_rule || rules.vertical_variance())
         .and_then(|_| here.cell().and_then(Cell::elevation))
-        .map(|e| (e, span.s2_meeting(e.mean_m, opts)));
+        .map(|e| (e, span.s2_meeting(e.mean_m, rules.vertical_variance())));
     let overhead_score = z.filter(|_| ceiling_rule).and_then(|z| {
         let (e, s2) = surface?;
         let grown = Elevation {
@@ -451,7 +482,7 @@ fn hit_sample(
             // Under the vertical-variance rule a hit is weighted by the noise its beam has where it meets the
             // surface, not by the error its range reported: short readings report less and would pull it up.
             let s2 = surface
-                .filter(|_| opts.vertical_variance)
+                .filter(|_| rules.vertical_variance())
                 .map_or(s2, |(_, meeting)| meeting);
             evidence.add_hit(log, p, z, s2, opts.scan_hit_elevation, opts.surface_band_sigmas)
         }
