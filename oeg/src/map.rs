@@ -14,14 +14,17 @@
 
 mod apply;
 mod batch;
+mod deferred_hits;
 mod integrate;
 pub use batch::BatchError;
 pub use integrate::RAYS_BETWEEN_STOP_CHECKS;
 mod layers;
 mod rule_evidence;
 mod rule_set;
+mod runs;
 mod sample;
 mod scratch;
+mod span;
 mod stance;
 mod update;
 mod views;

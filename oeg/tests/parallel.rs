@@ -238,3 +238,53 @@ fn a_batch_near_its_memory_limit_maps_and_stops_where_one_thread_does() {
         }
     }
 }
+
+#[test]
+fn long_scans_of_the_recommended_model_near_its_memory_limit_map_and_stop_where_one_thread_does() {
+    // Under `robust` a long scan's later runs defer their hits and replay them into the first run's log after
+    // the grids merge; the log must stay within the limit as one thread's does, and a refused scan leaves the
+    // map as one thread leaves it.
+    let scans = &synthetic_scans()[..2];
+    let run = |threads: usize, limit: u64| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| {
+            let mut config = MapConfig::new(0.1);
+            config.model = MapPreset::Robust.model(&RobotProfile::default());
+            config.memory_limit_bytes = limit;
+            let mut map = Map::new(config).expect("valid");
+            let taken = scans.iter().take_while(|s| map.integrate(s).is_ok()).count();
+            let held = map.memory_bytes() + map.scratch_bytes();
+            assert!(
+                held <= limit,
+                "{held} B held under {limit} B on {threads} threads"
+            );
+            (taken, map_to_bytes(&map))
+        })
+    };
+    // The least limit under which one thread maps every scan, by bisection.
+    let (mut refused, mut taken) = (1u64 << 16, 1u64 << 30);
+    assert!(run(1, refused).0 < scans.len(), "{:?}", run(1, refused).0);
+    assert!(run(1, taken).0 == scans.len(), "{:?}", run(1, taken).0);
+    while taken - refused > 64 * 1024 {
+        let mid = refused + (taken - refused) / 2;
+        if run(1, mid).0 == scans.len() {
+            taken = mid;
+        } else {
+            refused = mid;
+        }
+    }
+    for limit in [refused / 2, refused, taken, taken + 64 * 1024, 2 * taken] {
+        let (scans_taken, one) = run(1, limit);
+        for threads in [2, 3] {
+            let (taken_here, bytes) = run(threads, limit);
+            assert_eq!(taken_here, scans_taken, "limit {limit} B on {threads} threads");
+            assert!(
+                bytes == one,
+                "limit {limit} B: the map on {threads} threads differs"
+            );
+        }
+    }
+}

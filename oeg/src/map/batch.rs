@@ -13,7 +13,7 @@ use super::apply::ScanUpdate;
 use super::integrate::{SHORT_SCAN_RAYS, gather_rays};
 use super::rule_set::OptionRules;
 use super::sample::{Before, Sampling};
-use super::scratch::{Evidence, PaperEvidence, ScanScratch, Scratch};
+use super::scratch::{Evidence, HitSink, PaperEvidence, ScanScratch, Scratch};
 use super::update::update_cell;
 use super::{IntegrationStats, Map};
 use crate::error::Error;
@@ -271,7 +271,10 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     scans: &[S],
     (scratch, lists): (&mut Scratch<E>, &mut [TouchedCells<E>]),
     budget: u64,
-) -> Option<IntegrationStats> {
+) -> Option<IntegrationStats>
+where
+    (): HitSink<E>,
+{
     if E::READS_MAP {
         return None;
     }

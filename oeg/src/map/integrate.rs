@@ -3,21 +3,21 @@
 //!
 //! Both steps use the threads rayon gives them ([`rayon::current_num_threads`]), and the map is the same, bit
 //! for bit, on any number: a long scan's rays are gathered in runs, one per thread, into separate scratch
-//! grids merged in the runs' order (where the evidence merges exactly: [`Evidence::exact_merge`]), and the
-//! touched tiles are updated in parallel, each cell from its own evidence alone.
+//! grids merged in the runs' order (`runs.rs`, where the evidence merges exactly: [`Evidence::exact_merge`],
+//! the hits whose combination depends on their order replayed after), and the touched tiles are updated in
+//! parallel, each cell from its own evidence alone.
 
 use std::ops::Range;
 
-use rayon::prelude::*;
-
 use super::apply::{ScanUpdate, apply};
 use super::rule_set::{BandCeilingRules, OptionRules, Rules};
+use super::runs::gather_in_parallel;
 use super::sample::{Before, Here, RaySpan, Sampling};
-use super::scratch::{Evidence, ExactMerge, HitStore, ScanScratch, Scratch};
+use super::scratch::{Evidence, HitSink, HitStore, ScanScratch, Scratch};
 use super::{IntegrationStats, Map};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex, marked_by_tile};
+use crate::storage::{TILE_CELLS, TILE_SHIFT, TileGrid, TileIndex};
 use crate::traversal::GroundTraversal;
 
 /// Rays between two questions of [`Map::integrate_unless`]'s `stop`: a few milliseconds of work.
@@ -181,126 +181,14 @@ fn gather<E: Sampling, R: Rules>(
     }
 }
 
-/// [`gather`] in `runs` runs of consecutive rays, the first into `scratch.main`, the others into the workers'
-/// grids, each under an equal share of the memory left; then the workers' evidence merged into the first's in
-/// the runs' order.
-fn gather_in_parallel<E: Sampling, R: Rules>(
-    before: &Before<R>,
-    scan: &Scan,
-    scratch: &mut Scratch<E>,
-    runs: usize,
-    scratch_limit: u64,
-    merge: ExactMerge<E>,
-    stop: &(impl Fn() -> bool + Sync),
-) -> Result<IntegrationStats> {
-    // Workers' grids are kept, with their pooled tiles, for the next scan that needs them (here or in
-    // `Map::integrate_batch`).
-    if scratch.workers.len() < runs - 1 {
-        scratch.workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
-    }
-    let bounds = balanced_runs(scan, runs, before.geometry.resolution_m());
-    let share = scratch_limit / runs as u64;
-    let grids: Vec<&mut TileGrid<E>> = std::iter::once(&mut scratch.main)
-        .chain(scratch.workers.iter_mut())
-        .take(runs)
-        .collect();
-    let run_stats = grids
-        .into_par_iter()
-        .enumerate()
-        .map(|(k, grid)| {
-            let rays = bounds[k]..bounds[k + 1];
-            let mut stats = IntegrationStats::default();
-            // Evidence that merges keeps nothing beside its grid ([`ExactMerge`]).
-            let mut hits = E::Hits::default();
-            gather_rays(before, scan, rays, (grid, &mut hits), share, &mut stats, stop).map(|()| stats)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    merge_runs(
-        &mut scratch.main,
-        &mut scratch.workers[..runs - 1],
-        scratch_limit,
-        merge,
-    )
-    .map_err(|e| Error::MemoryLimit {
-        requested_bytes: e.requested_bytes,
-        limit_bytes: before.memory_limit_bytes,
-    })?;
-    Ok(run_stats
-        .into_iter()
-        .fold(IntegrationStats::default(), |mut a, s| {
-            a += s;
-            a
-        }))
-}
-
-/// Merges the workers' evidence into `main`'s, in the workers' order, where each cell's evidence merges exactly
-/// (`merge`): first the tiles `main` lacks are placed, in order, under `limit_bytes`, and the rows the workers
-/// wrote are marked in `main` (the update visits them, and skips the cells no ray touched); then tile by tile
-/// in parallel, each worker's cells are merged and reset where they are read, and the workers take their tiles
-/// back.
-fn merge_runs<E: Evidence>(
-    main: &mut TileGrid<E>,
-    workers: &mut [TileGrid<E>],
-    limit_bytes: u64,
-    merge: ExactMerge<E>,
-) -> std::result::Result<(), crate::storage::CapacityExceeded> {
-    for worker in workers.iter() {
-        for (tile, _, marked) in worker.marked_tiles() {
-            let slot = main.slot_or_insert(tile, limit_bytes)?;
-            main.mark_rows(slot, marked.rows_covered());
-        }
-    }
-    let fill = main.fill();
-    // Every worker tile has its tile in `main`, placed above; a worker's evidence is reset in any case.
-    let work = marked_by_tile(main, workers.iter_mut());
-    work.into_par_iter().for_each(|(mut merged, runs)| {
-        for (evidence, marked) in runs {
-            if let Some(merged) = merged.as_deref_mut() {
-                marked.for_each(|k| {
-                    // An untouched cell's evidence merges as nothing.
-                    if !evidence[k].paper().is_untouched() {
-                        merge.merge(&mut merged[k], &evidence[k]);
-                    }
-                });
-            }
-            marked.reset(evidence, fill);
-        }
-    });
-    workers.iter_mut().for_each(TileGrid::release_reset);
-    Ok(())
-}
-
-/// The bounds of `runs` runs of consecutive rays of `scan` with about equal work: a ray's walk crosses about
-/// one cell per cell size of its length over the ground, so a camera's frame, whose upper rows reach far and
-/// lower rows near, is not cut at its middle ray. Any cut gives the same map (the runs merge exactly); this
-/// one keeps the threads equally busy.
-fn balanced_runs(scan: &Scan, runs: usize, resolution_m: f64) -> Vec<usize> {
-    let work: Vec<f64> = scan
-        .rays
-        .iter()
-        .scan(0.0, |total, ray| {
-            let v = ray.offset_in_world;
-            *total += f64::from(v.x.hypot(v.y)) / resolution_m + 1.0;
-            Some(*total)
-        })
-        .collect();
-    let total = work.last().copied().unwrap_or(0.0);
-    let mut bounds: Vec<usize> = (0..runs)
-        .map(|k| work.partition_point(|&w| w < total * k as f64 / runs as f64))
-        .collect();
-    bounds[0] = 0;
-    bounds.push(scan.rays.len());
-    bounds
-}
-
 /// Casts the scan's rays `rays` into `grid` and what its evidence keeps beside it (at most `limit_bytes` of
 /// both): each ray's span ([`RaySpan::of`]), checked against the grid and the limit ([`walk_of`]), then what
 /// each crossed cell learns from it ([`Sampling`]).
-pub(super) fn gather_rays<E: Sampling, R: Rules>(
+pub(super) fn gather_rays<E: Sampling, R: Rules, L: HitSink<E>>(
     before: &Before<R>,
     scan: &Scan,
     rays: Range<usize>,
-    (grid, hits): (&mut TileGrid<E>, &mut E::Hits),
+    (grid, hits): (&mut TileGrid<E>, &mut L),
     limit_bytes: u64,
     stats: &mut IntegrationStats,
     stop: &impl Fn() -> bool,
@@ -324,10 +212,10 @@ pub(super) fn gather_rays<E: Sampling, R: Rules>(
         let walk_limit = limit_bytes.saturating_sub(hits.memory_bytes());
         let scratch = (&mut *grid, &mut *hits);
         match (span.hit.is_some(), by_cell) {
-            (true, true) => sample_walk::<E, R, true, true>(before, &span, walk, scratch, walk_limit)?,
-            (true, false) => sample_walk::<E, R, true, false>(before, &span, walk, scratch, walk_limit)?,
-            (false, true) => sample_walk::<E, R, false, true>(before, &span, walk, scratch, walk_limit)?,
-            (false, false) => sample_walk::<E, R, false, false>(before, &span, walk, scratch, walk_limit)?,
+            (true, true) => sample_walk::<E, R, L, true, true>(before, &span, walk, scratch, walk_limit)?,
+            (true, false) => sample_walk::<E, R, L, true, false>(before, &span, walk, scratch, walk_limit)?,
+            (false, true) => sample_walk::<E, R, L, false, true>(before, &span, walk, scratch, walk_limit)?,
+            (false, false) => sample_walk::<E, R, L, false, false>(before, &span, walk, scratch, walk_limit)?,
         }
     }
     Ok(())
@@ -339,11 +227,11 @@ pub(super) fn gather_rays<E: Sampling, R: Rules>(
 /// ([`TileGrid::slot_tile_and_marks_mut`], [`SHORT_SCAN_RAYS`]). `HIT`: whether the ray hit something
 /// (else every cell it crosses is cleared: [`Sampling::cleared`]).
 #[inline(always)]
-fn sample_walk<E: Sampling, R: Rules, const HIT: bool, const BY_CELL: bool>(
+fn sample_walk<E: Sampling, R: Rules, L: HitSink<E>, const HIT: bool, const BY_CELL: bool>(
     before: &Before<R>,
     span: &RaySpan,
     mut walk: GroundTraversal,
-    (grid, hits): (&mut TileGrid<E>, &mut E::Hits),
+    (grid, hits): (&mut TileGrid<E>, &mut L),
     limit_bytes: u64,
 ) -> Result<()> {
     let mut z_enter_m = span.height_at(span.l_lo);

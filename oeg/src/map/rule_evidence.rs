@@ -1,12 +1,14 @@
 //! Every rule's evidence ([`ModelOptions`](crate::model::ModelOptions)): the part of a cell's evidence every sample touches, kept in the
 //! scratch's grid, and the part only hits touch, kept in a list beside it.
 
-use super::scratch::{Evidence, HitStore, PaperEvidence};
+pub(crate) use super::deferred_hits::DeferredHits;
+use super::scratch::{Evidence, ExactMerge, HitLevels, HitSink, HitStore, PaperEvidence, SampledHit};
+use crate::model::ModelOptions;
 use crate::model::SeenFrom;
 use crate::model::{
     CeilingHit, Elevation, Level, ScanHitElevation, overhead_significant, spread_variance, surface_level,
 };
-use crate::storage::{CapacityExceeded, TileIndex};
+use crate::storage::{CapacityExceeded, TileGrid, TileIndex};
 
 /// What one scan says about one cell under every rule of [`ModelOptions`](crate::model::ModelOptions), the part every sample reads or
 /// writes: the paper's evidence, what a free sample judges against the cell's surface and ceiling, and where
@@ -137,6 +139,19 @@ impl ScanEvidence {
         ceiling_contradicted: false,
         visited: false,
     };
+
+    /// Adds what a later run of the same scan's rays said, gathered apart with its hits deferred
+    /// ([`DeferredHits`]): every field of the grid's part is a maximum, a minimum or a flag, so afterwards
+    /// `self` is what gathering both runs would have given, but for the later run's hits, replayed next.
+    pub(super) fn merge_later(&mut self, later: &Self) {
+        self.paper.merge_later(&later.paper);
+        if later.ceiling_clear_m > self.ceiling_clear_m {
+            self.ceiling_clear_m = later.ceiling_clear_m;
+        }
+        self.band_contradicted |= later.band_contradicted;
+        self.ceiling_contradicted |= later.ceiling_contradicted;
+        self.visited |= later.visited;
+    }
 
     /// The cell's hit evidence in `log`, if the scan hit it.
     #[inline(always)]
@@ -312,9 +327,59 @@ impl HitStore for HitLog {
     }
 }
 
+impl HitSink<ScanEvidence> for HitLog {
+    #[inline(always)]
+    fn add_hit(
+        &mut self,
+        evidence: &mut ScanEvidence,
+        _at: (TileIndex, usize),
+        hit: SampledHit,
+        levels: HitLevels,
+    ) {
+        evidence.add_hit(self, hit.p, hit.z_m, hit.var_m2, levels.rule, levels.band_sigmas);
+    }
+
+    #[inline(always)]
+    fn add_overhead(
+        &mut self,
+        evidence: &mut ScanEvidence,
+        (tile, _): (TileIndex, usize),
+        hit: SampledHit,
+        side: SeenFrom,
+        score: f32,
+    ) {
+        evidence.add_overhead((self, tile), hit.p, hit.z_m, hit.var_m2, side, score);
+    }
+}
+
 impl Evidence for ScanEvidence {
     const NONE: Self = Self::NONE;
     type Hits = HitLog;
+    type Deferred = DeferredHits;
+
+    /// A free sample may leave the probability as it was and still say something of the cell's ceiling.
+    fn is_touched(&self) -> bool {
+        !self.paper.is_untouched()
+            || self.ceiling_contradicted
+            || self.band_contradicted
+            || self.ceiling_clear_m > f32::NEG_INFINITY
+    }
+
+    /// The grid's part merges exactly under every option: the hits, whose combination depends on their
+    /// order, are deferred and replayed.
+    fn exact_merge(_opts: &ModelOptions) -> Option<ExactMerge<Self>> {
+        Some(ExactMerge::new(ScanEvidence::merge_later))
+    }
+
+    fn replay(
+        grid: &mut TileGrid<Self>,
+        log: &mut HitLog,
+        deferred: &DeferredHits,
+        opts: &ModelOptions,
+        limit_bytes: u64,
+    ) -> Result<(), CapacityExceeded> {
+        deferred.replay(grid, log, opts, limit_bytes)
+    }
 
     #[inline(always)]
     fn paper(&self) -> &PaperEvidence {

@@ -2,7 +2,7 @@
 //! (Algorithm 1 reads the map as it was before the scan), kept in tiles beside the map and reused scan after
 //! scan.
 
-pub(crate) use super::rule_evidence::{HitEvidence, HitLog, HitSample, ScanEvidence};
+pub(crate) use super::rule_evidence::{HitEvidence, HitSample, ScanEvidence};
 use crate::model::{FreeSpaceOccupancy, ModelOptions, OverheadHits, ScanHitElevation};
 use crate::storage::{CapacityExceeded, TileGrid, TileIndex};
 
@@ -96,9 +96,16 @@ impl PaperEvidence {
 /// ([`ScanScratch::for_model`]), so a model pays in memory and in work only for the rules it uses.
 pub(crate) trait Evidence: Copy + Send + Sync + 'static {
     const NONE: Self;
-    /// What the evidence keeps beside its grid: the scan's [`HitLog`], or nothing.
-    type Hits: HitStore;
+    /// What the evidence keeps beside its grid: the scan's [`super::rule_evidence::HitLog`], or nothing.
+    type Hits: HitStore + HitSink<Self>;
+    /// What a later run of a scan gathered in parallel keeps beside its grid: its hits, in their order, to be
+    /// replayed into the first run's once the grids are merged ([`Evidence::replay`]), or nothing.
+    type Deferred: HitStore + HitSink<Self>;
     fn paper(&self) -> &PaperEvidence;
+    /// Whether a sample of the scan left anything in the cell's evidence (an untouched cell merges as nothing).
+    fn is_touched(&self) -> bool {
+        !self.paper().is_untouched()
+    }
     /// Called as a ray's sample is about to be added: whether the scan's rays had not crossed the cell yet
     /// (the cell's offset is then marked, so that the update and the clearing visit the cells crossed alone).
     fn first_visit(&mut self) -> bool;
@@ -121,19 +128,32 @@ pub(crate) trait Evidence: Copy + Send + Sync + 'static {
     }
     /// How evidence gathered from a later run of a scan's rays merges into an earlier run's to give exactly
     /// the evidence of one run under `opts` ([`PaperEvidence::merge_later`]), if it can: then the rays may be
-    /// gathered in parallel. Only evidence that keeps nothing beside its grid merges ([`ExactMerge`]).
+    /// gathered in parallel. What the evidence keeps beside its grid is replayed, in the runs' order, after
+    /// the grids merge ([`Evidence::replay`]).
     fn exact_merge(_opts: &ModelOptions) -> Option<ExactMerge<Self>> {
         None
     }
+    /// Adds a later run's `deferred` hits, in their order, to `grid` (the runs' grids merged into it) and its
+    /// `hits`, as gathering the runs one after the other would have, the log within `limit_bytes`.
+    ///
+    /// # Errors
+    /// When the log would pass `limit_bytes`.
+    fn replay(
+        _grid: &mut TileGrid<Self>,
+        _hits: &mut Self::Hits,
+        _deferred: &Self::Deferred,
+        _opts: &ModelOptions,
+        _limit_bytes: u64,
+    ) -> Result<(), CapacityExceeded> {
+        Ok(())
+    }
 }
 
-/// [`Evidence::exact_merge`]'s merge of a later run's evidence into an earlier run's. Only evidence that keeps
-/// nothing beside its grid (`Hits = ()`) can make one: the runs' grids are all that is merged, so the workers
-/// that gather side by side need no hit log of their own.
+/// [`Evidence::exact_merge`]'s merge of a later run's grid evidence into an earlier run's.
 #[derive(Clone, Copy)]
 pub(crate) struct ExactMerge<E>(fn(&mut E, &E));
 
-impl<E: Evidence<Hits = ()>> ExactMerge<E> {
+impl<E: Evidence> ExactMerge<E> {
     pub(crate) fn new(merge: fn(&mut E, &E)) -> Self {
         Self(merge)
     }
@@ -155,6 +175,79 @@ pub(crate) trait HitStore: Default + Clone + std::fmt::Debug + Send + Sync {
     fn memory_bytes(&self) -> u64;
 }
 
+/// Where a scan's hits go as they are sampled: into the cell's evidence and what it keeps beside the grid at
+/// once ([`super::rule_evidence::HitLog`], or nothing for the paper's evidence), or, for a later run of a scan
+/// gathered in parallel, into a list replayed in order once the runs' grids are merged
+/// ([`super::rule_evidence::DeferredHits`]).
+pub(crate) trait HitSink<E>: HitStore {
+    /// A sample with `p > l_occ` at `at` (its tile and offset): an elevation measurement `z_m` of variance
+    /// `var_m2` (eq. 12), combined with the scan's others by `rule`, `band_sigmas` wide
+    /// ([`ScanHitElevation::HighestLevel`]).
+    fn add_hit(&mut self, evidence: &mut E, at: (TileIndex, usize), hit: SampledHit, levels: HitLevels);
+    /// A hit above the cell's surface band ([`crate::OverheadHits::Ceiling`]) by a beam from `side`, `score`
+    /// standard deviations above the surface.
+    fn add_overhead(
+        &mut self,
+        evidence: &mut E,
+        at: (TileIndex, usize),
+        hit: SampledHit,
+        side: crate::model::SeenFrom,
+        score: f32,
+    );
+}
+
+/// One sample's hit: its probability (eq. 10) and height with its variance (eq. 12).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SampledHit {
+    pub(crate) p: f32,
+    pub(crate) z_m: f32,
+    pub(crate) var_m2: f32,
+}
+
+/// How a scan's hits in a cell combine: [`ModelOptions::scan_hit_elevation`] and
+/// [`ModelOptions::surface_band_sigmas`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct HitLevels {
+    pub(crate) rule: ScanHitElevation,
+    pub(crate) band_sigmas: f32,
+}
+
+impl HitLevels {
+    pub(crate) fn of(opts: &ModelOptions) -> Self {
+        Self {
+            rule: opts.scan_hit_elevation,
+            band_sigmas: opts.surface_band_sigmas,
+        }
+    }
+}
+
+/// The paper's evidence keeps its hits in the grid alone.
+impl HitSink<PaperEvidence> for () {
+    #[inline(always)]
+    fn add_hit(
+        &mut self,
+        evidence: &mut PaperEvidence,
+        _at: (TileIndex, usize),
+        hit: SampledHit,
+        levels: HitLevels,
+    ) {
+        evidence.add_hit(hit.p, hit.z_m, hit.var_m2, levels.rule);
+    }
+
+    /// The paper's rules keep no structure over a cell: a hit over its surface counts for the occupancy.
+    #[inline(always)]
+    fn add_overhead(
+        &mut self,
+        evidence: &mut PaperEvidence,
+        _at: (TileIndex, usize),
+        hit: SampledHit,
+        _side: crate::model::SeenFrom,
+        _score: f32,
+    ) {
+        evidence.raise_p(hit.p);
+    }
+}
+
 impl HitStore for () {
     #[inline(always)]
     fn reserve(&mut self, _entries: usize, _limit_bytes: u64) -> Result<(), CapacityExceeded> {
@@ -171,6 +264,7 @@ impl HitStore for () {
 impl Evidence for PaperEvidence {
     const NONE: Self = Self::NONE;
     type Hits = ();
+    type Deferred = ();
 
     #[inline(always)]
     fn paper(&self) -> &PaperEvidence {
