@@ -55,7 +55,9 @@ impl Map {
     /// thousands of scans of a few hundred rays each, use every core; a long scan is split between the threads
     /// on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold less than half the
     /// memory limit, each thread's grid, and its lists, under a sixteenth of that half: near it, or for a scan
-    /// of very long rays, scans go one at a time, so that a limit stops the same scan at the same place.
+    /// of very long rays, scans go one at a time, so that a limit stops the same scan at the same place. Under
+    /// other models the scans go one at a time on a thread of the pool, where a long scan's runs and a large
+    /// update share their work without a hand-over from outside it.
     ///
     /// # Errors
     /// The first scan [`Map::integrate`] refuses, with its place in `scans`.
@@ -64,20 +66,26 @@ impl Map {
         scans: &[S],
     ) -> Result<IntegrationStats, BatchError> {
         // A model whose measurements correlate takes each scan's correlation from the views before it.
-        if rayon::current_num_threads() < 2
-            || !matches!(self.scratch, ScanScratch::Paper(_))
-            || self.config.model.measurement_correlation > 0.0
-        {
-            let mut total = IntegrationStats::default();
-            for (index, scan) in scans.iter().enumerate() {
-                total += self
-                    .integrate(scan.borrow())
-                    .map_err(|error| BatchError { index, error })?;
-            }
-            return Ok(total);
+        if rayon::current_num_threads() < 2 {
+            return self.integrate_one_by_one(scans);
         }
-        // On a worker thread, so that the threads meet without a hand-over from outside the pool.
+        // On a worker thread, so that the threads meet without a hand-over from outside the pool: a scan's
+        // parallel steps (a long scan's runs, a large update) then share out their work within the pool.
+        if !matches!(self.scratch, ScanScratch::Paper(_)) || self.config.model.measurement_correlation > 0.0 {
+            return rayon::scope(|_| self.integrate_one_by_one(scans));
+        }
         rayon::scope(|_| self.integrate_in_windows(scans))
+    }
+
+    /// [`Map::integrate`] on each of `scans` in turn.
+    fn integrate_one_by_one<S: Borrow<Scan>>(&mut self, scans: &[S]) -> Result<IntegrationStats, BatchError> {
+        let mut total = IntegrationStats::default();
+        for (index, scan) in scans.iter().enumerate() {
+            total += self
+                .integrate(scan.borrow())
+                .map_err(|error| BatchError { index, error })?;
+        }
+        Ok(total)
     }
 
     /// [`Map::integrate_batch`] on a thread of the pool, for a model whose scratch is the paper's evidence.
