@@ -18,6 +18,15 @@ enum Feed {
     Batch,
 }
 
+/// `f` on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(f)
+}
+
 fn map_of(preset: MapPreset, resolution_m: f64) -> Map {
     let mut config = MapConfig::new(resolution_m);
     config.model = preset.model(&RobotProfile::default());
@@ -27,11 +36,7 @@ fn map_of(preset: MapPreset, resolution_m: f64) -> Map {
 /// Integrates `scans` into a fresh map of `preset` at `resolution_m` on a pool of `threads` threads and
 /// returns the saved map's bytes.
 fn map_bytes_on(threads: usize, feed: Feed, preset: MapPreset, resolution_m: f64, scans: &[Scan]) -> Vec<u8> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("a thread pool");
-    pool.install(|| {
+    on_threads(threads, || {
         let mut map = map_of(preset, resolution_m);
         match feed {
             Feed::OneByOne => {
@@ -149,11 +154,7 @@ fn a_batch_stops_at_the_scan_the_map_refuses_with_the_scans_before_it_in_the_map
     let mut bad = scans[..12].to_vec();
     bad[9].rays[3] = Ray::hit(Vector3::new(f32::NAN, 0.0, 0.0));
     for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a thread pool");
-        pool.install(|| {
+        on_threads(threads, || {
             let mut map = map_of(MapPreset::Paper, 0.05);
             let err = map.integrate_batch(&bad).expect_err("scan 9 holds a NaN");
             assert_eq!(err.index, 9, "{err}");
@@ -209,11 +210,7 @@ fn a_batch_near_its_memory_limit_maps_and_stops_where_one_thread_does() {
         64 * full_bytes,
     ] {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("a thread pool");
-            pool.install(|| {
+            on_threads(threads, || {
                 let mut config = MapConfig::new(0.05);
                 config.memory_limit_bytes = limit;
                 let mut map = Map::new(config).expect("valid");
@@ -246,11 +243,7 @@ fn long_scans_of_the_recommended_model_near_its_memory_limit_map_and_stop_where_
     // map as one thread leaves it.
     let scans = &synthetic_scans()[..2];
     let run = |threads: usize, limit: u64| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a thread pool");
-        pool.install(|| {
+        on_threads(threads, || {
             let mut config = MapConfig::new(0.1);
             config.model = MapPreset::Robust.model(&RobotProfile::default());
             config.memory_limit_bytes = limit;

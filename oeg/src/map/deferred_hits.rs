@@ -89,7 +89,8 @@ impl HitSink<ScanEvidence> for DeferredHits {
 
 impl DeferredHits {
     /// Adds the hits, in their order, to `grid`'s evidence (the runs' grids merged into it, so every tile
-    /// they were gathered in is there) and its `log`, within `limit_bytes` ([`super::scratch::Evidence::replay`]).
+    /// they were gathered in is there) and its `log`, within `limit_bytes`
+    /// ([`super::scratch::Evidence::replay`]).
     pub(super) fn replay(
         &self,
         grid: &mut TileGrid<ScanEvidence>,

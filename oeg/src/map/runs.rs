@@ -66,17 +66,21 @@ pub(super) fn gather_in_parallel<E: Sampling, R: Rules>(
         merge,
     )
     .map_err(refusal)?;
+    // The log grows under what the grids and the lists still to replay leave of the limit.
     let grids_bytes = scratch.memory_bytes() - scratch.hits.memory_bytes();
+    let mut deferred_bytes: u64 = gathered.iter().map(|(_, d)| d.memory_bytes()).sum();
     let mut stats = IntegrationStats::default();
     for (run_stats, deferred) in gathered {
+        let limit = scratch_limit.saturating_sub(grids_bytes + deferred_bytes);
         E::replay(
             &mut scratch.main,
             &mut scratch.hits,
             &deferred,
             before.opts,
-            scratch_limit.saturating_sub(grids_bytes),
+            limit,
         )
         .map_err(refusal)?;
+        deferred_bytes -= deferred.memory_bytes();
         stats += run_stats;
     }
     Ok(stats)
