@@ -164,14 +164,21 @@ impl Sampling for PaperEvidence {
     #[inline(always)]
     fn near_hit<R: Rules, L: HitSink<Self>>(
         &mut self,
-        _log: &mut L,
+        log: &mut L,
         before: &Before<R>,
         span: &RaySpan,
         crossing: &CellCrossing,
-        _here: &Here,
+        here: &Here,
     ) {
         match span.hit_probability_and_height(before.opts, crossing) {
-            (p, Some(z)) => self.add_hit(p, z, span.s2, before.opts.scan_hit_elevation),
+            (p, Some(z)) => {
+                let hit = SampledHit {
+                    p,
+                    z_m: z,
+                    var_m2: span.s2,
+                };
+                log.add_hit(self, here.at(), hit, HitLevels::of(before.opts));
+            }
             (p, None) => self.raise_p(p),
         }
     }

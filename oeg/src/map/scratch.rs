@@ -234,7 +234,8 @@ impl HitSink<PaperEvidence> for () {
         evidence.add_hit(hit.p, hit.z_m, hit.var_m2, levels.rule);
     }
 
-    /// The paper's rules keep no structure over a cell: a hit over its surface counts for the occupancy.
+    /// The paper's rules keep no structure over a cell and never ask this: a hit over its surface would count
+    /// for the occupancy.
     #[inline(always)]
     fn add_overhead(
         &mut self,
