@@ -91,7 +91,13 @@ impl Mapping {
         let s = &loaded.scenario;
         // What the sensors could see, on the scenario's own window (the first map's: the others share the
         // simulation and differ in their model, or in a sweep's resolution, where the judge leaves it out).
-        let observability = Observability::new(simulation.world(), &loaded.window, s.robot.profile());
+        let mut observability = Observability::new(simulation.world(), &loaded.window, s.robot.profile());
+        if !s.actors.is_empty() {
+            // DA counts only the cells whose ghosts the sensors could have cleared (`judge::ghosts`).
+            let (covered_until_s, _) =
+                crate::judge::ghosts::actor_cells(&s.actors, s.duration_s, &loaded.window);
+            observability = observability.tracking_actors(covered_until_s);
+        }
         let max_range_m: Vec<f64> = simulation.sensors().iter().map(|x| x.spec.max_range_m).collect();
         let blind_band = blind_band(
             simulation.sensors(),

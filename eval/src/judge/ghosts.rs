@@ -6,9 +6,12 @@
 //!   remover must not remove.
 //! - **DA** (dynamic accuracy): of the cells an actor's footprint covered at some time of the run, that are
 //!   truly drivable and that no actor covers at its end, the fraction the map calls drivable at the end: the
-//!   ghosts removed. A cell the map leaves uncertain only because the sensors measured it too coarsely to tell
-//!   a step ([`oeg::Doubt::Imprecise`]: a stereo camera's ground a few metres away) says nothing about a
-//!   ghost, and is left out.
+//!   ghosts removed. Two kinds of cell say nothing about a ghost and are left out: one the map leaves
+//!   uncertain only because the sensors measured it too coarsely to tell a step ([`oeg::Doubt::Imprecise`]:
+//!   a stereo camera's ground a few metres away), and one where a ray met an actor at a height the sensors
+//!   never observed again after the last actor left ([`sim::observability::Observability::seen_again`]): no
+//!   map of these readings could have cleared what the actor left there, as SA leaves out the blocked cells
+//!   no ray could tell about.
 //! - **AA** (associated accuracy): `sqrt(SA x DA)`.
 //!
 //! Both are over the scored cells (observed, on the terrain, not left unknown): a cell the map never observed
@@ -16,6 +19,7 @@
 //! of 82.37 and DUFOMap 98.56.
 
 use oeg::{CellIndex, Doubt, GridWindow, Traversability};
+use sim::observability::Observability;
 use sim::scenario::{Actor, Scenario};
 
 use crate::judge::verdict::{Verdict, Verdicts};
@@ -54,11 +58,11 @@ fn fraction(part: u64, whole: u64) -> Option<f64> {
     (whole > 0).then(|| part as f64 / whole as f64)
 }
 
-/// Per cell of `window`: whether an actor's footprint covered its centre at some time of `[0, end_s]`, and
-/// whether one covers it at `end_s`. Each actor's path is followed in steps of at most half a cell.
-pub(crate) fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> (Vec<bool>, Vec<bool>) {
+/// Per cell of `window`: the last time in `[0, end_s]` an actor's footprint covered its centre (-inf: never),
+/// and whether one covers it at `end_s`. Each actor's path is followed in steps of at most half a cell.
+pub(crate) fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> (Vec<f64>, Vec<bool>) {
     let n = window.num_cells() as usize;
-    let (mut swept, mut at_end) = (vec![false; n], vec![false; n]);
+    let (mut covered_until_s, mut at_end) = (vec![f64::NEG_INFINITY; n], vec![false; n]);
     let res = window.resolution_m();
     for actor in actors {
         let Some([t0, t1]) = actor.time_span_s() else {
@@ -74,7 +78,9 @@ pub(crate) fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> 
         let step_s = max_speed_step(actor, res / 2.0);
         loop {
             if let Some((x, y)) = actor.position_at(t) {
-                mark_disk(&mut swept, window, (x, y), radius);
+                for_disk(window, (x, y), radius, |k| {
+                    covered_until_s[k] = covered_until_s[k].max(t)
+                });
             }
             if t >= t1 {
                 break;
@@ -82,10 +88,10 @@ pub(crate) fn actor_cells(actors: &[Actor], end_s: f64, window: &GridWindow) -> 
             t = (t + step_s).min(t1);
         }
         if let Some((x, y)) = actor.position_at(end_s) {
-            mark_disk(&mut at_end, window, (x, y), radius);
+            for_disk(window, (x, y), radius, |k| at_end[k] = true);
         }
     }
-    (swept, at_end)
+    (covered_until_s, at_end)
 }
 
 /// The time step that moves `actor` at most `step_m` on its fastest leg (the whole span when it never
@@ -105,8 +111,8 @@ fn max_speed_step(actor: &Actor, step_m: f64) -> f64 {
     step.max(1e-3)
 }
 
-/// Marks the cells of `window` whose centre lies within `radius_m` of `(x, y)`.
-fn mark_disk(cells: &mut [bool], window: &GridWindow, (x, y): (f64, f64), radius_m: f64) {
+/// Calls `f` with the raster offset of every cell of `window` whose centre lies within `radius_m` of `(x, y)`.
+fn for_disk(window: &GridWindow, (x, y): (f64, f64), radius_m: f64, mut f: impl FnMut(usize)) {
     let (geometry, region) = (window.geometry(), window.region());
     let (Some(lo), Some(hi)) = (
         geometry.cell_of(x - radius_m, y - radius_m),
@@ -121,33 +127,58 @@ fn mark_disk(cells: &mut [bool], window: &GridWindow, (x, y): (f64, f64), radius
             if (cx - x).hypot(cy - y) <= radius_m
                 && let Some(k) = region.offset(c)
             {
-                cells[k] = true;
+                f(k);
             }
         }
     }
 }
 
 /// SA and DA's counts for the map judged in `verdicts` (with its observability marks), the actors of `s`
-/// over its whole duration; `doubts` says why the map left each cell undecided (empty: it does not say).
-pub(crate) fn count(s: &Scenario, verdicts: &Verdicts, doubts: &[Option<Doubt>]) -> GhostCounts {
-    let (swept, at_end) = actor_cells(&s.actors, s.duration_s, &verdicts.window);
+/// over its whole duration; `doubts` says why the map left each cell undecided (empty: it does not say);
+/// `observability`, the run's observability truth over the same region, says which cells the sensors observed
+/// again after the actors left (none, another region, or not tracked: every cell counts as observed again).
+pub(crate) fn count(
+    s: &Scenario,
+    verdicts: &Verdicts,
+    doubts: &[Option<Doubt>],
+    observability: Option<&Observability>,
+) -> GhostCounts {
+    let (covered_until_s, at_end) = actor_cells(&s.actors, s.duration_s, &verdicts.window);
+    let seen_again = observability
+        .filter(|o| o.window == verdicts.window)
+        .and_then(Observability::seen_again);
+    tally(verdicts, doubts, &covered_until_s, &at_end, seen_again.as_deref())
+}
+
+/// [`count`] over the actors' cells: `covered_until_s` and `at_end` from [`actor_cells`], `seen_again` from
+/// the observability truth.
+fn tally(
+    verdicts: &Verdicts,
+    doubts: &[Option<Doubt>],
+    covered_until_s: &[f64],
+    at_end: &[bool],
+    seen_again: Option<&[bool]>,
+) -> GhostCounts {
     let mut c = GhostCounts::default();
     for k in 0..verdicts.verdict.len() {
         if verdicts.verdict[k] == Verdict::NotScored {
             continue;
         }
-        let imprecise = doubts.get(k).copied().flatten() == Some(Doubt::Imprecise);
+        let swept = covered_until_s[k] > f64::NEG_INFINITY;
         let truth = verdicts.truth[k];
         let mapped = verdicts.mapped[k];
-        if truth.is_blocked() && !swept[k] && !verdicts.unobservable[k] {
+        if truth.is_blocked() && !swept && !verdicts.unobservable[k] {
             c.num_static_cells += 1;
             c.static_kept_cells += u64::from(matches!(
                 mapped,
                 Traversability::Blocked | Traversability::Uncertain
             ));
-        } else if !truth.is_blocked() && swept[k] && !at_end[k] && !imprecise {
-            c.num_dynamic_cells += 1;
-            c.dynamic_cleared_cells += u64::from(mapped.is_drivable());
+        } else if !truth.is_blocked() && swept && !at_end[k] {
+            let imprecise = doubts.get(k).copied().flatten() == Some(Doubt::Imprecise);
+            if !imprecise && seen_again.is_none_or(|seen| seen[k]) {
+                c.num_dynamic_cells += 1;
+                c.dynamic_cleared_cells += u64::from(mapped.is_drivable());
+            }
         }
     }
     c
@@ -174,9 +205,15 @@ mod tests {
             CellRegion::from_corners(CellIndex::new(0, -20), CellIndex::new(99, 19)).expect("region");
         // Walks 4 m along y = 0 in 2 s (2 m/s), then leaves the scene.
         let walker = person(vec![[0.0, 0.5, 0.0], [2.0, 4.5, 0.0]]);
-        let (swept, at_end) = actor_cells(&[walker], 10.0, &GridWindow::new(g, region));
+        let (covered_until_s, at_end) = actor_cells(&[walker], 10.0, &GridWindow::new(g, region));
         assert!(at_end.iter().all(|c| !c));
-        let at = |x: f64, y: f64| swept[region.offset(g.cell_of(x, y).expect("cell")).expect("inside")];
+        let until =
+            |x: f64, y: f64| covered_until_s[region.offset(g.cell_of(x, y).expect("cell")).expect("inside")];
+        let at = |x: f64, y: f64| until(x, y) > f64::NEG_INFINITY;
+        // The cell centred at x = 2.025 m is covered while the walker is within 0.25 m of it: until it reaches
+        // x = 2.275 m, at 0.8875 s, or up to a step of half a cell (0.0125 s at 2 m/s) before.
+        let last = until(2.025, 0.0);
+        assert!((0.8875 - 0.0125 - 1e-9..=0.8875 + 1e-9).contains(&last), "{last}");
         // Every cell along the way, no gap between the steps; the band is 0.5 m wide.
         for k in 0..80 {
             assert!(
@@ -200,6 +237,47 @@ mod tests {
             .flat_map(|j| (-10..10).map(move |i| (i, j)))
             .filter(|(i, j)| (f64::from(*i) + 0.5).hypot(f64::from(*j) + 0.5) <= r)
             .count()
+    }
+
+    #[test]
+    fn da_leaves_out_a_cell_whose_ghost_the_sensors_never_observed_again() {
+        use crate::judge::verdict::{TruthClass, Verdict, Verdicts};
+        let g = GridGeometry::new(0.05).expect("grid");
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(3, 0)).expect("region");
+        // Four truly drivable cells. The first three were covered by an actor: the map cleared the first; the
+        // second is a ghost at a height no ray crossed again; the third a ghost the sensors did observe
+        // again. The fourth was never covered.
+        let mapped = vec![
+            Traversability::Traversable,
+            Traversability::Blocked,
+            Traversability::Blocked,
+            Traversability::Traversable,
+        ];
+        let verdicts = Verdicts {
+            window: GridWindow::new(g, region),
+            truth: vec![TruthClass::Drivable; 4],
+            verdict: vec![
+                Verdict::RightDrivable,
+                Verdict::OverCautious,
+                Verdict::OverCautious,
+                Verdict::RightDrivable,
+            ],
+            mapped,
+            unobservable: vec![false; 4],
+        };
+        let covered_until_s = [1.0, 1.0, 1.0, f64::NEG_INFINITY];
+        let at_end = [false; 4];
+        let seen = tally(
+            &verdicts,
+            &[],
+            &covered_until_s,
+            &at_end,
+            Some(&[true, false, true, true]),
+        );
+        assert_eq!((seen.num_dynamic_cells, seen.dynamic_cleared_cells), (2, 1));
+        // Without the observability truth, every covered cell counts, the ghost nobody could clear included.
+        let all = tally(&verdicts, &[], &covered_until_s, &at_end, None);
+        assert_eq!((all.num_dynamic_cells, all.dynamic_cleared_cells), (3, 1));
     }
 
     #[test]

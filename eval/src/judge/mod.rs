@@ -94,7 +94,10 @@ pub fn score(
     let mut metrics = metrics::compute(&s.name, s.seed, &estimate, truth, &verdicts);
     let plan = plan_check::check(s, &verdicts)?;
     record_plan(&mut metrics, &plan);
-    record_ghosts(&mut metrics, &ghosts::count(s, &verdicts, &estimate.doubts));
+    record_ghosts(
+        &mut metrics,
+        &ghosts::count(s, &verdicts, &estimate.doubts, sensed.observability),
+    );
     if let Some(n) = sensed.navigation {
         record_navigation(&mut metrics, n);
     }

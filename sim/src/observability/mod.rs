@@ -24,6 +24,11 @@ use serde::Serialize;
 use crate::sensors::{SensorScan, SimSensor};
 use crate::world::World;
 
+mod seen_again;
+
+pub use seen_again::SeenAgain;
+use seen_again::Sight;
+
 /// The observability of every cell of a region.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Observability {
@@ -37,6 +42,9 @@ pub struct Observability {
     pub band_hit: Vec<bool>,
     /// Rays that told something (cast, and not a hole or a dropout).
     pub num_rays: u64,
+    /// Per cell an actor covers, once asked for ([`Observability::tracking_actors`]): the heights at which
+    /// rays met the actor over it, and those the sensors observed again after it left.
+    seen_again: Option<SeenAgain>,
     profile: RobotProfile,
     /// Ground height at each cell's centre, metres (NaN off the terrain).
     ground_m: Vec<f64>,
@@ -66,11 +74,37 @@ impl Observability {
             clearance: vec![false; cells.len()],
             band_hit: vec![false; cells.len()],
             num_rays: 0,
+            seen_again: None,
             profile,
             ground_m,
             ground_lo_m,
             ground_hi_m,
         }
+    }
+
+    /// Also keeps, over the cells actors cover (`covered_until_s`: per cell of the window, the last time an
+    /// actor covered it, -inf: never), the heights at which rays met an actor there and those observed again
+    /// after it left ([`SeenAgain`]; 16 bytes a cell): what tells a ghost a map should have cleared from one
+    /// no map of these readings could.
+    ///
+    /// # Panics
+    /// If `covered_until_s` does not hold one time per cell of the window.
+    #[must_use]
+    pub fn tracking_actors(mut self, covered_until_s: Vec<f64>) -> Self {
+        assert_eq!(covered_until_s.len(), self.step.len(), "one time per cell");
+        self.seen_again = Some(SeenAgain::new(
+            covered_until_s,
+            self.profile.height_m,
+            &self.window,
+        ));
+        self
+    }
+
+    /// Per cell, whether the sensors observed again, after the last actor left it, every height at which a
+    /// ray had met an actor over it (true for a cell no ray met an actor over); `None` unless asked for with
+    /// [`Observability::tracking_actors`].
+    pub fn seen_again(&self) -> Option<Vec<bool>> {
+        self.seen_again.as_ref().map(SeenAgain::cells)
     }
 
     /// Records the rays of one scan of a sensor whose range ends at `max_range_m`.
@@ -84,13 +118,19 @@ impl Observability {
         );
         // Each ray lists the cells it makes observable; the lists are merged by OR, so the order of the
         // threads does not matter.
-        let (steps, bands) = scan
+        let stamp_s = scan.stamp_s;
+        let ((x0, y0), (w, h)) = (self.window.min_corner_m(), self.window.size_m());
+        let region_m = ((x0, y0), (x0 + w, y0 + h));
+        let tracked_m = (self.seen_again.as_ref())
+            .filter(|s| s.may_see_again(stamp_s))
+            .and_then(SeenAgain::rect_m);
+        let (steps, bands, sights) = scan
             .rays
             .par_iter()
             .filter(|r| !r.true_range_m.is_nan())
             .fold(
-                || (Vec::new(), Vec::new()),
-                |(mut steps, mut bands), r| {
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(mut steps, mut bands, mut sights), r| {
                     let dir = rotation * r.vector_in_sensor.cast::<f64>().normalize();
                     let hit = r.true_range_m.is_finite();
                     let length = if hit {
@@ -102,17 +142,25 @@ impl Observability {
                     if hit && let Some(k) = this.offset_at(&end) {
                         // On the cell, and whether inside its band.
                         steps.push((k, (step..=height).contains(&(end.z - this.ground_m[k]))));
+                        if let Some(seen) = &this.seen_again {
+                            seen.ended(k, end.z - this.ground_m[k], stamp_s, &mut sights);
+                        }
                     }
-                    this.walk_band(&origin, &dir, length, &mut bands);
-                    (steps, bands)
+                    let ray = (&origin, &dir, length);
+                    this.walk_band(ray, region_m, &mut bands);
+                    if let Some((seen, rect_m)) = this.seen_again.as_ref().zip(tracked_m) {
+                        this.walk_tracked(seen, ray, rect_m, stamp_s, &mut sights);
+                    }
+                    (steps, bands, sights)
                 },
             )
             .reduce(
-                || (Vec::new(), Vec::new()),
-                |(mut a, mut b), (c, d)| {
-                    a.extend(c);
-                    b.extend(d);
-                    (a, b)
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(mut a, mut b, mut c), (d, e, f)| {
+                    a.extend(d);
+                    b.extend(e);
+                    c.extend(f);
+                    (a, b, c)
                 },
             );
         self.num_rays += scan.rays.iter().filter(|r| !r.true_range_m.is_nan()).count() as u64;
@@ -123,26 +171,66 @@ impl Observability {
         for k in bands {
             self.clearance[k] = true;
         }
+        if let Some(seen) = &mut self.seen_again {
+            seen.record(sights);
+        }
     }
 
     fn offset_at(&self, p: &Point3<f64>) -> Option<usize> {
         self.window.offset_of(p.x, p.y)
     }
 
-    /// The cells whose band the ray from `origin` along the unit `dir` crosses within `length`.
-    fn walk_band(&self, origin: &Point3<f64>, dir: &Vector3<f64>, length: f64, out: &mut Vec<usize>) {
+    /// The cells whose band the ray crosses within the rectangle `rect_m` (the region's).
+    #[inline(never)]
+    fn walk_band(&self, ray: Ray<'_>, rect_m: Rect, out: &mut Vec<usize>) {
         let (step, height) = (
             f64::from(self.profile.max_step_m),
             f64::from(self.profile.height_m),
         );
-        // The part of the ray within the heights any cell's band can take.
-        let (z_lo, z_hi) = (self.ground_lo_m + step, self.ground_hi_m + height);
+        self.walk_heights(ray, (step, height), rect_m, |k, za, zb| {
+            let g = self.ground_m[k];
+            if g.is_finite() && za.max(zb) >= g + step && za.min(zb) <= g + height {
+                out.push(k);
+            }
+        });
+    }
+
+    /// What the ray says of the cells actors cover ([`SeenAgain::crossed`]), from their ground to the robot's
+    /// height, within the rectangle `rect_m` that holds them all.
+    #[inline(never)]
+    fn walk_tracked(&self, seen: &SeenAgain, ray: Ray<'_>, rect_m: Rect, t_s: f64, out: &mut Vec<Sight>) {
+        self.walk_heights(
+            ray,
+            (0.0, f64::from(self.profile.height_m)),
+            rect_m,
+            |k, za, zb| {
+                let g = self.ground_m[k];
+                if g.is_finite() {
+                    seen.crossed(k, (za - g, zb - g), t_s, out);
+                }
+            },
+        );
+    }
+
+    /// Calls `f(k, z_enter, z_leave)` for each cell `k` of the region the ray from `origin` along the unit
+    /// `dir` crosses within `length`, with the ray's heights where it enters and leaves the cell, over the part
+    /// of the ray that can lie between `lo_m` and `hi_m` over some cell's ground and within the rectangle
+    /// `rect_m` (its min and max corners, metres; the region's or a part of it).
+    #[inline(always)]
+    fn walk_heights(
+        &self,
+        (origin, dir, length): Ray<'_>,
+        (lo_m, hi_m): (f64, f64),
+        rect_m: Rect,
+        mut f: impl FnMut(usize, f64, f64),
+    ) {
+        // The part of the ray within those heights over any cell's ground.
+        let (z_lo, z_hi) = (self.ground_lo_m + lo_m, self.ground_hi_m + hi_m);
         let Some((mut t0, mut t1)) = slab(origin.z, dir.z, z_lo, z_hi, length) else {
             return;
         };
-        // ... and within the region.
-        let ((x0, y0), (w, h)) = (self.window.min_corner_m(), self.window.size_m());
-        let (x1, y1) = (x0 + w, y0 + h);
+        // ... and within the rectangle.
+        let ((x0, y0), (x1, y1)) = rect_m;
         for (o, d, a, b) in [(origin.x, dir.x, x0, x1), (origin.y, dir.y, y0, y1)] {
             match slab(o, d, a, b, length) {
                 Some((s0, s1)) => (t0, t1) = (t0.max(s0), t1.min(s1)),
@@ -181,11 +269,7 @@ impl Observability {
         for _ in 0..max_cells {
             let leave = next_x.min(next_y).min(t1);
             if let Some(k) = self.window.region().offset(cell) {
-                let g = self.ground_m[k];
-                let (za, zb) = (origin.z + dir.z * enter, origin.z + dir.z * leave);
-                if g.is_finite() && za.max(zb) >= g + step && za.min(zb) <= g + height {
-                    out.push(k);
-                }
+                f(k, origin.z + dir.z * enter, origin.z + dir.z * leave);
             }
             if leave >= t1 {
                 break;
@@ -201,6 +285,12 @@ impl Observability {
         }
     }
 }
+
+/// A ray: its origin, unit direction and length, metres.
+type Ray<'a> = (&'a Point3<f64>, &'a Vector3<f64>, f64);
+
+/// A rectangle of the ground plane: its min and max corners, metres.
+type Rect = ((f64, f64), (f64, f64));
 
 /// The interval of `t` in `[0, length]` over which `o + d t` lies within `[a, b]`.
 fn slab(o: f64, d: f64, a: f64, b: f64, length: f64) -> Option<(f64, f64)> {
