@@ -90,3 +90,52 @@ fn in_the_world_the_far_board_is_never_hit_and_the_near_one_is() {
     let (near, _) = board_band_hits(1.0);
     assert!(near > 0, "rays ended on the board at 1 m");
 }
+
+/// Over the cells a person standing 3 m ahead of a standing lidar covers: whether every height at which a ray
+/// met the person was seen again after they left, for a person who leaves at `leave_s` of a 2 s run.
+fn seen_again_after_leaving(leave_s: f64) -> Vec<bool> {
+    let person = format!(
+        "[[actors]]\nkind = \"person\"\nwaypoints = [[0.0, 3.0, 0.0], [{leave_s:?}, 3.0, 0.0], [{:?}, 3.0, 3.9]]\n",
+        leave_s + 0.5
+    );
+    let text = standing(&format!("{LIDAR}{person}")).replace("duration_s = 4.0", "duration_s = 2.0");
+    let loaded = common::load_text(&format!("person-{leave_s}"), &text).expect("valid");
+    let mut sim = Simulation::new(&loaded).expect("simulation");
+    let geometry = GridGeometry::new(0.05).expect("geometry");
+    let region = geometry.region_covering((2.6, -0.4), (3.4, 0.4)).expect("region");
+    let window = oeg::GridWindow::new(geometry, region);
+    // The cells of the person's disk, covered until they leave (and a little longer, as they walk off).
+    let covered_until_s: Vec<f64> = region
+        .cells()
+        .map(|c| {
+            let (x, y) = geometry.cell_center(c);
+            if (x - 3.0).hypot(y) <= 0.25 {
+                leave_s + 0.1
+            } else {
+                f64::NEG_INFINITY
+            }
+        })
+        .collect();
+    let mut o =
+        Observability::new(sim.world(), &window, RobotProfile::default()).tracking_actors(covered_until_s);
+    while let Some(scan) = sim.next_scan() {
+        o.observe(&scan, 100.0);
+    }
+    o.seen_again().expect("tracked")
+}
+
+#[test]
+fn a_person_who_left_is_seen_again_where_the_rings_met_them_and_one_who_stayed_is_not() {
+    // Left after half a second: the rings that met the person cross the same cells at the same heights in the
+    // scans after, so every height met is seen again.
+    let left = seen_again_after_leaving(0.5);
+    // Stayed to the end: the heights the rings met are never seen again.
+    let stayed = seen_again_after_leaving(1.95);
+    let unseen = stayed.iter().filter(|s| !**s).count();
+    assert!(unseen > 0, "the rings met the person who stayed");
+    assert!(
+        left.iter().all(|s| *s),
+        "{} cells not seen again",
+        left.iter().filter(|s| !**s).count()
+    );
+}

@@ -12,6 +12,9 @@
 //! A truly blocked cell that the map calls drivable is then *unsafe* when a ray could have told, and *blind*
 //! when none could: no map of these readings could have known (`oeg_eval::judge::verdict`).
 //!
+//! In scenes with people, over the cells they cover, it also keeps the heights at which rays met them and those
+//! observed again after they left ([`SeenAgain`]): which ghosts a map of these readings could have cleared.
+//!
 //! [`blind_band`] answers the same question on the geometry alone: for each range from the robot, the largest
 //! vertical gap between the sensors' rays within the robot's height band, on flat ground. A board thinner than
 //! the gap at a range can hide in it.
@@ -116,14 +119,15 @@ impl Observability {
             f64::from(self.profile.max_step_m),
             f64::from(self.profile.height_m),
         );
-        // Each ray lists the cells it makes observable; the lists are merged by OR, so the order of the
-        // threads does not matter.
         let stamp_s = scan.stamp_s;
         let ((x0, y0), (w, h)) = (self.window.min_corner_m(), self.window.size_m());
         let region_m = ((x0, y0), (x0 + w, y0 + h));
+        // The cells people covered are walked again from the ground up, once one of them has been left.
         let tracked_m = (self.seen_again.as_ref())
             .filter(|s| s.may_see_again(stamp_s))
             .and_then(SeenAgain::rect_m);
+        // Each ray lists the cells it makes observable; the lists are merged by OR, so the order of the
+        // threads does not matter.
         let (steps, bands, sights) = scan
             .rays
             .par_iter()
