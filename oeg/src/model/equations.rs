@@ -33,10 +33,7 @@ pub fn inverse_sensor_model(l: f32, l_p: f32, dl: f32, k: f32, p_min: f32) -> f3
     let base = p_occ(l, l_p, p_min);
     let z = (l - l_p) / dl;
     let peak = k / (dl * (2.0 * std::f32::consts::PI).sqrt());
-    // At the measured range itself (every hit's end cell) the bump is exactly 1: `exp(-0)` is 1 in IEEE 754,
-    // so skipping the call changes no bit and saves the most frequent one.
-    let bump = if z == 0.0 { 1.0 } else { (-0.5 * z * z).exp() };
-    base + (peak + 0.5 - base) * bump
+    base + (peak + 0.5 - base) * (-0.5 * z * z).exp()
 }
 
 /// Bounds an inverse-sensor-model probability into `[p_min, p_max]`, inside the open interval (0, 1), so its
