@@ -40,12 +40,14 @@ pub struct Estimate {
     /// Whether the map observed the cell: for the testbed's map, a ray reached it; for another mapper's
     /// arrays, the cell has a decision, an elevation or an occupancy probability.
     pub observed: Vec<bool>,
-    /// Elevation, world z, metres; NaN where there is no estimate.
-    pub elevation_m: Vec<f64>,
+    /// Elevation, world z, metres; NaN where there is no estimate. The three layers are kept in single
+    /// precision, as the testbed's map stores them (another mapper's values are rounded to it: 6e-8 of their
+    /// size, a tenth of a micrometre at 1 m), which halves the judge's largest rasters.
+    pub elevation_m: Vec<f32>,
     /// The elevation's variance, m^2; NaN where there is none.
-    pub variance_m2: Vec<f64>,
+    pub variance_m2: Vec<f32>,
     /// Occupancy probability; NaN where there is none.
-    pub occupancy: Vec<f64>,
+    pub occupancy: Vec<f32>,
     /// The testbed's own map's bookkeeping (zero for another mapper's arrays).
     pub totals: MapTotals,
 }
@@ -204,14 +206,7 @@ impl Estimate {
     /// Rasters too large for the map's memory limit.
     pub fn of_map(map: &Map, truth: &TruthRaster, rule: TraversabilityRule) -> Result<Self> {
         let region = *truth.window.region();
-        let layer = |kind: LayerKind| -> Result<Vec<f64>> {
-            Ok(map
-                .layer(kind, region)?
-                .values
-                .into_iter()
-                .map(f64::from)
-                .collect())
-        };
+        let layer = |kind: LayerKind| -> Result<Vec<f32>> { Ok(map.layer(kind, region)?.values) };
         // The occupancy is NaN exactly where no ray reached the cell.
         let occupancy = layer(LayerKind::OccupancyProbability)?;
         let (decisions, doubts) = map.traversability_and_doubt_layers(region, &truth.profile, rule)?;
@@ -294,9 +289,9 @@ impl Estimate {
             e.decisions.push(decision);
             e.observed
                 .push(decision != Traversability::Unknown || !elevation.is_nan() || !occupancy.is_nan());
-            e.elevation_m.push(elevation);
-            e.variance_m2.push(variance);
-            e.occupancy.push(occupancy);
+            e.elevation_m.push(elevation as f32);
+            e.variance_m2.push(variance as f32);
+            e.occupancy.push(occupancy as f32);
         }
         Ok(e)
     }
@@ -304,7 +299,12 @@ impl Estimate {
     /// The elevation and its variance at raster offset `k`, when the map has one.
     pub fn elevation(&self, k: usize) -> Option<(f64, f64)> {
         let e = self.elevation_m[k];
-        (!e.is_nan()).then_some((e, self.variance_m2[k]))
+        (!e.is_nan()).then(|| (f64::from(e), f64::from(self.variance_m2[k])))
+    }
+
+    /// The occupancy probability at raster offset `k` (NaN where there is none).
+    pub fn occupancy(&self, k: usize) -> f64 {
+        f64::from(self.occupancy[k])
     }
 }
 

@@ -143,15 +143,20 @@ pub(crate) fn count(
     doubts: &[Option<Doubt>],
     observability: Option<&Observability>,
 ) -> GhostCounts {
-    let (covered_until_s, at_end) = actor_cells(&s.actors, s.duration_s, &verdicts.window);
+    // With no actor no cell was swept: SA alone is counted, without a raster of times as large as the region.
+    let (covered_until_s, at_end) = if s.actors.is_empty() {
+        (Vec::new(), Vec::new())
+    } else {
+        actor_cells(&s.actors, s.duration_s, &verdicts.window)
+    };
     let seen_again = observability
         .filter(|o| o.window == verdicts.window)
         .and_then(Observability::seen_again);
     tally(verdicts, doubts, &covered_until_s, &at_end, seen_again.as_deref())
 }
 
-/// [`count`] over the actors' cells: `covered_until_s` and `at_end` from [`actor_cells`], `seen_again` from
-/// the observability truth.
+/// [`count`] over the actors' cells: `covered_until_s` and `at_end` from [`actor_cells`] (empty: no cell was
+/// swept), `seen_again` from the observability truth.
 fn tally(
     verdicts: &Verdicts,
     doubts: &[Option<Doubt>],
@@ -164,7 +169,7 @@ fn tally(
         if verdicts.verdict[k] == Verdict::NotScored {
             continue;
         }
-        let swept = covered_until_s[k] > f64::NEG_INFINITY;
+        let swept = covered_until_s.get(k).is_some_and(|&t| t > f64::NEG_INFINITY);
         let truth = verdicts.truth[k];
         let mapped = verdicts.mapped[k];
         if truth.is_blocked() && !swept && !verdicts.unobservable[k] {
@@ -173,7 +178,7 @@ fn tally(
                 mapped,
                 Traversability::Blocked | Traversability::Uncertain
             ));
-        } else if !truth.is_blocked() && swept && !at_end[k] {
+        } else if !truth.is_blocked() && swept && !at_end.get(k).copied().unwrap_or(false) {
             let imprecise = doubts.get(k).copied().flatten() == Some(Doubt::Imprecise);
             if !imprecise && seen_again.is_none_or(|seen| seen[k]) {
                 c.num_dynamic_cells += 1;

@@ -169,7 +169,7 @@ pub fn compute(
         if t.elevation_m.is_nan() {
             continue;
         }
-        let p = estimate.occupancy[k];
+        let p = estimate.occupancy(k);
         if !p.is_nan() {
             let o = if verdicts.truth[k].is_blocked() { 1.0 } else { 0.0 };
             brier_sum += (p - o) * (p - o);

@@ -122,7 +122,7 @@ fn applicable(
     expectations: &std::collections::BTreeMap<String, scenario::Expectation>,
     estimate: &Estimate,
 ) -> std::collections::BTreeMap<String, scenario::Expectation> {
-    let has = |layer: &[f64]| layer.iter().any(|v| !v.is_nan());
+    let has = |layer: &[f32]| layer.iter().any(|v| !v.is_nan());
     let (elevation, occupancy) = (has(&estimate.elevation_m), has(&estimate.occupancy));
     expectations
         .iter()

@@ -61,7 +61,7 @@ pub(crate) fn wrong_cells(estimate: &Estimate, truth: &TruthRaster, verdicts: &V
             y_m: crate::output::round_m(y_m),
             error,
             mapped: verdicts.mapped[k].name(),
-            occupancy_probability: estimate.occupancy[k] as f32,
+            occupancy_probability: estimate.occupancy[k],
             elevation_m: e.map(|(e, _)| e),
             elevation_std_m: e.and_then(|(_, var)| (!var.is_nan()).then(|| var.sqrt())),
             true_elevation_m: t.elevation_m,
