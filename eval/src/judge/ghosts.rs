@@ -286,6 +286,42 @@ mod tests {
     }
 
     #[test]
+    fn without_actors_no_cell_is_dynamic_and_every_observable_blocked_cell_counts_for_sa() {
+        use crate::judge::verdict::{TruthClass, Verdict, Verdicts};
+        let g = GridGeometry::new(0.05).expect("grid");
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(3, 0)).expect("region");
+        // Three truly blocked cells, the map kept two (one as uncertain); the third no ray could tell about.
+        // A drivable cell beside them.
+        let verdicts = Verdicts {
+            window: GridWindow::new(g, region),
+            truth: vec![
+                TruthClass::Step,
+                TruthClass::Step,
+                TruthClass::Step,
+                TruthClass::Drivable,
+            ],
+            verdict: vec![
+                Verdict::RightBlocked,
+                Verdict::Uncertain,
+                Verdict::Unsafe,
+                Verdict::RightDrivable,
+            ],
+            mapped: vec![
+                Traversability::Blocked,
+                Traversability::Uncertain,
+                Traversability::Traversable,
+                Traversability::Traversable,
+            ],
+            unobservable: vec![false, false, true, false],
+        };
+        // No actor: no raster of times (what `count` passes for a scene without actors).
+        let c = tally(&verdicts, &[], &[], &[], None);
+        assert_eq!((c.num_static_cells, c.static_kept_cells), (2, 2));
+        assert_eq!((c.num_dynamic_cells, c.dynamic_cleared_cells), (0, 0));
+        assert_eq!(c.associated_accuracy(), None);
+    }
+
+    #[test]
     fn aa_is_the_geometric_mean_and_undefined_without_dynamic_cells() {
         let c = GhostCounts {
             num_static_cells: 100,
