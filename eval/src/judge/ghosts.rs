@@ -144,24 +144,23 @@ pub(crate) fn count(
     observability: Option<&Observability>,
 ) -> GhostCounts {
     // With no actor no cell was swept: SA alone is counted, without a raster of times as large as the region.
-    let (covered_until_s, at_end) = if s.actors.is_empty() {
-        (Vec::new(), Vec::new())
-    } else {
-        actor_cells(&s.actors, s.duration_s, &verdicts.window)
-    };
+    let actors = (!s.actors.is_empty()).then(|| actor_cells(&s.actors, s.duration_s, &verdicts.window));
     let seen_again = observability
         .filter(|o| o.window == verdicts.window)
         .and_then(Observability::seen_again);
-    tally(verdicts, doubts, &covered_until_s, &at_end, seen_again.as_deref())
+    let swept = actors
+        .as_ref()
+        .map(|(until, at_end)| (until.as_slice(), at_end.as_slice()));
+    tally(verdicts, doubts, swept, seen_again.as_deref())
 }
 
-/// [`count`] over the actors' cells: `covered_until_s` and `at_end` from [`actor_cells`] (empty: no cell was
-/// swept), `seen_again` from the observability truth.
+/// [`count`] over the actors' cells: `swept`, the last time an actor covered each cell and whether one covers
+/// it at the end, from [`actor_cells`] (`None`: no actor, no cell was swept); `seen_again` from the
+/// observability truth.
 fn tally(
     verdicts: &Verdicts,
     doubts: &[Option<Doubt>],
-    covered_until_s: &[f64],
-    at_end: &[bool],
+    swept: Option<(&[f64], &[bool])>,
     seen_again: Option<&[bool]>,
 ) -> GhostCounts {
     let mut c = GhostCounts::default();
@@ -169,7 +168,9 @@ fn tally(
         if verdicts.verdict[k] == Verdict::NotScored {
             continue;
         }
-        let swept = covered_until_s.get(k).is_some_and(|&t| t > f64::NEG_INFINITY);
+        let (swept, left) = swept.map_or((false, false), |(until, at_end)| {
+            (until[k] > f64::NEG_INFINITY, !at_end[k])
+        });
         let truth = verdicts.truth[k];
         let mapped = verdicts.mapped[k];
         if truth.is_blocked() && !swept && !verdicts.unobservable[k] {
@@ -178,7 +179,7 @@ fn tally(
                 mapped,
                 Traversability::Blocked | Traversability::Uncertain
             ));
-        } else if !truth.is_blocked() && swept && !at_end.get(k).copied().unwrap_or(false) {
+        } else if !truth.is_blocked() && swept && left {
             let imprecise = doubts.get(k).copied().flatten() == Some(Doubt::Imprecise);
             if !imprecise && seen_again.is_none_or(|seen| seen[k]) {
                 c.num_dynamic_cells += 1;
@@ -272,16 +273,11 @@ mod tests {
         };
         let covered_until_s = [1.0, 1.0, 1.0, f64::NEG_INFINITY];
         let at_end = [false; 4];
-        let seen = tally(
-            &verdicts,
-            &[],
-            &covered_until_s,
-            &at_end,
-            Some(&[true, false, true, true]),
-        );
+        let swept = Some((&covered_until_s[..], &at_end[..]));
+        let seen = tally(&verdicts, &[], swept, Some(&[true, false, true, true]));
         assert_eq!((seen.num_dynamic_cells, seen.dynamic_cleared_cells), (2, 1));
         // Without the observability truth, every covered cell counts, the ghost nobody could clear included.
-        let all = tally(&verdicts, &[], &covered_until_s, &at_end, None);
+        let all = tally(&verdicts, &[], swept, None);
         assert_eq!((all.num_dynamic_cells, all.dynamic_cleared_cells), (3, 1));
     }
 
@@ -315,7 +311,7 @@ mod tests {
             unobservable: vec![false, false, true, false],
         };
         // No actor: no raster of times (what `count` passes for a scene without actors).
-        let c = tally(&verdicts, &[], &[], &[], None);
+        let c = tally(&verdicts, &[], None, None);
         assert_eq!((c.num_static_cells, c.static_kept_cells), (2, 2));
         assert_eq!((c.num_dynamic_cells, c.dynamic_cleared_cells), (0, 0));
         assert_eq!(c.associated_accuracy(), None);
