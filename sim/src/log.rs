@@ -386,6 +386,7 @@ impl<'a> LogReader<'a> {
                 vector_in_sensor: v,
                 range_sigma_m: sigma,
                 true_range_m: f32::NAN,
+                true_hit_actor: false,
             });
         }
         let [world_from_sensor, estimated_world_from_sensor] = poses;

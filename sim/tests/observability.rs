@@ -1,5 +1,5 @@
 //! What the sensors could see, on the geometry alone and in a simulated world: a board that fits between two
-//! lidar rings is blind at 3 m and observable at 1 m.
+//! lidar rings is blind at 3 m and observable at 1 m; a person is neither ground nor structure.
 
 #![allow(
     clippy::disallowed_methods,
@@ -137,5 +137,50 @@ fn a_person_who_left_is_seen_again_where_the_rings_met_them_and_one_who_stayed_i
         left.iter().all(|s| *s),
         "{} cells not seen again",
         left.iter().filter(|s| !**s).count()
+    );
+}
+
+#[test]
+fn a_ray_that_ends_on_a_person_tells_nothing_of_the_cell_under_them() {
+    // A person stands 1 m ahead of a standing lidar, where the rings end inside the robot's height band: on the
+    // person, not on any structure. No cell's band was hit, and the ray is marked as the person's.
+    let person = "[[actors]]\nkind = \"person\"\nwaypoints = [[0.0, 1.0, 0.0], [10.0, 1.0, 0.0]]\n";
+    let text = standing(&format!("{LIDAR}{person}"));
+    let loaded = common::load_text("person-band", &text).expect("valid");
+    let mut sim = Simulation::new(&loaded).expect("simulation");
+    let geometry = GridGeometry::new(0.05).expect("geometry");
+    let region = geometry.region_covering((0.6, -0.4), (1.4, 0.4)).expect("region");
+    let window = oeg::GridWindow::new(geometry, region);
+    let mut o = Observability::new(sim.world(), &window, RobotProfile::default());
+    // Rays that truly ended on the person inside the band: 3.5 cm to 0.46 m over the ground.
+    let mut on_person_in_band = 0;
+    while let Some(scan) = sim.next_scan() {
+        if scan.stamp_s > 1.0 {
+            break;
+        }
+        let (origin, rotation) = (
+            scan.world_from_sensor.translation.vector,
+            scan.world_from_sensor.rotation,
+        );
+        on_person_in_band += scan
+            .rays
+            .iter()
+            .filter(|r| r.true_hit_actor)
+            .map(|r| {
+                origin.z
+                    + (rotation * r.vector_in_sensor.cast::<f64>().normalize()).z * f64::from(r.true_range_m)
+            })
+            .filter(|z| (0.035..=0.46).contains(z))
+            .count();
+        o.observe(&scan, 100.0);
+    }
+    assert!(
+        on_person_in_band > 100,
+        "the rings met the person in the band: {on_person_in_band} rays"
+    );
+    assert!(
+        o.band_hit.iter().all(|h| !h),
+        "{} cells hit in their band",
+        o.band_hit.iter().filter(|h| **h).count()
     );
 }

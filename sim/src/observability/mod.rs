@@ -1,11 +1,13 @@
 //! What the sensors could see: an observability truth, from the rays the simulated sensors cast and from
 //! nothing the map computes. Per cell of the map region:
 //!
-//! * the **step** decision was observable when a ray truly ended on the cell (on its surface);
+//! * the **step** decision was observable when a ray truly ended on the cell (on its surface: the ground or a
+//!   static obstacle, not a person standing there);
 //! * the **clearance** decision: a ray crossed, or ended inside, the band over the cell between a step above
 //!   the ground (`max_step_m`) and the robot's height, the band where a structure the robot cannot pass under
 //!   would have to be ([`Observability::clearance`]). Over a cell that truly holds such a structure, only a
-//!   ray that *ended* inside the band ([`Observability::band_hit`]) can have told: a ray that crossed the band
+//!   ray that *ended* inside the band, on the structure ([`Observability::band_hit`]; a ray that met a person
+//!   who walked under it tells nothing of the structure), can have told: a ray that crossed the band
 //!   there without ending passed above or below the structure (between two lidar rings, say), and saw
 //!   nothing of it.
 //!
@@ -37,11 +39,12 @@ use seen_again::Sight;
 pub struct Observability {
     /// The cells, on the map's grid.
     pub window: GridWindow,
-    /// Per cell: a ray truly ended on it.
+    /// Per cell: a ray truly ended on it, on the ground or a static obstacle (not a person).
     pub step: Vec<bool>,
     /// Per cell: a ray crossed or ended inside its band between a step and the robot's height.
     pub clearance: Vec<bool>,
-    /// Per cell: a ray ended inside that band (it hit something there: a structure's underside or side).
+    /// Per cell: a ray ended inside that band on the scene's own surfaces (a structure's underside or side;
+    /// not a person).
     pub band_hit: Vec<bool>,
     /// Rays that told something (cast, and not a hole or a dropout).
     pub num_rays: u64,
@@ -144,8 +147,12 @@ impl Observability {
                     };
                     let end = origin + dir * length;
                     if hit && let Some(k) = this.offset_at(&end) {
-                        // On the cell, and whether inside its band.
-                        steps.push((k, (step..=height).contains(&(end.z - this.ground_m[k]))));
+                        // On the cell, and whether inside its band: on the ground or a structure. A ray that
+                        // ended on a person tells nothing of either (the board a person walks under, the
+                        // curb a person stands on).
+                        if !r.true_hit_actor {
+                            steps.push((k, (step..=height).contains(&(end.z - this.ground_m[k]))));
+                        }
                         if let Some(seen) = &this.seen_again {
                             seen.ended(k, end.z - this.ground_m[k], stamp_s, &mut sights);
                         }

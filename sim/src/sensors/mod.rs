@@ -47,6 +47,9 @@ pub struct SensorRay {
     /// infinite when it hit nothing within range, NaN when it told nothing (a hole, a dropout, a hit outside
     /// the sensor's range) or the scan was read from a log. The observability truth reads it.
     pub true_range_m: f32,
+    /// Whether that noise-free hit was on a moving actor (a person) rather than the ground or a static
+    /// obstacle: such a ray tells nothing of the scene's own surfaces (the observability truth).
+    pub true_hit_actor: bool,
 }
 
 impl PartialEq for SensorRay {
@@ -56,6 +59,7 @@ impl PartialEq for SensorRay {
             && self.vector_in_sensor == other.vector_in_sensor
             && self.range_sigma_m == other.range_sigma_m
             && self.true_range_m.to_bits() == other.true_range_m.to_bits()
+            && self.true_hit_actor == other.true_hit_actor
     }
 }
 
@@ -328,6 +332,7 @@ impl SimSensor {
             vector_in_sensor: nominal.cast(),
             range_sigma_m: 0.0,
             true_range_m: f32::NAN,
+            true_hit_actor: false,
         };
         // A stream per beam: the same numbers whatever thread casts it.
         let mut rng = Stream::seed_from_u64(
@@ -402,6 +407,7 @@ impl SimSensor {
                 vector_in_sensor: (nominal * measured).cast(),
                 range_sigma_m: sigma_at_measured as f32,
                 true_range_m: hit.distance_m as f32,
+                true_hit_actor: matches!(hit.kind, HitKind::Actor { .. }),
             },
             source,
         )
