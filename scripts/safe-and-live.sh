@@ -12,6 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 baseline=${1:-}
+base=""
 commit=$(git rev-parse --short HEAD)
 [ -n "$(git status --porcelain)" ] && commit="$commit with uncommitted changes"
 if [ -n "${2:-}" ]; then
@@ -19,17 +20,21 @@ if [ -n "${2:-}" ]; then
     mkdir -p "$work"
 else
     work=$(mktemp -d)
-    trap 'git -C "$root" worktree remove --force "$work/baseline" 2>/dev/null || true; rm -rf "$work"' EXIT
+    trap 'git -C "$root" worktree remove --force "$work/baseline-$base" 2>/dev/null || true; rm -rf "$work"' EXIT
 fi
 
 cargo build --quiet --release -p oeg-testbed
 builds=("$commit:$root/target/release/oeg")
 if [ -n "$baseline" ]; then
-    if [ ! -x "$work/target/release/oeg" ]; then
-        git -C "$root" worktree add --quiet --detach "$work/baseline" "$baseline"
-        (cd "$work/baseline" && CARGO_TARGET_DIR="$work/target" cargo build --quiet --release -p oeg-testbed)
+    # One worktree and target folder per baseline commit, so that a folder kept between calls never runs one
+    # commit's sweep with another's build.
+    base=$(git rev-parse --short "$baseline")
+    if [ ! -x "$work/target-$base/release/oeg" ]; then
+        git -C "$root" worktree remove --force "$work/baseline-$base" 2>/dev/null || true
+        git -C "$root" worktree add --quiet --detach "$work/baseline-$base" "$baseline"
+        (cd "$work/baseline-$base" && CARGO_TARGET_DIR="$work/target-$base" cargo build --quiet --release -p oeg-testbed)
     fi
-    builds=("$(git rev-parse --short "$baseline"):$work/target/release/oeg" "${builds[@]}")
+    builds=("$base:$work/target-$base/release/oeg" "${builds[@]}")
 fi
 
 tables=()
