@@ -5,19 +5,16 @@
 
 mod common;
 
-use std::path::PathBuf;
-
 use common::{oeg, ok, root, s, temp_dir};
 
-/// `oeg run` of `tests/scenes/<scene>.toml` under `preset`: the output folder and its `navigation.json`.
-fn run_under(scene: &str, preset: &str) -> (PathBuf, serde_json::Value) {
+/// `oeg run` of `tests/scenes/<scene>.toml` under `preset`: its `navigation.json`.
+fn run_under(scene: &str, preset: &str) -> serde_json::Value {
     let out = temp_dir("nav-live", &format!("{scene}_{preset}"));
     let file = root().join("tests/scenes").join(format!("{scene}.toml"));
     let set = format!("map.preset={preset}");
     ok(&oeg(&["run", s(&file), "--set", &set, "--out", s(&out)]));
-    let nav = serde_json::from_slice(&std::fs::read(out.join("navigation.json")).expect("navigation.json"))
-        .expect("json");
-    (out, nav)
+    serde_json::from_slice(&std::fs::read(out.join("navigation.json")).expect("navigation.json"))
+        .expect("json")
 }
 
 #[test]
@@ -26,7 +23,7 @@ fn a_gap_between_two_walls_seen_from_one_side_is_driven_through() {
     // the frontier rule must not close it. Under both presets the robot drives through (the straight line is
     // 5.5 m; the way round a wall's end is longer than 6 m), touching nothing.
     for preset in ["paper", "robust"] {
-        let (_, nav) = run_under("nav_gap", preset);
+        let nav = run_under("nav_gap", preset);
         assert_eq!(nav["outcome"], "reached", "{preset}: {nav:#}");
         assert_eq!(nav["contacts"], 0, "{preset}: {nav:#}");
         let driven = nav["driven_length_m"].as_f64().expect("length");
@@ -41,7 +38,7 @@ fn a_person_who_blocks_the_corridor_and_leaves_is_waited_for() {
     // goal and waits, mapping: the lasers see the corridor clear, the next plan goes through, and the robot
     // reaches the goal under both presets.
     for preset in ["paper", "robust"] {
-        let (_, nav) = run_under("nav_person_blocks", preset);
+        let nav = run_under("nav_person_blocks", preset);
         assert_eq!(nav["outcome"], "reached", "{preset}: {nav:#}");
         assert_eq!(nav["contacts"], 0, "{preset}: {nav:#}");
         let events = nav["events"].as_array().expect("events");
