@@ -47,7 +47,7 @@ impl ScoringTruth {
                 scenario: s.clone(),
                 raster: truth_of(loaded, mapping.simulation.world(), progress)?,
                 returns: Some(mapping.simulation.obstacle_returns().clone()),
-                observability: Some(mapping.observability),
+                observability: Some(mapping.observability.finished()),
             });
         }
         // The static world's truth (people and the robot left out) is the same at any time.

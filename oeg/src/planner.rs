@@ -344,10 +344,10 @@ pub fn plan_or_why(
         let inflated = std::mem::replace(&mut forbidden, inflation.forbidden(clearance));
         // The way out of the inflation is a cost, as costmap_2d's: a path leaves it the shortest way rather
         // than run along it at the start's clearance, where the footprint's corners meet what it inflates.
-        let cost = (INFLATED_CELL_COST * SIDE_COST as f64).round() as u64;
+        let cost = (INFLATED_CELL_COST * SIDE_COST as f64).round() as u32;
         for ((e, inflated), allowed) in extra.iter_mut().zip(&inflated).zip(&forbidden) {
             if *inflated && !*allowed {
-                *e += cost;
+                *e = e.saturating_add(cost);
             }
         }
     }
@@ -377,10 +377,10 @@ pub fn plan_or_why(
 }
 
 /// The memory [`plan`] takes per cell of its region, bytes, at most in practice: the decisions' copy and the
-/// forbidden mask (1 each), the cost of entering each cell (8), A*'s cost (8), parent (4) and closed flag
-/// (1), and its open list (24 a cell pushed once); 47 in all, rounded up. The inflation's distances (8) and
+/// forbidden mask (1 each), the cost of entering each cell (4), A*'s cost (8), parent (4) and closed flag
+/// (1), and its open list (24 a cell pushed once); 43 in all, rounded up. The inflation's distances (8) and
 /// masks are freed before A* starts. A caller bounds a plan's region with it before planning.
-pub const PLANNER_BYTES_PER_CELL: u64 = 48;
+pub const PLANNER_BYTES_PER_CELL: u64 = 44;
 
 /// Octile distance in cost units: exact for 8-connected moves on an empty grid, so A* stays optimal.
 fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
@@ -396,7 +396,7 @@ fn heuristic(nx: usize, a: usize, b: usize) -> u64 {
 fn astar(
     region: &CellRegion,
     forbidden: &[bool],
-    extra: &[u64],
+    extra: &[u32],
     start: usize,
     goal: usize,
 ) -> Option<Vec<usize>> {
@@ -449,7 +449,7 @@ fn astar(
                 continue; // no corner cutting
             }
             let step = if diagonal { DIAGONAL_COST } else { SIDE_COST };
-            let g_n = g + step + extra[n];
+            let g_n = g + step + u64::from(extra[n]);
             if g_n < cost[n] {
                 cost[n] = g_n;
                 parent[n] = k as u32;

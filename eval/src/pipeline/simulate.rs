@@ -100,7 +100,7 @@ pub fn simulate(
             timing,
             truth: None,
             navigation: None,
-            observability: mapping.observability,
+            observability: mapping.observability.finished(),
             blind_band: mapping.blind_band,
         });
     };

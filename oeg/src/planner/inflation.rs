@@ -57,7 +57,7 @@ impl Inflation {
     /// Adds to `extra` the cost of entering each cell beyond the inflation radius and within
     /// [`PlannerOptions::inflation_cost_width_m`] of it, in A*'s units: [`INFLATED_CELL_COST`] cell lengths
     /// at the radius, decaying by [`PlannerOptions::cost_scaling_factor`].
-    pub(super) fn add_costs(&self, extra: &mut [u64], options: &PlannerOptions) {
+    pub(super) fn add_costs(&self, extra: &mut [u32], options: &PlannerOptions) {
         let Some(d2) = self
             .squared_distances
             .as_ref()
@@ -71,7 +71,7 @@ impl Inflation {
             if *d2 > radius * radius && *d2 <= reach * reach {
                 let beyond_m = (d2.sqrt() - radius) * self.resolution_m;
                 let cost = INFLATED_CELL_COST * (-options.cost_scaling_factor * beyond_m).exp();
-                *e += (cost * SIDE_COST as f64).round() as u64;
+                *e = e.saturating_add((cost * SIDE_COST as f64).round() as u32);
             }
         }
     }

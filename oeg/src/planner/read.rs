@@ -14,7 +14,7 @@ pub(super) fn as_planned(
     start: CellIndex,
     goal: CellIndex,
     options: &PlannerOptions,
-) -> (Vec<Traversability>, Vec<u64>) {
+) -> (Vec<Traversability>, Vec<u32>) {
     let (region, resolution_m) = (window.region(), window.resolution_m());
     let mut decisions = decisions.to_vec();
     let r = options.footprint_radius_m.min(options.inflation_radius_m) / resolution_m + 1e-9;
@@ -31,14 +31,15 @@ fn optimistic_beyond(
     region: &CellRegion,
     resolution_m: f64,
     decisions: &mut [Traversability],
-    extra: &mut [u64],
+    extra: &mut [u32],
     start: CellIndex,
     options: &PlannerOptions,
 ) {
     let Some(beyond) = options.optimistic_beyond_m.map(|m| m / resolution_m) else {
         return;
     };
-    let doubt = (options.doubt_cost * SIDE_COST as f64).round() as u64;
+    // At most 1,000 cell lengths (the options' check): far within a u32.
+    let doubt = (options.doubt_cost * SIDE_COST as f64).round() as u32;
     for (k, (t, e)) in decisions.iter_mut().zip(extra).enumerate() {
         if !matches!(t, Traversability::Uncertain | Traversability::Unknown) {
             continue;
@@ -50,7 +51,7 @@ fn optimistic_beyond(
         let (di, dj) = (f64::from(c.i - start.i), f64::from(c.j - start.j));
         if di * di + dj * dj > beyond * beyond {
             *t = Traversability::Free;
-            *e += doubt;
+            *e = e.saturating_add(doubt);
         }
     }
 }

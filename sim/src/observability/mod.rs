@@ -52,8 +52,9 @@ pub struct Observability {
     /// rays met the actor over it, and those the sensors observed again after it left.
     seen_again: Option<SeenAgain>,
     profile: RobotProfile,
-    /// Ground height at each cell's centre, metres (NaN off the terrain).
-    ground_m: Vec<f64>,
+    /// Ground height at each cell's centre, metres (NaN off the terrain); `None` once observing is over
+    /// ([`Observability::finished`]).
+    ground_m: Option<Vec<f64>>,
     ground_lo_m: f64,
     ground_hi_m: f64,
 }
@@ -82,7 +83,7 @@ impl Observability {
             num_rays: 0,
             seen_again: None,
             profile,
-            ground_m,
+            ground_m: Some(ground_m),
             ground_lo_m,
             ground_hi_m,
         }
@@ -113,8 +114,21 @@ impl Observability {
         self.seen_again.as_ref().map(SeenAgain::cells)
     }
 
+    /// What was observed, without what only observing needs: the ground height under every cell (8 bytes a
+    /// cell), freed for what reads the observability after the run (the judge, the figures).
+    #[must_use]
+    pub fn finished(mut self) -> Self {
+        self.ground_m = None;
+        self
+    }
+
     /// Records the rays of one scan of a sensor whose range ends at `max_range_m`.
+    ///
+    /// # Panics
+    /// After [`Observability::finished`].
     pub fn observe(&mut self, scan: &SensorScan, max_range_m: f64) {
+        let ground_m =
+            (self.ground_m.as_deref()).expect("Observability::observe after Observability::finished");
         let origin = Point3::from(scan.world_from_sensor.translation.vector);
         let rotation = scan.world_from_sensor.rotation;
         let this = &*self;
@@ -151,16 +165,16 @@ impl Observability {
                         // ended on a person tells nothing of either (the board a person walks under, the
                         // curb a person stands on).
                         if !r.true_hit_actor {
-                            steps.push((k, (step..=height).contains(&(end.z - this.ground_m[k]))));
+                            steps.push((k, (step..=height).contains(&(end.z - ground_m[k]))));
                         }
                         if let Some(seen) = &this.seen_again {
-                            seen.ended(k, end.z - this.ground_m[k], stamp_s, &mut sights);
+                            seen.ended(k, end.z - ground_m[k], stamp_s, &mut sights);
                         }
                     }
                     let ray = (&origin, &dir, length);
-                    this.walk_band(ray, region_m, &mut bands);
+                    this.walk_band(ground_m, ray, region_m, &mut bands);
                     if let Some((seen, rect_m)) = this.seen_again.as_ref().zip(tracked_m) {
-                        this.walk_tracked(seen, ray, rect_m, stamp_s, &mut sights);
+                        this.walk_tracked((seen, ground_m), ray, rect_m, stamp_s, &mut sights);
                     }
                     (steps, bands, sights)
                 },
@@ -193,13 +207,13 @@ impl Observability {
 
     /// The cells whose band the ray crosses within the rectangle `rect_m` (the region's).
     #[inline(never)]
-    fn walk_band(&self, ray: Ray<'_>, rect_m: Rect, out: &mut Vec<usize>) {
+    fn walk_band(&self, ground_m: &[f64], ray: Ray<'_>, rect_m: Rect, out: &mut Vec<usize>) {
         let (step, height) = (
             f64::from(self.profile.max_step_m),
             f64::from(self.profile.height_m),
         );
         self.walk_heights(ray, (step, height), rect_m, |k, za, zb| {
-            let g = self.ground_m[k];
+            let g = ground_m[k];
             if g.is_finite() && za.max(zb) >= g + step && za.min(zb) <= g + height {
                 out.push(k);
             }
@@ -209,13 +223,20 @@ impl Observability {
     /// What the ray says of the cells actors cover ([`SeenAgain::crossed`]), from their ground to the robot's
     /// height, within the rectangle `rect_m` that holds them all.
     #[inline(never)]
-    fn walk_tracked(&self, seen: &SeenAgain, ray: Ray<'_>, rect_m: Rect, t_s: f64, out: &mut Vec<Sight>) {
+    fn walk_tracked(
+        &self,
+        (seen, ground_m): (&SeenAgain, &[f64]),
+        ray: Ray<'_>,
+        rect_m: Rect,
+        t_s: f64,
+        out: &mut Vec<Sight>,
+    ) {
         self.walk_heights(
             ray,
             (0.0, f64::from(self.profile.height_m)),
             rect_m,
             |k, za, zb| {
-                let g = self.ground_m[k];
+                let g = ground_m[k];
                 if g.is_finite() {
                     seen.crossed(k, (za - g, zb - g), t_s, out);
                 }

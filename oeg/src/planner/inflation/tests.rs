@@ -117,7 +117,7 @@ fn the_inflation_cost_decays_from_the_radius_to_nothing_at_the_band_s_edge() {
         } else {
             INFLATED_CELL_COST * (-10.0 * (distance_m - 0.25)).exp()
         };
-        assert_eq!(*e, (expected * 1000.0).round() as u64, "cell {i}");
+        assert_eq!(*e, (expected * 1000.0).round() as u32, "cell {i}");
     }
     assert!((2000..4000).contains(&extra[6]), "{extra:?}");
     assert!(extra[6..=11].windows(2).all(|w| w[0] > w[1]), "{extra:?}");
