@@ -7,14 +7,19 @@ mod common;
 
 use common::{oeg, ok, root, s, temp_dir};
 
-/// `oeg run` of `tests/scenes/<scene>.toml` under `preset`: its `navigation.json`.
-fn run_under(scene: &str, preset: &str) -> serde_json::Value {
+/// `oeg run` of `tests/scenes/<scene>.toml` under `preset`, which must reach the goal touching nothing: its
+/// `navigation.json`.
+fn reached_untouched(scene: &str, preset: &str) -> serde_json::Value {
     let out = temp_dir("nav-live", &format!("{scene}_{preset}"));
     let file = root().join("tests/scenes").join(format!("{scene}.toml"));
     let set = format!("map.preset={preset}");
     ok(&oeg(&["run", s(&file), "--set", &set, "--out", s(&out)]));
-    serde_json::from_slice(&std::fs::read(out.join("navigation.json")).expect("navigation.json"))
-        .expect("json")
+    let nav: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("navigation.json")).expect("navigation.json"))
+            .expect("json");
+    assert_eq!(nav["outcome"], "reached", "{scene}, {preset}: {nav:#}");
+    assert_eq!(nav["contacts"], 0, "{scene}, {preset}: {nav:#}");
+    nav
 }
 
 #[test]
@@ -23,9 +28,7 @@ fn a_gap_between_two_walls_seen_from_one_side_is_driven_through() {
     // the frontier rule must not close it. Under both presets the robot drives through (the straight line is
     // 5.5 m; the way round a wall's end is longer than 6 m), touching nothing.
     for preset in ["paper", "robust"] {
-        let nav = run_under("nav_gap", preset);
-        assert_eq!(nav["outcome"], "reached", "{preset}: {nav:#}");
-        assert_eq!(nav["contacts"], 0, "{preset}: {nav:#}");
+        let nav = reached_untouched("nav_gap", preset);
         let driven = nav["driven_length_m"].as_f64().expect("length");
         assert!(driven < 6.0, "{preset}: went round, {driven} m: {nav:#}");
     }
@@ -38,9 +41,7 @@ fn a_person_who_blocks_the_corridor_and_leaves_is_waited_for() {
     // goal and waits, mapping: the lasers see the corridor clear, the next plan goes through, and the robot
     // reaches the goal under both presets.
     for preset in ["paper", "robust"] {
-        let nav = run_under("nav_person_blocks", preset);
-        assert_eq!(nav["outcome"], "reached", "{preset}: {nav:#}");
-        assert_eq!(nav["contacts"], 0, "{preset}: {nav:#}");
+        let nav = reached_untouched("nav_person_blocks", preset);
         let events = nav["events"].as_array().expect("events");
         let kinds: Vec<&str> = events
             .iter()
