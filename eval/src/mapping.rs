@@ -9,7 +9,7 @@ use sim::Simulation;
 use sim::scenario;
 use sim::sensors::PoseSource;
 
-use sim::observability::{BlindBandRow, Observability, blind_band};
+use sim::observability::{BlindBandRow, Observer, blind_band};
 
 use crate::error::Result;
 use crate::progress::Progress;
@@ -41,7 +41,7 @@ pub struct Mapping {
     tick_s: f64,
     duration_s: f64,
     /// What the rays could have told, over the map region on the first map's grid.
-    pub observability: Observability,
+    pub observability: Observer,
     /// The sensors' blind band at the start, on flat ground (`blind_band.csv`).
     pub blind_band: Vec<BlindBandRow>,
     max_range_m: Vec<f64>,
@@ -91,7 +91,7 @@ impl Mapping {
         let s = &loaded.scenario;
         // What the sensors could see, on the scenario's own window (the first map's: the others share the
         // simulation and differ in their model, or in a sweep's resolution, where the judge leaves it out).
-        let mut observability = Observability::new(simulation.world(), &loaded.window, s.robot.profile());
+        let mut observability = Observer::new(simulation.world(), &loaded.window, s.robot.profile());
         if !s.actors.is_empty() {
             // DA counts only the cells whose ghosts the sensors could have cleared (`judge::ghosts`).
             let (covered_until_s, _) =
@@ -298,7 +298,7 @@ fn simulate_batch(
 /// at once (`Map::integrate_batch`), the maps at the same time (they are independent), each map's time added
 /// to its `map_s`. Returns the scans as the maps took them.
 fn map_batch(
-    observability: &mut Observability,
+    observability: &mut Observer,
     maps: &mut [Map],
     map_s: &mut [f64],
     models: &[oeg::SensorModel],
@@ -333,7 +333,7 @@ fn map_batch(
 /// One simulated scan into the observability and, at the estimated pose, into every map ([`map_batch`] of
 /// one scan). Returns the scan as the maps took it.
 fn map_scan(
-    observability: &mut Observability,
+    observability: &mut Observer,
     maps: &mut [Map],
     map_s: &mut [f64],
     models: &[oeg::SensorModel],

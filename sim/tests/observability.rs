@@ -10,7 +10,7 @@ mod common;
 
 use oeg::{GridGeometry, RobotProfile};
 use sim::Simulation;
-use sim::observability::{Observability, blind_band, ray_heights_at};
+use sim::observability::{Observer, blind_band, ray_heights_at};
 
 /// A 16-ring lidar (rings 2 degrees apart, none level) 0.452 m up, looking level; the robot stands still.
 const LIDAR: &str = r#"
@@ -73,13 +73,14 @@ fn board_band_hits(x: f64) -> (usize, usize) {
         .region_covering((x - 0.1, -0.5), (x + 0.1, 0.5))
         .expect("region");
     let window = oeg::GridWindow::new(geometry, region);
-    let mut o = Observability::new(sim.world(), &window, RobotProfile::default());
+    let mut o = Observer::new(sim.world(), &window, RobotProfile::default());
     while let Some(scan) = sim.next_scan() {
         if scan.stamp_s > 1.0 {
             break;
         }
         o.observe(&scan, 100.0);
     }
+    let o = o.finished();
     (o.band_hit.iter().filter(|h| **h).count(), o.band_hit.len())
 }
 
@@ -116,12 +117,11 @@ fn seen_again_after_leaving(leave_s: f64) -> Vec<bool> {
             }
         })
         .collect();
-    let mut o =
-        Observability::new(sim.world(), &window, RobotProfile::default()).tracking_actors(covered_until_s);
+    let mut o = Observer::new(sim.world(), &window, RobotProfile::default()).tracking_actors(covered_until_s);
     while let Some(scan) = sim.next_scan() {
         o.observe(&scan, 100.0);
     }
-    o.seen_again().expect("tracked")
+    o.finished().seen_again().expect("tracked")
 }
 
 #[test]
@@ -151,7 +151,7 @@ fn a_ray_that_ends_on_a_person_tells_nothing_of_the_cell_under_them() {
     let geometry = GridGeometry::new(0.05).expect("geometry");
     let region = geometry.region_covering((0.6, -0.4), (1.4, 0.4)).expect("region");
     let window = oeg::GridWindow::new(geometry, region);
-    let mut o = Observability::new(sim.world(), &window, RobotProfile::default());
+    let mut o = Observer::new(sim.world(), &window, RobotProfile::default());
     // Rays that truly ended on the person inside the band: 3.5 cm to 0.46 m over the ground.
     let mut on_person_in_band = 0;
     while let Some(scan) = sim.next_scan() {
@@ -178,6 +178,7 @@ fn a_ray_that_ends_on_a_person_tells_nothing_of_the_cell_under_them() {
         on_person_in_band > 100,
         "the rings met the person in the band: {on_person_in_band} rays"
     );
+    let o = o.finished();
     assert!(
         o.band_hit.iter().all(|h| !h),
         "{} cells hit in their band",

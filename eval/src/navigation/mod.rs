@@ -412,7 +412,7 @@ impl Recorder {
         self.summary_events[e].obstacle = contact.obstacle;
         self.summary_events[e].distance_m = Some(0.0);
         // Observable: a ray of the scans so far could have told about one of the cells entered.
-        let o = &mapping.observability;
+        let o = mapping.observability.observed();
         let observable = contact.cells.iter().any(|c| {
             o.window
                 .region()

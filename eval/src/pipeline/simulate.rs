@@ -130,7 +130,7 @@ pub fn simulate(
         timing,
         truth: Some((truth, truth_s)),
         navigation: Some(log),
-        observability: mapping.observability,
+        observability: mapping.observability.finished(),
         blind_band: mapping.blind_band,
     })
 }

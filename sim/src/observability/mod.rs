@@ -34,7 +34,8 @@ mod seen_again;
 pub use seen_again::SeenAgain;
 use seen_again::Sight;
 
-/// The observability of every cell of a region.
+/// The observability of every cell of a region: what the sensors' rays could have told, once a run's scans are
+/// observed ([`Observer::finished`]), or so far ([`Observer::observed`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Observability {
     /// The cells, on the map's grid.
@@ -48,18 +49,33 @@ pub struct Observability {
     pub band_hit: Vec<bool>,
     /// Rays that told something (cast, and not a hole or a dropout).
     pub num_rays: u64,
-    /// Per cell an actor covers, once asked for ([`Observability::tracking_actors`]): the heights at which
-    /// rays met the actor over it, and those the sensors observed again after it left.
+    /// Per cell an actor covers, once asked for ([`Observer::tracking_actors`]): the heights at which rays met
+    /// the actor over it, and those the sensors observed again after it left.
     seen_again: Option<SeenAgain>,
     profile: RobotProfile,
-    /// Ground height at each cell's centre, metres (NaN off the terrain); `None` once observing is over
-    /// ([`Observability::finished`]).
-    ground_m: Option<Vec<f64>>,
+}
+
+/// Observes a run's scans into an [`Observability`], reading the ground under every cell of its region.
+#[derive(Debug, Clone)]
+pub struct Observer {
+    observed: Observability,
+    /// Ground height at each cell's centre, metres (NaN off the terrain): 8 bytes a cell, which only
+    /// observing needs.
+    ground_m: Vec<f64>,
     ground_lo_m: f64,
     ground_hi_m: f64,
 }
 
 impl Observability {
+    /// Per cell, whether the sensors observed again, after the last actor left it, every height at which a
+    /// ray had met an actor over it (true for a cell no ray met an actor over); `None` unless asked for with
+    /// [`Observer::tracking_actors`].
+    pub fn seen_again(&self) -> Option<Vec<bool>> {
+        self.seen_again.as_ref().map(SeenAgain::cells)
+    }
+}
+
+impl Observer {
     /// Nothing observed yet over `window`; the ground is read from `world` under every cell's centre.
     pub fn new(world: &World, window: &GridWindow, profile: RobotProfile) -> Self {
         let geometry = window.geometry();
@@ -76,14 +92,16 @@ impl Observability {
             (lo.min(g), hi.max(g))
         });
         Self {
-            window: *window,
-            step: vec![false; cells.len()],
-            clearance: vec![false; cells.len()],
-            band_hit: vec![false; cells.len()],
-            num_rays: 0,
-            seen_again: None,
-            profile,
-            ground_m: Some(ground_m),
+            observed: Observability {
+                window: *window,
+                step: vec![false; cells.len()],
+                clearance: vec![false; cells.len()],
+                band_hit: vec![false; cells.len()],
+                num_rays: 0,
+                seen_again: None,
+                profile,
+            },
+            ground_m,
             ground_lo_m,
             ground_hi_m,
         }
@@ -98,49 +116,39 @@ impl Observability {
     /// If `covered_until_s` does not hold one time per cell of the window.
     #[must_use]
     pub fn tracking_actors(mut self, covered_until_s: Vec<f64>) -> Self {
-        assert_eq!(covered_until_s.len(), self.step.len(), "one time per cell");
-        self.seen_again = Some(SeenAgain::new(
-            covered_until_s,
-            self.profile.height_m,
-            &self.window,
-        ));
+        let o = &mut self.observed;
+        assert_eq!(covered_until_s.len(), o.step.len(), "one time per cell");
+        o.seen_again = Some(SeenAgain::new(covered_until_s, o.profile.height_m, &o.window));
         self
     }
 
-    /// Per cell, whether the sensors observed again, after the last actor left it, every height at which a
-    /// ray had met an actor over it (true for a cell no ray met an actor over); `None` unless asked for with
-    /// [`Observability::tracking_actors`].
-    pub fn seen_again(&self) -> Option<Vec<bool>> {
-        self.seen_again.as_ref().map(SeenAgain::cells)
+    /// What the scans observed so far told.
+    pub fn observed(&self) -> &Observability {
+        &self.observed
     }
 
-    /// What was observed, without what only observing needs: the ground height under every cell (8 bytes a
-    /// cell), freed for what reads the observability after the run (the judge, the figures).
+    /// What the scans observed told, without what only observing needs (the ground under every cell, 8 bytes a
+    /// cell): for what reads it after the run (the judge, the figures).
     #[must_use]
-    pub fn finished(mut self) -> Self {
-        self.ground_m = None;
-        self
+    pub fn finished(self) -> Observability {
+        self.observed
     }
 
     /// Records the rays of one scan of a sensor whose range ends at `max_range_m`.
-    ///
-    /// # Panics
-    /// After [`Observability::finished`].
     pub fn observe(&mut self, scan: &SensorScan, max_range_m: f64) {
-        let ground_m =
-            (self.ground_m.as_deref()).expect("Observability::observe after Observability::finished");
         let origin = Point3::from(scan.world_from_sensor.translation.vector);
         let rotation = scan.world_from_sensor.rotation;
         let this = &*self;
+        let (ground_m, observed) = (&self.ground_m, &self.observed);
         let (step, height) = (
-            f64::from(self.profile.max_step_m),
-            f64::from(self.profile.height_m),
+            f64::from(observed.profile.max_step_m),
+            f64::from(observed.profile.height_m),
         );
         let stamp_s = scan.stamp_s;
-        let ((x0, y0), (w, h)) = (self.window.min_corner_m(), self.window.size_m());
+        let ((x0, y0), (w, h)) = (observed.window.min_corner_m(), observed.window.size_m());
         let region_m = ((x0, y0), (x0 + w, y0 + h));
         // The cells people covered are walked again from the ground up, once one of them has been left.
-        let tracked_m = (self.seen_again.as_ref())
+        let tracked_m = (observed.seen_again.as_ref())
             .filter(|s| s.may_see_again(stamp_s))
             .and_then(SeenAgain::rect_m);
         // Each ray lists the cells it makes observable; the lists are merged by OR, so the order of the
@@ -167,14 +175,14 @@ impl Observability {
                         if !r.true_hit_actor {
                             steps.push((k, (step..=height).contains(&(end.z - ground_m[k]))));
                         }
-                        if let Some(seen) = &this.seen_again {
+                        if let Some(seen) = &observed.seen_again {
                             seen.ended(k, end.z - ground_m[k], stamp_s, &mut sights);
                         }
                     }
                     let ray = (&origin, &dir, length);
-                    this.walk_band(ground_m, ray, region_m, &mut bands);
-                    if let Some((seen, rect_m)) = this.seen_again.as_ref().zip(tracked_m) {
-                        this.walk_tracked((seen, ground_m), ray, rect_m, stamp_s, &mut sights);
+                    this.walk_band(ray, region_m, &mut bands);
+                    if let Some((seen, rect_m)) = observed.seen_again.as_ref().zip(tracked_m) {
+                        this.walk_tracked(seen, ray, rect_m, stamp_s, &mut sights);
                     }
                     (steps, bands, sights)
                 },
@@ -188,32 +196,31 @@ impl Observability {
                     (a, b, c)
                 },
             );
-        self.num_rays += scan.rays.iter().filter(|r| !r.true_range_m.is_nan()).count() as u64;
+        let observed = &mut self.observed;
+        observed.num_rays += scan.rays.iter().filter(|r| !r.true_range_m.is_nan()).count() as u64;
         for (k, in_band) in steps {
-            self.step[k] = true;
-            self.band_hit[k] |= in_band;
+            observed.step[k] = true;
+            observed.band_hit[k] |= in_band;
         }
         for k in bands {
-            self.clearance[k] = true;
+            observed.clearance[k] = true;
         }
-        if let Some(seen) = &mut self.seen_again {
+        if let Some(seen) = &mut observed.seen_again {
             seen.record(sights);
         }
     }
 
     fn offset_at(&self, p: &Point3<f64>) -> Option<usize> {
-        self.window.offset_of(p.x, p.y)
+        self.observed.window.offset_of(p.x, p.y)
     }
 
     /// The cells whose band the ray crosses within the rectangle `rect_m` (the region's).
     #[inline(never)]
-    fn walk_band(&self, ground_m: &[f64], ray: Ray<'_>, rect_m: Rect, out: &mut Vec<usize>) {
-        let (step, height) = (
-            f64::from(self.profile.max_step_m),
-            f64::from(self.profile.height_m),
-        );
+    fn walk_band(&self, ray: Ray<'_>, rect_m: Rect, out: &mut Vec<usize>) {
+        let profile = &self.observed.profile;
+        let (step, height) = (f64::from(profile.max_step_m), f64::from(profile.height_m));
         self.walk_heights(ray, (step, height), rect_m, |k, za, zb| {
-            let g = ground_m[k];
+            let g = self.ground_m[k];
             if g.is_finite() && za.max(zb) >= g + step && za.min(zb) <= g + height {
                 out.push(k);
             }
@@ -223,20 +230,13 @@ impl Observability {
     /// What the ray says of the cells actors cover ([`SeenAgain::crossed`]), from their ground to the robot's
     /// height, within the rectangle `rect_m` that holds them all.
     #[inline(never)]
-    fn walk_tracked(
-        &self,
-        (seen, ground_m): (&SeenAgain, &[f64]),
-        ray: Ray<'_>,
-        rect_m: Rect,
-        t_s: f64,
-        out: &mut Vec<Sight>,
-    ) {
+    fn walk_tracked(&self, seen: &SeenAgain, ray: Ray<'_>, rect_m: Rect, t_s: f64, out: &mut Vec<Sight>) {
         self.walk_heights(
             ray,
-            (0.0, f64::from(self.profile.height_m)),
+            (0.0, f64::from(self.observed.profile.height_m)),
             rect_m,
             |k, za, zb| {
-                let g = ground_m[k];
+                let g = self.ground_m[k];
                 if g.is_finite() {
                     seen.crossed(k, (za - g, zb - g), t_s, out);
                 }
@@ -272,11 +272,12 @@ impl Observability {
         if t0 >= t1 {
             return;
         }
-        let res = self.window.resolution_m();
+        let window = &self.observed.window;
+        let res = window.resolution_m();
         // Amanatides and Woo's traversal of the cells the segment's x-y shadow crosses.
         let at = |t: f64| (origin.x + dir.x * t, origin.y + dir.y * t);
         let (sx, sy) = at(t0);
-        let Some(mut cell) = self.window.geometry().cell_of(sx, sy) else {
+        let Some(mut cell) = window.geometry().cell_of(sx, sy) else {
             return;
         };
         let axis = |d: f64, p: f64, index: i32| -> (i32, f64, f64) {
@@ -297,10 +298,10 @@ impl Observability {
         let (step_i, mut next_x, dx) = axis(dir.x, sx, cell.i);
         let (step_j, mut next_y, dy) = axis(dir.y, sy, cell.j);
         let mut enter = t0;
-        let max_cells = self.window.region().num_x as usize + self.window.region().num_y as usize + 2;
+        let max_cells = window.region().num_x as usize + window.region().num_y as usize + 2;
         for _ in 0..max_cells {
             let leave = next_x.min(next_y).min(t1);
-            if let Some(k) = self.window.region().offset(cell) {
+            if let Some(k) = window.region().offset(cell) {
                 f(k, origin.z + dir.z * enter, origin.z + dir.z * leave);
             }
             if leave >= t1 {
