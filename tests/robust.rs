@@ -138,10 +138,11 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
 /// weighted by the noise its beam has where it meets the surface, and the navigator kept its path while it
 /// stayed valid (`[navigation] replan = "when_invalid"`). They pin what the preset does today, not what it
 /// should do: the scenarios' own `[expectations]` (set for their own settings) fail under it. The planner
-/// finds no path in 6 of the 24 scenes (8 before): `large_outdoor`, `long_range_stereo`, `outdoor_stereo` (far
-/// stereo ground, `imprecise`), `nav_curbs` (the 3 cm curb across the way is uncertain, and the robot turns
-/// back and forth before it until its time runs out: the finding of issue 40), `physics_nav_slope` and
-/// `spurious_returns`. Against the bounds before: fewer unsafe step cells on `default` (26 to 1) and
+/// finds no path on the final map in 4 of the 24 scenes: `large_outdoor` (far stereo ground, `imprecise`),
+/// `nav_curbs` (the 3 cm curb across the way is uncertain, and the robot turns back and forth before it until
+/// its time runs out: the finding of issue 40), `physics_nav_slope` (two tilted lasers see a strip of ground
+/// little wider than the robot, and the frontier leaves it undecided) and `spurious_returns` (spurious returns
+/// leave blocked specks across the way). Against the bounds before: fewer unsafe step cells on `default` (26 to 1) and
 /// `physics_nav_curbs` (100 to 65), more on `curb_staircase` (9 to 13), `ramp_and_slope` (31 to 43) and
 /// `nav_curbs` (106 to 120), and more unsafe clearance cells where the robot drives past a board
 /// (`physics_nav_board` 69 to 142, `nav_blind_spot` 188 to 236): with variances that shrink again as the robot
