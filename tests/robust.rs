@@ -141,12 +141,12 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
 /// finds no path on the final map in 4 of the 24 scenes: `large_outdoor` (far stereo ground, `imprecise`),
 /// `nav_curbs` (the 3 cm curb across the way is uncertain, and the robot turns back and forth before it until
 /// its time runs out: the finding of issue 40), `physics_nav_slope` (two tilted lasers see a strip of ground
-/// little wider than the robot, and the frontier leaves it undecided) and `spurious_returns` (spurious returns
-/// leave blocked specks across the way). Against the bounds before: fewer unsafe step cells on `default` (26 to 1) and
-/// `physics_nav_curbs` (100 to 65), more on `curb_staircase` (9 to 13), `ramp_and_slope` (31 to 43) and
-/// `nav_curbs` (106 to 120), and more unsafe clearance cells where the robot drives past a board
-/// (`physics_nav_board` 69 to 142, `nav_blind_spot` 188 to 236): with variances that shrink again as the robot
-/// moves, fewer cells are uncertain and more are decided, some wrongly.
+/// little wider than the robot, and the frontier leaves it undecided) and `spurious_returns` (spurious
+/// returns leave blocked specks across the way). Against the bounds before: fewer unsafe step cells on
+/// `default` (26 to 1) and `physics_nav_curbs` (100 to 65), more on `curb_staircase` (9 to 13),
+/// `ramp_and_slope` (31 to 43) and `nav_curbs` (106 to 120), and more unsafe clearance cells where the robot
+/// drives past a board (`physics_nav_board` 69 to 142, `nav_blind_spot` 188 to 236): with variances that
+/// shrink again as the robot moves, fewer cells are uncertain and more are decided, some wrongly.
 const ROBUST_BOUNDS: [(&str, u64, u64, f64); 24] = [
     // (scenario, unsafe step cells, unsafe clearance cells: measured + about 10 % + 2; elevation within 2 sigma:
     // measured - 0.02).
