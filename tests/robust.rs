@@ -131,6 +131,26 @@ fn a_table_2_cm_lower_than_the_robot_is_never_driven_under() {
     // The paper's model maps the ground seen under it: the table is gone.
     let paper = run("low_table", "paper");
     assert_eq!(rows(&paper.join("obstacles.csv"))[0]["decision"], "unsafe");
+    // Under both, cells under the table's middle are blind (no ray ended under it within the robot's height)
+    // and, under the paper's, its edges are not: `wrong_cells.csv` tells them apart as the metrics count them.
+    for out in [&robust, &paper] {
+        let m: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("metrics.json")).expect("metrics.json"))
+                .expect("json");
+        let unsafe_rows = rows(&out.join("wrong_cells.csv"))
+            .into_iter()
+            .filter(|r| r["error"] == "unsafe")
+            .collect::<Vec<_>>();
+        let blind = unsafe_rows.iter().filter(|r| r["blind"] == "true").count() as u64;
+        assert!(blind > 0, "{}: a blind unsafe cell", out.display());
+        assert_eq!(Some(blind), m["blind_cells"].as_u64(), "{}", out.display());
+        assert_eq!(
+            Some(unsafe_rows.len() as u64 - blind),
+            m["unsafe_observable_cells"].as_u64(),
+            "{}",
+            out.display()
+        );
+    }
 }
 
 /// The shipped scenes under `robust`: regression bounds measured on 2026-12-06 (`oeg suite scenarios --set

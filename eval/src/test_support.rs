@@ -43,6 +43,7 @@ pub(crate) fn wrong_cell() -> crate::judge::wrong_cells::WrongCell {
         true_step_m: 0.3,
         true_step_blocked: true,
         true_structure_gap_m: None,
+        blind: false,
     }
 }
 

@@ -37,6 +37,10 @@ pub(crate) struct WrongCell {
     pub true_step_blocked: bool,
     /// The truth: smallest free gap under a structure over the cell, metres.
     pub true_structure_gap_m: Option<f32>,
+    /// Truly blocked, and no ray could have told (the observability truth: no ray ended on the step cell, or
+    /// inside the band under the structure, on it): an `unsafe` cell so counts in `blind_cells`, not in
+    /// `unsafe_observable_cells`. False in a run without an observability truth (a replayed log).
+    pub blind: bool,
 }
 
 /// The observed cells of the truth's region whose decision is wrong (verdict `unsafe` or `over_cautious`) or
@@ -69,6 +73,7 @@ pub(crate) fn wrong_cells(estimate: &Estimate, truth: &TruthRaster, verdicts: &V
             true_step_m: t.step_m,
             true_step_blocked: t.step_blocked,
             true_structure_gap_m: (!t.structure_gap_m.is_nan()).then_some(t.structure_gap_m),
+            blind: verdicts.unobservable[k],
         });
     }
     rows
@@ -88,6 +93,7 @@ impl crate::output::CsvRow for WrongCell {
         "true_step_m",
         "true_step_blocked",
         "true_structure_gap_m",
+        "blind",
     ];
 }
 
@@ -100,7 +106,7 @@ mod tests {
                 .expect("utf8");
         assert_eq!(
             ours.lines().nth(1),
-            Some("1.0,2.0,unsafe,free,0.2,,0.01,0.3,0.0,0.3,true,")
+            Some("1.0,2.0,unsafe,free,0.2,,0.01,0.3,0.0,0.3,true,,false")
         );
     }
 }
