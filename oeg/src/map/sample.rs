@@ -223,8 +223,7 @@ impl Sampling for ScanEvidence {
 }
 
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
-/// free-space rules of the options: against the cell's surface (surface band, depth limit). What a beam on its
-/// way to a hit says of a structure over the cell is [`pass_by_ceiling`]'s.
+/// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
 #[inline(always)]
 fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
     let (opts, rules) = (before.opts, before.rules);
