@@ -192,21 +192,15 @@ impl Sampling for ScanEvidence {
         &mut self,
         before: &Before<R>,
         span: &RaySpan,
-        _crossing: &CellCrossing,
+        crossing: &CellCrossing,
         here: &Here,
     ) {
-        free_sample(before, span, here, self);
+        free_sample(before, span, crossing, here, self);
     }
 
     #[inline(always)]
     fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
-        free_sample(before, span, here, self);
-        // A beam on its way to a hit, through a cell with a structure over it.
-        if before.rules.ceiling()
-            && let Some(c) = here.ceiling().filter(|c| c.is_some())
-        {
-            pass_by_ceiling(c, span, crossing.l_exit, here, before.opts, self);
-        }
+        free_sample(before, span, crossing, here, self);
     }
 
     #[inline(always)]
@@ -225,7 +219,13 @@ impl Sampling for ScanEvidence {
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
 /// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
 #[inline(always)]
-fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
+fn free_sample<R: Rules>(
+    before: &Before<R>,
+    span: &RaySpan,
+    crossing: &CellCrossing,
+    here: &Here,
+    evidence: &mut ScanEvidence,
+) {
     let (opts, rules) = (before.opts, before.rules);
     let band_rule = rules.surface_band();
     let needs_surface = band_rule || rules.max_depth_m().is_some();
@@ -245,6 +245,17 @@ fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, eviden
         }
         return;
     }
+    if rules.ceiling()
+        && let Some(c) = here.ceiling().filter(|c| c.is_some())
+    {
+        // The beam's footprint where it leaves the cell, the wider end.
+        let footprint = beam_footprint_var_m2(crossing.l_exit, span.dir.z).sqrt() as f32;
+        if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas, footprint) {
+            evidence.ceiling_contradicted = true;
+        } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas, footprint) {
+            evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
+        }
+    }
     if let (Some(depth), Some(e)) = (rules.max_depth_m(), surface)
         && e.mean_m - beam_top > depth
     {
@@ -259,29 +270,6 @@ fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, eviden
         evidence.band_contradicted = true;
     }
     evidence.paper.add_free(opts.p_min, beam_top, span.s2);
-}
-
-/// What a beam on its way to a hit, through a cell with the structure `c` over it, says of the structure: it
-/// passed through the structure's side of its band, or under it, as far as its footprint where it leaves the
-/// cell (`l_exit` along the beam, the wider end) tells. Out of the free sample's loop: few cells have a
-/// structure over them.
-#[cold]
-#[inline(never)]
-fn pass_by_ceiling(
-    c: &Ceiling,
-    span: &RaySpan,
-    l_exit: f64,
-    here: &Here,
-    opts: &ModelOptions,
-    evidence: &mut ScanEvidence,
-) {
-    let (beam_top, beam_bottom) = (here.beam_top_m, here.beam_bottom_m);
-    let footprint = beam_footprint_var_m2(l_exit, span.dir.z).sqrt() as f32;
-    if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas, footprint) {
-        evidence.ceiling_contradicted = true;
-    } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas, footprint) {
-        evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
-    }
 }
 
 /// What a cell within 3 sigma of the hit says: eq. 10's probability, and eq. 12's height where the cell
