@@ -10,8 +10,8 @@ use crate::error::Error;
 use crate::geometry::GridGeometry;
 use crate::model::{Ceiling, SeenFrom};
 use crate::model::{
-    Elevation, Level, ModelOptions, band_contradicts, beam_footprint_var_m2, ceiling_contradicts,
-    ceiling_passed_under, surface_level,
+    Elevation, Level, ModelOptions, band_contradicts, ceiling_contradicts, ceiling_passed_under,
+    surface_level,
 };
 use crate::storage::{TILE_CELLS, TileGrid, TileIndex};
 use crate::traversal::CellCrossing;
@@ -192,15 +192,15 @@ impl Sampling for ScanEvidence {
         &mut self,
         before: &Before<R>,
         span: &RaySpan,
-        crossing: &CellCrossing,
+        _crossing: &CellCrossing,
         here: &Here,
     ) {
-        free_sample(before, span, crossing, here, self);
+        free_sample(before, span, here, self);
     }
 
     #[inline(always)]
-    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
-        free_sample(before, span, crossing, here, self);
+    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
+        free_sample(before, span, here, self);
     }
 
     #[inline(always)]
@@ -219,13 +219,7 @@ impl Sampling for ScanEvidence {
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
 /// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
 #[inline(always)]
-fn free_sample<R: Rules>(
-    before: &Before<R>,
-    span: &RaySpan,
-    crossing: &CellCrossing,
-    here: &Here,
-    evidence: &mut ScanEvidence,
-) {
+fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
     let (opts, rules) = (before.opts, before.rules);
     let band_rule = rules.surface_band();
     let needs_surface = band_rule || rules.max_depth_m().is_some();
@@ -248,11 +242,9 @@ fn free_sample<R: Rules>(
     if rules.ceiling()
         && let Some(c) = here.ceiling().filter(|c| c.is_some())
     {
-        // The beam's footprint where it leaves the cell, the wider end.
-        let footprint = beam_footprint_var_m2(crossing.l_exit, span.dir.z).sqrt() as f32;
-        if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas, footprint) {
+        if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas) {
             evidence.ceiling_contradicted = true;
-        } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas, footprint) {
+        } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas) {
             evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
         }
     }

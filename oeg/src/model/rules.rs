@@ -331,29 +331,16 @@ pub fn ceiling_confirmed(log_odds_value: f32, p_max: f32) -> bool {
 /// have such grazing beams clear the structures they keep measuring. The band is
 /// as wide as the structure's hits spread ([`spread_variance`]): a person's front, hit from the ankles up,
 /// is contradicted by any beam through where they stood.
-///
-/// Where the beam passed is known to its footprint, `footprint_m` (one standard deviation across its direction,
-/// on the vertical: [`beam_footprint_var_m2`]): it contradicts only where it passed through that side surely,
-/// its footprint within it. A beam within a footprint of the band's edge says nothing: hits on a board's face,
-/// fused, make a band a few millimetres wide, and beams grazing under the board within a footprint of it cleared
-/// the board from the cells of its edge, where a real beam's footprint would have met it.
-pub fn ceiling_contradicts(
-    ceiling: &Ceiling,
-    z_lo_m: f32,
-    z_hi_m: f32,
-    band_sigmas: f32,
-    footprint_m: f32,
-) -> bool {
+pub fn ceiling_contradicts(ceiling: &Ceiling, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
     let (lo, hi) = ceiling_band(ceiling, band_sigmas);
-    let (lo, hi) = (lo + footprint_m, hi - footprint_m);
-    lo <= hi && z_lo_m <= hi && z_hi_m >= lo
+    z_lo_m <= hi && z_hi_m >= lo
 }
 
 /// [`crate::OverheadHits::Ceiling`]: whether a beam whose highest point in a cell is `z_top_m` passed wholly under
-/// the structure's side of its band ([`ceiling_contradicts`]), its footprint `footprint_m` too: the space it
-/// crossed, up to `z_top_m`, is clear under the structure (`Ceiling::clear_m`).
-pub fn ceiling_passed_under(ceiling: &Ceiling, z_top_m: f32, band_sigmas: f32, footprint_m: f32) -> bool {
-    z_top_m + footprint_m < ceiling_band(ceiling, band_sigmas).0
+/// the structure's side of its band ([`ceiling_contradicts`]): the space it crossed, up to `z_top_m`, is clear
+/// under the structure (`Ceiling::clear_m`).
+pub fn ceiling_passed_under(ceiling: &Ceiling, z_top_m: f32, band_sigmas: f32) -> bool {
+    z_top_m < ceiling_band(ceiling, band_sigmas).0
 }
 
 /// The structure's side of a ceiling's band, `(lo, hi)`: `[z - k sigma, z]` for a top seen from above,
@@ -406,16 +393,9 @@ pub fn correlated_variance(fused_var_m2: f32, prior_var_m2: f32, measurement_var
 /// for a far, level beam.
 pub fn vertical_variance(range_sigma_m: f64, dir_z: f64, range_m: f64) -> f32 {
     let along = range_sigma_m * dir_z;
-    let var = along * along + beam_footprint_var_m2(range_m, dir_z);
-    var.max(VERTICAL_SIGMA_FLOOR_M * VERTICAL_SIGMA_FLOOR_M) as f32
-}
-
-/// The variance of where a beam of unit direction with vertical component `dir_z` passes, `range_m` from the
-/// sensor, on the vertical: its footprint across its direction, `range * BEAM_SIGMA_RAD`, projected onto z
-/// (`1 - dir_z^2` of its variance).
-pub fn beam_footprint_var_m2(range_m: f64, dir_z: f64) -> f64 {
     let across = range_m * BEAM_SIGMA_RAD;
-    across * across * (1.0 - dir_z * dir_z).max(0.0)
+    let var = along * along + across * across * (1.0 - dir_z * dir_z).max(0.0);
+    var.max(VERTICAL_SIGMA_FLOOR_M * VERTICAL_SIGMA_FLOOR_M) as f32
 }
 
 /// The standard deviation of where a beam hits across its direction, radians: half the 0.25 degree beam

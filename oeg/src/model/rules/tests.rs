@@ -322,27 +322,18 @@ fn a_beam_contradicts_a_ceiling_only_on_the_structures_side_of_it() {
         seen_from: SeenFrom::Above,
         clear_m: f32::NEG_INFINITY,
     };
+    assert!(ceiling_contradicts(&top, 0.33, 0.335, 3.0), "through the board");
+    assert!(ceiling_passed_under(&top, 0.30, 3.0), "under the board: clear");
+    assert!(!ceiling_passed_under(&top, 0.33, 3.0), "in the board's band");
     assert!(
-        ceiling_contradicts(&top, 0.33, 0.335, 3.0, 0.0),
-        "through the board"
-    );
-    assert!(
-        ceiling_passed_under(&top, 0.30, 3.0, 0.0),
-        "under the board: clear"
-    );
-    assert!(!ceiling_passed_under(&top, 0.33, 3.0, 0.0), "in the board's band");
-    assert!(
-        ceiling_contradicts(&top, 0.30, 0.40, 3.0, 0.0),
+        ceiling_contradicts(&top, 0.30, 0.40, 3.0),
         "a steep beam across it"
     );
     assert!(
-        !ceiling_contradicts(&top, 0.341, 0.345, 3.0, 0.0),
+        !ceiling_contradicts(&top, 0.341, 0.345, 3.0),
         "skimming over the top"
     );
-    assert!(
-        !ceiling_contradicts(&top, 0.20, 0.30, 3.0, 0.0),
-        "under the board"
-    );
+    assert!(!ceiling_contradicts(&top, 0.20, 0.30, 3.0), "under the board");
     // Its underside at 0.30 m seen from below: the board lies over it.
     let underside = Ceiling {
         z_m: 0.30,
@@ -350,27 +341,27 @@ fn a_beam_contradicts_a_ceiling_only_on_the_structures_side_of_it() {
         ..top
     };
     assert!(
-        ceiling_contradicts(&underside, 0.305, 0.31, 3.0, 0.0),
+        ceiling_contradicts(&underside, 0.305, 0.31, 3.0),
         "through the board"
     );
     assert!(
-        !ceiling_contradicts(&underside, 0.29, 0.299, 3.0, 0.0),
+        !ceiling_contradicts(&underside, 0.29, 0.299, 3.0),
         "skimming under it"
     );
     assert!(
-        !ceiling_contradicts(&underside, 0.40, 0.45, 3.0, 0.0),
+        !ceiling_contradicts(&underside, 0.40, 0.45, 3.0),
         "over the board"
     );
-    assert!(ceiling_passed_under(&underside, 0.299, 3.0, 0.0));
-    assert!(!ceiling_passed_under(&underside, 0.40, 3.0, 0.0), "over it");
+    assert!(ceiling_passed_under(&underside, 0.299, 3.0));
+    assert!(!ceiling_passed_under(&underside, 0.40, 3.0), "over it");
     // Seen from both sides: either side of it.
     let front = Ceiling {
         seen_from: SeenFrom::Both,
         ..top
     };
-    assert!(ceiling_contradicts(&front, 0.341, 0.345, 3.0, 0.0));
-    assert!(ceiling_contradicts(&front, 0.33, 0.335, 3.0, 0.0));
-    assert!(!ceiling_contradicts(&front, 0.20, 0.30, 3.0, 0.0));
+    assert!(ceiling_contradicts(&front, 0.341, 0.345, 3.0));
+    assert!(ceiling_contradicts(&front, 0.33, 0.335, 3.0));
+    assert!(!ceiling_contradicts(&front, 0.20, 0.30, 3.0));
     assert_eq!(SeenFrom::Above.and(SeenFrom::Below), SeenFrom::Both);
     assert_eq!(SeenFrom::Below.and(SeenFrom::Below), SeenFrom::Below);
     for side in [SeenFrom::Above, SeenFrom::Below, SeenFrom::Both] {
@@ -430,44 +421,4 @@ fn the_top_surface_is_kept_against_lower_hits_and_follows_higher_ones() {
         fuse_elevation(ElevationFusion::TopSurface, table, 0.0, 1e-4, 0.0, 3.0),
         top
     );
-}
-
-#[test]
-fn a_beam_within_its_footprint_of_a_structure_s_band_neither_contradicts_nor_clears_it() {
-    // A board's face hit from above: the hits fuse into a band 3 mm deep under 0.424 m.
-    let face = Ceiling {
-        z_m: 0.424,
-        var_m2: 1e-6,
-        log_odds: 3.5,
-        seen_from: SeenFrom::Above,
-        clear_m: f32::NEG_INFINITY,
-    };
-    // 2 m out, a level beam's footprint is 4.4 mm (`BEAM_SIGMA_RAD`).
-    let footprint = beam_footprint_var_m2(2.0, 0.0).sqrt() as f32;
-    assert!((footprint - 0.0044).abs() < 1e-6, "{footprint}");
-    // A beam through the band's lower edge, within its footprint of the space under the board.
-    let (lo, hi) = (0.4209, 0.4212);
-    assert!(
-        ceiling_contradicts(&face, lo, hi, 3.0, 0.0),
-        "a line through the band"
-    );
-    assert!(
-        !ceiling_contradicts(&face, lo, hi, 3.0, footprint),
-        "a beam: not surely"
-    );
-    assert!(
-        !ceiling_passed_under(&face, hi, 3.0, footprint),
-        "nor surely under"
-    );
-    // Well under it, the beam clears the space under the board.
-    assert!(ceiling_passed_under(&face, 0.40, 3.0, footprint));
-    // A band much wider than a footprint (a person's front, hit from the ankles up): a beam through it
-    // contradicts it.
-    let person = Ceiling {
-        z_m: 1.0,
-        var_m2: 0.1,
-        seen_from: SeenFrom::Both,
-        ..face
-    };
-    assert!(ceiling_contradicts(&person, 0.5, 0.52, 3.0, footprint));
 }
