@@ -41,11 +41,11 @@ pub use model::{
     DEFAULT_LOG_ODDS_MIN, DEFAULT_OCCUPIED_THRESHOLD, DEFAULT_P_MAX, DEFAULT_P_MIN, DEFAULT_SIGNIFICANCE_K_M,
     DEFAULT_SURFACE_BAND_SIGMAS, Elevation, ElevationFusion, FreeSpaceElevation, FreeSpaceOccupancy,
     GAUSSIAN_CUTOFF_SIGMAS, HitHeight, Level, ModelOptions, OverheadHits, ScanHitElevation, SeenFrom,
-    VERTICAL_SIGMA_FLOOR_M, band_contradicts, ceiling_confirmed, ceiling_contradicts, ceiling_passed_under,
-    clamp_probability, correlated_variance, elevation_observation, free_sample_informs, fuse_elevation,
-    fuse_top_surface, fuse_with_disagreement, inverse_sensor_model, kalman_fuse, log_odds, normal_tail,
-    overhead_significant, p_occ, probability_from_log_odds, ray_bound, spread_variance, surface_level,
-    update_ceiling, update_log_odds, vertical_variance,
+    VERTICAL_SIGMA_FLOOR_M, band_contradicts, beam_footprint_m, ceiling_confirmed, ceiling_contradicts,
+    ceiling_passed_under, clamp_probability, correlated_variance, elevation_observation, free_sample_informs,
+    fuse_elevation, fuse_top_surface, fuse_with_disagreement, inverse_sensor_model, kalman_fuse, log_odds,
+    normal_tail, overhead_significant, p_occ, probability_from_log_odds, ray_bound, spread_variance,
+    surface_level, update_ceiling, update_log_odds, vertical_variance,
 };
 pub use preset::{MapModel, MapPreset, ModelChoice, ModelKeys, ROBUST_HEIGHT_MARGIN_M, STATIC_MAX_DEPTH_M};
 

@@ -42,7 +42,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{CellIndex, CellRegion, GridGeometry};
 use crate::model::Ceiling;
 use crate::model::{ModelOptions, log_odds};
-use crate::storage::{TILE_CELLS, TILE_SHIFT, TILE_SIZE, TileGrid, TileIndex};
+use crate::storage::{TILE_CELLS, TileGrid, TileIndex};
 
 /// Default memory limit of a map, bytes (4 GiB): far above any sensible map, low enough that a corrupt point
 /// a million kilometres away gives an error instead of exhausting the machine.
@@ -245,16 +245,11 @@ impl Map {
     /// Every observed cell with its state, tile by tile in a fixed order.
     pub fn observed_cells(&self) -> impl Iterator<Item = (CellIndex, Cell)> + '_ {
         self.cells.tiles().flat_map(|(tile, cells)| {
-            let first = tile.first_cell();
             cells
                 .iter()
                 .enumerate()
                 .filter(|(_, c)| c.is_observed())
-                .map(move |(k, c)| {
-                    let i = first.i + (k % TILE_SIZE) as i32;
-                    let j = first.j + (k >> TILE_SHIFT) as i32;
-                    (CellIndex::new(i, j), *c)
-                })
+                .map(move |(k, c)| (tile.cell(k), *c))
         })
     }
 

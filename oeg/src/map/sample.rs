@@ -10,8 +10,8 @@ use crate::error::Error;
 use crate::geometry::GridGeometry;
 use crate::model::{Ceiling, SeenFrom};
 use crate::model::{
-    Elevation, Level, ModelOptions, band_contradicts, ceiling_contradicts, ceiling_passed_under,
-    surface_level,
+    Elevation, Level, ModelOptions, band_contradicts, beam_footprint_m, ceiling_contradicts,
+    ceiling_passed_under, surface_level,
 };
 use crate::storage::{TILE_CELLS, TileGrid, TileIndex};
 use crate::traversal::CellCrossing;
@@ -192,15 +192,15 @@ impl Sampling for ScanEvidence {
         &mut self,
         before: &Before<R>,
         span: &RaySpan,
-        _crossing: &CellCrossing,
+        crossing: &CellCrossing,
         here: &Here,
     ) {
-        free_sample(before, span, here, self);
+        free_sample(before, span, crossing, here, self);
     }
 
     #[inline(always)]
-    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, _crossing: &CellCrossing, here: &Here) {
-        free_sample(before, span, here, self);
+    fn free<R: Rules>(&mut self, before: &Before<R>, span: &RaySpan, crossing: &CellCrossing, here: &Here) {
+        free_sample(before, span, crossing, here, self);
     }
 
     #[inline(always)]
@@ -219,7 +219,13 @@ impl Sampling for ScanEvidence {
 /// What a cell the beam passes through before its hit (or a ray that returned nothing) says, under the
 /// free-space rules of the options: against the cell's surface (surface band, depth limit) and its ceiling.
 #[inline(always)]
-fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, evidence: &mut ScanEvidence) {
+fn free_sample<R: Rules>(
+    before: &Before<R>,
+    span: &RaySpan,
+    crossing: &CellCrossing,
+    here: &Here,
+    evidence: &mut ScanEvidence,
+) {
     let (opts, rules) = (before.opts, before.rules);
     let band_rule = rules.surface_band();
     let needs_surface = band_rule || rules.max_depth_m().is_some();
@@ -242,11 +248,7 @@ fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, eviden
     if rules.ceiling()
         && let Some(c) = here.ceiling().filter(|c| c.is_some())
     {
-        if ceiling_contradicts(c, beam_bottom, beam_top, opts.surface_band_sigmas) {
-            evidence.ceiling_contradicted = true;
-        } else if ceiling_passed_under(c, beam_top, opts.surface_band_sigmas) {
-            evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
-        }
+        free_under_ceiling(c, opts, span, crossing.l_exit, here, evidence);
     }
     if let (Some(depth), Some(e)) = (rules.max_depth_m(), surface)
         && e.mean_m - beam_top > depth
@@ -262,6 +264,34 @@ fn free_sample<R: Rules>(before: &Before<R>, span: &RaySpan, here: &Here, eviden
         evidence.band_contradicted = true;
     }
     evidence.paper.add_free(opts.p_min, beam_top, span.s2);
+}
+
+/// What a free sample says of the structure `ceiling` over its cell ([`crate::OverheadHits::Ceiling`]): whether the
+/// beam contradicts it, its footprint ([`beam_footprint_m`]) taken where it leaves the cell, `l_exit` along it,
+/// or passed under it.
+#[inline(always)]
+fn free_under_ceiling(
+    ceiling: &Ceiling,
+    opts: &ModelOptions,
+    span: &RaySpan,
+    l_exit: f64,
+    here: &Here,
+    evidence: &mut ScanEvidence,
+) {
+    let (beam_top, beam_bottom) = (here.beam_top_m, here.beam_bottom_m);
+    let horizontal_m = l_exit * (1.0 - span.dir.z * span.dir.z).max(0.0).sqrt();
+    let footprint_m = beam_footprint_m(horizontal_m) as f32;
+    if ceiling_contradicts(
+        ceiling,
+        beam_bottom,
+        beam_top,
+        opts.surface_band_sigmas,
+        footprint_m,
+    ) {
+        evidence.ceiling_contradicted = true;
+    } else if ceiling_passed_under(ceiling, beam_top, opts.surface_band_sigmas) {
+        evidence.ceiling_clear_m = evidence.ceiling_clear_m.max(beam_top);
+    }
 }
 
 /// What a cell within 3 sigma of the hit says: eq. 10's probability, and eq. 12's height where the cell

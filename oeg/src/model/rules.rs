@@ -331,8 +331,27 @@ pub fn ceiling_confirmed(log_odds_value: f32, p_max: f32) -> bool {
 /// have such grazing beams clear the structures they keep measuring. The band is
 /// as wide as the structure's hits spread ([`spread_variance`]): a person's front, hit from the ankles up,
 /// is contradicted by any beam through where they stood.
-pub fn ceiling_contradicts(ceiling: &Ceiling, z_lo_m: f32, z_hi_m: f32, band_sigmas: f32) -> bool {
+///
+/// Where the beam passed is known to its footprint, `footprint_m` (one standard deviation across its direction,
+/// on the vertical: [`beam_footprint_m`]). The band is narrowed by it on the side away from the measured
+/// height, never past that height: a beam through the height where the structure was hit contradicts it
+/// (a person's front, hit at one height, is cleared by the beam that passes where they stood), but one within
+/// its footprint of the band's far edge may have passed beside the structure, not through it. Hits on a board's
+/// face from a descending ring read as a top, fused into a band a few millimetres deep, and the beams grazing
+/// under the board within their footprint of it cleared the board from the cells of its edge, where a real
+/// beam's footprint would have met it.
+pub fn ceiling_contradicts(
+    ceiling: &Ceiling,
+    z_lo_m: f32,
+    z_hi_m: f32,
+    band_sigmas: f32,
+    footprint_m: f32,
+) -> bool {
     let (lo, hi) = ceiling_band(ceiling, band_sigmas);
+    let (lo, hi) = (
+        (lo + footprint_m).min(ceiling.z_m),
+        (hi - footprint_m).max(ceiling.z_m),
+    );
     z_lo_m <= hi && z_hi_m >= lo
 }
 
@@ -396,6 +415,14 @@ pub fn vertical_variance(range_sigma_m: f64, dir_z: f64, range_m: f64) -> f32 {
     let across = range_m * BEAM_SIGMA_RAD;
     let var = along * along + across * across * (1.0 - dir_z * dir_z).max(0.0);
     var.max(VERTICAL_SIGMA_FLOOR_M * VERTICAL_SIGMA_FLOOR_M) as f32
+}
+
+/// The standard deviation of where a beam passes on the vertical, `horizontal_m` from the sensor across the
+/// ground: its footprint across its direction, `range * BEAM_SIGMA_RAD`, projected onto z, the term
+/// [`vertical_variance`] adds to a hit's. The range times `sqrt(1 - dir_z^2)` is the horizontal distance,
+/// whatever the beam's elevation.
+pub fn beam_footprint_m(horizontal_m: f64) -> f64 {
+    horizontal_m * BEAM_SIGMA_RAD
 }
 
 /// The standard deviation of where a beam hits across its direction, radians: half the 0.25 degree beam

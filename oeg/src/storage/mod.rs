@@ -55,6 +55,16 @@ impl TileIndex {
     pub(crate) fn first_cell(self) -> CellIndex {
         CellIndex::new(self.ti << TILE_SHIFT, self.tj << TILE_SHIFT)
     }
+
+    /// The tile's cell at `offset` ([`offset_in_tile`]; the bits above a tile's are ignored).
+    #[inline]
+    pub(crate) fn cell(self, offset: usize) -> CellIndex {
+        let (first, k) = (self.first_cell(), offset & (TILE_CELLS - 1));
+        CellIndex::new(
+            first.i + (k % TILE_SIZE) as i32,
+            first.j + (k >> TILE_SHIFT) as i32,
+        )
+    }
 }
 
 /// Offset of a cell inside its tile, row-major.

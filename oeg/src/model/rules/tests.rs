@@ -322,18 +322,24 @@ fn a_beam_contradicts_a_ceiling_only_on_the_structures_side_of_it() {
         seen_from: SeenFrom::Above,
         clear_m: f32::NEG_INFINITY,
     };
-    assert!(ceiling_contradicts(&top, 0.33, 0.335, 3.0), "through the board");
+    assert!(
+        ceiling_contradicts(&top, 0.33, 0.335, 3.0, 0.0),
+        "through the board"
+    );
     assert!(ceiling_passed_under(&top, 0.30, 3.0), "under the board: clear");
     assert!(!ceiling_passed_under(&top, 0.33, 3.0), "in the board's band");
     assert!(
-        ceiling_contradicts(&top, 0.30, 0.40, 3.0),
+        ceiling_contradicts(&top, 0.30, 0.40, 3.0, 0.0),
         "a steep beam across it"
     );
     assert!(
-        !ceiling_contradicts(&top, 0.341, 0.345, 3.0),
+        !ceiling_contradicts(&top, 0.341, 0.345, 3.0, 0.0),
         "skimming over the top"
     );
-    assert!(!ceiling_contradicts(&top, 0.20, 0.30, 3.0), "under the board");
+    assert!(
+        !ceiling_contradicts(&top, 0.20, 0.30, 3.0, 0.0),
+        "under the board"
+    );
     // Its underside at 0.30 m seen from below: the board lies over it.
     let underside = Ceiling {
         z_m: 0.30,
@@ -341,15 +347,15 @@ fn a_beam_contradicts_a_ceiling_only_on_the_structures_side_of_it() {
         ..top
     };
     assert!(
-        ceiling_contradicts(&underside, 0.305, 0.31, 3.0),
+        ceiling_contradicts(&underside, 0.305, 0.31, 3.0, 0.0),
         "through the board"
     );
     assert!(
-        !ceiling_contradicts(&underside, 0.29, 0.299, 3.0),
+        !ceiling_contradicts(&underside, 0.29, 0.299, 3.0, 0.0),
         "skimming under it"
     );
     assert!(
-        !ceiling_contradicts(&underside, 0.40, 0.45, 3.0),
+        !ceiling_contradicts(&underside, 0.40, 0.45, 3.0, 0.0),
         "over the board"
     );
     assert!(ceiling_passed_under(&underside, 0.299, 3.0));
@@ -359,9 +365,9 @@ fn a_beam_contradicts_a_ceiling_only_on_the_structures_side_of_it() {
         seen_from: SeenFrom::Both,
         ..top
     };
-    assert!(ceiling_contradicts(&front, 0.341, 0.345, 3.0));
-    assert!(ceiling_contradicts(&front, 0.33, 0.335, 3.0));
-    assert!(!ceiling_contradicts(&front, 0.20, 0.30, 3.0));
+    assert!(ceiling_contradicts(&front, 0.341, 0.345, 3.0, 0.0));
+    assert!(ceiling_contradicts(&front, 0.33, 0.335, 3.0, 0.0));
+    assert!(!ceiling_contradicts(&front, 0.20, 0.30, 3.0, 0.0));
     assert_eq!(SeenFrom::Above.and(SeenFrom::Below), SeenFrom::Both);
     assert_eq!(SeenFrom::Below.and(SeenFrom::Below), SeenFrom::Below);
     for side in [SeenFrom::Above, SeenFrom::Below, SeenFrom::Both] {
@@ -420,5 +426,73 @@ fn the_top_surface_is_kept_against_lower_hits_and_follows_higher_ones() {
     assert_eq!(
         fuse_elevation(ElevationFusion::TopSurface, table, 0.0, 1e-4, 0.0, 3.0),
         top
+    );
+}
+
+#[test]
+fn a_beam_within_its_footprint_of_a_structure_s_far_edge_does_not_contradict_it_but_one_through_its_height_does()
+ {
+    // A board's face hit by a descending ring: the hits read as a top and fuse into a band 3 mm deep under
+    // 0.424 m, while the underside is at 0.4216 m.
+    let face = Ceiling {
+        z_m: 0.424,
+        var_m2: 1e-6,
+        log_odds: 3.5,
+        seen_from: SeenFrom::Above,
+        clear_m: f32::NEG_INFINITY,
+    };
+    // 2 m out, a beam's footprint is 4.4 mm (`BEAM_SIGMA_RAD`), as `vertical_variance` has it.
+    let footprint = beam_footprint_m(2.0) as f32;
+    for dir_z in [0.0_f64, -0.3] {
+        let range = 2.0 / (1.0 - dir_z * dir_z).sqrt();
+        let hit = vertical_variance(0.0, dir_z, range).sqrt();
+        assert!((hit - footprint).abs() < 1e-6, "{hit} {footprint}");
+    }
+    assert!((footprint - 0.0044).abs() < 1e-6, "{footprint}");
+    // A beam under the board, through the band's lower edge: a line through the band, but within its
+    // footprint of the space under the board.
+    let (lo, hi) = (0.4209, 0.4212);
+    assert!(ceiling_contradicts(&face, lo, hi, 3.0, 0.0), "a line");
+    assert!(
+        !ceiling_contradicts(&face, lo, hi, 3.0, footprint),
+        "a beam may have passed under the board"
+    );
+    // Nor did it pass under: it says neither.
+    assert!(!ceiling_passed_under(&face, hi, 3.0));
+    // A beam through the height where the board was hit contradicts it, however wide its footprint: the beam
+    // that passes where a person stood clears them.
+    assert!(ceiling_contradicts(&face, 0.4235, 0.4245, 3.0, footprint));
+    assert!(
+        !ceiling_contradicts(&face, 0.4241, 0.4245, 3.0, footprint),
+        "over the top"
+    );
+    // A deep band, a person's front hit from the ankles up: narrowed by the footprint at its far edge only.
+    let front = Ceiling {
+        z_m: 1.0,
+        var_m2: 0.01,
+        seen_from: SeenFrom::Both,
+        ..face
+    };
+    assert!(ceiling_contradicts(&front, 0.70, 0.75, 3.0, footprint));
+    assert!(ceiling_contradicts(&front, 1.25, 1.29, 3.0, footprint));
+    assert!(
+        !ceiling_contradicts(&front, 0.69, 0.699, 3.0, footprint),
+        "within the footprint below"
+    );
+    assert!(
+        !ceiling_contradicts(&front, 1.297, 1.31, 3.0, footprint),
+        "within the footprint above"
+    );
+    // An underside seen from below: narrowed over it, never under its height.
+    let underside = Ceiling {
+        z_m: 0.50,
+        seen_from: SeenFrom::Below,
+        ..face
+    };
+    assert!(ceiling_contradicts(&underside, 0.499, 0.501, 3.0, footprint));
+    assert!(!ceiling_contradicts(&underside, 0.5025, 0.503, 3.0, footprint));
+    assert!(
+        ceiling_passed_under(&underside, 0.499, 3.0),
+        "passing under is as before"
     );
 }
