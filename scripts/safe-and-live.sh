@@ -63,9 +63,11 @@ print("runs that reached the goal; contacts of the footprint with truly blocked 
 print("(observable) and not (blind), summed, and all contacts by what the robot's map called the cells entered")
 print("(blocked: the navigator drove into what its map forbade; undecided; drivable: the map's false clearance);")
 print("the collision guard's stops, summed; runs that ended stuck; mean uncertain cells, of them mean `imprecise`")
-print("(the sensors' resolution), mean over-cautious cells; mean AA over the runs with people (DynamicMap's")
-print("associated accuracy, in percent); mean `elevation_within_2sigma` and the share of runs with it in [0.90,")
-print("0.98]. A column the build did not measure is `-`.")
+print("(the sensors' resolution), mean over-cautious cells; mean unsafe cells of the final map that a ray could")
+print("have told about (`unsafe_observable_cells`); mean SA and DA (DynamicMap's static and dynamic accuracy, in")
+print("percent, over the runs that have such cells) and mean AA over the runs with people; mean")
+print("`elevation_within_2sigma` and the share of runs with it in [0.90, 0.98]. A column the build did not")
+print("measure is `-`.")
 
 
 def num(row, key):
@@ -91,8 +93,8 @@ for table in tables:
     print()
     print(f"## The build at {name}")
     print()
-    print("| preset | runs | truth has a path | reached | contacts observable | contacts blind | map said blocked / undecided / drivable | guard stops | stuck | uncertain | of them imprecise | over-cautious | AA (runs with people) | within 2 sigma | runs with it in [0.90, 0.98] |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| preset | runs | truth has a path | reached | contacts observable | contacts blind | map said blocked / undecided / drivable | guard stops | stuck | uncertain | of them imprecise | over-cautious | unsafe, observable | SA | DA | AA (runs with people) | within 2 sigma | runs with it in [0.90, 0.98] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for preset in ["paper", "robust"]:
         runs = [r for r in rows if r.get("preset") == preset]
         has_path = [r for r in runs if r.get("truth_plan_found") in ("true", "True", "1")]
@@ -103,6 +105,9 @@ for table in tables:
         observable, blind = total("nav_contacts_observable"), total("nav_contacts_blind")
         mapped = "-" if total("nav_contacts_mapped_blocked") is None else " / ".join(
             fmt(total(f"nav_contacts_mapped_{k}"), 0) for k in ("blocked", "undecided", "drivable"))
+        def percent(key):
+            v = mean([num(r, key) for r in runs])
+            return None if v is None else 100 * v
         aa = mean([num(r, "associated_accuracy") for r in runs])
         w2s = [num(r, "elevation_within_2sigma") for r in runs]
         inside = sum(1 for v in w2s if v is not None and 0.90 <= v <= 0.98)
@@ -112,6 +117,8 @@ for table in tables:
             f"{fmt(mean([num(r, 'uncertain_cells') for r in runs]))} | "
             f"{fmt(mean([num(r, 'doubt_imprecise_cells') for r in runs]))} | "
             f"{fmt(mean([num(r, 'overcautious_cells') for r in runs]))} | "
+            f"{fmt(mean([num(r, 'unsafe_observable_cells') for r in runs]))} | "
+            f"{fmt(percent('static_accuracy'))} | {fmt(percent('dynamic_accuracy'))} | "
             f"{fmt(None if aa is None else 100 * aa)} | {fmt(mean(w2s), 3)} | {inside} of {len(runs)} |"
         )
 PY
