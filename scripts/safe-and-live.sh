@@ -47,7 +47,10 @@ for build in "${builds[@]}"; do
     echo "ran sweeps/safe_and_live.toml with the build at $name"
 done
 
-python3 - "$commit" "$baseline" "${tables[@]}" >docs/results/safe_and_live.md <<'PY'
+# The page is written beside its place and moved over it once whole: a table that fails half-way leaves the
+# page as it was.
+page=$(mktemp docs/results/.safe_and_live.md.XXXXXX)
+if ! python3 - "$commit" "$baseline" "${tables[@]}" >"$page" <<'PY'
 import csv, math, sys
 
 commit, baseline, tables = sys.argv[1], sys.argv[2], sys.argv[3:]
@@ -122,4 +125,11 @@ for table in tables:
             f"{fmt(None if aa is None else 100 * aa)} | {fmt(mean(w2s), 3)} | {inside} of {len(runs)} |"
         )
 PY
+then
+    rm -f "$page"
+    echo "error: the table of docs/results/safe_and_live.md could not be written; the page is left as it was" >&2
+    exit 1
+fi
+chmod 644 "$page"
+mv "$page" docs/results/safe_and_live.md
 echo "wrote docs/results/safe_and_live.md"
