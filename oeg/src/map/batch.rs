@@ -51,12 +51,10 @@ impl Map {
     /// Under a model whose samples do not read the map (one whose scratch is the paper's evidence), runs of
     /// consecutive short scans (fewer than 8,192 rays) go in windows of 8 scans a thread: each thread gathers
     /// its scans one after another and keeps what each touched in a list, then the window's cells are updated
-    /// tile by tile in parallel, each from the scans' lists in their order, while the threads gather the next
-    /// window (whose samples read nothing of the map, which is updated window after window). This is what
-    /// makes a robot's log, thousands of scans of a few hundred rays each, use every core; a long scan is split
-    /// between the threads on its own ([`Map::integrate`]). Windows run only while the map and its scratch
-    /// (the pending window's lists included) hold less than half the memory limit, each thread's grid, and its
-    /// lists, under a sixteenth of that half: near it, or for a scan
+    /// tile by tile in parallel, each from the scans' lists in their order. This is what makes a robot's log,
+    /// thousands of scans of a few hundred rays each, use every core; a long scan is split between the threads
+    /// on its own ([`Map::integrate`]). Windows run only while the map and its scratch hold less than half the
+    /// memory limit, each thread's grid, and its lists, under a sixteenth of that half: near it, or for a scan
     /// of very long rays, scans go one at a time, so that a limit stops the same scan at the same place. Under
     /// other models the scans go one at a time on a thread of the pool, where a long scan's runs and a large
     /// update share their work without a hand-over from outside it.
@@ -91,15 +89,12 @@ impl Map {
     }
 
     /// [`Map::integrate_batch`] on a thread of the pool, for a model whose scratch is the paper's evidence.
-    /// Each window's cells are updated while the next window is gathered: the gathering reads nothing of the
-    /// map, and the updates go window after window, so the map is the same as one window at a time.
     fn integrate_in_windows<S: Borrow<Scan> + Sync>(
         &mut self,
         scans: &[S],
     ) -> Result<IntegrationStats, BatchError> {
         let threads = rayon::current_num_threads();
         let mut total = IntegrationStats::default();
-        let mut pending = None;
         let mut next = 0;
         while next < scans.len() {
             let window = scans[next..]
@@ -107,182 +102,81 @@ impl Map {
                 .take(threads * SCANS_PER_THREAD)
                 .take_while(|s| Borrow::<Scan>::borrow(*s).rays.len() < SHORT_SCAN_RAYS)
                 .count();
-            if window > 1 {
-                let (applied, gathered) =
-                    self.apply_while_gathering(pending.take(), &scans[next..next + window]);
-                total += applied;
-                if gathered.is_some() {
-                    pending = gathered;
-                    next += window;
-                    continue;
-                }
+            if window > 1
+                && let Some(stats) = self.integrate_side_by_side(&scans[next..next + window])
+            {
+                total += stats;
+                next += window;
+                continue;
             }
-            total += self.apply_window(pending.take());
             let stats = self
                 .integrate(scans[next].borrow())
                 .map_err(|error| BatchError { index: next, error })?;
             total += stats;
             next += 1;
         }
-        total += self.apply_window(pending.take());
         Ok(total)
     }
 
-    /// Updates the cells of `pending` (a window gathered before `scans`), if any, while `scans` are gathered side
-    /// by side and their tiles placed: the statistics of `pending`, and the window of `scans`, or `None`, with
-    /// the scratch as it was, when they cannot be gathered so (a model whose samples read the map, an invalid
-    /// scan, memory near the limit): the caller then integrates them one by one, which reports any error as it
-    /// always does. `pending` is in the map either way.
-    fn apply_while_gathering<S: Borrow<Scan> + Sync>(
-        &mut self,
-        pending: Option<Window>,
-        scans: &[S],
-    ) -> (IntegrationStats, Option<Window>) {
-        if !matches!(self.scratch, ScanScratch::Paper(_))
-            || scans
-                .par_iter()
-                .any(|s| Borrow::<Scan>::borrow(s).validate().is_err())
+    /// `scans` gathered side by side and applied in order; `None`, with the map and scratch as they were, when
+    /// they cannot be (a model whose samples read the map, an invalid scan, memory near the limit): the caller
+    /// then integrates them one by one, which reports any error as it always does.
+    fn integrate_side_by_side<S: Borrow<Scan> + Sync>(&mut self, scans: &[S]) -> Option<IntegrationStats> {
+        if scans
+            .par_iter()
+            .any(|s| Borrow::<Scan>::borrow(s).validate().is_err())
         {
-            return (self.apply_window(pending), None);
+            return None;
         }
-        let own_bytes = super::OWN_BYTES + self.views.memory_bytes();
-        let update = self.window_update();
         let Self {
             config,
             geometry,
             cells,
             ceilings,
             scratch,
+            levels,
+            views,
             ..
         } = self;
         let ScanScratch::Paper(scratch) = scratch else {
-            unreachable!("checked above")
+            return None;
         };
-        let map_bytes = cells.memory_bytes() + ceilings.memory_bytes() + own_bytes;
-        // The gathering reads nothing of the map (the paper's rules: `gather_side_by_side` refuses others), so it
-        // is given an empty one, and the pending window's cells are updated meanwhile; its lists count against
-        // the budget until then.
-        let (no_cells, no_ceilings) = (
-            TileGrid::new(crate::cell::Cell::UNOBSERVED),
-            TileGrid::new(crate::Ceiling::NONE),
-        );
         let before = Before {
             geometry,
-            cells: &no_cells,
-            ceilings: &no_ceilings,
+            cells,
+            ceilings,
             opts: &config.model,
             memory_limit_bytes: config.memory_limit_bytes,
-            own_bytes,
+            own_bytes: super::OWN_BYTES + views.memory_bytes(),
             rules: OptionRules::of(&config.model),
         };
-        let pending_bytes: u64 = pending
-            .as_ref()
-            .map_or(0, |p| p.lists.iter().map(TouchedCells::memory_bytes).sum());
-        let budget = (config.memory_limit_bytes / 2).saturating_sub(pending_bytes);
-        // The window's lists live until its cells are updated: the scratch kept between scans is the grids.
+        let budget = config.memory_limit_bytes / 2;
+        // The window's lists live as long as the window: the scratch kept between scans is the grids.
         let mut lists: Vec<TouchedCells<PaperEvidence>> = std::iter::repeat_with(TouchedCells::default)
             .take(scans.len())
             .collect();
-        let (applied, gathered) = rayon::join(
-            || pending.map(|p| (p.apply(cells, &config.model, update), p.scans)),
-            || gather_side_by_side(&before, scans, (scratch, &mut lists), budget, map_bytes),
-        );
-        if let Some((stats, n)) = applied {
-            self.num_scans += n as u64;
-            self.totals += stats;
-        }
-        let applied = applied.map_or_else(IntegrationStats::default, |(s, _)| s);
-        let window = gathered.and_then(|stats| {
-            self.place_window(Window {
-                lists,
-                stats,
-                scans: scans.len(),
-            })
-        });
-        (applied, window)
-    }
-
-    /// Places the tiles of a window's cells: the window, or `None`, with the scratch recycled, when the map and
-    /// the scratch with them would hold more than half the memory limit (the pending window's lists are gone by
-    /// then). The map's tile index grows with them, which the gathering's check could not count. Near the
-    /// budget the scans go one by one, as the caller does with `None` (tiles placed here stay, empty, as a failed
-    /// scan's do in `Map::integrate`).
-    fn place_window(&mut self, window: Window) -> Option<Window> {
-        let own_bytes = super::OWN_BYTES + self.views.memory_bytes();
-        let budget = self.config.memory_limit_bytes / 2;
-        let Self {
-            cells,
-            ceilings,
-            scratch: ScanScratch::Paper(scratch),
-            ..
-        } = self
-        else {
-            return None;
-        };
-        // At most one new tile per tile of each scan.
-        let new_tiles: usize = window
-            .lists
-            .iter()
-            .map(|l| l.tiles.iter().filter(|(t, _)| !cells.has_tile(*t)).count())
-            .sum();
-        let lists_bytes: u64 = window.lists.iter().map(TouchedCells::memory_bytes).sum();
-        let map_bytes = cells.memory_bytes() + ceilings.memory_bytes() + own_bytes;
-        let needed = map_bytes
-            .saturating_add(scratch.memory_bytes())
-            .saturating_add(lists_bytes)
-            .saturating_add((new_tiles * TileGrid::<crate::cell::Cell>::tile_bytes()) as u64);
+        let mut stats = gather_side_by_side(&before, scans, (scratch, &mut lists), budget)?;
+        // The cells' tiles, under the budget: the map's tile index grows with them, which the gathering's check
+        // could not count. Near the budget the scans go one by one, as the caller does with `None` (tiles placed
+        // here stay, empty, as a failed scan's do in `Map::integrate`).
+        let own_bytes = before.own_bytes;
+        let lists_bytes: u64 = lists.iter().map(TouchedCells::memory_bytes).sum();
         let room =
             budget.saturating_sub(scratch.memory_bytes() + lists_bytes + ceilings.memory_bytes() + own_bytes);
-        if needed > budget || !place_tiles(cells, &window.lists, room) {
+        if !place_tiles(cells, &lists, room) {
             scratch.recycle();
             return None;
         }
-        Some(window)
-    }
-
-    /// How a window's cells are updated: side by side only under independent measurements (the caller's
-    /// check), so no scan correlates with another.
-    fn window_update(&self) -> ScanUpdate {
-        ScanUpdate {
-            levels: self.levels,
+        // Side by side only under independent measurements (the caller's check): no scan correlates with another.
+        let update = ScanUpdate {
+            levels: *levels,
             correlation: 0.0,
-            own_bytes: super::OWN_BYTES + self.views.memory_bytes(),
-        }
-    }
-
-    /// Updates the cells of a gathered window, if any: its statistics.
-    fn apply_window(&mut self, window: Option<Window>) -> IntegrationStats {
-        let Some(window) = window else {
-            return IntegrationStats::default();
+            own_bytes,
         };
-        let update = self.window_update();
-        let stats = window.apply(&mut self.cells, &self.config.model, update);
-        self.num_scans += window.scans as u64;
+        stats.num_cells_updated = apply_in_order(cells, &lists, &config.model, update);
+        self.num_scans += scans.len() as u64;
         self.totals += stats;
-        stats
-    }
-}
-
-/// A window of scans gathered side by side, its cells' tiles placed, waiting for its cells' update: each scan's
-/// evidence in a list, in the scans' order, and what the gathering counted.
-struct Window {
-    lists: Vec<TouchedCells<PaperEvidence>>,
-    stats: IntegrationStats,
-    scans: usize,
-}
-
-impl Window {
-    /// Updates every cell the window's scans touched, in their order: its statistics, with the cell updates.
-    fn apply(
-        &self,
-        cells: &mut TileGrid<crate::cell::Cell>,
-        opts: &crate::model::ModelOptions,
-        update: ScanUpdate,
-    ) -> IntegrationStats {
-        IntegrationStats {
-            num_cells_updated: apply_in_order(cells, &self.lists, opts, update),
-            ..self.stats
-        }
+        Some(stats)
     }
 }
 
@@ -385,7 +279,6 @@ fn gather_side_by_side<E: Sampling<Hits = ()>, S: Borrow<Scan> + Sync>(
     scans: &[S],
     (scratch, lists): (&mut Scratch<E>, &mut [TouchedCells<E>]),
     budget: u64,
-    map_bytes: u64,
 ) -> Option<IntegrationStats>
 where
     (): HitSink<E>,
@@ -395,6 +288,7 @@ where
     }
     let runs = rayon::current_num_threads().clamp(1, scans.len());
     let per_run = scans.len().div_ceil(runs);
+    let map_bytes = before.map_bytes();
     // Each run's grid and each run's lists under an equal share of what the budget leaves, and at most a
     // sixteenth of it: a window is for scans of ordinary rays (a few megabytes of scratch each); a scan whose
     // rays need more goes alone, under the whole limit, rather than leave a window's grids holding (and the
@@ -430,10 +324,16 @@ where
             Some(stats)
         })
         .collect::<Option<Vec<_>>>();
+    // The tiles the cells' grid will place, at most one per tile of each scan.
+    let new_tiles: usize = lists
+        .iter()
+        .map(|l| l.tiles.iter().filter(|(t, _)| !before.cells.has_tile(*t)).count())
+        .sum();
     let lists_bytes: u64 = lists.iter().map(TouchedCells::memory_bytes).sum();
     let needed = map_bytes
         .saturating_add(scratch.memory_bytes())
-        .saturating_add(lists_bytes);
+        .saturating_add(lists_bytes)
+        .saturating_add((new_tiles * TileGrid::<crate::cell::Cell>::tile_bytes()) as u64);
     match gathered {
         Some(all) if needed <= budget => {
             Some(all.into_iter().fold(IntegrationStats::default(), |mut a, s| {
