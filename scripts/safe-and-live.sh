@@ -131,7 +131,6 @@ for table in tables:
         def percent(key):
             v = mean([num(r, key) for r in runs])
             return None if v is None else 100 * v
-        aa = mean([num(r, "associated_accuracy") for r in runs])
         w2s = [num(r, "elevation_within_2sigma") for r in runs]
         inside = sum(1 for v in w2s if v is not None and 0.90 <= v <= 0.98)
         print(
@@ -142,7 +141,7 @@ for table in tables:
             f"{fmt(mean([num(r, 'overcautious_cells') for r in runs]))} | "
             f"{fmt(mean([num(r, 'unsafe_observable_cells') for r in runs]))} | "
             f"{fmt(percent('static_accuracy'))} | {fmt(percent('dynamic_accuracy'))} | "
-            f"{fmt(None if aa is None else 100 * aa)} | {fmt(mean(w2s), 3)} | {inside} of {len(runs)} |"
+            f"{fmt(percent('associated_accuracy'))} | {fmt(mean(w2s), 3)} | {inside} of {len(runs)} |"
         )
 PY
 then
