@@ -9,7 +9,7 @@ use super::update::update_cell;
 use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::model::{Ceiling, OverheadHits, update_ceiling};
-use crate::storage::{Marked, TILE_CELLS, TileGrid};
+use crate::storage::{Marked, TILE_CELLS, TILES_PER_JOB, TileGrid};
 
 /// The log-odds levels a cell update compares with.
 #[derive(Debug, Clone, Copy)]
@@ -98,7 +98,10 @@ pub(super) fn apply<E: Evidence>(
     // Cells to update: below [`MIN_CELLS_IN_PARALLEL`], handing tiles to threads costs more than it saves.
     let touched: usize = work.iter().map(|(_, _, marks)| marks.num_cells()).sum();
     stats.num_cells_updated += if touched >= MIN_CELLS_IN_PARALLEL && rayon::current_num_threads() > 1 {
-        work.into_par_iter().map(update_tile).sum::<u64>()
+        work.into_par_iter()
+            .with_max_len(TILES_PER_JOB)
+            .map(update_tile)
+            .sum::<u64>()
     } else {
         work.into_iter().map(update_tile).sum::<u64>()
     };

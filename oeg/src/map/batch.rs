@@ -18,7 +18,7 @@ use super::update::update_cell;
 use super::{IntegrationStats, Map};
 use crate::error::Error;
 use crate::scan::Scan;
-use crate::storage::{TileGrid, TileIndex};
+use crate::storage::{TILES_PER_JOB, TileGrid, TileIndex};
 
 /// Scans of a window per thread. Each thread gathers its run of scans one after another into one grid, which
 /// stays in its core's cache, and moves each scan's evidence into a list ([`TouchedCells`]); no core reads a
@@ -379,6 +379,7 @@ fn apply_in_order<E: Sampling<Hits = ()>>(
     cells
         .tiles_mut_in_order(tiles)
         .into_par_iter()
+        .with_max_len(TILES_PER_JOB)
         .map(|(tile, cells)| {
             let mut updated = 0;
             for list in lists {

@@ -12,7 +12,7 @@ use super::sample::{Before, Sampling};
 use super::scratch::{Evidence, ExactMerge, HitStore, Scratch};
 use crate::error::{Error, Result};
 use crate::scan::Scan;
-use crate::storage::{CapacityExceeded, TileGrid, marked_by_tile};
+use crate::storage::{CapacityExceeded, TILES_PER_JOB, TileGrid, marked_by_tile};
 
 /// [`super::integrate`]'s gathering of a long scan in `runs` runs of consecutive rays, the first into
 /// `scratch.main` and its hit log, the others into the workers' grids with their hits deferred
@@ -106,19 +106,21 @@ fn merge_runs<E: Evidence>(
     let fill = main.fill();
     // Every worker tile has its tile in `main`, placed above; a worker's evidence is reset in any case.
     let work = marked_by_tile(main, workers.iter_mut());
-    work.into_par_iter().for_each(|(mut merged, runs)| {
-        for (evidence, marked) in runs {
-            if let Some(merged) = merged.as_deref_mut() {
-                marked.for_each(|k| {
-                    // An untouched cell's evidence merges as nothing.
-                    if evidence[k].is_touched() {
-                        merge.merge(&mut merged[k], &evidence[k]);
-                    }
-                });
+    work.into_par_iter()
+        .with_max_len(TILES_PER_JOB)
+        .for_each(|(mut merged, runs)| {
+            for (evidence, marked) in runs {
+                if let Some(merged) = merged.as_deref_mut() {
+                    marked.for_each(|k| {
+                        // An untouched cell's evidence merges as nothing.
+                        if evidence[k].is_touched() {
+                            merge.merge(&mut merged[k], &evidence[k]);
+                        }
+                    });
+                }
+                marked.reset(evidence, fill);
             }
-            marked.reset(evidence, fill);
-        }
-    });
+        });
     workers.iter_mut().for_each(TileGrid::release_reset);
     Ok(())
 }

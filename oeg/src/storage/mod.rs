@@ -25,6 +25,14 @@ pub(crate) const TILE_SIZE: usize = 1 << TILE_SHIFT;
 pub(crate) const TILE_CELLS: usize = TILE_SIZE * TILE_SIZE;
 pub(crate) const TILE_MASK: i32 = (TILE_SIZE as i32) - 1;
 
+/// Tiles a thread takes at a time in a pass over tiles in parallel (`with_max_len`): one. A pass's tiles hold
+/// very different numbers of cells to visit (a laser line's near tiles most of its cells), and rayon's adaptive
+/// split otherwise stops at runs of several tiles, so a thread that finished its share waits for the other's
+/// run; with one tile a job, it takes the next tile instead. Measured on 2 threads, alternating 21 runs of each
+/// build on the default scenario's laser lines and on its stereo frames (`oeg map` of logs recorded from the
+/// scenario with only those sensors, `integrate_wall_time_s`): 0.92 and 0.93 of the time with the default split.
+pub(crate) const TILES_PER_JOB: usize = 1;
+
 /// A tile's coordinates: cell `(i, j)` is in tile `(i >> TILE_SHIFT, j >> TILE_SHIFT)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub(crate) struct TileIndex {
