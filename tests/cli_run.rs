@@ -195,6 +195,8 @@ fn the_person_who_crossed_and_left_is_gone_from_the_map() {
     let m = metrics(&frozen);
     assert_eq!(m["plan_found"], false, "the person left behind blocks the goal");
     assert_eq!(m["truth_plan_found"], true);
+    // The rays reached the corridor the person left: the map, not the sensors' reach, lacks the path.
+    assert_eq!(m["observable_truth_plan_found"], true);
 }
 
 #[test]

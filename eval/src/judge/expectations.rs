@@ -35,6 +35,7 @@ pub fn metric_domain(name: &str) -> (f64, f64) {
         | "occupancy_brier"
         | "plan_found"
         | "truth_plan_found"
+        | "observable_truth_plan_found"
         | "nav_reached"
         | "nav_stuck"
         | "phys_tipped_over"

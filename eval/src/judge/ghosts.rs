@@ -270,6 +270,7 @@ mod tests {
             ],
             mapped,
             unobservable: vec![false; 4],
+            reached: None,
         };
         let covered_until_s = [1.0, 1.0, 1.0, f64::NEG_INFINITY];
         let at_end = [false; 4];
@@ -309,6 +310,7 @@ mod tests {
                 Traversability::Traversable,
             ],
             unobservable: vec![false, false, true, false],
+            reached: None,
         };
         // No actor: no raster of times (what `count` passes for a scene without actors).
         let c = tally(&verdicts, &[], None, None);

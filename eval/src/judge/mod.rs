@@ -184,6 +184,7 @@ pub fn record_plan(metrics: &mut Metrics, check: &plan_check::PlanCheck) {
     metrics.plan_unsafe_cells = check.unsafe_cells.len() as u64;
     metrics.plan_blind_cells = check.blind_cells.len() as u64;
     metrics.truth_plan_found = check.truth_plan.is_some();
+    metrics.observable_truth_plan_found = check.observable_truth_plan_found;
     metrics.truth_plan_length_m = length(&check.truth_plan);
     metrics.plan_length_ratio = metrics.plan_length_m / metrics.truth_plan_length_m;
 }

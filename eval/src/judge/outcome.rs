@@ -95,10 +95,12 @@ impl Outcome {
     pub fn path_text(&self) -> String {
         let m = &self.metrics;
         if !m.plan_found {
-            let text = if m.truth_plan_found {
-                "no path on the map (the truth has one)"
-            } else {
-                "no path on the map, nor on the truth"
+            let text = match (m.truth_plan_found, m.observable_truth_plan_found) {
+                (true, Some(false)) => {
+                    "no path on the map (the truth has one, none through what the rays reached)"
+                }
+                (true, _) => "no path on the map (the truth has one)",
+                (false, _) => "no path on the map, nor on the truth",
             };
             return match &self.closed_by {
                 Some(closed_by) => format!("{text}: {closed_by}"),
@@ -266,6 +268,11 @@ mod tests {
         assert_eq!(
             Outcome::new("robust", &m, &bound(10.0)).path_text(),
             "no path on the map (the truth has one)"
+        );
+        m.observable_truth_plan_found = Some(false);
+        assert_eq!(
+            Outcome::new("robust", &m, &bound(10.0)).path_text(),
+            "no path on the map (the truth has one, none through what the rays reached)"
         );
         let found =
             Outcome::new("robust", &test_metrics(), &bound(10.0)).with_closed_by(Some(closed_by.into()));

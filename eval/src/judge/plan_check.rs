@@ -22,6 +22,11 @@ pub struct PlanCheck {
     pub map_plan: Option<Plan>,
     /// The path planned on the truth (every cell known), if there is one.
     pub truth_plan: Option<Plan>,
+    /// Whether the truth has a path through what the sensors reached ([`Verdicts::observable_truth_decisions`]:
+    /// a drivable cell that no ray ended on nor crossed above a step's height is unknown); `None` without an
+    /// observability truth. Where it has none, a map's path would have to cross cells of which the sensors
+    /// told nothing but, at most, a grazing ray below a step's height.
+    pub observable_truth_plan_found: Option<bool>,
     /// Cells of the map's path whose centre lies within the inflation radius of a truly blocked cell: where
     /// the robot following the map's path would touch an obstacle.
     pub unsafe_cells: Vec<CellIndex>,
@@ -35,17 +40,20 @@ pub struct PlanCheck {
 
 impl PlanCheck {
     /// With no path on the map and cells that closed the way ([`PlanCheck::closing`]), those cells in words: by
-    /// why the map could not decide them (`estimate`'s doubts, or `never_observed`) and by what the truth calls
-    /// them, as in `closed by 1 cell the map cannot decide (1 step_band); the truth: 1 drivable, 0
+    /// why the map could not decide them (`estimate`'s doubts, or `never_observed`), by what the truth calls
+    /// them and, with an observability truth, how many of the drivable ones no ray reached, as in `closed by 3
+    /// cells the map cannot decide (1 never_observed, 2 step_band); the truth: 3 drivable (1 no ray reached), 0
     /// blocked`. `None` otherwise.
     pub fn closed_by(&self, verdicts: &Verdicts, estimate: &Estimate) -> Option<String> {
         if self.map_plan.is_some() {
             return None;
         }
-        let mut truly_blocked = 0;
+        let (mut truly_blocked, mut unreached) = (0, 0);
         let cells = self.closing.iter().filter_map(|c| verdicts.offset(*c));
         let reasons = count_reasons(cells.map(|k| {
-            truly_blocked += u64::from(verdicts.truth[k].is_blocked());
+            let blocked = verdicts.truth[k].is_blocked();
+            truly_blocked += u64::from(blocked);
+            unreached += u64::from(!blocked && verdicts.unreached(k));
             match estimate.doubts.get(k).copied().flatten() {
                 Some(doubt) => doubt.name(),
                 None if estimate.observed.get(k) == Some(&false) => "never_observed",
@@ -54,9 +62,13 @@ impl PlanCheck {
             }
         }));
         let total: u64 = reasons.values().sum();
+        let unreached = match verdicts.reached {
+            Some(_) => format!(" ({unreached} no ray reached)"),
+            None => String::new(),
+        };
         closing_words(&reasons).map(|words| {
             format!(
-                "{words}; the truth: {} drivable, {truly_blocked} blocked",
+                "{words}; the truth: {} drivable{unreached}, {truly_blocked} blocked",
                 total - truly_blocked
             )
         })
@@ -144,6 +156,16 @@ pub fn check(s: &Scenario, verdicts: &Verdicts) -> Result<PlanCheck> {
     let map_plan = oeg::plan(window, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
     let truly = verdicts.truth_decisions();
     let truth_plan = oeg::plan(window, &truly, start, goal, &options).map_err(planner_error)?;
+    let observable_truth_plan_found = match verdicts.observable_truth_decisions() {
+        // Without a path on the truth there is none through less of it.
+        Some(_) if truth_plan.is_none() => Some(false),
+        Some(told) => Some(
+            oeg::plan(window, &told, start, goal, &options)
+                .map_err(planner_error)?
+                .is_some(),
+        ),
+        None => None,
+    };
     let unsafe_cells = match &map_plan {
         Some(p) => unsafe_path_cells(p, window, &truly, &options).map_err(planner_error)?,
         None => Vec::new(),
@@ -158,6 +180,7 @@ pub fn check(s: &Scenario, verdicts: &Verdicts) -> Result<PlanCheck> {
     Ok(PlanCheck {
         map_plan,
         truth_plan,
+        observable_truth_plan_found,
         unsafe_cells,
         blind_cells,
         closing,
@@ -323,6 +346,7 @@ mod tests {
         let check = PlanCheck {
             map_plan: Some(straight),
             truth_plan: Some(truth_plan),
+            observable_truth_plan_found: None,
             unsafe_cells,
             blind_cells: Vec::new(),
             closing: Vec::new(),
@@ -335,6 +359,47 @@ mod tests {
         assert_eq!(lines.next(), Some("map,0,0.5,0.5,false,false"));
         assert!(csv.contains("map,3,3.5,0.5,true,false\n"), "{csv}");
         assert!(csv.lines().any(|l| l.starts_with("truth,0,")));
+    }
+
+    #[test]
+    fn the_closing_cells_say_how_many_drivable_ones_no_ray_reached() {
+        // Three closing cells: drivable and never observed, drivable on the frontier, and a truly blocked one.
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(2, 0)).expect("region");
+        let window = GridWindow::new(oeg::GridGeometry::new(1.0).expect("resolution"), region);
+        let flat = truth_cell(0.0, false, f32::NAN);
+        let truth = truth_raster(region, vec![flat, flat, truth_cell(0.2, true, f32::NAN)]);
+        let mut verdicts = Verdicts::from_classes(&truth, vec![Traversability::Unknown; 3]);
+        let estimate = Estimate {
+            window,
+            decisions: vec![Traversability::Unknown; 3],
+            doubts: vec![None, Some(oeg::Doubt::Frontier), None],
+            observed: vec![false, true, false],
+            elevation_m: vec![f32::NAN; 3],
+            variance_m2: vec![f32::NAN; 3],
+            occupancy: vec![f32::NAN; 3],
+            totals: crate::judge::estimate::MapTotals::default(),
+        };
+        let check = PlanCheck {
+            map_plan: None,
+            truth_plan: None,
+            observable_truth_plan_found: None,
+            unsafe_cells: Vec::new(),
+            blind_cells: Vec::new(),
+            closing: region.cells().collect(),
+        };
+        let words =
+            "closed by 3 cells the map cannot decide (1 frontier, 2 never_observed); the truth: 2 drivable";
+        assert_eq!(
+            check.closed_by(&verdicts, &estimate),
+            Some(format!("{words}, 1 blocked")),
+            "without an observability truth nothing is said of the rays"
+        );
+        // The blocked cell no ray reached is counted as blocked, not as unreached.
+        verdicts.reached = Some(vec![false, true, false]);
+        assert_eq!(
+            check.closed_by(&verdicts, &estimate),
+            Some(format!("{words} (1 no ray reached), 1 blocked"))
+        );
     }
 
     #[test]

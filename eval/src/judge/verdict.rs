@@ -156,6 +156,10 @@ pub struct Verdicts {
     /// cell, or inside the band of a cell under a structure lower than the robot. All false when the run has no observability truth (a
     /// replayed log).
     pub unobservable: Vec<bool>,
+    /// Per cell, from the run's observability truth: whether any ray truly ended on the cell or crossed the
+    /// band over it between a step and the robot's height, the rays that can tell a map what is there. `None`
+    /// without an observability truth (a replayed log).
+    pub reached: Option<Vec<bool>>,
 }
 
 /// How many cells got each verdict, with the unsafe and over-cautious ones split by what decides them.
@@ -228,6 +232,7 @@ impl Verdicts {
         Self {
             window: truth.window,
             unobservable: vec![false; truth_classes.len()],
+            reached: None,
             truth: truth_classes,
             mapped,
             verdict,
@@ -244,7 +249,14 @@ impl Verdicts {
         for (k, t) in self.truth.iter().enumerate() {
             self.unobservable[k] = !t.could_be_told(o, k);
         }
+        self.reached = Some(o.step.iter().zip(&o.clearance).map(|(s, c)| *s || *c).collect());
         self
+    }
+
+    /// Whether the cell at raster offset `k` is one no ray reached ([`Verdicts::reached`]); false without an
+    /// observability truth.
+    pub fn unreached(&self, k: usize) -> bool {
+        self.reached.as_ref().is_some_and(|r| !r[k])
     }
 
     /// The raster offset of `cell`, if inside the region.
@@ -297,6 +309,20 @@ impl Verdicts {
             })
             .collect()
     }
+
+    /// The truth's decisions as the sensors could have told them: [`Verdicts::truth_decisions`] with every
+    /// truly drivable cell that no ray reached unknown, as it is to any map of these readings (a truly blocked
+    /// cell stays blocked). `None` without an observability truth.
+    pub fn observable_truth_decisions(&self) -> Option<Vec<Traversability>> {
+        self.reached.as_ref()?;
+        let mut decisions = self.truth_decisions();
+        for (k, d) in decisions.iter_mut().enumerate() {
+            if *d == Traversability::Free && self.unreached(k) {
+                *d = Traversability::Unknown;
+            }
+        }
+        Some(decisions)
+    }
 }
 
 #[cfg(test)]
@@ -332,6 +358,58 @@ mod tests {
         assert_eq!(
             Verdict::of(TruthClass::OffTerrain, T::Blocked),
             Verdict::NotScored
+        );
+    }
+
+    #[test]
+    fn a_drivable_cell_no_ray_reached_is_unknown_to_the_observable_truth() {
+        // 1 m cells, 5 x 3: a wall across x = 2 m but for its gap at y = 1 m, which no ray reached.
+        let region = CellRegion::from_corners(CellIndex::new(0, 0), CellIndex::new(4, 2)).expect("region");
+        let wall = |c: CellIndex| c.i == 2 && c.j != 1;
+        let truth = truth_raster(
+            region,
+            region
+                .cells()
+                .map(|c| truth_cell(if wall(c) { 0.2 } else { 0.0 }, wall(c), f32::NAN))
+                .collect(),
+        );
+        let gap = region.offset(CellIndex::new(2, 1)).expect("inside");
+        let mut v = Verdicts::from_classes(&truth, vec![Traversability::Unknown; truth.cells.len()]);
+        assert_eq!(v.observable_truth_decisions(), None, "no observability truth");
+        assert!(!v.unreached(gap));
+        let mut reached = vec![true; truth.cells.len()];
+        reached[gap] = false;
+        // A blocked cell no ray reached stays blocked.
+        let blocked = region.offset(CellIndex::new(2, 0)).expect("inside");
+        reached[blocked] = false;
+        v.reached = Some(reached);
+        let told = v.observable_truth_decisions().expect("observability");
+        let truly = v.truth_decisions();
+        for k in 0..truly.len() {
+            let want = if k == gap {
+                Traversability::Unknown
+            } else {
+                truly[k]
+            };
+            assert_eq!(told[k], want, "cell {k}");
+        }
+        assert_eq!(told[blocked], Traversability::Blocked);
+        // The planner that avoids unknown cells finds the truth's path through the gap, and none through what
+        // the rays reached.
+        let options = oeg::PlannerOptions {
+            inflation_radius_m: 0.0,
+            ..oeg::PlannerOptions::default()
+        };
+        let (s, g) = (CellIndex::new(0, 1), CellIndex::new(4, 1));
+        assert!(
+            oeg::plan(&v.window, &truly, s, g, &options)
+                .expect("valid")
+                .is_some()
+        );
+        assert!(
+            oeg::plan(&v.window, &told, s, g, &options)
+                .expect("valid")
+                .is_none()
         );
     }
 

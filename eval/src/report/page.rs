@@ -379,11 +379,14 @@ fn plan_check(page: &mut Page, run: &RunPage) -> std::result::Result<(), String>
     page.heading("plan", "Plan check");
     page.paragraph(
         "A* from the start to the goal on the map's decisions, with the robot's inflation, against the same \
-         search on the truth; the path's cells near a truly blocked cell are unsafe. The path is in plan.csv.",
+         search on the truth, and on the truth as far as the rays reached it (a drivable cell no ray ended on nor \
+         crossed above a step's height counts as never observed); the path's cells near a truly blocked cell are \
+         unsafe. The path is in plan.csv.",
     );
     let keys = [
         "plan_found",
         "truth_plan_found",
+        "observable_truth_plan_found",
         "plan_length_ratio",
         "plan_unsafe_cells",
         "plan_blind_cells",

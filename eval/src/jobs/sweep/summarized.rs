@@ -28,9 +28,14 @@ pub const METRICS: [(&str, &str, bool); 10] = [
 
 /// The metrics summarized when some run has them: closed-loop runs' (`[navigation]`) and what no ray could tell
 /// (absent from rows of earlier versions).
-pub const OPTIONAL_METRICS: [(&str, &str, bool); 17] = [
+pub const OPTIONAL_METRICS: [(&str, &str, bool); 18] = [
     ("blind_cells", "unsafe cells no ray could tell about", false),
     ("plan_blind_cells", "blind cells on the planned path", false),
+    (
+        "observable_truth_plan_found",
+        "rate of runs whose truth has a path through what the rays reached",
+        true,
+    ),
     (
         "nav_reached",
         "rate of closed-loop runs that reached the goal",
