@@ -156,15 +156,15 @@ pub fn check(s: &Scenario, verdicts: &Verdicts) -> Result<PlanCheck> {
     let map_plan = oeg::plan(window, &verdicts.mapped, start, goal, &options).map_err(planner_error)?;
     let truly = verdicts.truth_decisions();
     let truth_plan = oeg::plan(window, &truly, start, goal, &options).map_err(planner_error)?;
-    let observable_truth_plan_found = match verdicts.observable_truth_decisions() {
+    let observable_truth_plan_found = if truth_plan.is_none() {
         // Without a path on the truth there is none through less of it.
-        Some(_) if truth_plan.is_none() => Some(false),
-        Some(told) => Some(
-            oeg::plan(window, &told, start, goal, &options)
-                .map_err(planner_error)?
-                .is_some(),
-        ),
-        None => None,
+        verdicts.reached.as_ref().map(|_| false)
+    } else {
+        verdicts
+            .observable_truth_decisions(&truly)
+            .map(|told| oeg::plan(window, &told, start, goal, &options).map(|p| p.is_some()))
+            .transpose()
+            .map_err(planner_error)?
     };
     let unsafe_cells = match &map_plan {
         Some(p) => unsafe_path_cells(p, window, &truly, &options).map_err(planner_error)?,

@@ -310,12 +310,12 @@ impl Verdicts {
             .collect()
     }
 
-    /// The truth's decisions as the sensors could have told them: [`Verdicts::truth_decisions`] with every
-    /// truly drivable cell that no ray reached unknown, as it is to any map of these readings (a truly blocked
-    /// cell stays blocked). `None` without an observability truth.
-    pub fn observable_truth_decisions(&self) -> Option<Vec<Traversability>> {
+    /// The truth's decisions as the sensors could have told them: `truly` ([`Verdicts::truth_decisions`]) with
+    /// every truly drivable cell that no ray reached unknown, as it is to any map of these readings (a truly
+    /// blocked cell stays blocked). `None` without an observability truth.
+    pub fn observable_truth_decisions(&self, truly: &[Traversability]) -> Option<Vec<Traversability>> {
         self.reached.as_ref()?;
-        let mut decisions = self.truth_decisions();
+        let mut decisions = truly.to_vec();
         for (k, d) in decisions.iter_mut().enumerate() {
             if *d == Traversability::Free && self.unreached(k) {
                 *d = Traversability::Unknown;
@@ -375,7 +375,12 @@ mod tests {
         );
         let gap = region.offset(CellIndex::new(2, 1)).expect("inside");
         let mut v = Verdicts::from_classes(&truth, vec![Traversability::Unknown; truth.cells.len()]);
-        assert_eq!(v.observable_truth_decisions(), None, "no observability truth");
+        let truly = v.truth_decisions();
+        assert_eq!(
+            v.observable_truth_decisions(&truly),
+            None,
+            "no observability truth"
+        );
         assert!(!v.unreached(gap));
         let mut reached = vec![true; truth.cells.len()];
         reached[gap] = false;
@@ -383,8 +388,7 @@ mod tests {
         let blocked = region.offset(CellIndex::new(2, 0)).expect("inside");
         reached[blocked] = false;
         v.reached = Some(reached);
-        let told = v.observable_truth_decisions().expect("observability");
-        let truly = v.truth_decisions();
+        let told = v.observable_truth_decisions(&truly).expect("observability");
         for k in 0..truly.len() {
             let want = if k == gap {
                 Traversability::Unknown
