@@ -66,6 +66,12 @@ pub struct Scan {
     pub sensor: SensorModel,
     /// Time of the scan, seconds (informational; the map does not use it).
     pub stamp_s: f64,
+    /// The world z of the ground under the robot that carried the sensor, metres, where it is known (a
+    /// simulated run, a log recorded with it): height thresholding
+    /// ([`crate::ModelOptions::max_height_m`]) measures from it, as elevation_mapping's height limits
+    /// measure in the robot's frame, so a robot that climbs a slope keeps mapping the ground ahead. `None`
+    /// (real data without a robot's pose): the threshold is world z.
+    pub ground_z_m: Option<f64>,
 }
 
 impl Scan {
@@ -76,6 +82,7 @@ impl Scan {
             rays: Vec::new(),
             sensor,
             stamp_s: 0.0,
+            ground_z_m: None,
         }
     }
 

@@ -143,6 +143,45 @@ fn height_thresholding_keeps_overhangs_out_of_the_map() {
     );
 }
 
+#[test]
+fn height_thresholding_measures_from_the_ground_under_the_robot() {
+    // The branch scene of the test above, 2 m higher: a robot on a plateau (or up a slope).
+    let lift = 2.0;
+    let targets = [(2.05, 0.05, 0.8 + lift), (4.05, 0.05, lift)];
+    let origin = Point3::new(0.05, 0.05, 0.3 + lift);
+    let thresholded = || {
+        map_with(
+            0.1,
+            ModelOptions {
+                max_height_m: Some(0.5),
+                ..ModelOptions::default()
+            },
+        )
+    };
+    let (mut on_plateau, mut world_z) = (thresholded(), thresholded());
+    for _ in 0..3 {
+        let mut scan = scan_of(origin, &targets);
+        world_z.integrate(&scan).expect("integrated");
+        scan.ground_z_m = Some(lift);
+        on_plateau.integrate(&scan).expect("integrated");
+    }
+    let profile = RobotProfile::default();
+    // Measured from the robot's ground, the threshold keeps the plateau's ground and drops the branch, as on
+    // flat ground at z = 0: the cell under the branch is only seen free, the ground beyond is mapped.
+    let rule = TraversabilityRule::Absolute;
+    assert_eq!(
+        on_plateau.traversability(cell(&on_plateau, 2.05, 0.05), &profile, rule),
+        Traversability::Free
+    );
+    let ground = on_plateau
+        .cell(cell(&on_plateau, 4.05, 0.05))
+        .elevation()
+        .expect("the plateau's ground is mapped");
+    assert!((ground.mean_m - lift as f32).abs() < 0.05, "{ground:?}");
+    // Measured in world z (a scan that does not say where its ground is), the whole scene is above 0.5 m.
+    assert_eq!(world_z.num_observed_cells(), 0);
+}
+
 /// The paper's Fig. 5 and 6: a person stands 2 m ahead for several scans, then leaves; the laser, 0.4 m up,
 /// then sees the floor 4 m ahead through the place the person stood.
 fn person_walks_through(mode: FreeSpaceElevation) -> Map {

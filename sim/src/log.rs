@@ -47,6 +47,11 @@ pub struct LogSensor {
     pub rate_hz: f64,
     /// What the map assumes for rays without their own error, and how far no-returns clear.
     pub map_model: oeg::SensorModel,
+    /// The ground under the robot in the sensor's frame, metres ([`SensorScan::ground_in_sensor`]); absent
+    /// for a robot without wheels, and from logs written before it was recorded (their maps threshold heights
+    /// in world z).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground_in_sensor_m: Option<[f64; 3]>,
 }
 
 /// The log's JSON header.
@@ -281,7 +286,13 @@ pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
                 check_container_checksum(path, data, r.pos)?;
                 return Ok(SensorLog { header, scans });
             }
-            1 => scans.push(r.scan_record(at, header.sensors.len())?),
+            1 => {
+                let mut scan = r.scan_record(at, header.sensors.len())?;
+                scan.ground_in_sensor = header.sensors[scan.sensor_index]
+                    .ground_in_sensor_m
+                    .map(Point3::from);
+                scans.push(scan);
+            }
             other => return Err(r.fail(at, format!("unknown record tag {other}"))),
         }
     }
@@ -396,6 +407,7 @@ impl<'a> LogReader<'a> {
             stamp_s,
             world_from_sensor,
             estimated_world_from_sensor,
+            ground_in_sensor: None,
             rays,
         })
     }

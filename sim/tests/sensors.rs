@@ -303,6 +303,9 @@ fn logs_read_back_exactly_and_reject_damage() {
             preset: "sick_lms291".into(),
             rate_hz: 75.0,
             map_model: sim.sensors()[0].map_model(),
+            ground_in_sensor_m: sim.sensors()[0]
+                .ground_in_sensor(sim.world())
+                .map(|g| [g.x, g.y, g.z]),
         }],
         stance: Some(sim::log::LogStance::new(
             &sim.world().robot().wheel_contacts(),
@@ -342,6 +345,8 @@ fn logs_read_back_exactly_and_reject_damage() {
             s
         })
         .collect();
+    // The ground under the robot reads back with every scan, from the header.
+    assert!(measured.iter().all(|s| s.ground_in_sensor.is_some()));
     assert_eq!(back.scans, measured);
     let bytes = std::fs::read(&path).expect("bytes");
     for cut in [0, 10, 40, bytes.len() / 2, bytes.len() - 1] {
@@ -443,4 +448,24 @@ fn each_obstacle_counts_the_readings_it_returned_and_one_no_beam_reaches_counts_
     let hits = scan.rays.iter().filter(|r| r.kind == RayKind::Hit).count() as u64;
     let returned = sim.obstacle_returns().of(0);
     assert!(returned > 0 && returned < hits, "{returned} of {hits}");
+}
+
+#[test]
+fn a_scan_says_how_high_the_ground_under_the_robot_is() {
+    // The robot stands 3 m up a 10 % slope: the ground under it is 0.3 m high, whichever sensor looks.
+    let text = common::scenario_driving(
+        1.0,
+        "waypoints_xy_m = [[3.0, 0.0], [3.5, 0.0]]\nspeed_m_s = 0.5",
+        &format!("[terrain]\nkind = \"slope\"\nslope_x = 0.1\n\n[[sensors]]\n{LASER}"),
+    );
+    let loaded = common::load_text("ground", &text).expect("valid");
+    let mut sim = Simulation::new(&loaded).expect("simulation");
+    let scan = sim.next_scan().expect("a scan at t = 0");
+    let model = sim.sensors()[0].map_model();
+    for pose in [PoseSource::True, PoseSource::Estimated] {
+        let ground = scan.to_scan(pose, model).ground_z_m.expect("a robot on wheels");
+        assert!((ground - 0.3).abs() < 0.01, "{ground}");
+    }
+    // The sensor sits above it: the map's threshold measures from the ground, not from the sensor.
+    assert!(scan.world_from_sensor.translation.z > 0.3 + 0.1);
 }

@@ -70,6 +70,7 @@ pub fn log_header(loaded: &scenario::LoadedScenario, sim: &Simulation) -> LogHea
                 preset: s.spec.preset.to_string(),
                 rate_hz: s.spec.rate_hz,
                 map_model: s.map_model(),
+                ground_in_sensor_m: s.ground_in_sensor(sim.world()).map(|g| [g.x, g.y, g.z]),
             })
             .collect(),
         stance: log_stance(sim.world()),

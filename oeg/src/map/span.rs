@@ -71,10 +71,10 @@ impl RaySpan {
             },
             |(_, s)| s,
         );
-        // Height thresholding: keep the part of the ray at or below max_height.
+        // Height thresholding: keep the part of the ray at or below max_height above the robot's ground.
         let (mut l_lo, mut l_hi): (f64, f64) = (0.0, l_end);
         if let Some(h) = opts.max_height_m {
-            let h = f64::from(h);
+            let h = f64::from(h) + scan.ground_z_m.unwrap_or(0.0);
             if dir.z > 0.0 {
                 l_hi = l_hi.min((h - o.z) / dir.z);
             } else if dir.z < 0.0 {

@@ -255,9 +255,11 @@ pub struct ModelOptions {
     /// ([`crate::model::correlated_variance`]). 0 (the paper): independent, eq. 9's variance shrinks with
     /// every measurement. 1: a standing sensor's cell is as certain as its best measurement.
     pub measurement_correlation: f32,
-    /// Height thresholding (paper section 6.2, Fig. 12): the parts of a beam higher than this, in world z
-    /// metres, are ignored entirely, so overhangs the robot passes under never enter the map. `None` (the
-    /// paper's base model) keeps everything; set it to the robot's height plus a margin.
+    /// Height thresholding (paper section 6.2, Fig. 12): the parts of a beam higher than this, in metres above
+    /// the ground under the robot when the scan was taken ([`crate::Scan::ground_z_m`]; world z for scans
+    /// that do not say), are ignored entirely, so overhangs the robot passes under never enter the map, and a
+    /// robot that climbs a slope keeps mapping the ground ahead of it. `None` (the paper's base model) keeps
+    /// everything; set it to the robot's height plus a margin.
     pub max_height_m: Option<f32>,
     /// Hits farther than this from the sensor are treated as no-return rays up to this range (OctoMap's
     /// `maxrange`). `None`: no limit.

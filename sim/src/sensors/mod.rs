@@ -138,6 +138,9 @@ pub struct SensorScan {
     pub world_from_sensor: Isometry3<f64>,
     /// Estimated `world_from_sensor`.
     pub estimated_world_from_sensor: Isometry3<f64>,
+    /// The ground under the robot in the sensor's frame ([`crate::World::ground_in_link`]), which places
+    /// the map's height threshold ([`oeg::Scan::ground_z_m`]); `None` for a robot without wheels.
+    pub ground_in_sensor: Option<Point3<f64>>,
     /// The readings.
     pub rays: Vec<SensorRay>,
 }
@@ -152,6 +155,7 @@ impl SensorScan {
         let rotation = world_from_sensor.rotation;
         let mut scan = Scan::new(Point3::from(world_from_sensor.translation.vector), sensor);
         scan.stamp_s = self.stamp_s;
+        scan.ground_z_m = self.ground_in_sensor.map(|g| (world_from_sensor * g).z);
         // Rotated in float64 and stored in float32, as a bag's reader places a cloud's float32 points; a ray
         // that returned nothing reaches the sensor's range ([`SensorScan::cleared_in_sensor`]).
         scan.rays.extend(self.rays.iter().map(|r| Ray {
@@ -249,6 +253,13 @@ impl SimSensor {
         self.bias_m
     }
 
+    /// The ground under the robot in this sensor's frame ([`crate::World::ground_in_link`]).
+    pub fn ground_in_sensor(&self, world: &World) -> Option<Point3<f64>> {
+        world
+            .ground_in_link(&self.spec.mount_link)
+            .map(|g| self.link_from_sensor.inverse_transform_point(&g))
+    }
+
     /// What the map should assume about this sensor when a ray carries no error of its own.
     pub fn map_model(&self) -> oeg::SensorModel {
         let noise = match self.spec.noise.range {
@@ -311,6 +322,7 @@ impl SimSensor {
             stamp_s: world.time_s(),
             world_from_sensor,
             estimated_world_from_sensor: estimated * self.link_from_sensor,
+            ground_in_sensor: self.ground_in_sensor(world),
             rays: rays.clone(),
         })
     }

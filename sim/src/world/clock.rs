@@ -166,6 +166,23 @@ impl World {
         self.robot.base_from_link(link).map(|b| self.world_from_base * b)
     }
 
+    /// The ground under the robot in the frame of its link `link`: the mean of its wheels' contact points, so
+    /// that a sensor on that link knows, in every pose, how high the ground under the robot is. `None` for a
+    /// robot without wheels or without that link.
+    pub fn ground_in_link(&self, link: &str) -> Option<Point3<f64>> {
+        if self.wheel_contacts.is_empty() {
+            return None;
+        }
+        let mean = self
+            .wheel_contacts
+            .iter()
+            .fold(nalgebra::Vector3::zeros(), |sum, c| sum + c.coords)
+            / self.wheel_contacts.len() as f64;
+        self.robot
+            .base_from_link(link)
+            .map(|b| b.inverse_transform_point(&Point3::from(mean)))
+    }
+
     /// Where the robot stands now as odometry believes ([`crate::robot::stance_at`] at the estimated pose), for
     /// the map's [`oeg::Map::integrate_stance`]. `None` for a robot without wheels or collision shapes.
     pub fn estimated_stance(&self) -> Option<oeg::Stance> {
