@@ -5,7 +5,10 @@ use nalgebra::Point3;
 use oeg::{ModelOptions, RobotProfile, Traversability, TraversabilityRule};
 
 #[path = "common/scans.rs"]
-#[allow(dead_code, reason = "the shared scans serve several test files; this one needs three")]
+#[allow(
+    dead_code,
+    reason = "the shared scans serve several test files; this one needs three"
+)]
 mod scans;
 
 use scans::{cell, map_with, scan_of};
@@ -87,4 +90,3 @@ fn height_thresholding_measures_from_the_ground_under_the_robot() {
     // Measured in world z (a scan that does not say where its ground is), the whole scene is above 0.5 m.
     assert_eq!(world_z.num_observed_cells(), 0);
 }
-
