@@ -32,6 +32,11 @@ pub struct Mapping {
     pub simulation: Simulation,
     /// One map per model, the first the run's own.
     pub maps: Vec<Map>,
+    /// Which maps take the robot's stance as the ground under it ([`oeg::TraversabilityRule::needs_stance`]):
+    /// at the start, and after every batch of scans ([`Map::integrate_footprint`]).
+    take_stance: Vec<bool>,
+    /// The space the robot's body fills over its footprint (`None`: a robot without wheels or body).
+    body: Option<oeg::BodySpan>,
     models: Vec<oeg::SensorModel>,
     simulation_s: f64,
     map_s: Vec<f64>,
@@ -73,6 +78,8 @@ impl Mapping {
         let simulation = Simulation::new(loaded)?;
         // The ground the robot stands on at the start, for the rules whose frontier needs it.
         let stance = simulation.world().estimated_stance();
+        let take_stance: Vec<bool> = maps.iter().map(|m| m.traversability.needs_stance()).collect();
+        let body = simulation.world().robot().body_span();
         let maps = maps
             .iter()
             .map(|m| {
@@ -117,6 +124,8 @@ impl Mapping {
             map_s: vec![0.0; maps.len()],
             simulation,
             maps,
+            take_stance,
+            body,
             models,
             simulation_s: 0.0,
             last_tick: -1,
@@ -177,13 +186,15 @@ impl Mapping {
         // the simulation, and each side keeps its own order, so the results do not depend on it. Batches let
         // the maps gather short scans side by side (`Map::integrate_batch`) and the threads meet seldom.
         let mut batch = self.simulate_batch(until_s);
-        while !batch.is_empty() {
+        while !batch.0.is_empty() {
             progress.check_cancelled()?;
-            let last_stamp_s = batch.last().map_or(0.0, |scan| scan.stamp_s);
-            let num_scans = batch.len() as u64;
+            let last_stamp_s = batch.0.last().map_or(0.0, |scan| scan.stamp_s);
+            let num_scans = batch.0.len() as u64;
             let Self {
                 observability,
                 maps,
+                take_stance,
+                body,
                 map_s,
                 models,
                 max_range_m,
@@ -191,9 +202,14 @@ impl Mapping {
                 simulation_s,
                 ..
             } = self;
+            let (scans, stance) = batch;
             let (simulated, mapped) = rayon::join(
                 || simulate_batch(simulation, simulation_s, until_s),
-                || map_batch(observability, maps, map_s, models, max_range_m, batch),
+                || {
+                    map_batch(observability, maps, map_s, models, max_range_m, scans)?;
+                    let stance = stance.as_ref().zip(*body);
+                    lay_footprints(maps, take_stance, map_s, stance)
+                },
             );
             mapped?;
             batch = simulated;
@@ -209,6 +225,9 @@ impl Mapping {
             progress.check_cancelled()?;
             let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
             let scan = self.map_scan(scan)?;
+            let stance = self.simulation.world().estimated_stance();
+            let stance = stance.as_ref().zip(self.body);
+            lay_footprints(&mut self.maps, &self.take_stance, &mut self.map_s, stance)?;
             if let Some(r) = &mut self.recording {
                 let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
                 r.recording
@@ -242,8 +261,8 @@ impl Mapping {
         }
     }
 
-    /// The simulation's next batch of scans up to `until_s`, timed.
-    fn simulate_batch(&mut self, until_s: f64) -> Vec<sim::sensors::SensorScan> {
+    /// The simulation's next batch of scans up to `until_s`, timed, and where the robot stands after it.
+    fn simulate_batch(&mut self, until_s: f64) -> (Vec<sim::sensors::SensorScan>, Option<oeg::Stance>) {
         simulate_batch(&mut self.simulation, &mut self.simulation_s, until_s)
     }
 
@@ -280,18 +299,41 @@ impl Mapping {
 /// Scans simulated, then mapped, together ([`Mapping::feed_until`]): a fraction of a second of the drive.
 const SCANS_PER_BATCH: usize = 32;
 
-/// The simulation's next scans up to `until_s`, at most [`SCANS_PER_BATCH`], the time added to `simulation_s`.
+/// The simulation's next scans up to `until_s`, at most [`SCANS_PER_BATCH`], the time added to `simulation_s`,
+/// and where the robot stands (as odometry believes) at the last of them.
 fn simulate_batch(
     simulation: &mut Simulation,
     simulation_s: &mut f64,
     until_s: f64,
-) -> Vec<sim::sensors::SensorScan> {
+) -> (Vec<sim::sensors::SensorScan>, Option<oeg::Stance>) {
     let t0 = Instant::now();
     let batch = std::iter::from_fn(|| simulation.next_scan_until(until_s))
         .take(SCANS_PER_BATCH)
         .collect();
+    let stance = simulation.world().estimated_stance();
     *simulation_s += t0.elapsed().as_secs_f64();
-    batch
+    (batch, stance)
+}
+
+/// The robot's stance, with the space its body fills ([`Map::integrate_footprint`]), into the maps that take
+/// it, each map's time added to its `map_s`.
+fn lay_footprints(
+    maps: &mut [Map],
+    take_stance: &[bool],
+    map_s: &mut [f64],
+    stance: Option<(&oeg::Stance, oeg::BodySpan)>,
+) -> Result<()> {
+    let Some((stance, body)) = stance else {
+        return Ok(());
+    };
+    for ((map, take), seconds) in maps.iter_mut().zip(take_stance).zip(map_s) {
+        if *take {
+            let t0 = Instant::now();
+            map.integrate_footprint(stance, body)?;
+            *seconds += t0.elapsed().as_secs_f64();
+        }
+    }
+    Ok(())
 }
 
 /// Simulated scans into the observability and, at the estimated pose, into every map: each map takes the batch

@@ -24,8 +24,8 @@ pub use cell::Cell;
 pub use error::{Error, Result};
 pub use geometry::{CellIndex, CellRegion, GridGeometry, GridWindow, MAX_RESOLUTION_M, MIN_RESOLUTION_M};
 pub use map::{
-    BatchError, DEFAULT_MEMORY_LIMIT_BYTES, DEFAULT_STANCE_SIGMA_M, IntegrationStats, Layer, LayerKind, Map,
-    MapConfig, RAYS_BETWEEN_STOP_CHECKS, Raster, Stance,
+    BatchError, BodySpan, DEFAULT_MEMORY_LIMIT_BYTES, DEFAULT_STANCE_SIGMA_M, IntegrationStats, Layer,
+    LayerKind, Map, MapConfig, RAYS_BETWEEN_STOP_CHECKS, Raster, Stance,
 };
 
 // What goes in: scans of rays from a sensor with a range-noise model.

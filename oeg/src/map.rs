@@ -6,7 +6,7 @@
 //!   each touched cell updated once (`map/apply.rs`, one cell's update in `map/update.rs`); [`Map::integrate_batch`] (`map/batch.rs`): many short
 //!   scans side by side, a run of them per thread;
 //! * `stance` (`map/stance.rs`): the ground a standing robot's wheels touch, as a measurement
-//!   ([`Map::integrate_stance`]);
+//!   ([`Map::integrate_stance`]), and what a driving robot's body fills, as proof ([`Map::integrate_footprint`]);
 //! * `layers` (`map/layers.rs`): dense rasters of one quantity ([`Map::layer`]);
 //! * the decisions ([`Map::traversability`], [`Map::traversability_layer`], [`Map::traversability_counts`]):
 //!   `traversability/decide.rs`, beside the pure rules they apply;
@@ -30,7 +30,7 @@ mod update;
 mod views;
 
 pub use layers::{Layer, LayerKind, Raster};
-pub use stance::{DEFAULT_STANCE_SIGMA_M, Stance};
+pub use stance::{BodySpan, DEFAULT_STANCE_SIGMA_M, Stance};
 
 use serde::{Deserialize, Serialize};
 

@@ -11,7 +11,7 @@ use crate::cell::Cell;
 use crate::error::{Error, Result};
 use crate::footprint::{Footprint, Pose2};
 use crate::geometry::{CellIndex, CellRegion, GridWindow};
-use crate::model::{log_odds, update_log_odds};
+use crate::model::{Ceiling, log_odds, update_log_odds};
 use crate::storage::{TileIndex, offset_in_tile};
 use crate::traversability::TraversabilityRule;
 
@@ -156,6 +156,18 @@ impl Stance {
     }
 }
 
+/// The space a robot's body fills over its footprint, metres above the ground its wheels stand on: from the
+/// underside of its chassis (its ground clearance; the wheels alone reach lower) up to its height. What lies
+/// in it where the robot stands is gone ([`Map::integrate_footprint`]); what lies under the chassis between
+/// the wheels, lower than `underside_m`, the robot may straddle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodySpan {
+    /// The chassis' lowest point above the wheels' contacts, metres.
+    pub underside_m: f32,
+    /// The robot's highest point above them, metres.
+    pub height_m: f32,
+}
+
 impl TraversabilityRule {
     /// Whether the rule's frontier test ([`crate::Doubt::Frontier`]) needs the ground a robot stands on as a
     /// measurement ([`Map::integrate_stance`]): the contact rule's does, or the cells around a robot whose
@@ -180,8 +192,45 @@ impl Map {
     /// [`Error::InvalidSetting`] for a stance [`Stance::validate`] refuses, or one whose footprint lies beyond the
     /// grid; [`Error::MemoryLimit`] if the footprint's tiles would exceed the map's limit (nothing is set then).
     pub fn integrate_stance(&mut self, stance: &Stance) -> Result<u64> {
+        self.lay_ground(stance, None)
+    }
+
+    /// Takes a driving robot's stance as what it is, proof of what its body occupies (nav2's footprint
+    /// clearing, the obstacle layer's `footprint_clearing_enabled`, on by default, kept to the space the body
+    /// fills): as [`Map::integrate_stance`] for the cells under the footprint that no scan measured, and
+    /// besides:
+    /// * under a wheel (the cell of a contact point) the ground is where the wheel stands: a cell seen only
+    ///   free takes the plane's height and variance (one a scan measured keeps its measurement, which a
+    ///   wheel's contact, inferred from the pose, does not overrule);
+    /// * an estimate above the plane by more than the chassis' clearance (`body.underside_m`) plus the surface
+    ///   band ([`crate::ModelOptions::surface_band_sigmas`] standard deviations of the difference) lies where
+    ///   the body is: a spurious return that no later beam passed through (the space between a push-broom
+    ///   lidar and the ground its line sweeps is never crossed again), a person who left. It takes the plane
+    ///   too. Lower ones (a curb under the chassis' overhang) are kept;
+    /// * a structure over a cell ([`Map::ceiling`]) whose lowest hits lie within the body's span is removed.
+    ///
+    /// Returns the cells it set.
+    ///
+    /// The robot has to be where the stance says: `oeg run` gives it the stance at the estimated pose after
+    /// every batch of scans, for the maps judged by [`crate::TraversabilityRule::Contact`].
+    ///
+    /// # Errors
+    /// As [`Map::integrate_stance`].
+    pub fn integrate_footprint(&mut self, stance: &Stance, body: BodySpan) -> Result<u64> {
+        self.lay_ground(stance, Some(body))
+    }
+
+    /// The plane under `stance` into the cells under its footprint that no scan measured, and, given the
+    /// robot's `body`, into those whose estimate it contradicts ([`Map::integrate_footprint`]).
+    fn lay_ground(&mut self, stance: &Stance, body: Option<BodySpan>) -> Result<u64> {
         let (plane, var_m2) = stance.ground()?;
         let cells = self.cells_under_footprint(&stance.footprint, stance.pose)?;
+        let mut wheels: Vec<CellIndex> = stance
+            .contacts
+            .iter()
+            .filter_map(|c| self.geometry.cell_of(c.x, c.y))
+            .collect();
+        wheels.sort_unstable();
         let tiles: Vec<TileIndex> = {
             let mut t: Vec<TileIndex> = cells.iter().map(|c| TileIndex::of(*c)).collect();
             t.sort_unstable();
@@ -203,6 +252,7 @@ impl Map {
         }
         let opts = &self.config.model;
         let hit = update_log_odds(0.0, log_odds(opts.p_max), opts.log_odds_min, opts.log_odds_max);
+        let band_sigmas = opts.surface_band_sigmas;
         let mut set = 0;
         for cell in cells {
             let tile = self
@@ -213,13 +263,26 @@ impl Map {
                     limit_bytes: self.config.memory_limit_bytes,
                 })?;
             let c = &mut tile[offset_in_tile(cell)];
-            if c.is_observed() {
+            let (x, y) = self.geometry.cell_center(cell);
+            let ground_m = plane.z_at(x, y) as f32;
+            let under_wheel = wheels.binary_search(&cell).is_ok();
+            let contradicted = |c: &Cell, body: BodySpan| match c.elevation() {
+                Some(e) => e.mean_m - ground_m - band_sigmas * (e.var_m2 + var_m2).sqrt() > body.underside_m,
+                None => under_wheel,
+            };
+            if let (Some(body), Some(ceilings)) = (body, self.ceilings.tile_mut(TileIndex::of(cell))) {
+                let ceiling = &mut ceilings[offset_in_tile(cell)];
+                let over_m = ceiling.z_m - ground_m;
+                if ceiling.is_some() && over_m < body.height_m && (under_wheel || over_m > body.underside_m) {
+                    *ceiling = Ceiling::NONE;
+                }
+            }
+            if c.is_observed() && !body.is_some_and(|b| contradicted(c, b)) {
                 continue;
             }
-            let (x, y) = self.geometry.cell_center(cell);
             *c = Cell {
-                log_odds: hit,
-                mean_m: plane.z_at(x, y) as f32,
+                log_odds: hit.max(c.log_odds),
+                mean_m: ground_m,
                 var_m2,
             };
             set += 1;
@@ -236,159 +299,4 @@ impl Map {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::map::MapConfig;
-    use crate::preset::MapPreset;
-    use crate::traversability::{RobotProfile, Traversability};
-
-    fn pioneer() -> Footprint {
-        Footprint {
-            min_x_m: -0.3,
-            max_x_m: 0.3,
-            min_y_m: -0.25,
-            max_y_m: 0.25,
-        }
-    }
-
-    fn stance(contacts: Vec<Point3<f64>>) -> Stance {
-        Stance {
-            contacts,
-            footprint: pioneer(),
-            pose: Pose2 {
-                x_m: 1.0,
-                y_m: 2.0,
-                yaw_rad: 0.3,
-            },
-            sigma_m: DEFAULT_STANCE_SIGMA_M,
-        }
-    }
-
-    /// Four wheels at `(+-0.2, +-0.2)` about `(1, 2)` on the plane `z = 0.1 + 0.05 x`.
-    fn wheels_on_a_slope() -> Vec<Point3<f64>> {
-        [(-0.2, -0.2), (-0.2, 0.2), (0.2, -0.2), (0.2, 0.2)]
-            .map(|(dx, dy)| Point3::new(1.0 + dx, 2.0 + dy, 0.1 + 0.05 * (1.0 + dx)))
-            .to_vec()
-    }
-
-    #[test]
-    fn the_footprint_cells_take_the_plane_through_the_wheels_with_the_contacts_variance() {
-        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
-        let set = map
-            .integrate_stance(&stance(wheels_on_a_slope()))
-            .expect("stance");
-        // A 0.6 x 0.5 m rectangle, turned: about 120 cells of 25 cm^2, and a ring of partly covered ones.
-        assert!((120..=200).contains(&set), "{set}");
-        assert_eq!(map.num_observed_cells(), set);
-        assert_eq!(map.num_scans(), 0);
-        for (cell, c) in map.observed_cells() {
-            let (x, _) = map.geometry().cell_center(cell);
-            assert!((f64::from(c.mean_m) - (0.1 + 0.05 * x)).abs() < 1e-5, "{cell:?}");
-            assert!((c.var_m2 - DEFAULT_STANCE_SIGMA_M * DEFAULT_STANCE_SIGMA_M).abs() < 1e-9);
-            assert_eq!(map.is_occupied(cell), Some(true));
-        }
-    }
-
-    #[test]
-    fn a_twisted_stance_adds_its_residual_and_one_wheel_gives_a_level_plane() {
-        let mut twisted = wheels_on_a_slope();
-        twisted[0].z += 0.02;
-        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
-        map.integrate_stance(&stance(twisted)).expect("stance");
-        let (_, c) = map.observed_cells().next().expect("a cell");
-        // The plane misses each wheel by 5 mm: the residual's square adds to the contacts' variance.
-        let expected = DEFAULT_STANCE_SIGMA_M.powi(2) + 0.005_f32.powi(2);
-        assert!((c.var_m2 - expected).abs() < 1e-8, "{} {expected}", c.var_m2);
-
-        let mut level = Map::new(MapConfig::new(0.05)).expect("map");
-        level
-            .integrate_stance(&stance(vec![Point3::new(1.0, 2.0, 0.3)]))
-            .expect("stance");
-        assert!(level.observed_cells().all(|(_, c)| c.mean_m == 0.3));
-    }
-
-    #[test]
-    fn a_cell_a_scan_observed_keeps_its_measurement() {
-        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
-        let seen = map.geometry().cell_of(1.0, 2.0).expect("cell");
-        let measured = Cell {
-            log_odds: -1.0,
-            mean_m: 0.5,
-            var_m2: 1e-4,
-        };
-        map.cells
-            .tile_or_insert(TileIndex::of(seen), u64::MAX)
-            .expect("tile")[offset_in_tile(seen)] = measured;
-        let set = map
-            .integrate_stance(&stance(wheels_on_a_slope()))
-            .expect("stance");
-        assert_eq!(map.cell(seen), measured);
-        assert_eq!(map.num_observed_cells(), set + 1);
-    }
-
-    #[test]
-    fn under_the_contact_rule_the_ground_it_stands_on_is_drivable_and_no_frontier() {
-        let robot = RobotProfile::default();
-        let model = MapPreset::Robust.model(&robot);
-        let mut map = Map::new(MapConfig {
-            model,
-            ..MapConfig::new(0.05)
-        })
-        .expect("map");
-        map.integrate_stance(&stance(wheels_on_a_slope()))
-            .expect("stance");
-        let rule = MapPreset::Robust.traversability();
-        let centre = map.geometry().cell_of(1.0, 2.0).expect("cell");
-        assert_eq!(
-            map.traversability(centre, &robot, rule),
-            Traversability::Traversable
-        );
-    }
-
-    #[test]
-    fn a_stance_that_is_not_finite_or_has_no_contact_is_refused_and_sets_nothing() {
-        let mut map = Map::new(MapConfig::new(0.05)).expect("map");
-        for (s, words) in [
-            (stance(Vec::new()), "at least one contact"),
-            (stance(vec![Point3::new(f64::NAN, 0.0, 0.0)]), "not finite"),
-            (stance(vec![Point3::new(9.0, 2.0, 0.0)]), "more than"),
-            (stance(vec![Point3::new(1.0, 2.0, f64::MAX)]), "no finite plane"),
-            (
-                Stance {
-                    sigma_m: 0.0,
-                    ..stance(wheels_on_a_slope())
-                },
-                "sigma_m",
-            ),
-            (
-                Stance {
-                    pose: Pose2 {
-                        x_m: f64::INFINITY,
-                        y_m: 0.0,
-                        yaw_rad: 0.0,
-                    },
-                    ..stance(wheels_on_a_slope())
-                },
-                "pose",
-            ),
-        ] {
-            let e = map.integrate_stance(&s).expect_err("refused").to_string();
-            assert!(e.contains(words), "{e}");
-        }
-        assert_eq!(map.num_observed_cells(), 0);
-    }
-
-    #[test]
-    fn a_stance_beyond_the_memory_limit_is_refused_whole() {
-        let mut map = Map::new(MapConfig {
-            memory_limit_bytes: 1000,
-            ..MapConfig::new(0.05)
-        })
-        .expect("map");
-        let e = map
-            .integrate_stance(&stance(wheels_on_a_slope()))
-            .expect_err("too big");
-        assert!(matches!(e, Error::MemoryLimit { .. }), "{e}");
-        assert_eq!(map.num_observed_cells(), 0);
-    }
-}
+mod tests;
