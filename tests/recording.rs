@@ -239,3 +239,23 @@ fn the_recording_reads_back_validates_against_its_schemas_and_is_the_same_bytes_
     );
     assert!(last_time > 10_000_000_000, "the run lasts beyond 10 s");
 }
+
+#[test]
+fn a_recorded_run_maps_as_an_unrecorded_one_under_robust() {
+    // The recording maps scan by scan, the run in batches; the robust map also takes the robot's stance (the
+    // ground under it, footprint clearing) at the batches' ends, and the recorded run at the same scans.
+    let dir = temp_dir("recording", "same_map");
+    let scene = root().join("tests/scenes/nav_blind.toml");
+    let mut maps = Vec::new();
+    for mcap in [true, false] {
+        let out = dir.join(if mcap { "recorded" } else { "plain" });
+        let mut args = vec!["run", s(&scene), "--set", "map.preset=robust", "--out", s(&out)];
+        if mcap {
+            args.push("--mcap");
+        }
+        let o = oeg_with_threads(&args, Some("2"));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        maps.push(std::fs::read(out.join("map.oeg")).expect("map.oeg"));
+    }
+    assert!(maps[0] == maps[1], "the recorded run's map differs");
+}

@@ -220,14 +220,19 @@ impl Mapping {
 
     /// [`Mapping::feed_until`] while recording: simulating and mapping take turns, scan by scan, since a
     /// recording reads the world as it was at the scan.
+    /// The robot's stance is taken where [`Mapping::feed_until`] takes it, after every [`SCANS_PER_BATCH`] scans
+    /// and after the last, so that a recorded run maps as an unrecorded one.
     fn feed_recording_until(&mut self, until_s: f64, progress: &Progress) -> Result<()> {
+        let mut since_stance = 0;
         while let Some(scan) = self.simulate_next(until_s) {
             progress.check_cancelled()?;
             let (stamp_s, sensor_index) = (scan.stamp_s, scan.sensor_index);
             let scan = self.map_scan(scan)?;
-            let stance = self.simulation.world().estimated_stance();
-            let stance = stance.as_ref().zip(self.body);
-            lay_footprints(&mut self.maps, &self.take_stance, &mut self.map_s, stance)?;
+            since_stance += 1;
+            if since_stance == SCANS_PER_BATCH {
+                self.lay_footprint()?;
+                since_stance = 0;
+            }
             if let Some(r) = &mut self.recording {
                 let name = r.sensors.get(sensor_index).map_or("sensor", String::as_str);
                 r.recording
@@ -238,7 +243,17 @@ impl Mapping {
             }
             self.report_progress(stamp_s, 1, progress);
         }
+        if since_stance > 0 {
+            self.lay_footprint()?;
+        }
         Ok(())
+    }
+
+    /// The robot's stance now into the maps that take it ([`lay_footprints`]).
+    fn lay_footprint(&mut self) -> Result<()> {
+        let stance = self.simulation.world().estimated_stance();
+        let stance = stance.as_ref().zip(self.body);
+        lay_footprints(&mut self.maps, &self.take_stance, &mut self.map_s, stance)
     }
 
     /// Moves the progress bar past `num_scans` scans, the last at `stamp_s`: its line is refreshed once per
