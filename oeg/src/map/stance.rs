@@ -199,14 +199,13 @@ impl Map {
     /// clearing, the obstacle layer's `footprint_clearing_enabled`, on by default, kept to the space the body
     /// fills): as [`Map::integrate_stance`] for the cells under the footprint that no scan measured, and
     /// besides:
-    /// * under a wheel (the cell of a contact point) the ground is where the wheel stands: a cell seen only
-    ///   free takes the plane's height and variance (one a scan measured keeps its measurement, which a
-    ///   wheel's contact, inferred from the pose, does not overrule);
     /// * an estimate above the plane by more than the chassis' clearance (`body.underside_m`) plus the surface
     ///   band ([`crate::ModelOptions::surface_band_sigmas`] standard deviations of the difference) lies where
     ///   the body is: a spurious return that no later beam passed through (the space between a push-broom
     ///   lidar and the ground its line sweeps is never crossed again), a person who left. It takes the plane
-    ///   too. Lower ones (a curb under the chassis' overhang) are kept;
+    ///   too. Lower ones (a curb under the chassis' overhang) are kept, and so are cells seen only free: a
+    ///   wheel's contact, inferred from the pose, set into free cells would stand out of them, and the rules
+    ///   that judge a free cell by the estimates beside it would read a step there;
     /// * a structure over a cell ([`Map::ceiling`]) whose lowest hits lie within the body's span is removed.
     ///
     /// Returns the cells it set.
@@ -225,12 +224,6 @@ impl Map {
     fn lay_ground(&mut self, stance: &Stance, body: Option<BodySpan>) -> Result<u64> {
         let (plane, var_m2) = stance.ground()?;
         let cells = self.cells_under_footprint(&stance.footprint, stance.pose)?;
-        let mut wheels: Vec<CellIndex> = stance
-            .contacts
-            .iter()
-            .filter_map(|c| self.geometry.cell_of(c.x, c.y))
-            .collect();
-        wheels.sort_unstable();
         let tiles: Vec<TileIndex> = {
             let mut t: Vec<TileIndex> = cells.iter().map(|c| TileIndex::of(*c)).collect();
             t.sort_unstable();
@@ -265,15 +258,16 @@ impl Map {
             let c = &mut tile[offset_in_tile(cell)];
             let (x, y) = self.geometry.cell_center(cell);
             let ground_m = plane.z_at(x, y) as f32;
-            let under_wheel = wheels.binary_search(&cell).is_ok();
-            let contradicted = |c: &Cell, body: BodySpan| match c.elevation() {
-                Some(e) => e.mean_m - ground_m - band_sigmas * (e.var_m2 + var_m2).sqrt() > body.underside_m,
-                None => under_wheel,
+            // An estimate the body's span contradicts; a cell seen only free has none.
+            let contradicted = |c: &Cell, body: BodySpan| {
+                c.elevation().is_some_and(|e| {
+                    e.mean_m - ground_m - band_sigmas * (e.var_m2 + var_m2).sqrt() > body.underside_m
+                })
             };
             if let (Some(body), Some(ceilings)) = (body, self.ceilings.tile_mut(TileIndex::of(cell))) {
                 let ceiling = &mut ceilings[offset_in_tile(cell)];
                 let over_m = ceiling.z_m - ground_m;
-                if ceiling.is_some() && over_m < body.height_m && (under_wheel || over_m > body.underside_m) {
+                if ceiling.is_some() && over_m < body.height_m && over_m > body.underside_m {
                     *ceiling = Ceiling::NONE;
                 }
             }
