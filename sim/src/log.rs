@@ -26,6 +26,10 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Result, SimError};
 use crate::sensors::{PoseSource, SensorRay, SensorScan};
 
+/// The farthest a sensor's `ground_in_sensor_m` may lie from it along any axis, metres: the ground is under the
+/// robot that carries the sensor.
+pub const MAX_GROUND_IN_SENSOR_M: f64 = 100.0;
+
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"OEGLOG\r\n";
 /// The format version written and read.
@@ -268,6 +272,20 @@ pub fn parse_log(path: &Path, data: &[u8]) -> Result<SensorLog> {
     };
     let header: LogHeader =
         serde_json::from_slice(prefix.header).map_err(|e| r.fail(16, format!("malformed header: {e}")))?;
+    for sensor in &header.sensors {
+        if let Some(g) = sensor.ground_in_sensor_m
+            && g.iter().any(|v| v.abs() > MAX_GROUND_IN_SENSOR_M)
+        {
+            return Err(r.fail(
+                16,
+                format!(
+                    "sensor {}: ground_in_sensor_m {g:?} lies more than {MAX_GROUND_IN_SENSOR_M} m from the \
+                     sensor; expected the ground under the robot that carries it",
+                    sensor.name
+                ),
+            ));
+        }
+    }
     let mut scans = Vec::new();
     loop {
         let at = r.pos;

@@ -469,3 +469,32 @@ fn a_scan_says_how_high_the_ground_under_the_robot_is() {
     // The sensor sits above it: the map's threshold measures from the ground, not from the sensor.
     assert!(scan.world_from_sensor.translation.z > 0.3 + 0.1);
 }
+
+#[test]
+fn a_log_whose_ground_lies_far_from_its_sensor_is_refused() {
+    let (scan, sim) = scan_with("farground", LASER, "");
+    let header = sim::log::LogHeader {
+        scenario: "farground".into(),
+        seed: 7,
+        duration_s: 4.0,
+        sensors: vec![sim::log::LogSensor {
+            name: "laser".into(),
+            kind: "laser2d".into(),
+            preset: "sick_lms291".into(),
+            rate_hz: 75.0,
+            map_model: sim.sensors()[0].map_model(),
+            ground_in_sensor_m: Some([0.0, 0.0, -1e300]),
+        }],
+        stance: None,
+    };
+    let dir = common::temp_dir("farground");
+    let path = dir.join("far.oeglog");
+    let mut w = sim::log::LogWriter::create(&path, &header).expect("create");
+    w.push(&scan).expect("push");
+    w.finish().expect("finish");
+    let err = sim::log::read_log(&path).expect_err("absurd ground").to_string();
+    assert!(
+        err.contains("far.oeglog") && err.contains("sensor laser: ground_in_sensor_m"),
+        "{err}"
+    );
+}

@@ -258,12 +258,6 @@ impl Map {
             let c = &mut tile[offset_in_tile(cell)];
             let (x, y) = self.geometry.cell_center(cell);
             let ground_m = plane.z_at(x, y) as f32;
-            // An estimate the body's span contradicts; a cell seen only free has none.
-            let contradicted = |c: &Cell, body: BodySpan| {
-                c.elevation().is_some_and(|e| {
-                    e.mean_m - ground_m - band_sigmas * (e.var_m2 + var_m2).sqrt() > body.underside_m
-                })
-            };
             if let (Some(body), Some(ceilings)) = (body, self.ceilings.tile_mut(TileIndex::of(cell))) {
                 let ceiling = &mut ceilings[offset_in_tile(cell)];
                 let over_m = ceiling.z_m - ground_m;
@@ -271,7 +265,13 @@ impl Map {
                     *ceiling = Ceiling::NONE;
                 }
             }
-            if c.is_observed() && !body.is_some_and(|b| contradicted(c, b)) {
+            // An estimate the body's span contradicts; a cell seen only free has none.
+            let contradicted = body.is_some_and(|b| {
+                c.elevation().is_some_and(|e| {
+                    e.mean_m - ground_m - band_sigmas * (e.var_m2 + var_m2).sqrt() > b.underside_m
+                })
+            });
+            if c.is_observed() && !contradicted {
                 continue;
             }
             *c = Cell {
