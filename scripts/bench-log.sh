@@ -5,7 +5,9 @@
 # tree, on 1 and 2 threads (`RAYON_NUM_THREADS`), alternating, REPEATS times each; then the whole default run
 # (`oeg run scenarios/default.toml`, which maps as it simulates) the same way. It prints a Markdown table of the
 # medians (`timing.json`) and checks that each build's maps are the same file on one and two threads (two builds
-# agree only while they place the rays with the same arithmetic).
+# agree only while they place the rays with the same arithmetic). Last, the machine's ceiling for two threads:
+# this tree's one-thread `oeg map` of the log twice, by two processes at once, against one alone (`2 x alone /
+# the slower of the two`): the speed-up no threading of the same work can beat on this machine.
 #
 #   bash scripts/bench-log.sh                 # baseline 7bca6bb (before the batches and the cell marks), 5 repeats
 #   bash scripts/bench-log.sh 33f1f85 3       # another baseline, 3 repeats
@@ -63,6 +65,13 @@ for _ in $(seq "$repeats"); do
             cmp -s "$out/map.oeg" "$work/run-$side-1/map.oeg" || { echo "the maps differ: $out" >&2; exit 1; }
         done
     done
+    # The ceiling: two one-thread processes of this tree at once; the slower one's integration time.
+    for pair in a b; do
+        RAYON_NUM_THREADS=1 "$head_bin" map "$work/default.oeglog" --resolution 0.05 "${model[@]}" \
+            --out "$work/pair-$pair" >/dev/null &
+    done
+    wait
+    for pair in a b; do json "$work/pair-$pair/timing.json" integrate_wall_time_s; done | sort -g | tail -1 >>"$work/pair.s"
 done
 
 m() { median <"$work/$1"; }
@@ -86,3 +95,7 @@ row '`oeg run`: `map_rays_per_s`' 'M rays/s' 1e6 run map_rays_per_s more
 row '`oeg run`: `total_wall_time_s`' s 1 run total_wall_time_s less
 echo
 echo "Speed-ups > 1: faster. In each build, every map of the log is the same file, and every run's map.oeg too, on one and two threads."
+awk -v h1="$(m map-head-1.s)" -v h2="$(m map-head-2.s)" -v p="$(m pair.s)" 'BEGIN {
+    printf "\nThe machine'"'"'s ceiling for two threads: two one-thread `oeg map` of the log by this tree at once, the slower %.2f s against %.2f s alone: %.2fx; this tree'"'"'s two threads reach %.2fx, %.0f %% of it.\n",
+        p, h1, 2 * h1 / p, h1 / h2, 100 * (h1 / h2) / (2 * h1 / p)
+}'

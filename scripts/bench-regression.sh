@@ -4,8 +4,10 @@
 # working tree, and both map the shared real scans at 0.05, 0.1 and 0.2 m, one thread, alternating
 # baseline / this tree, REPEATS times each. It prints the medians, the ratio per resolution, the memory (the
 # map with its per-scan scratch, as the first version counted it, and this tree's map alone), this tree's
-# `static` and `robust` presets against its paper model, and this tree's paper and robust models on two
-# threads. Run it after every change to the map (the machines are noisy, so CI does not; ratios within one run
+# `static` and `robust` presets against its paper model, this tree's paper and robust models on two threads,
+# and the machine's ceiling for two threads: two one-thread processes of this tree's paper model at once, the
+# speed-up no threading of the same work can beat on this machine (`2 x alone / the slower of the two`: the
+# second core's share, memory and cache contention). Run it after every change to the map (the machines are noisy, so CI does not; ratios within one run
 # are what count).
 #
 #   bash scripts/bench-regression.sh                   # baseline c75d7d4 (the first map), 5 repeats
@@ -43,11 +45,11 @@ run() {
 }
 median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
-printf '\n| resolution | %s: paper | this tree: paper | ratio (this / %s) | %s: map and scratch | this tree: map and scratch | this tree: map | this tree: static | static / paper | this tree: robust | robust / paper | this tree: paper, 2 threads | speed-up | this tree: robust, 2 threads | speed-up |\n' \
+printf '\n| resolution | %s: paper | this tree: paper | ratio (this / %s) | %s: map and scratch | this tree: map and scratch | this tree: map | this tree: static | static / paper | this tree: robust | robust / paper | this tree: paper, 2 threads | speed-up | this tree: robust, 2 threads | speed-up | this tree: paper, two 1-thread processes at once | ceiling |\n' \
     "$baseline" "$baseline" "$baseline"
-echo '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|'
+echo '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|'
 for resolution in 0.05 0.1 0.2; do
-    : >"$work/base" && : >"$work/head" && : >"$work/static" && : >"$work/robust" && : >"$work/two" && : >"$work/robust2"
+    : >"$work/base" && : >"$work/head" && : >"$work/static" && : >"$work/robust" && : >"$work/two" && : >"$work/robust2" && : >"$work/pair"
     for _ in $(seq "$repeats"); do
         run "$base_bin" "$resolution" >>"$work/base"
         run "$head_bin" "$resolution" paper >>"$work/head"
@@ -55,6 +57,11 @@ for resolution in 0.05 0.1 0.2; do
         run "$head_bin" "$resolution" robust >>"$work/robust"
         run "$head_bin" "$resolution" paper 2 >>"$work/two"
         run "$head_bin" "$resolution" robust 2 >>"$work/robust2"
+        # The ceiling: the same work twice, by two processes at once; the slower one's time.
+        run "$head_bin" "$resolution" paper >"$work/pair-a" &
+        run "$head_bin" "$resolution" paper >"$work/pair-b"
+        wait
+        cut -d' ' -f1 "$work/pair-a" "$work/pair-b" | sort -g | tail -1 >>"$work/pair"
     done
     b=$(cut -d' ' -f1 "$work/base" | median)
     h=$(cut -d' ' -f1 "$work/head" | median)
@@ -62,13 +69,14 @@ for resolution in 0.05 0.1 0.2; do
     r=$(cut -d' ' -f1 "$work/robust" | median)
     t=$(cut -d' ' -f1 "$work/two" | median)
     r2=$(cut -d' ' -f1 "$work/robust2" | median)
+    p2=$(median <"$work/pair")
     bm=$(head -1 "$work/base" | cut -d' ' -f2)
     hm=$(head -1 "$work/head" | cut -d' ' -f2)
     hmap=$(head -1 "$work/head" | cut -d' ' -f3)
-    awk -v res="$resolution" -v b="$b" -v h="$h" -v st="$st" -v r="$r" -v t="$t" -v r2="$r2" -v bm="$bm" -v hm="$hm" -v hmap="$hmap" 'BEGIN {
-        printf "| %s m | %.4f s | %.4f s | %.2fx | %.2f MB | %.2f MB | %s | %.4f s | %.2fx | %.4f s | %.2fx | %.4f s | %.2fx | %.4f s | %.2fx |\n",
-            res, b, h, h / b, bm / 1e6, hm / 1e6, (hmap == "-" ? "-" : sprintf("%.2f MB", hmap / 1e6)), st, st / h, r, r / h, t, h / t, r2, r / r2
+    awk -v res="$resolution" -v b="$b" -v h="$h" -v st="$st" -v r="$r" -v t="$t" -v r2="$r2" -v p2="$p2" -v bm="$bm" -v hm="$hm" -v hmap="$hmap" 'BEGIN {
+        printf "| %s m | %.4f s | %.4f s | %.2fx | %.2f MB | %.2f MB | %s | %.4f s | %.2fx | %.4f s | %.2fx | %.4f s | %.2fx | %.4f s | %.2fx | %.4f s | %.2fx |\n",
+            res, b, h, h / b, bm / 1e6, hm / 1e6, (hmap == "-" ? "-" : sprintf("%.2f MB", hmap / 1e6)), st, st / h, r, r / h, t, h / t, r2, r / r2, p2, 2 * h / p2
     }'
 done
 echo
-echo "Medians of $repeats alternating runs each, one thread unless stated, $(nproc) cores, $(basename "$data"); ratio > 1: this tree is slower."
+echo "Medians of $repeats alternating runs each, one thread unless stated, $(nproc) cores, $(basename "$data"); ratio > 1: this tree is slower. Ceiling: \`2 x\` this tree's paper time alone over the slower of two one-thread processes mapping the same scans at once, the most any two-thread speed-up of this work can reach on this machine."
