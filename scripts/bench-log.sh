@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The map's speed on a robot's log of short scans, on one and two threads, against a baseline build, in one run:
-# the default scenario's drive is recorded once (`oeg record`: 4,653 scans, about 785 rays each: two push-broom
-# lasers and a stereo camera), then mapped by `oeg map` with the scenario's model, by the baseline and by this
+# the default scenario's drive is recorded once by the baseline (`oeg record`: 4,653 scans, about 785 rays each:
+# two push-broom lasers and a stereo camera), then mapped by `oeg map` with the scenario's model, by the baseline and by this
 # tree, on 1 and 2 threads (`RAYON_NUM_THREADS`), alternating, REPEATS times each; then the whole default run
 # (`oeg run scenarios/default.toml`, which maps as it simulates) the same way. It prints a Markdown table of the
 # medians (`timing.json`) and checks that each build's maps are the same file on one and two threads (two builds
@@ -33,7 +33,9 @@ echo "building oeg at $baseline and at this tree ($commit) ..." >&2
 cargo build --quiet --release --bin oeg
 base_bin="$work/target/release/oeg"
 head_bin="$root/target/release/oeg"
-"$head_bin" record scenarios/default.toml --out "$work/default.oeglog" >&2
+# Recorded by the baseline: a log both builds read (a build reads the logs of older builds, not always those
+# of newer ones).
+"$base_bin" record scenarios/default.toml --out "$work/default.oeglog" >&2
 
 # The scenario's model (scenarios/default.toml's [map.model]); `oeg map` otherwise maps with the defaults.
 model=(--set map.model.max_height_m=0.5 --set map.model.no_return_clear_range_m=10)
