@@ -309,6 +309,11 @@ fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
         bytes(&run) == bytes(&mapped),
         "the bag's map differs from the run's"
     );
+    // Every scan's height threshold measured from the ground under the robot, the bag's `base_footprint`.
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(mapped.join("summary.json")).expect("summary")).expect("json");
+    assert!(summary["num_scans"].as_u64().is_some_and(|n| n > 0));
+    assert_eq!(summary["num_scans_with_ground"], summary["num_scans"]);
     // In the `map` frame (the true pose), the same scans land elsewhere: the drift is in the bag's transforms.
     assert!(
         bytes(&in_map) != bytes(&mapped),

@@ -82,6 +82,6 @@ pub use io::pcd::{
 pub use io::planner_files::{PLANNER_FLOAT_LAYERS, planner_files};
 pub use io::rosbag::{
     Bag, BagOptions, BagRaster, BagScan, BagSkip, BagTransform, BagWriter, CLOUD_CLEAR_FIELDS,
-    CLOUD_RANGE_SIGMA_FIELD, CloudPrecision, GridMapLayers, MAX_GRID_MAP_CELLS, parse_bag, parse_grid_map,
-    read_bag, read_bag_within, read_grid_map,
+    CLOUD_RANGE_SIGMA_FIELD, CloudPrecision, DEFAULT_GROUND_FRAME, GridMapLayers, MAX_GRID_MAP_CELLS,
+    parse_bag, parse_grid_map, read_bag, read_bag_within, read_grid_map,
 };

@@ -82,7 +82,8 @@ def test_a_recorded_bag_reads_in_rosbags_with_its_clouds_and_transforms(tmp_path
     blocked_in_grid = int(np.count_nonzero(grid.data[1].data == 0.0))
     assert blocked_in_grid == int(np.count_nonzero(occupancy.data == 100)) > 0
     assert occupancy.info.width * occupancy.info.height == grid.data[0].data.size
-    assert {("map", "odom"), ("odom", "base_link"), ("base_link", "laser_left")} <= frames
+    expected = {("map", "odom"), ("odom", "base_link"), ("base_link", "base_footprint"), ("base_link", "laser_left")}
+    assert expected <= frames
     # Mapped in the odom frame (the estimated pose) with the scenario's model, the bag gives the map of the
     # testbed's own log of the same scans (the run's map), byte for byte.
     log = tmp_path / "corridor.oeglog"

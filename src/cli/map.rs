@@ -26,7 +26,7 @@ pub(crate) struct MapArgs {
     /// robot.height_m, input.graph_sensor (laser|stereo), input.pcd_sensor (laser|stereo), input.pcd_frame
     /// (as_is|optical), input.pcd_points (sensor|world), input.pcd_invalid (drop|no_return), input.log_pose (estimated|true), input.bag.topics
     /// (["/points"]), input.bag.map_frame, input.bag.odometry, input.bag.start_s, input.bag.end_s,
-    /// input.bag.stride, input.bag.tf_tolerance_s, input.bag.cloud_sensor. Every key: docs/guide.md#settings-one-door.
+    /// input.bag.stride, input.bag.tf_tolerance_s, input.bag.cloud_sensor, input.bag.ground_frame. Every key: docs/guide.md#settings-one-door.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
     /// Also write the files a planner reads over the observed region, in `planner/`: the decisions as a nav2

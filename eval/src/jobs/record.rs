@@ -156,14 +156,22 @@ fn record_rosbag2(
         let base_from_sensor = mounts[scan.sensor_index].inverse();
         let estimated = scan.estimated_world_from_sensor * base_from_sensor;
         let truth = scan.world_from_sensor * base_from_sensor;
-        bag.transforms(
-            "/tf",
-            stamp_ns,
-            &[
-                transform("map", "odom", stamp_ns, truth * estimated.inverse()),
-                transform("odom", BASE_FRAME, stamp_ns, estimated),
-            ],
-        )?;
+        let mut transforms = vec![
+            transform("map", "odom", stamp_ns, truth * estimated.inverse()),
+            transform("odom", BASE_FRAME, stamp_ns, estimated),
+        ];
+        // REP 120's frame on the ground under the robot: its origin the mean of the wheels' contacts, which the
+        // run measures its height threshold from (`oeg::BagOptions::ground_frame` reads it back).
+        if let Some(ground) = scan.ground_in_sensor {
+            let ground_in_base = mounts[scan.sensor_index] * ground;
+            transforms.push(transform(
+                BASE_FRAME,
+                oeg::DEFAULT_GROUND_FRAME,
+                stamp_ns,
+                Isometry3::translation(ground_in_base.x, ground_in_base.y, ground_in_base.z),
+            ));
+        }
+        bag.transforms("/tf", stamp_ns, &transforms)?;
         let cloud = BagCloud::of(&scan, &sensor.map_model, &loaded.scenario.map.model);
         let topic = format!("/{}/points", sensor.name);
         bag.cloud_with_fields(

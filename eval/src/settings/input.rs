@@ -66,6 +66,8 @@ pub struct BagInput {
     pub tf_tolerance_s: f64,
     /// Range-error model of `PointCloud2` points (`laser`).
     pub cloud_sensor: RangeModel,
+    /// The frame on the ground under the robot that height thresholds are measured from (`base_footprint`).
+    pub ground_frame: String,
 }
 
 impl Default for BagInput {
@@ -80,6 +82,7 @@ impl Default for BagInput {
             stride: o.stride,
             tf_tolerance_s: o.tf_tolerance_s,
             cloud_sensor: RangeModel::Laser,
+            ground_frame: o.ground_frame,
         }
     }
 }
@@ -97,6 +100,7 @@ impl BagInput {
             tf_tolerance_s: self.tf_tolerance_s,
             cloud_sensor: self.cloud_sensor.model(),
             laser_sensor: oeg::SensorModel::laser(),
+            ground_frame: self.ground_frame.clone(),
         }
     }
 }

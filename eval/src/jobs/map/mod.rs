@@ -68,6 +68,9 @@ pub struct MapSummary {
     pub free_space_elevation: oeg::FreeSpaceElevation,
     /// Height threshold, if any.
     pub max_height_m: Option<f32>,
+    /// Scans that say where the ground under the robot was (a sensor log that records it, a bag whose
+    /// transforms hold `input.bag.ground_frame`): the height threshold measures from it; the others' from z = 0.
+    pub num_scans_with_ground: u64,
     /// Cells observed at least once.
     pub num_cells_observed: u64,
     /// Observed cells with `P > occupied_threshold`.
@@ -181,6 +184,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
     let map_bytes = map.memory_bytes();
     let scratch_bytes = map.scratch_bytes();
     map.release_scratch();
+    let num_scans_with_ground = scans.iter().filter(|(_, s)| s.ground_z_m.is_some()).count() as u64;
     drop(scans);
 
     // The writes, their errors naming the output folder's files (the staging is gone when the job fails).
@@ -190,6 +194,7 @@ pub fn run(job: &MapJob, progress: &Progress) -> Result<MapReport> {
         let totals = map.totals();
         let mut summary = summarize(job, &map, map_bytes, map_file_bytes);
         summary.num_messages_skipped = skipped.iter().map(|(_, s)| s.count).sum();
+        summary.num_scans_with_ground = num_scans_with_ground;
         let per_s = |n: u64| {
             if integrate_wall_time_s > 0.0 {
                 n as f64 / integrate_wall_time_s
@@ -303,6 +308,7 @@ fn summarize(job: &MapJob, map: &Map, map_bytes: u64, map_file_bytes: u64) -> Ma
         resolution_m: map.geometry().resolution_m(),
         free_space_elevation: job.config.model.free_space_elevation,
         max_height_m: job.config.model.max_height_m,
+        num_scans_with_ground: 0,
         num_cells_observed: map.num_observed_cells(),
         num_cells_occupied: counts.num_occupied(),
         num_cells_free: counts.num_free,

@@ -70,7 +70,16 @@ pub struct BagOptions {
     pub cloud_sensor: SensorModel,
     /// The range error of `LaserScan` readings; its range is each message's `range_max`.
     pub laser_sensor: SensorModel,
+    /// The frame whose origin lies on the ground under the robot, REP 120's `base_footprint` (the default):
+    /// where the bag's transforms hold it, each scan's height threshold is measured from that origin's height
+    /// in the map frame at the scan's stamp ([`Scan::ground_z_m`]), as `oeg run` measures it from the ground
+    /// under the robot's wheels, and a scan without that transform is skipped like one without its sensor's.
+    /// A bag without the frame thresholds in the map frame's z.
+    pub ground_frame: String,
 }
+
+/// The default [`BagOptions::ground_frame`]: REP 120's frame on the ground under the robot.
+pub const DEFAULT_GROUND_FRAME: &str = "base_footprint";
 
 impl Default for BagOptions {
     fn default() -> Self {
@@ -84,6 +93,7 @@ impl Default for BagOptions {
             tf_tolerance_s: 0.0,
             cloud_sensor: SensorModel::laser(),
             laser_sensor: SensorModel::laser(),
+            ground_frame: DEFAULT_GROUND_FRAME.into(),
         }
     }
 }
@@ -123,6 +133,9 @@ pub struct Bag {
     pub skipped: Vec<BagSkip>,
     /// Range messages outside the time range or the stride.
     pub num_not_selected: u64,
+    /// The frame the scans' height thresholds are measured from ([`BagOptions::ground_frame`]), or `None`
+    /// where the bag's transforms do not hold it (the map frame's z).
+    pub ground_frame: Option<String>,
 }
 
 /// Reads a bag's range data into scans in the map frame ([`BagOptions`]).
@@ -201,6 +214,9 @@ fn parse_files(
         ));
     }
     // Second pass: the scans.
+    let ground_frame = tree
+        .has_frame(&options.ground_frame)
+        .then(|| options.ground_frame.clone());
     let mut reader = ScanReader {
         options,
         tree: &tree,
@@ -212,6 +228,7 @@ fn parse_files(
             scans: Vec::new(),
             skipped: Vec::new(),
             num_not_selected: 0,
+            ground_frame,
         },
     };
     counts.clear();

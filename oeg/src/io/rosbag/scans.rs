@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::cloud::{CloudReading, PointCloud2};
 use super::container::{Channel, Channels};
@@ -119,26 +119,13 @@ impl ScanReader<'_> {
             (laser.header, readings)
         };
         let stamp_ns = stamp_or_log_time(header.stamp_ns, log_time);
-        let tolerance_ns = (o.tf_tolerance_s * 1e9).round() as i64;
-        let pose = match self
-            .tree
-            .lookup(self.map_frame, &header.frame_id, stamp_ns, tolerance_ns)
-        {
-            Ok(p) => p,
-            Err(reason) => {
-                self.skip(
-                    &c.topic,
-                    format!(
-                        "no transform from `{}` to `{}`: {reason}",
-                        header.frame_id, self.map_frame
-                    ),
-                );
-                return Ok(());
-            }
+        let Some((pose, ground_z_m)) = self.place(&c.topic, &header.frame_id, stamp_ns) else {
+            return Ok(());
         };
         let origin = Point3::from(pose.translation.vector);
         let mut out = Scan::new(origin, o.cloud_sensor);
         out.stamp_s = stamp_ns as f64 * 1e-9;
+        out.ground_z_m = ground_z_m;
         match scan {
             Readings::Cloud(readings) => {
                 // A cloud's rays that returned nothing clear to their own length, the sensor's range.
@@ -190,6 +177,35 @@ impl ScanReader<'_> {
             scan: out,
         });
         Ok(())
+    }
+
+    /// The sensor's pose in the map frame at `stamp_ns`, and the height of the ground under the robot there
+    /// where the bag holds [`BagOptions::ground_frame`]; `None` (the message skipped, and counted) without
+    /// either transform.
+    fn place(&mut self, topic: &str, frame_id: &str, stamp_ns: i64) -> Option<(Isometry3<f64>, Option<f64>)> {
+        let tolerance_ns = (self.options.tf_tolerance_s * 1e9).round() as i64;
+        let pose = match self.tree.lookup(self.map_frame, frame_id, stamp_ns, tolerance_ns) {
+            Ok(p) => p,
+            Err(reason) => {
+                let reason = format!("no transform from `{frame_id}` to `{}`: {reason}", self.map_frame);
+                self.skip(topic, reason);
+                return None;
+            }
+        };
+        let Some(ground) = self.bag.ground_frame.clone() else {
+            return Some((pose, None));
+        };
+        match self.tree.lookup(self.map_frame, &ground, stamp_ns, tolerance_ns) {
+            Ok(p) => Some((pose, Some(p.translation.vector.z))),
+            Err(reason) => {
+                let reason = format!(
+                    "no transform from `{ground}` (the ground under the robot) to `{}`: {reason}",
+                    self.map_frame
+                );
+                self.skip(topic, reason);
+                None
+            }
+        }
     }
 
     fn skip(&mut self, topic: &str, reason: String) {
