@@ -6,28 +6,16 @@
     reason = "the tests write corrupt bags byte by byte and read the committed corpus whole"
 )]
 
+#[path = "common/bags.rs"]
+mod bags;
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use bags::{scratch, transform};
 use common::shared_file;
 use nalgebra::{Isometry3, Point3, Vector3};
-use oeg::{BagOptions, BagTransform, BagWriter, CloudPrecision, Map, MapConfig, SensorModel};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-rosbag-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-fn transform(parent: &str, child: &str, stamp_ns: i64, t: Isometry3<f64>) -> BagTransform {
-    BagTransform {
-        parent: parent.into(),
-        child: child.into(),
-        stamp_ns,
-        transform: t,
-    }
-}
+use oeg::{BagOptions, BagWriter, CloudPrecision, Map, MapConfig, SensorModel};
 
 fn map_of<'a>(scans: impl Iterator<Item = &'a oeg::Scan>) -> Vec<u8> {
     let mut map = Map::new(MapConfig::new(0.05)).expect("valid");
@@ -43,7 +31,7 @@ fn the_shared_real_scans_as_a_bag_map_to_the_graph_s_bytes() {
         return;
     };
     let nodes = oeg::read_graph(&path).expect("readable");
-    let folder = scratch("3dtk");
+    let folder = scratch("rosbag", "3dtk");
     let mut bag = BagWriter::new(&folder).expect("writer");
     for (k, node) in nodes.iter().enumerate() {
         let stamp = 1_000_000_000 + k as i64 * 100_000_000;
@@ -95,7 +83,7 @@ fn driving_bag(folder: &Path, cloud_stamps_ns: &[i64]) {
 
 #[test]
 fn a_cloud_is_placed_through_the_tree_at_its_stamp_and_one_without_a_transform_is_counted() {
-    let folder = scratch("driving");
+    let folder = scratch("rosbag", "driving");
     driving_bag(&folder, &[500_000_000, 1_500_000_000]);
     let bag = oeg::read_bag(&folder, &BagOptions::default()).expect("readable");
     assert_eq!(bag.scans.len(), 1);
@@ -133,7 +121,7 @@ fn a_cloud_is_placed_through_the_tree_at_its_stamp_and_one_without_a_transform_i
 
 /// Writes one file of a split bag into `folder` as `file` (through a bag of its own) and returns its name.
 fn split_file(folder: &Path, file: &str, write: impl FnOnce(&mut BagWriter)) -> String {
-    let part = scratch(&format!("part-{file}"));
+    let part = scratch("rosbag", &format!("part-{file}"));
     let mut bag = BagWriter::new(&part).expect("writer");
     write(&mut bag);
     let written = bag.finish().expect("written");
@@ -149,9 +137,9 @@ fn a_bag_split_over_files_reads_as_one_with_the_transforms_of_every_file() {
     // transforms in the first file only, each file with its own schema and channel ids (the second file's
     // topics come in another order, so its ids differ), and a cloud in the second file placed by a transform
     // from the first.
-    let whole = scratch("whole");
+    let whole = scratch("rosbag", "whole");
     driving_bag(&whole, &[500_000_000, 900_000_000]);
-    let split = scratch("split");
+    let split = scratch("rosbag", "split");
     let up = Isometry3::translation(0.0, 0.0, 0.5);
     let points = [Vector3::new(1.0, 0.0, -0.5), Vector3::new(2.0, 1.0, -0.5)];
     let first = split_file(&split, "split_0.mcap", |bag| {
@@ -212,7 +200,7 @@ fn a_bag_split_over_files_reads_as_one_with_the_transforms_of_every_file() {
 
 #[test]
 fn a_grid_map_is_chosen_by_time_counted_from_the_bag_s_first_message() {
-    let folder = scratch("grid_map_times");
+    let folder = scratch("rosbag", "grid_map_times");
     let mut bag = BagWriter::new(&folder).expect("writer");
     // The bag starts at 1 s with a transform; maps at 3 s and 5 s, 2 and 4 s after its start.
     let odom = transform("odom", "base_link", 1_000_000_000, Isometry3::identity());
@@ -254,7 +242,7 @@ fn a_grid_map_is_chosen_by_time_counted_from_the_bag_s_first_message() {
 
 #[test]
 fn options_that_name_what_the_bag_lacks_are_refused() {
-    let folder = scratch("options");
+    let folder = scratch("rosbag", "options");
     driving_bag(&folder, &[500_000_000]);
     let e = |options: BagOptions| oeg::read_bag(&folder, &options).expect_err("refused").to_string();
     let missing = e(BagOptions {
@@ -290,7 +278,7 @@ fn options_that_name_what_the_bag_lacks_are_refused() {
 
 #[test]
 fn a_corrupt_or_truncated_bag_gets_an_error_naming_the_file_never_a_panic() {
-    let folder = scratch("corrupt");
+    let folder = scratch("rosbag", "corrupt");
     driving_bag(&folder, &[500_000_000]);
     let name = folder.file_name().expect("named").to_string_lossy().to_string();
     let file = folder.join(format!("{name}_0.mcap"));
@@ -335,7 +323,7 @@ fn every_byte_of_a_zstd_and_an_lz4_bag_flipped_gives_an_error_or_a_map_never_a_p
 
 #[test]
 fn a_written_grid_map_reads_back_and_a_corrupt_one_is_an_error_never_a_panic() {
-    let folder = scratch("grid_map");
+    let folder = scratch("rosbag", "grid_map");
     let mut bag = BagWriter::new(&folder).expect("writer");
     let raster = oeg::BagRaster {
         frame: "map".into(),

@@ -7,25 +7,14 @@
     reason = "the tests write their bags into a scratch folder"
 )]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+#[path = "common/bags.rs"]
+mod bags;
+
+use bags::{scratch, transform};
 use nalgebra::{Isometry3, Vector3};
-use oeg::{BagOptions, BagTransform, BagWriter, CloudPrecision, Map, MapConfig, ModelOptions};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oeg-rosbag-ground-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-fn transform(parent: &str, child: &str, stamp_ns: i64, t: Isometry3<f64>) -> BagTransform {
-    BagTransform {
-        parent: parent.into(),
-        child: child.into(),
-        stamp_ns,
-        transform: t,
-    }
-}
+use oeg::{BagOptions, BagWriter, CloudPrecision, Map, MapConfig, ModelOptions};
 
 /// A robot standing on a plateau 2 m up (`odom` -> `base_link` at z = 2.1, its base 10 cm over the ground), a
 /// lidar 0.3 m over its base, and a cloud at 1 s and at 3 s of the ground 2 to 3 m ahead. With `footprint`,
@@ -91,7 +80,7 @@ fn cells_with_height(scans: &[oeg::BagScan]) -> usize {
 
 #[test]
 fn a_bag_s_base_footprint_is_the_ground_its_height_threshold_measures_from() {
-    let folder = scratch("footprint");
+    let folder = scratch("rosbag-ground", "footprint");
     plateau_bag(&folder, true);
     let bag = oeg::read_bag(&folder, &BagOptions::default()).expect("readable");
     assert_eq!(bag.ground_frame.as_deref(), Some("base_footprint"));
@@ -130,7 +119,7 @@ fn a_bag_s_base_footprint_is_the_ground_its_height_threshold_measures_from() {
 
 #[test]
 fn a_bag_without_a_ground_frame_thresholds_in_the_map_frame_s_z() {
-    let folder = scratch("no-footprint");
+    let folder = scratch("rosbag-ground", "no-footprint");
     plateau_bag(&folder, false);
     let bag = oeg::read_bag(&folder, &BagOptions::default()).expect("readable");
     assert_eq!(bag.ground_frame, None);
