@@ -303,6 +303,13 @@ fn a_recorded_ros2_bag_maps_as_the_run_maps_the_same_scans() {
             "{args:?}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
+        if args[0] == "map" {
+            let said = String::from_utf8_lossy(&o.stdout);
+            assert!(
+                said.contains("height threshold 0.5 m over the ground under the robot at every scan"),
+                "{said}"
+            );
+        }
     }
     let bytes = |d: &std::path::Path| std::fs::read(d.join("map.oeg")).expect("map");
     assert!(

@@ -90,6 +90,21 @@ pub(crate) fn print_report(report: &MapReport) {
         report.timing.integrate_wall_time_s,
         report.timing.integrate_rays_per_s / 1e6
     );
+    if let Some(h) = s.max_height_m {
+        let (with, all) = (s.num_scans_with_ground, s.num_scans);
+        if with == all {
+            say!("height threshold {h} m over the ground under the robot at every scan");
+        } else if with == 0 {
+            say!(
+                "height threshold {h} m over z = 0: no scan says where the ground under the robot was (a bag \
+                 without `input.bag.ground_frame`, a scan graph, a point cloud)"
+            );
+        } else {
+            say!(
+                "height threshold {h} m over the ground under the robot at {with} of {all} scans, over z = 0 at the others"
+            );
+        }
+    }
     for (bag, skip) in &report.skipped {
         say!(
             "skipped {} messages of {} in {}: {}",
