@@ -285,6 +285,18 @@ fn the_same_seed_gives_the_same_scans_on_one_and_two_threads() {
     assert_ne!(one, other, "a different seed changes the noise");
 }
 
+/// The log header's entry for the scene's one laser (`LASER`), its ground given.
+fn laser_log_sensor(sim: &Simulation, ground_in_sensor_m: Option<[f64; 3]>) -> sim::log::LogSensor {
+    sim::log::LogSensor {
+        name: "laser".into(),
+        kind: "laser2d".into(),
+        preset: "sick_lms291".into(),
+        rate_hz: 75.0,
+        map_model: sim.sensors()[0].map_model(),
+        ground_in_sensor_m,
+    }
+}
+
 #[test]
 fn logs_read_back_exactly_and_reject_damage() {
     let (_, mut sim) = scan_with(
@@ -293,20 +305,14 @@ fn logs_read_back_exactly_and_reject_damage() {
         "",
     );
     let scans: Vec<_> = (0..5).filter_map(|_| sim.next_scan()).collect();
+    let ground = sim.sensors()[0]
+        .ground_in_sensor(sim.world())
+        .map(|g| [g.x, g.y, g.z]);
     let header = sim::log::LogHeader {
         scenario: "log".into(),
         seed: 7,
         duration_s: 4.0,
-        sensors: vec![sim::log::LogSensor {
-            name: "laser".into(),
-            kind: "laser2d".into(),
-            preset: "sick_lms291".into(),
-            rate_hz: 75.0,
-            map_model: sim.sensors()[0].map_model(),
-            ground_in_sensor_m: sim.sensors()[0]
-                .ground_in_sensor(sim.world())
-                .map(|g| [g.x, g.y, g.z]),
-        }],
+        sensors: vec![laser_log_sensor(&sim, ground)],
         stance: Some(sim::log::LogStance::new(
             &sim.world().robot().wheel_contacts(),
             sim.world().robot().footprint(),
@@ -477,14 +483,7 @@ fn a_log_whose_ground_lies_far_from_its_sensor_is_refused() {
         scenario: "farground".into(),
         seed: 7,
         duration_s: 4.0,
-        sensors: vec![sim::log::LogSensor {
-            name: "laser".into(),
-            kind: "laser2d".into(),
-            preset: "sick_lms291".into(),
-            rate_hz: 75.0,
-            map_model: sim.sensors()[0].map_model(),
-            ground_in_sensor_m: Some([0.0, 0.0, -1e300]),
-        }],
+        sensors: vec![laser_log_sensor(&sim, Some([0.0, 0.0, -1e300]))],
         stance: None,
     };
     let dir = common::temp_dir("farground");
