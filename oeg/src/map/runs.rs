@@ -11,7 +11,8 @@ use super::rule_set::Rules;
 use super::sample::{Before, Sampling};
 use super::scratch::{Evidence, ExactMerge, HitStore, Scratch};
 use crate::error::{Error, Result};
-use crate::scan::Scan;
+use crate::model::{GAUSSIAN_CUTOFF_SIGMAS, ModelOptions};
+use crate::scan::{RayKind, Scan};
 use crate::storage::{CapacityExceeded, TILES_PER_JOB, TileGrid, marked_by_tile};
 
 /// [`super::integrate`]'s gathering of a long scan in `runs` runs of consecutive rays, the first into
@@ -32,7 +33,7 @@ pub(super) fn gather_in_parallel<E: Sampling, R: Rules>(
     if scratch.workers.len() < runs - 1 {
         scratch.workers.resize_with(runs - 1, || TileGrid::new(E::NONE));
     }
-    let bounds = balanced_runs(scan, runs, before.geometry.resolution_m());
+    let bounds = balanced_runs(scan, runs, before.opts, before.geometry.resolution_m());
     let share = scratch_limit / runs as u64;
     let grids = std::iter::once((&mut scratch.main, Some(&mut scratch.hits)))
         .chain(scratch.workers.iter_mut().map(|w| (w, None)))
@@ -125,17 +126,30 @@ fn merge_runs<E: Evidence>(
     Ok(())
 }
 
-/// The bounds of `runs` runs of consecutive rays of `scan` with about equal work: a ray's walk crosses about
-/// one cell per cell size of its length over the ground, so a camera's frame, whose upper rows reach far and
-/// lower rows near, is not cut at its middle ray. Any cut gives the same map (the runs merge exactly); this
-/// one keeps the threads equally busy.
-fn balanced_runs(scan: &Scan, runs: usize, resolution_m: f64) -> Vec<usize> {
+/// The bounds of `runs` runs of consecutive rays of `scan` with about equal work: the cells their walks
+/// cross, one per cell size of a ray's length over the ground up to 3 sigma past its hit, where its samples
+/// end (a ray with no return: up to the range it clears). A camera's frame, whose upper rows reach far with
+/// error bands that grow with the square of the range and whose lower rows reach near, is not cut at its
+/// middle ray. Any cut gives the same map (the runs merge exactly); this one keeps the threads equally busy.
+/// It runs on one thread before the runs start, so it costs a ray a square root and its range error, not its
+/// whole span ([`super::span::RaySpan::of`]).
+fn balanced_runs(scan: &Scan, runs: usize, opts: &ModelOptions, resolution_m: f64) -> Vec<usize> {
+    let clear_range_m = opts.no_return_clear_range_m.unwrap_or(scan.sensor.max_range_m);
     let work: Vec<f64> = scan
         .rays
         .iter()
         .scan(0.0, |total, ray| {
             let v = ray.offset_in_world;
-            *total += f64::from(v.x.hypot(v.y)) / resolution_m + 1.0;
+            let ground = v.x.hypot(v.y);
+            let walked = match ray.kind {
+                RayKind::Hit => {
+                    let sigma = ray.range_sigma_m.unwrap_or_else(|| scan.sensor.sigma_m(ground));
+                    ground + GAUSSIAN_CUTOFF_SIGMAS * sigma
+                }
+                RayKind::NoReturn => clear_range_m * ground / v.norm(),
+            };
+            // A ray the walk refuses (a zero direction) costs its check alone.
+            *total += f64::from(walked).max(0.0) / resolution_m + 1.0;
             Some(*total)
         })
         .collect();
@@ -146,4 +160,70 @@ fn balanced_runs(scan: &Scan, runs: usize, resolution_m: f64) -> Vec<usize> {
     bounds[0] = 0;
     bounds.push(scan.rays.len());
     bounds
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Point3, Vector3};
+
+    use super::balanced_runs;
+    use crate::geometry::GridGeometry;
+    use crate::map::span::RaySpan;
+    use crate::model::ModelOptions;
+    use crate::scan::{Ray, Scan};
+    use crate::sensor::SensorModel;
+    use crate::traversal::GroundTraversal;
+
+    /// The cells the walks of `scan`'s rays `rays` cross, as the gathering walks them.
+    fn cells_walked(
+        scan: &Scan,
+        rays: std::ops::Range<usize>,
+        opts: &ModelOptions,
+        geometry: &GridGeometry,
+    ) -> usize {
+        scan.rays[rays]
+            .iter()
+            .filter_map(|ray| RaySpan::of(scan, ray, opts))
+            .map(|s| {
+                let (o, d) = (s.origin, s.dir);
+                GroundTraversal::new(geometry, (o.x, o.y), (d.x, d.y), s.l_lo, s.l_hi).map_or(0, |w| w.len())
+            })
+            .sum()
+    }
+
+    #[test]
+    fn a_camera_frame_is_cut_where_its_walks_cross_equal_cells() {
+        // A stereo camera 0.5 m up, looking along x: its lower rows see the ground near, with small error bands,
+        // its upper rows far, where the band grows with the square of the range, and some pixels see nothing.
+        let opts = ModelOptions::default();
+        let geometry = GridGeometry::new(0.05).expect("resolution");
+        let mut scan = Scan::new(Point3::new(0.0, 0.0, 0.5), SensorModel::stereo());
+        for row in 0..60 {
+            let ahead = 0.8 + 0.1 * f64::from(row);
+            for col in -20..=20 {
+                let offset = Vector3::new(ahead, 0.02 * f64::from(col) * ahead, -0.5).cast::<f32>();
+                scan.rays.push(if row % 7 == 6 {
+                    Ray::no_return(offset)
+                } else {
+                    Ray::hit(offset)
+                });
+            }
+        }
+        for runs in [2, 3, 4] {
+            let bounds = balanced_runs(&scan, runs, &opts, geometry.resolution_m());
+            assert_eq!((bounds[0], bounds[runs]), (0, scan.rays.len()));
+            let cells: Vec<usize> = bounds
+                .windows(2)
+                .map(|b| cells_walked(&scan, b[0]..b[1], &opts, &geometry))
+                .collect();
+            let (lo, hi) = (
+                cells.iter().min().expect("runs"),
+                cells.iter().max().expect("runs"),
+            );
+            assert!(
+                (*hi as f64) < 1.03 * (*lo as f64),
+                "{runs} runs walk {cells:?} cells (bounds {bounds:?})"
+            );
+        }
+    }
 }
